@@ -1,1 +1,50 @@
-fn main() {}
+//! Compiles every shader in `shaders_glsl/` with glslang, validates and
+//! reflects it with naga, and writes `$OUT_DIR/shaders.rs` (see
+//! `build/shader_compiler.rs`). A broken shader stops the build with its file
+//! and line.
+
+#[path = "build/shader_compiler.rs"]
+mod shader_compiler;
+
+use std::path::Path;
+
+fn main() {
+    let root = Path::new("shaders_glsl");
+    let include_dir = root.join("common");
+    println!("cargo:rerun-if-changed=build/shader_compiler.rs");
+    println!("cargo:rerun-if-changed={}", root.display());
+    println!("cargo:rerun-if-changed={}", include_dir.display());
+    let mut files: Vec<_> = std::fs::read_dir(root)
+        .expect("shaders_glsl/ is missing")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    if let Ok(dir) = std::fs::read_dir(&include_dir) {
+        for e in dir.flatten() {
+            println!("cargo:rerun-if-changed={}", e.path().display());
+        }
+    }
+    let mut shaders = Vec::new();
+    let mut errors = Vec::new();
+    for path in &files {
+        println!("cargo:rerun-if-changed={}", path.display());
+        match shader_compiler::compile_file(path, &include_dir) {
+            Ok(s) => shaders.push(s),
+            Err(e) => errors.push(e),
+        }
+    }
+    if !errors.is_empty() {
+        // cargo shows build-script stderr on failure; one block per shader.
+        for e in &errors {
+            eprintln!("error: {e}\n");
+        }
+        panic!(
+            "{} shader(s) failed to compile: see the messages above",
+            errors.len()
+        );
+    }
+    let code = shader_compiler::generate_module(&shaders).unwrap_or_else(|e| panic!("{e}"));
+    let out = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("shaders.rs");
+    std::fs::write(&out, code).expect("cannot write generated shader module");
+}

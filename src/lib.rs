@@ -1,1 +1,16 @@
+//! vista: a GPU-driven terrain renderer for Vulkan (Far Cry 5 style) on ash.
+//!
+//! Layers: [`gpu`] owns every unsafe Vulkan call; [`frame`] wraps passes in
+//! labels and timestamps; [`passes`] holds one pass per file; [`shaders`] is
+//! generated at build time from `shaders_glsl/`.
 
+pub mod error;
+pub mod frame;
+pub mod gpu;
+pub mod passes;
+pub mod patch_grid;
+pub mod profiler;
+pub mod shaders;
+pub mod smoke;
+
+pub use error::{Error, Result};

@@ -1,0 +1,384 @@
+//! Shader compilation and reflection, shared by `build.rs` and the test that
+//! proves a broken shader stops the build with its file and line.
+//!
+//! GLSL is compiled with glslang (Vulkan 1.3 target), then parsed and validated
+//! with naga, whose IR is also the source of every reflected number the host
+//! uses (bindings, workgroup size, push-constant and struct sizes).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// One descriptor binding as the shader declares it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReflectedBinding {
+    pub name: String,
+    pub set: u32,
+    pub binding: u32,
+    /// Variant name of `vista::gpu::BindingKind`.
+    pub kind: &'static str,
+}
+
+#[derive(Debug, Clone)]
+pub struct CompiledShader {
+    /// Rust module name: the file stem for compute shaders (it names the
+    /// pass), `stem_vert` / `stem_frag` for graphics stages.
+    pub module: String,
+    pub file: String,
+    /// Variant name of `vista::gpu::ShaderStage`.
+    pub stage: &'static str,
+    pub words: Vec<u32>,
+    pub workgroup_size: [u32; 3],
+    pub bindings: Vec<ReflectedBinding>,
+    pub push_constant_size: u32,
+    /// (name, constant id) of each specialization constant.
+    pub spec_constants: Vec<(String, u32)>,
+    /// (name, size in bytes) of each named struct type.
+    pub structs: Vec<(String, u32)>,
+    /// Files pulled in through `#include`, for `rerun-if-changed`.
+    pub includes: Vec<PathBuf>,
+}
+
+fn stage_of(
+    path: &Path,
+) -> Result<(glslang::ShaderStage, &'static str, naga::ShaderStage), String> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("comp") => Ok((
+            glslang::ShaderStage::Compute,
+            "Compute",
+            naga::ShaderStage::Compute,
+        )),
+        Some("vert") => Ok((
+            glslang::ShaderStage::Vertex,
+            "Vertex",
+            naga::ShaderStage::Vertex,
+        )),
+        Some("frag") => Ok((
+            glslang::ShaderStage::Fragment,
+            "Fragment",
+            naga::ShaderStage::Fragment,
+        )),
+        other => Err(format!(
+            "{}: unknown shader extension {other:?} (expected comp, vert or frag)",
+            path.display()
+        )),
+    }
+}
+
+struct Includer {
+    dir: PathBuf,
+    seen: Vec<PathBuf>,
+}
+
+impl glslang::include::IncludeHandler for Includer {
+    fn include(
+        &mut self,
+        _ty: glslang::include::IncludeType,
+        header_name: &str,
+        _includer_name: &str,
+        _depth: usize,
+    ) -> Option<glslang::include::IncludeResult> {
+        let path = self.dir.join(header_name);
+        let data = std::fs::read_to_string(&path).ok()?;
+        self.seen.push(path);
+        Some(glslang::include::IncludeResult {
+            name: header_name.to_string(),
+            data,
+        })
+    }
+}
+
+/// glslang names the main file "0" in its log; name it by path instead so a
+/// failure reads `shaders_glsl/foo.comp:12: ...`.
+fn rewrite_log(log: &str, file: &str) -> String {
+    log.lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| l.replacen(" 0:", &format!(" {file}:"), 1))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Compiles one GLSL file; `include_dir` resolves `#include "x.glsl"`.
+pub fn compile_file(path: &Path, include_dir: &Path) -> Result<CompiledShader, String> {
+    let file = path.display().to_string();
+    let (gl_stage, stage_name, naga_stage) = stage_of(path)?;
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let compiler = glslang::Compiler::acquire().ok_or("glslang failed to initialise")?;
+    let source = glslang::ShaderSource::from(text);
+    let options = glslang::CompilerOptions {
+        source_language: glslang::SourceLanguage::GLSL,
+        target: glslang::Target::Vulkan {
+            version: glslang::VulkanVersion::Vulkan1_3,
+            spirv_version: glslang::SpirvVersion::SPIRV1_6,
+        },
+        version_profile: None,
+        ..Default::default()
+    };
+    let mut includer = Includer {
+        dir: include_dir.to_path_buf(),
+        seen: Vec::new(),
+    };
+    let words = {
+        let input = glslang::ShaderInput::new(
+            &source,
+            gl_stage,
+            &options,
+            None::<&[(&str, Option<&str>)]>,
+            Some(&mut includer),
+        )
+        .map_err(|e| format!("{file}: {e}"))?;
+        let shader = compiler.create_shader(input).map_err(|e| match e {
+            glslang::error::GlslangError::ParseError(log)
+            | glslang::error::GlslangError::PreprocessError(log) => {
+                format!("{file}: GLSL error\n{}", rewrite_log(&log.log, &file))
+            }
+            other => format!("{file}: {other}"),
+        })?;
+        shader
+            .compile()
+            .map_err(|e| format!("{file}: link/codegen failed: {e}"))?
+    };
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .ok_or_else(|| format!("{file}: bad file name"))?;
+    let module = match stage_name {
+        "Compute" => stem.to_string(),
+        "Vertex" => format!("{stem}_vert"),
+        _ => format!("{stem}_frag"),
+    };
+    let mut out = reflect(&words, &file, naga_stage)?;
+    out.module = module;
+    out.stage = stage_name;
+    out.words = words;
+    out.includes = includer.seen;
+    Ok(out)
+}
+
+fn binding_kind(
+    module: &naga::Module,
+    var: &naga::GlobalVariable,
+    file: &str,
+) -> Result<&'static str, String> {
+    let inner = &module.types[var.ty].inner;
+    let inner = match inner {
+        naga::TypeInner::BindingArray { .. } => {
+            return Err(format!("{file}: binding arrays are not supported"))
+        }
+        i => i,
+    };
+    Ok(match (var.space, inner) {
+        (naga::AddressSpace::Storage { .. }, _) => "StorageBuffer",
+        (naga::AddressSpace::Uniform, _) => "UniformBuffer",
+        (naga::AddressSpace::Handle, naga::TypeInner::Sampler { .. }) => "Sampler",
+        (
+            naga::AddressSpace::Handle,
+            naga::TypeInner::Image {
+                class: naga::ImageClass::Storage { .. },
+                ..
+            },
+        ) => "StorageImage",
+        (naga::AddressSpace::Handle, naga::TypeInner::Image { .. }) => "SampledImage",
+        (space, _) => {
+            return Err(format!(
+                "{file}: unsupported resource in address space {space:?}"
+            ))
+        }
+    })
+}
+
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut out = e.to_string();
+    let mut cur = e.source();
+    while let Some(inner) = cur {
+        out.push_str(": ");
+        out.push_str(&inner.to_string());
+        cur = inner.source();
+    }
+    out
+}
+
+fn reflect(words: &[u32], file: &str, stage: naga::ShaderStage) -> Result<CompiledShader, String> {
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    let options = naga::front::spv::Options {
+        adjust_coordinate_space: false,
+        strict_capabilities: false,
+        block_ctx_dump_prefix: None,
+    };
+    let module = naga::front::spv::parse_u8_slice(&bytes, &options)
+        .map_err(|e| format!("{file}: naga cannot parse the SPIR-V: {e}"))?;
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .map_err(|e| {
+        format!(
+            "{file}: naga validation failed: {}",
+            error_chain(e.as_inner())
+        )
+    })?;
+    let entry = module
+        .entry_points
+        .iter()
+        .find(|e| e.stage == stage)
+        .ok_or_else(|| format!("{file}: no {stage:?} entry point"))?;
+
+    let mut bindings = Vec::new();
+    let mut push_constant_size = 0;
+    for (_, var) in module.global_variables.iter() {
+        let type_name = module.types[var.ty].name.clone().unwrap_or_default();
+        let name = var
+            .name
+            .clone()
+            .filter(|n| !n.is_empty())
+            .unwrap_or(type_name);
+        if var.space == naga::AddressSpace::Immediate {
+            push_constant_size = module.types[var.ty].inner.size(module.to_ctx());
+            continue;
+        }
+        let Some(rb) = var.binding else { continue };
+        if name.is_empty() {
+            return Err(format!(
+                "{file}: binding (set {}, binding {}) has no name",
+                rb.group, rb.binding
+            ));
+        }
+        bindings.push(ReflectedBinding {
+            name,
+            set: rb.group,
+            binding: rb.binding,
+            kind: binding_kind(&module, var, file)?,
+        });
+    }
+    bindings.sort_by_key(|b| (b.set, b.binding));
+
+    let spec_constants = module
+        .overrides
+        .iter()
+        .filter_map(|(_, o)| Some((o.name.clone()?, u32::from(o.id?))))
+        .collect();
+    let structs = module
+        .types
+        .iter()
+        .filter_map(|(_, t)| match (&t.name, &t.inner) {
+            (Some(n), naga::TypeInner::Struct { span, .. }) if !n.is_empty() => {
+                Some((n.clone(), *span))
+            }
+            _ => None,
+        })
+        .collect();
+    Ok(CompiledShader {
+        module: String::new(),
+        file: file.to_string(),
+        stage: "",
+        words: Vec::new(),
+        workgroup_size: entry.workgroup_size,
+        bindings,
+        push_constant_size,
+        spec_constants,
+        structs,
+        includes: Vec::new(),
+    })
+}
+
+fn const_ident(name: &str) -> String {
+    let mut out = String::new();
+    let mut prev_lower = false;
+    for c in name.chars() {
+        if c.is_ascii_uppercase() && prev_lower {
+            out.push('_');
+        }
+        prev_lower = c.is_ascii_lowercase() || c.is_ascii_digit();
+        out.push(if c.is_ascii_alphanumeric() {
+            c.to_ascii_uppercase()
+        } else {
+            '_'
+        });
+    }
+    out
+}
+
+/// Rust source of the generated `shaders` module. Struct sizes are collected
+/// across all shaders; two shaders disagreeing on a struct's size is an error.
+pub fn generate_module(shaders: &[CompiledShader]) -> Result<String, String> {
+    let mut s = String::from("// @generated by build.rs from shaders_glsl/: do not edit.\n");
+    let mut structs: BTreeMap<String, (u32, String)> = BTreeMap::new();
+    for sh in shaders {
+        let _ = writeln!(
+            s,
+            "/// `{}`\npub mod {} {{\n    use crate::gpu::shader::*;",
+            sh.file, sh.module
+        );
+        for b in &sh.bindings {
+            let _ = writeln!(
+                s,
+                "    pub const {}: Binding = Binding {{ name: {:?}, set: {}, binding: {}, kind: BindingKind::{} }};",
+                const_ident(&b.name),
+                b.name,
+                b.set,
+                b.binding,
+                b.kind
+            );
+        }
+        for (name, id) in &sh.spec_constants {
+            let _ = writeln!(s, "    pub const SPEC_{}: u32 = {id};", const_ident(name));
+        }
+        let list: Vec<String> = sh.bindings.iter().map(|b| const_ident(&b.name)).collect();
+        let specs: Vec<String> = sh
+            .spec_constants
+            .iter()
+            .map(|(n, id)| format!("({n:?}, {id})"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "    pub const WORKGROUP_SIZE: [u32; 3] = {:?};",
+            sh.workgroup_size
+        );
+        let _ = writeln!(
+            s,
+            "    pub const PUSH_CONSTANT_SIZE: u32 = {};",
+            sh.push_constant_size
+        );
+        let _ = writeln!(
+            s,
+            "    static SPIRV: [u32; {}] = {:?};",
+            sh.words.len(),
+            sh.words
+        );
+        let _ = writeln!(
+            s,
+            "    pub static SHADER: ShaderInfo = ShaderInfo {{ name: {:?}, file: {:?}, stage: ShaderStage::{}, spirv: &SPIRV, workgroup_size: WORKGROUP_SIZE, bindings: &[{}], push_constant_size: PUSH_CONSTANT_SIZE, spec_constants: &[{}] }};\n}}",
+            sh.module,
+            sh.file,
+            sh.stage,
+            list.join(", "),
+            specs.join(", ")
+        );
+        for (name, size) in &sh.structs {
+            match structs.get(name) {
+                Some((old, where_)) if old != size => {
+                    return Err(format!(
+                        "struct {name} is {old} bytes in {where_} but {size} bytes in {}",
+                        sh.file
+                    ))
+                }
+                _ => {
+                    structs.insert(name.clone(), (*size, sh.file.clone()));
+                }
+            }
+        }
+    }
+    s.push_str(
+        "/// Byte size of every named GLSL struct, as the SPIR-V lays it out.\npub mod structs {\n",
+    );
+    for (name, (size, _)) in &structs {
+        let _ = writeln!(s, "    pub const {}: usize = {size};", const_ident(name));
+    }
+    s.push_str("}\n/// Every shader of the crate.\npub static ALL: &[&crate::gpu::shader::ShaderInfo] = &[");
+    for sh in shaders {
+        let _ = write!(s, "&{}::SHADER, ", sh.module);
+    }
+    s.push_str("];\n");
+    Ok(s)
+}

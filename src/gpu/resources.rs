@@ -1,0 +1,383 @@
+//! Buffers and images from small `*Desc` structs with debug names. Dropping a
+//! resource retires it: it is destroyed once every frame submitted before the
+//! drop has completed (see `Context::frame_completed`).
+
+use super::context::{Context, Shared};
+use crate::error::{vk_err, Error, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+pub use gpu_allocator::MemoryLocation;
+use serde::Serialize;
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::Arc;
+
+/// Live-object counters; tests assert they are all zero at teardown.
+#[derive(Default)]
+pub(crate) struct LiveCounters {
+    pub buffers: AtomicI64,
+    pub images: AtomicI64,
+    pub pipelines: AtomicI64,
+    pub query_pools: AtomicI64,
+    pub command_pools: AtomicI64,
+    pub sync_objects: AtomicI64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct LiveObjects {
+    pub buffers: i64,
+    pub images: i64,
+    pub pipelines: i64,
+    pub query_pools: i64,
+    pub command_pools: i64,
+    pub sync_objects: i64,
+}
+
+impl LiveObjects {
+    pub fn total(&self) -> i64 {
+        self.buffers
+            + self.images
+            + self.pipelines
+            + self.query_pools
+            + self.command_pools
+            + self.sync_objects
+    }
+}
+
+impl LiveCounters {
+    pub fn snapshot(&self) -> LiveObjects {
+        let l = |a: &AtomicI64| a.load(Ordering::Acquire);
+        LiveObjects {
+            buffers: l(&self.buffers),
+            images: l(&self.images),
+            pipelines: l(&self.pipelines),
+            query_pools: l(&self.query_pools),
+            command_pools: l(&self.command_pools),
+            sync_objects: l(&self.sync_objects),
+        }
+    }
+}
+
+pub(crate) fn inc(c: &AtomicI64) {
+    c.fetch_add(1, Ordering::AcqRel);
+}
+
+/// A Vulkan object waiting for the frames that may use it to finish.
+pub(crate) enum Garbage {
+    Buffer(vk::Buffer, Allocation),
+    Image(vk::Image, vk::ImageView, Allocation),
+    Pipeline(vk::Pipeline, vk::PipelineLayout, vk::DescriptorSetLayout),
+    QueryPool(vk::QueryPool),
+    CommandPool(vk::CommandPool),
+    Fence(vk::Fence),
+}
+
+impl Garbage {
+    pub(crate) fn destroy(self, s: &Shared) {
+        let d = &s.device;
+        let free = |a: Allocation| {
+            let _ = s
+                .allocator
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .free(a);
+        };
+        let dec = |c: &AtomicI64| c.fetch_sub(1, Ordering::AcqRel);
+        // SAFETY: retired objects are no longer used by the host, and every
+        // frame that could use them on the GPU has completed.
+        unsafe {
+            match self {
+                Garbage::Buffer(b, a) => {
+                    d.destroy_buffer(b, None);
+                    free(a);
+                    dec(&s.live.buffers);
+                }
+                Garbage::Image(i, v, a) => {
+                    d.destroy_image_view(v, None);
+                    d.destroy_image(i, None);
+                    free(a);
+                    dec(&s.live.images);
+                }
+                Garbage::Pipeline(p, l, sl) => {
+                    d.destroy_pipeline(p, None);
+                    d.destroy_pipeline_layout(l, None);
+                    d.destroy_descriptor_set_layout(sl, None);
+                    dec(&s.live.pipelines);
+                }
+                Garbage::QueryPool(q) => {
+                    d.destroy_query_pool(q, None);
+                    dec(&s.live.query_pools);
+                }
+                Garbage::CommandPool(p) => {
+                    d.destroy_command_pool(p, None);
+                    dec(&s.live.command_pools);
+                }
+                Garbage::Fence(f) => {
+                    d.destroy_fence(f, None);
+                    dec(&s.live.sync_objects);
+                }
+            }
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct BufferDesc<'a> {
+    pub name: &'a str,
+    pub size: u64,
+    pub usage: vk::BufferUsageFlags,
+    /// `CpuToGpu` / `GpuToCpu` buffers are persistently mapped.
+    pub location: MemoryLocation,
+}
+
+pub struct Buffer {
+    pub(crate) raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    pub size: u64,
+    pub name: String,
+    shared: Arc<Shared>,
+}
+
+fn allocate(
+    s: &Shared,
+    name: &str,
+    requirements: vk::MemoryRequirements,
+    location: MemoryLocation,
+    linear: bool,
+) -> Result<Allocation> {
+    let desc = AllocationCreateDesc {
+        name,
+        requirements,
+        location,
+        linear,
+        allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+    };
+    s.allocator
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .allocate(&desc)
+        .map_err(|source| match source {
+            gpu_allocator::AllocationError::OutOfMemory => Error::OutOfDeviceMemory,
+            source => Error::Allocation {
+                name: name.into(),
+                source,
+            },
+        })
+}
+
+impl Buffer {
+    pub fn new(ctx: &Context, desc: &BufferDesc) -> Result<Buffer> {
+        if desc.size == 0 {
+            return Err(Error::BadInput(format!(
+                "buffer {:?} has size 0",
+                desc.name
+            )));
+        }
+        let s = &ctx.shared;
+        let info = vk::BufferCreateInfo::default()
+            .size(desc.size)
+            .usage(desc.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid device and create info.
+        let raw =
+            unsafe { s.device.create_buffer(&info, None) }.map_err(vk_err("vkCreateBuffer"))?;
+        // SAFETY: raw is a live buffer of this device.
+        let req = unsafe { s.device.get_buffer_memory_requirements(raw) };
+        let allocation = match allocate(s, desc.name, req, desc.location, true) {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the buffer was never bound or used.
+                unsafe { s.device.destroy_buffer(raw, None) };
+                return Err(e);
+            }
+        };
+        // SAFETY: fresh allocation sized and aligned by the buffer's requirements.
+        if let Err(e) = unsafe {
+            s.device
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        } {
+            // SAFETY: nothing uses either object yet.
+            unsafe { s.device.destroy_buffer(raw, None) };
+            let _ = s
+                .allocator
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .free(allocation);
+            return Err(Error::vk("vkBindBufferMemory", e));
+        }
+        inc(&s.live.buffers);
+        ctx.set_name(raw, desc.name);
+        Ok(Buffer {
+            raw,
+            allocation: Some(allocation),
+            size: desc.size,
+            name: desc.name.to_string(),
+            shared: s.clone(),
+        })
+    }
+
+    /// The mapped bytes of a host-visible buffer.
+    pub fn mapped(&self) -> Option<&[u8]> {
+        self.allocation
+            .as_ref()?
+            .mapped_slice()
+            .map(|s| &s[..self.size as usize])
+    }
+
+    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
+        let size = self.size as usize;
+        self.allocation
+            .as_mut()?
+            .mapped_slice_mut()
+            .map(|s| &mut s[..size])
+    }
+
+    pub fn raw(&self) -> vk::Buffer {
+        self.raw
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(a) = self.allocation.take() {
+            self.shared.retire(Garbage::Buffer(self.raw, a));
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct ImageDesc<'a> {
+    pub name: &'a str,
+    pub format: vk::Format,
+    pub extent: [u32; 2],
+    pub mip_levels: u32,
+    pub array_layers: u32,
+    pub usage: vk::ImageUsageFlags,
+}
+
+pub struct Image {
+    pub(crate) raw: vk::Image,
+    pub(crate) view: vk::ImageView,
+    allocation: Option<Allocation>,
+    pub format: vk::Format,
+    pub extent: [u32; 2],
+    pub mip_levels: u32,
+    pub array_layers: u32,
+    pub name: String,
+    shared: Arc<Shared>,
+}
+
+pub(crate) fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
+    match format {
+        vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
+        vk::Format::D32_SFLOAT_S8_UINT | vk::Format::D24_UNORM_S8_UINT => {
+            vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+        }
+        _ => vk::ImageAspectFlags::COLOR,
+    }
+}
+
+impl Image {
+    pub fn new(ctx: &Context, desc: &ImageDesc) -> Result<Image> {
+        let max = ctx.info().limits.max_image_dimension_2d;
+        let [w, h] = desc.extent;
+        if w == 0 || h == 0 || w > max || h > max || desc.mip_levels == 0 || desc.array_layers == 0
+        {
+            return Err(Error::BadInput(format!(
+                "image {:?}: extent {w}x{h}, {} mips, {} layers (max side {max})",
+                desc.name, desc.mip_levels, desc.array_layers
+            )));
+        }
+        let s = &ctx.shared;
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(desc.format)
+            .extent(vk::Extent3D {
+                width: w,
+                height: h,
+                depth: 1,
+            })
+            .mip_levels(desc.mip_levels)
+            .array_layers(desc.array_layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { s.device.create_image(&info, None) }.map_err(vk_err("vkCreateImage"))?;
+        // SAFETY: raw is a live image of this device.
+        let req = unsafe { s.device.get_image_memory_requirements(raw) };
+        let allocation = match allocate(s, desc.name, req, MemoryLocation::GpuOnly, false) {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: never bound or used.
+                unsafe { s.device.destroy_image(raw, None) };
+                return Err(e);
+            }
+        };
+        let view_type = if desc.array_layers > 1 {
+            vk::ImageViewType::TYPE_2D_ARRAY
+        } else {
+            vk::ImageViewType::TYPE_2D
+        };
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(view_type)
+            .format(desc.format)
+            .subresource_range(
+                vk::ImageSubresourceRange::default()
+                    .aspect_mask(aspect_of(desc.format))
+                    .level_count(desc.mip_levels)
+                    .layer_count(desc.array_layers),
+            );
+        // SAFETY: binding a fresh allocation sized by the image's requirements,
+        // then viewing the whole bound image.
+        let view = unsafe {
+            s.device
+                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+                .and_then(|_| s.device.create_image_view(&view_info, None))
+        };
+        let view = match view {
+            Ok(v) => v,
+            Err(e) => {
+                // SAFETY: nothing uses either object yet.
+                unsafe { s.device.destroy_image(raw, None) };
+                let _ = s
+                    .allocator
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .free(allocation);
+                return Err(Error::vk("vkBindImageMemory/vkCreateImageView", e));
+            }
+        };
+        inc(&s.live.images);
+        ctx.set_name(raw, desc.name);
+        ctx.set_name(view, desc.name);
+        Ok(Image {
+            raw,
+            view,
+            allocation: Some(allocation),
+            format: desc.format,
+            extent: desc.extent,
+            mip_levels: desc.mip_levels,
+            array_layers: desc.array_layers,
+            name: desc.name.to_string(),
+            shared: s.clone(),
+        })
+    }
+
+    pub fn raw(&self) -> vk::Image {
+        self.raw
+    }
+
+    pub fn view(&self) -> vk::ImageView {
+        self.view
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        if let Some(a) = self.allocation.take() {
+            self.shared.retire(Garbage::Image(self.raw, self.view, a));
+        }
+    }
+}

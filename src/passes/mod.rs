@@ -1,0 +1,5 @@
+//! One pass per file; the pass, its shader and its timer label share a name.
+
+pub mod diamond_patch;
+pub mod prefix_sum;
+pub mod smoke_triangle;
