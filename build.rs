@@ -39,10 +39,7 @@ fn main() {
         for e in &errors {
             eprintln!("error: {e}\n");
         }
-        panic!(
-            "{} shader(s) failed to compile: see the messages above",
-            errors.len()
-        );
+        panic!("{} shader(s) failed to compile: see the messages above", errors.len());
     }
     let code = shader_compiler::generate_module(&shaders).unwrap_or_else(|e| panic!("{e}"));
     let out = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("shaders.rs");

@@ -39,29 +39,12 @@ pub struct CompiledShader {
     pub includes: Vec<PathBuf>,
 }
 
-fn stage_of(
-    path: &Path,
-) -> Result<(glslang::ShaderStage, &'static str, naga::ShaderStage), String> {
+fn stage_of(path: &Path) -> Result<(glslang::ShaderStage, &'static str, naga::ShaderStage), String> {
     match path.extension().and_then(|e| e.to_str()) {
-        Some("comp") => Ok((
-            glslang::ShaderStage::Compute,
-            "Compute",
-            naga::ShaderStage::Compute,
-        )),
-        Some("vert") => Ok((
-            glslang::ShaderStage::Vertex,
-            "Vertex",
-            naga::ShaderStage::Vertex,
-        )),
-        Some("frag") => Ok((
-            glslang::ShaderStage::Fragment,
-            "Fragment",
-            naga::ShaderStage::Fragment,
-        )),
-        other => Err(format!(
-            "{}: unknown shader extension {other:?} (expected comp, vert or frag)",
-            path.display()
-        )),
+        Some("comp") => Ok((glslang::ShaderStage::Compute, "Compute", naga::ShaderStage::Compute)),
+        Some("vert") => Ok((glslang::ShaderStage::Vertex, "Vertex", naga::ShaderStage::Vertex)),
+        Some("frag") => Ok((glslang::ShaderStage::Fragment, "Fragment", naga::ShaderStage::Fragment)),
+        other => Err(format!("{}: unknown shader extension {other:?} (expected comp, vert or frag)", path.display())),
     }
 }
 
@@ -81,10 +64,7 @@ impl glslang::include::IncludeHandler for Includer {
         let path = self.dir.join(header_name);
         let data = std::fs::read_to_string(&path).ok()?;
         self.seen.push(path);
-        Some(glslang::include::IncludeResult {
-            name: header_name.to_string(),
-            data,
-        })
+        Some(glslang::include::IncludeResult { name: header_name.to_string(), data })
     }
 }
 
@@ -114,10 +94,7 @@ pub fn compile_file(path: &Path, include_dir: &Path) -> Result<CompiledShader, S
         version_profile: None,
         ..Default::default()
     };
-    let mut includer = Includer {
-        dir: include_dir.to_path_buf(),
-        seen: Vec::new(),
-    };
+    let mut includer = Includer { dir: include_dir.to_path_buf(), seen: Vec::new() };
     let words = {
         let input = glslang::ShaderInput::new(
             &source,
@@ -128,20 +105,14 @@ pub fn compile_file(path: &Path, include_dir: &Path) -> Result<CompiledShader, S
         )
         .map_err(|e| format!("{file}: {e}"))?;
         let shader = compiler.create_shader(input).map_err(|e| match e {
-            glslang::error::GlslangError::ParseError(log)
-            | glslang::error::GlslangError::PreprocessError(log) => {
+            glslang::error::GlslangError::ParseError(log) | glslang::error::GlslangError::PreprocessError(log) => {
                 format!("{file}: GLSL error\n{}", rewrite_log(&log.log, &file))
             }
             other => format!("{file}: {other}"),
         })?;
-        shader
-            .compile()
-            .map_err(|e| format!("{file}: link/codegen failed: {e}"))?
+        shader.compile().map_err(|e| format!("{file}: link/codegen failed: {e}"))?
     };
-    let stem = path
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .ok_or_else(|| format!("{file}: bad file name"))?;
+    let stem = path.file_stem().and_then(|s| s.to_str()).ok_or_else(|| format!("{file}: bad file name"))?;
     let module = match stage_name {
         "Compute" => stem.to_string(),
         "Vertex" => format!("{stem}_vert"),
@@ -155,35 +126,21 @@ pub fn compile_file(path: &Path, include_dir: &Path) -> Result<CompiledShader, S
     Ok(out)
 }
 
-fn binding_kind(
-    module: &naga::Module,
-    var: &naga::GlobalVariable,
-    file: &str,
-) -> Result<&'static str, String> {
+fn binding_kind(module: &naga::Module, var: &naga::GlobalVariable, file: &str) -> Result<&'static str, String> {
     let inner = &module.types[var.ty].inner;
     let inner = match inner {
-        naga::TypeInner::BindingArray { .. } => {
-            return Err(format!("{file}: binding arrays are not supported"))
-        }
+        naga::TypeInner::BindingArray { .. } => return Err(format!("{file}: binding arrays are not supported")),
         i => i,
     };
     Ok(match (var.space, inner) {
         (naga::AddressSpace::Storage { .. }, _) => "StorageBuffer",
         (naga::AddressSpace::Uniform, _) => "UniformBuffer",
         (naga::AddressSpace::Handle, naga::TypeInner::Sampler { .. }) => "Sampler",
-        (
-            naga::AddressSpace::Handle,
-            naga::TypeInner::Image {
-                class: naga::ImageClass::Storage { .. },
-                ..
-            },
-        ) => "StorageImage",
-        (naga::AddressSpace::Handle, naga::TypeInner::Image { .. }) => "SampledImage",
-        (space, _) => {
-            return Err(format!(
-                "{file}: unsupported resource in address space {space:?}"
-            ))
+        (naga::AddressSpace::Handle, naga::TypeInner::Image { class: naga::ImageClass::Storage { .. }, .. }) => {
+            "StorageImage"
         }
+        (naga::AddressSpace::Handle, naga::TypeInner::Image { .. }) => "SampledImage",
+        (space, _) => return Err(format!("{file}: unsupported resource in address space {space:?}")),
     })
 }
 
@@ -207,17 +164,9 @@ fn reflect(words: &[u32], file: &str, stage: naga::ShaderStage) -> Result<Compil
     };
     let module = naga::front::spv::parse_u8_slice(&bytes, &options)
         .map_err(|e| format!("{file}: naga cannot parse the SPIR-V: {e}"))?;
-    naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::all(),
-    )
-    .validate(&module)
-    .map_err(|e| {
-        format!(
-            "{file}: naga validation failed: {}",
-            error_chain(e.as_inner())
-        )
-    })?;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(&module)
+        .map_err(|e| format!("{file}: naga validation failed: {}", error_chain(e.as_inner())))?;
     let entry = module
         .entry_points
         .iter()
@@ -228,21 +177,14 @@ fn reflect(words: &[u32], file: &str, stage: naga::ShaderStage) -> Result<Compil
     let mut push_constant_size = 0;
     for (_, var) in module.global_variables.iter() {
         let type_name = module.types[var.ty].name.clone().unwrap_or_default();
-        let name = var
-            .name
-            .clone()
-            .filter(|n| !n.is_empty())
-            .unwrap_or(type_name);
+        let name = var.name.clone().filter(|n| !n.is_empty()).unwrap_or(type_name);
         if var.space == naga::AddressSpace::Immediate {
             push_constant_size = module.types[var.ty].inner.size(module.to_ctx());
             continue;
         }
         let Some(rb) = var.binding else { continue };
         if name.is_empty() {
-            return Err(format!(
-                "{file}: binding (set {}, binding {}) has no name",
-                rb.group, rb.binding
-            ));
+            return Err(format!("{file}: binding (set {}, binding {}) has no name", rb.group, rb.binding));
         }
         bindings.push(ReflectedBinding {
             name,
@@ -253,18 +195,13 @@ fn reflect(words: &[u32], file: &str, stage: naga::ShaderStage) -> Result<Compil
     }
     bindings.sort_by_key(|b| (b.set, b.binding));
 
-    let spec_constants = module
-        .overrides
-        .iter()
-        .filter_map(|(_, o)| Some((o.name.clone()?, u32::from(o.id?))))
-        .collect();
+    let spec_constants =
+        module.overrides.iter().filter_map(|(_, o)| Some((o.name.clone()?, u32::from(o.id?)))).collect();
     let structs = module
         .types
         .iter()
         .filter_map(|(_, t)| match (&t.name, &t.inner) {
-            (Some(n), naga::TypeInner::Struct { span, .. }) if !n.is_empty() => {
-                Some((n.clone(), *span))
-            }
+            (Some(n), naga::TypeInner::Struct { span, .. }) if !n.is_empty() => Some((n.clone(), *span)),
             _ => None,
         })
         .collect();
@@ -290,11 +227,7 @@ fn const_ident(name: &str) -> String {
             out.push('_');
         }
         prev_lower = c.is_ascii_lowercase() || c.is_ascii_digit();
-        out.push(if c.is_ascii_alphanumeric() {
-            c.to_ascii_uppercase()
-        } else {
-            '_'
-        });
+        out.push(if c.is_ascii_alphanumeric() { c.to_ascii_uppercase() } else { '_' });
     }
     out
 }
@@ -305,11 +238,7 @@ pub fn generate_module(shaders: &[CompiledShader]) -> Result<String, String> {
     let mut s = String::from("// @generated by build.rs from shaders_glsl/: do not edit.\n");
     let mut structs: BTreeMap<String, (u32, String)> = BTreeMap::new();
     for sh in shaders {
-        let _ = writeln!(
-            s,
-            "/// `{}`\npub mod {} {{\n    use crate::gpu::shader::*;",
-            sh.file, sh.module
-        );
+        let _ = writeln!(s, "/// `{}`\npub mod {} {{\n    use crate::gpu::shader::*;", sh.file, sh.module);
         for b in &sh.bindings {
             let _ = writeln!(
                 s,
@@ -325,27 +254,10 @@ pub fn generate_module(shaders: &[CompiledShader]) -> Result<String, String> {
             let _ = writeln!(s, "    pub const SPEC_{}: u32 = {id};", const_ident(name));
         }
         let list: Vec<String> = sh.bindings.iter().map(|b| const_ident(&b.name)).collect();
-        let specs: Vec<String> = sh
-            .spec_constants
-            .iter()
-            .map(|(n, id)| format!("({n:?}, {id})"))
-            .collect();
-        let _ = writeln!(
-            s,
-            "    pub const WORKGROUP_SIZE: [u32; 3] = {:?};",
-            sh.workgroup_size
-        );
-        let _ = writeln!(
-            s,
-            "    pub const PUSH_CONSTANT_SIZE: u32 = {};",
-            sh.push_constant_size
-        );
-        let _ = writeln!(
-            s,
-            "    static SPIRV: [u32; {}] = {:?};",
-            sh.words.len(),
-            sh.words
-        );
+        let specs: Vec<String> = sh.spec_constants.iter().map(|(n, id)| format!("({n:?}, {id})")).collect();
+        let _ = writeln!(s, "    pub const WORKGROUP_SIZE: [u32; 3] = {:?};", sh.workgroup_size);
+        let _ = writeln!(s, "    pub const PUSH_CONSTANT_SIZE: u32 = {};", sh.push_constant_size);
+        let _ = writeln!(s, "    static SPIRV: [u32; {}] = {:?};", sh.words.len(), sh.words);
         let _ = writeln!(
             s,
             "    pub static SHADER: ShaderInfo = ShaderInfo {{ name: {:?}, file: {:?}, stage: ShaderStage::{}, spirv: &SPIRV, workgroup_size: WORKGROUP_SIZE, bindings: &[{}], push_constant_size: PUSH_CONSTANT_SIZE, spec_constants: &[{}] }};\n}}",
@@ -358,10 +270,7 @@ pub fn generate_module(shaders: &[CompiledShader]) -> Result<String, String> {
         for (name, size) in &sh.structs {
             match structs.get(name) {
                 Some((old, where_)) if old != size => {
-                    return Err(format!(
-                        "struct {name} is {old} bytes in {where_} but {size} bytes in {}",
-                        sh.file
-                    ))
+                    return Err(format!("struct {name} is {old} bytes in {where_} but {size} bytes in {}", sh.file))
                 }
                 _ => {
                     structs.insert(name.clone(), (*size, sh.file.clone()));
@@ -369,9 +278,7 @@ pub fn generate_module(shaders: &[CompiledShader]) -> Result<String, String> {
             }
         }
     }
-    s.push_str(
-        "/// Byte size of every named GLSL struct, as the SPIR-V lays it out.\npub mod structs {\n",
-    );
+    s.push_str("/// Byte size of every named GLSL struct, as the SPIR-V lays it out.\npub mod structs {\n");
     for (name, (size, _)) in &structs {
         let _ = writeln!(s, "    pub const {}: usize = {size};", const_ident(name));
     }

@@ -16,10 +16,7 @@ pub enum Error {
     #[error("bad input: {0}")]
     BadInput(String),
     #[error("Vulkan call {call} failed: {result:?}")]
-    Vulkan {
-        call: &'static str,
-        result: vk::Result,
-    },
+    Vulkan { call: &'static str, result: vk::Result },
     #[error("GPU memory allocation for {name:?} failed: {source}")]
     Allocation {
         name: String,

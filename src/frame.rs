@@ -55,28 +55,16 @@ impl FrameExecutor {
     pub fn new(ctx: &Context, frames_in_flight: usize, max_passes: u32) -> Result<Self> {
         let limits = &ctx.info().limits;
         if !limits.timestamps_supported {
-            log::info!(
-                "{}: no timestamp support on the graphics queue; running without pass timings",
-                ctx.info().name
-            );
+            log::info!("{}: no timestamp support on the graphics queue; running without pass timings", ctx.info().name);
         }
         let mut slots = Vec::new();
         for i in 0..frames_in_flight.max(1) + 1 {
             let pool = if limits.timestamps_supported {
-                Some(TimestampPool::new(
-                    ctx,
-                    &format!("pass_timestamps[{i}]"),
-                    max_passes * 2,
-                )?)
+                Some(TimestampPool::new(ctx, &format!("pass_timestamps[{i}]"), max_passes * 2)?)
             } else {
                 None
             };
-            slots.push(Slot {
-                pool,
-                passes: Vec::new(),
-                frame: 0,
-                pending: false,
-            });
+            slots.push(Slot { pool, passes: Vec::new(), frame: 0, pending: false });
         }
         Ok(FrameExecutor {
             slots,
@@ -118,11 +106,7 @@ impl FrameExecutor {
                     gpu_ms: (ns(ticks[2 * i + 1]) - ns(ticks[2 * i])) / 1e6,
                 })
                 .collect();
-            self.latest = Some(FrameTimings {
-                frame: slot.frame,
-                start_ns: t0,
-                passes,
-            });
+            self.latest = Some(FrameTimings { frame: slot.frame, start_ns: t0, passes });
         }
     }
 
@@ -134,10 +118,7 @@ impl FrameExecutor {
         self.next = (self.next + 1) % self.slots.len();
         let slot = &mut self.slots[slot_index];
         if slot.pending {
-            log::debug!(
-                "timings of frame {} were not back in time and are dropped",
-                slot.frame
-            );
+            log::debug!("timings of frame {} were not back in time and are dropped", slot.frame);
         }
         slot.passes.clear();
         slot.frame = self.frame;
@@ -145,11 +126,7 @@ impl FrameExecutor {
         if let Some(pool) = &slot.pool {
             rec.reset_queries(pool, 0, pool.capacity);
         }
-        Frame {
-            exec: self,
-            rec,
-            slot: slot_index,
-        }
+        Frame { exec: self, rec, slot: slot_index }
     }
 }
 
@@ -163,19 +140,10 @@ pub struct Frame<'e, 'r> {
 impl<'r> Frame<'_, 'r> {
     /// Records one pass between a timestamp pair inside a debug label. The
     /// name is the pass's file, shader and timer label.
-    pub fn pass<T>(
-        &mut self,
-        name: &'static str,
-        queue: QueueKind,
-        f: impl FnOnce(&mut Recorder<'r>) -> T,
-    ) -> T {
+    pub fn pass<T>(&mut self, name: &'static str, queue: QueueKind, f: impl FnOnce(&mut Recorder<'r>) -> T) -> T {
         let slot = &mut self.exec.slots[self.slot];
         let i = slot.passes.len() as u32;
-        assert!(
-            i < self.exec.max_passes,
-            "more than {} passes in one frame",
-            self.exec.max_passes
-        );
+        assert!(i < self.exec.max_passes, "more than {} passes in one frame", self.exec.max_passes);
         slot.passes.push((name, queue));
         self.rec.begin_label(name);
         if let Some(pool) = &slot.pool {

@@ -6,10 +6,7 @@
 /// Counter-clockwise triangles (seen from +z) of an n x n quad grid with
 /// (n+1)^2 vertices in row-major order.
 pub fn diamond_indices(n: u32) -> Vec<u32> {
-    assert!(
-        n >= 1 && n % 2 == 0,
-        "diamond pattern needs an even quad count, got {n}"
-    );
+    assert!(n >= 1 && n % 2 == 0, "diamond pattern needs an even quad count, got {n}");
     let v = |x: u32, y: u32| y * (n + 1) + x;
     let mut out = Vec::with_capacity((n * n * 6) as usize);
     for y in 0..n {
@@ -37,17 +34,8 @@ mod tests {
         let idx = diamond_indices(n);
         for y in 1..n {
             for x in 1..n {
-                let touching = idx
-                    .chunks(3)
-                    .filter(|t| t.contains(&(y * (n + 1) + x)))
-                    .count();
-                let expect = if x % 2 == 1 && y % 2 == 1 {
-                    8
-                } else if x % 2 == 0 && y % 2 == 0 {
-                    8
-                } else {
-                    4
-                };
+                let touching = idx.chunks(3).filter(|t| t.contains(&(y * (n + 1) + x))).count();
+                let expect = if x % 2 == y % 2 { 8 } else { 4 };
                 assert_eq!(touching, expect, "vertex ({x},{y})");
             }
         }

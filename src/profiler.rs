@@ -28,31 +28,17 @@ pub fn summarize(frames: &[FrameTimings]) -> Vec<PassSummary> {
     names
         .into_iter()
         .map(|(name, queue)| {
-            let mut v: Vec<f64> = frames
-                .iter()
-                .flat_map(|f| f.passes.iter().filter(|p| p.name == name).map(|p| p.gpu_ms))
-                .collect();
+            let mut v: Vec<f64> =
+                frames.iter().flat_map(|f| f.passes.iter().filter(|p| p.name == name).map(|p| p.gpu_ms)).collect();
             v.sort_by(f64::total_cmp);
-            let median = if v.len() % 2 == 1 {
-                v[v.len() / 2]
-            } else {
-                0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2])
-            };
-            PassSummary {
-                name,
-                queue,
-                median_ms: median,
-                min_ms: v[0],
-                max_ms: v[v.len() - 1],
-                samples: v.len(),
-            }
+            let median = if v.len() % 2 == 1 { v[v.len() / 2] } else { 0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2]) };
+            PassSummary { name, queue, median_ms: median, min_ms: v[0], max_ms: v[v.len() - 1], samples: v.len() }
         })
         .collect()
 }
 
 pub fn to_json(frames: &[FrameTimings]) -> String {
-    serde_json::to_string_pretty(&json!({ "frames": frames, "summary": summarize(frames) }))
-        .unwrap_or_default()
+    serde_json::to_string_pretty(&json!({ "frames": frames, "summary": summarize(frames) })).unwrap_or_default()
 }
 
 /// Chrome trace-event JSON: one complete ("X") event per pass, one track per queue.
@@ -72,6 +58,5 @@ pub fn to_chrome_trace(frames: &[FrameTimings]) -> String {
     }
     events.push(json!({"name": "thread_name", "ph": "M", "pid": 1, "tid": 1, "args": {"name": "graphics queue"}}));
     events.push(json!({"name": "thread_name", "ph": "M", "pid": 1, "tid": 2, "args": {"name": "compute queue"}}));
-    serde_json::to_string(&json!({ "traceEvents": events, "displayTimeUnit": "ms" }))
-        .unwrap_or_default()
+    serde_json::to_string(&json!({ "traceEvents": events, "displayTimeUnit": "ms" })).unwrap_or_default()
 }

@@ -23,26 +23,15 @@ pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput>
     let tri = SmokeTriangle::new(ctx)?;
     let patch = DiamondPatch::new(ctx, 16)?;
     let n = PrefixSum::capacity();
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-        | vk::BufferUsageFlags::TRANSFER_DST
-        | vk::BufferUsageFlags::TRANSFER_SRC;
+    let usage =
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
     let input = Buffer::new(
         ctx,
-        &BufferDesc {
-            name: "smoke_scan_input",
-            size: u64::from(n) * 4,
-            usage,
-            location: MemoryLocation::GpuOnly,
-        },
+        &BufferDesc { name: "smoke_scan_input", size: u64::from(n) * 4, usage, location: MemoryLocation::GpuOnly },
     )?;
     let output = Buffer::new(
         ctx,
-        &BufferDesc {
-            name: "smoke_scan_output",
-            size: u64::from(n) * 4,
-            usage,
-            location: MemoryLocation::GpuOnly,
-        },
+        &BufferDesc { name: "smoke_scan_output", size: u64::from(n) * 4, usage, location: MemoryLocation::GpuOnly },
     )?;
     ctx.upload(&input, bytemuck::cast_slice(&(0..n).collect::<Vec<u32>>()))?;
     let target_desc = |name| ImageDesc {
@@ -58,30 +47,14 @@ pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput>
     let mut ring = FrameRing::new(ctx, 2)?;
     let mut exec = FrameExecutor::new(ctx, 2, 8)?;
     let mut out = Vec::new();
-    let corners = [
-        [-0.8, -0.7, 0.0, 1.0],
-        [0.9, -0.2, 0.0, 1.0],
-        [-0.1, 0.85, 0.0, 1.0],
-    ];
+    let corners = [[-0.8, -0.7, 0.0, 1.0], [0.9, -0.2, 0.0, 1.0], [-0.1, 0.85, 0.0, 1.0]];
     for _ in 0..frames {
         ring.record(ctx, |rec| {
-            rec.image_layout(
-                &tri_target,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-            );
-            rec.image_layout(
-                &patch_target,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-            );
+            rec.image_layout(&tri_target, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+            rec.image_layout(&patch_target, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
             let mut frame = exec.begin(rec);
-            frame.pass(PrefixSum::NAME, QueueKind::Compute, |r| {
-                scan.record(r, &input, &output, n)
-            })?;
-            frame.pass(SmokeTriangle::NAME, QueueKind::Graphics, |r| {
-                tri.record(r, &tri_target, corners)
-            });
+            frame.pass(PrefixSum::NAME, QueueKind::Compute, |r| scan.record(r, &input, &output, n))?;
+            frame.pass(SmokeTriangle::NAME, QueueKind::Graphics, |r| tri.record(r, &tri_target, corners));
             frame.pass(DiamondPatch::NAME, QueueKind::Graphics, |r| {
                 patch.record(r, &patch_target, Some(patch.vertex(5, 7)))
             });
@@ -95,16 +68,6 @@ pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput>
         }
     }
     ring.wait_all(ctx)?;
-    let image = ctx.read_image(
-        &patch_target,
-        0,
-        0,
-        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-        4,
-    )?;
-    Ok(SmokeOutput {
-        frames: out,
-        image,
-        size,
-    })
+    let image = ctx.read_image(&patch_target, 0, 0, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, 4)?;
+    Ok(SmokeOutput { frames: out, image, size })
 }

@@ -100,25 +100,13 @@ impl<'a> Recorder<'a> {
         let mut buffer_infos = Vec::with_capacity(bindings.len());
         let mut image_infos = Vec::with_capacity(bindings.len());
         for (b, r) in bindings {
-            assert!(
-                p.bindings.contains(b),
-                "{}: binding {} is not part of pipeline {}",
-                b.name,
-                b.binding,
-                p.name
-            );
+            assert!(p.bindings.contains(b), "{}: binding {} is not part of pipeline {}", b.name, b.binding, p.name);
             match r {
-                Resource::Buffer(buf) => buffer_infos.push(vk::DescriptorBufferInfo {
-                    buffer: buf.raw,
-                    offset: 0,
-                    range: vk::WHOLE_SIZE,
-                }),
+                Resource::Buffer(buf) => {
+                    buffer_infos.push(vk::DescriptorBufferInfo { buffer: buf.raw, offset: 0, range: vk::WHOLE_SIZE })
+                }
                 Resource::BufferRange(buf, offset, size) => {
-                    buffer_infos.push(vk::DescriptorBufferInfo {
-                        buffer: buf.raw,
-                        offset: *offset,
-                        range: *size,
-                    })
+                    buffer_infos.push(vk::DescriptorBufferInfo { buffer: buf.raw, offset: *offset, range: *size })
                 }
                 Resource::Image(img, layout) => image_infos.push(vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),
@@ -136,9 +124,7 @@ impl<'a> Recorder<'a> {
         let writes: Vec<vk::WriteDescriptorSet> = bindings
             .iter()
             .map(|(b, r)| {
-                let w = vk::WriteDescriptorSet::default()
-                    .dst_binding(b.binding)
-                    .descriptor_type(b.kind.vk());
+                let w = vk::WriteDescriptorSet::default().dst_binding(b.binding).descriptor_type(b.kind.vk());
                 match (r, b.kind) {
                     (
                         Resource::Buffer(_) | Resource::BufferRange(..),
@@ -147,31 +133,19 @@ impl<'a> Recorder<'a> {
                         bi += 1;
                         w.buffer_info(&buffer_infos[bi - 1..bi])
                     }
-                    (
-                        Resource::Image(..),
-                        BindingKind::SampledImage | BindingKind::StorageImage,
-                    )
+                    (Resource::Image(..), BindingKind::SampledImage | BindingKind::StorageImage)
                     | (Resource::Sampler(_), BindingKind::Sampler) => {
                         ii += 1;
                         w.image_info(&image_infos[ii - 1..ii])
                     }
-                    _ => panic!(
-                        "{}: resource does not match binding kind {:?}",
-                        b.name, b.kind
-                    ),
+                    _ => panic!("{}: resource does not match binding kind {:?}", b.name, b.kind),
                 }
             })
             .collect();
         // SAFETY: the set layout has the push-descriptor flag; the resources
         // are live for the borrow and deferred-destroyed after the frame.
         unsafe {
-            self.ctx.shared.push_descriptor.cmd_push_descriptor_set(
-                self.cmd,
-                p.bind_point,
-                p.layout,
-                0,
-                &writes,
-            )
+            self.ctx.shared.push_descriptor.cmd_push_descriptor_set(self.cmd, p.bind_point, p.layout, 0, &writes)
         };
     }
 
@@ -187,10 +161,7 @@ impl<'a> Recorder<'a> {
             p.push_size
         );
         // SAFETY: size checked against the layout's range.
-        unsafe {
-            self.d()
-                .cmd_push_constants(self.cmd, p.layout, p.push_stages, 0, bytes)
-        };
+        unsafe { self.d().cmd_push_constants(self.cmd, p.layout, p.push_stages, 0, bytes) };
     }
 
     pub fn dispatch(&mut self, x: u32, y: u32, z: u32) {
@@ -206,11 +177,8 @@ impl<'a> Recorder<'a> {
     /// Begins dynamic rendering into `colors` (+ optional depth cleared to
     /// 0, reversed-Z), with a full-target viewport and scissor.
     pub fn begin_rendering(&mut self, colors: &[ColorTarget], depth: Option<&Image>) {
-        let extent = colors
-            .first()
-            .map(|c| c.image.extent)
-            .or(depth.map(|d| d.extent))
-            .expect("begin_rendering needs a target");
+        let extent =
+            colors.first().map(|c| c.image.extent).or(depth.map(|d| d.extent)).expect("begin_rendering needs a target");
         let color_atts: Vec<_> = colors
             .iter()
             .map(|c| {
@@ -219,9 +187,7 @@ impl<'a> Recorder<'a> {
                     .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                     .load_op(vk::AttachmentLoadOp::CLEAR)
                     .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue {
-                        color: vk::ClearColorValue { float32: c.clear },
-                    })
+                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: c.clear } })
             })
             .collect();
         let depth_att = depth.map(|d| {
@@ -230,24 +196,13 @@ impl<'a> Recorder<'a> {
                 .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
                 .load_op(vk::AttachmentLoadOp::CLEAR)
                 .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue {
-                    depth_stencil: vk::ClearDepthStencilValue {
-                        depth: 0.0,
-                        stencil: 0,
-                    },
-                })
+                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } })
         });
         let area = vk::Rect2D {
             offset: vk::Offset2D { x: 0, y: 0 },
-            extent: vk::Extent2D {
-                width: extent[0],
-                height: extent[1],
-            },
+            extent: vk::Extent2D { width: extent[0], height: extent[1] },
         };
-        let mut info = vk::RenderingInfo::default()
-            .render_area(area)
-            .layer_count(1)
-            .color_attachments(&color_atts);
+        let mut info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&color_atts);
         if let Some(d) = depth_att.as_ref() {
             info = info.depth_attachment(d);
         }
@@ -280,10 +235,8 @@ impl<'a> Recorder<'a> {
     pub fn draw_indexed(&mut self, indices: &Buffer, index_count: u32, instances: u32) {
         // SAFETY: live u32 index buffer.
         unsafe {
-            self.d()
-                .cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
-            self.d()
-                .cmd_draw_indexed(self.cmd, index_count, instances, 0, 0, 0);
+            self.d().cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
+            self.d().cmd_draw_indexed(self.cmd, index_count, instances, 0, 0, 0);
         }
     }
 
@@ -299,46 +252,25 @@ impl<'a> Recorder<'a> {
         let stride = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u32;
         // SAFETY: live buffers; drawIndirectCount is a required feature.
         unsafe {
-            self.d()
-                .cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
-            self.d().cmd_draw_indexed_indirect_count(
-                self.cmd,
-                args.raw,
-                0,
-                count.raw,
-                count_offset,
-                max_draws,
-                stride,
-            );
+            self.d().cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
+            self.d().cmd_draw_indexed_indirect_count(self.cmd, args.raw, 0, count.raw, count_offset, max_draws, stride);
         }
     }
 
     pub fn fill_buffer(&mut self, buf: &Buffer, value: u32) {
         // SAFETY: live buffer, whole range.
-        unsafe {
-            self.d()
-                .cmd_fill_buffer(self.cmd, buf.raw, 0, vk::WHOLE_SIZE, value)
-        };
+        unsafe { self.d().cmd_fill_buffer(self.cmd, buf.raw, 0, vk::WHOLE_SIZE, value) };
     }
 
     pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, size: u64) {
-        assert!(
-            size <= src.size && size <= dst.size,
-            "copy of {size} bytes overruns {} or {}",
-            src.name,
-            dst.name
-        );
+        assert!(size <= src.size && size <= dst.size, "copy of {size} bytes overruns {} or {}", src.name, dst.name);
         // SAFETY: live buffers, size checked.
         unsafe {
             self.d().cmd_copy_buffer(
                 self.cmd,
                 src.raw,
                 dst.raw,
-                &[vk::BufferCopy {
-                    src_offset: 0,
-                    dst_offset: 0,
-                    size,
-                }],
+                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }],
             )
         };
     }
@@ -374,12 +306,7 @@ impl<'a> Recorder<'a> {
         if let Some(dd) = &self.ctx.shared.debug_device {
             let name = CString::new(name).unwrap_or_default();
             // SAFETY: valid command buffer; debug utils loaded.
-            unsafe {
-                dd.cmd_begin_debug_utils_label(
-                    self.cmd,
-                    &vk::DebugUtilsLabelEXT::default().label_name(&name),
-                )
-            };
+            unsafe { dd.cmd_begin_debug_utils_label(self.cmd, &vk::DebugUtilsLabelEXT::default().label_name(&name)) };
         }
     }
 
@@ -392,26 +319,12 @@ impl<'a> Recorder<'a> {
 
     pub fn reset_queries(&mut self, pool: &TimestampPool, first: u32, count: u32) {
         // SAFETY: range within the pool (asserted by the pool's user).
-        unsafe {
-            self.d()
-                .cmd_reset_query_pool(self.cmd, pool.raw, first, count)
-        };
+        unsafe { self.d().cmd_reset_query_pool(self.cmd, pool.raw, first, count) };
     }
 
     pub fn write_timestamp(&mut self, pool: &TimestampPool, index: u32) {
-        assert!(
-            index < pool.capacity,
-            "timestamp {index} outside pool of {}",
-            pool.capacity
-        );
+        assert!(index < pool.capacity, "timestamp {index} outside pool of {}", pool.capacity);
         // SAFETY: index checked; the query was reset this frame.
-        unsafe {
-            self.d().cmd_write_timestamp2(
-                self.cmd,
-                vk::PipelineStageFlags2::ALL_COMMANDS,
-                pool.raw,
-                index,
-            )
-        };
+        unsafe { self.d().cmd_write_timestamp2(self.cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool.raw, index) };
     }
 }

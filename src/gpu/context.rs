@@ -87,20 +87,12 @@ pub struct Context {
     pub(crate) shared: Arc<Shared>,
 }
 
-fn create_instance(
-    entry: &ash::Entry,
-    options: &ContextOptions,
-    log: &ValidationLog,
-) -> Result<(ash::Instance, bool)> {
+fn create_instance(entry: &ash::Entry, options: &ContextOptions, log: &ValidationLog) -> Result<(ash::Instance, bool)> {
     let validation = options.validation || options.sync_validation;
     // SAFETY: plain enumeration through a loaded entry.
-    let layers = unsafe { entry.enumerate_instance_layer_properties() }
-        .map_err(vk_err("vkEnumerateInstanceLayerProperties"))?;
-    if validation
-        && !layers
-            .iter()
-            .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER))
-    {
+    let layers =
+        unsafe { entry.enumerate_instance_layer_properties() }.map_err(vk_err("vkEnumerateInstanceLayerProperties"))?;
+    if validation && !layers.iter().any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER)) {
         return Err(Error::Unsupported(
             "the Khronos validation layer is not installed (run tools/install-deps as root)".into(),
         ));
@@ -108,10 +100,7 @@ fn create_instance(
     // SAFETY: plain enumeration through a loaded entry.
     let exts = unsafe { entry.enumerate_instance_extension_properties(None) }
         .map_err(vk_err("vkEnumerateInstanceExtensionProperties"))?;
-    let has = |name: &CStr| {
-        exts.iter()
-            .any(|e| e.extension_name_as_c_str().ok() == Some(name))
-    };
+    let has = |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(name));
     let debug_utils = has(ash::ext::debug_utils::NAME);
     let mut ext_names = Vec::new();
     if debug_utils {
@@ -120,11 +109,7 @@ fn create_instance(
     if options.sync_validation {
         ext_names.push(ash::ext::validation_features::NAME.as_ptr());
     }
-    let layer_names = if validation {
-        vec![VALIDATION_LAYER.as_ptr()]
-    } else {
-        vec![]
-    };
+    let layer_names = if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
     let app = vk::ApplicationInfo::default()
         .application_name(c"vista")
         .engine_name(c"vista")
@@ -144,21 +129,17 @@ fn create_instance(
     }
     // SAFETY: every pointer in `info` refers to locals that outlive the call.
     let instance = unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {
-        vk::Result::ERROR_INCOMPATIBLE_DRIVER => Error::Unsupported(
-            "no Vulkan 1.3 driver (install mesa-vulkan-drivers: tools/install-deps)".into(),
-        ),
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
+            Error::Unsupported("no Vulkan 1.3 driver (install mesa-vulkan-drivers: tools/install-deps)".into())
+        }
         e => Error::vk("vkCreateInstance", e),
     })?;
     Ok((instance, debug_utils))
 }
 
-fn pick_device(
-    instance: &ash::Instance,
-    wanted: Option<&str>,
-) -> Result<(vk::PhysicalDevice, DeviceInfo)> {
+fn pick_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::PhysicalDevice, DeviceInfo)> {
     // SAFETY: valid instance.
-    let devices = unsafe { instance.enumerate_physical_devices() }
-        .map_err(vk_err("vkEnumeratePhysicalDevices"))?;
+    let devices = unsafe { instance.enumerate_physical_devices() }.map_err(vk_err("vkEnumeratePhysicalDevices"))?;
     let mut rejected = Vec::new();
     let mut candidates = Vec::new();
     for pd in devices {
@@ -175,13 +156,8 @@ fn pick_device(
         device_info::type_rank(unsafe { instance.get_physical_device_properties(*pd) }.device_type)
     });
     candidates.into_iter().next().ok_or_else(|| {
-        let filter = wanted
-            .map(|w| format!(" named like {w:?}"))
-            .unwrap_or_default();
-        Error::Unsupported(format!(
-            "no usable Vulkan device{filter}; rejected: [{}]",
-            rejected.join("; ")
-        ))
+        let filter = wanted.map(|w| format!(" named like {w:?}")).unwrap_or_default();
+        Error::Unsupported(format!("no usable Vulkan device{filter}; rejected: [{}]", rejected.join("; ")))
     })
 }
 
@@ -189,11 +165,8 @@ impl Context {
     /// Creates its own instance and device: for tools and tests.
     pub fn headless(options: &ContextOptions) -> Result<Context> {
         // SAFETY: loads the system Vulkan loader; no other precondition.
-        let entry = unsafe { ash::Entry::load() }.map_err(|e| {
-            Error::Unsupported(format!(
-                "cannot load the Vulkan loader ({e}): run tools/install-deps"
-            ))
-        })?;
+        let entry = unsafe { ash::Entry::load() }
+            .map_err(|e| Error::Unsupported(format!("cannot load the Vulkan loader ({e}): run tools/install-deps")))?;
         let log = Arc::new(ValidationLog::default());
         let (instance, debug_utils) = create_instance(&entry, options, &log)?;
         let env = std::env::var("VISTA_DEVICE").ok();
@@ -207,21 +180,15 @@ impl Context {
             }
         };
         let prio = [1.0f32];
-        let mut queue_infos = vec![vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(info.graphics_family)
-            .queue_priorities(&prio)];
+        let mut queue_infos =
+            vec![vk::DeviceQueueCreateInfo::default().queue_family_index(info.graphics_family).queue_priorities(&prio)];
         if info.async_compute {
             queue_infos.push(
-                vk::DeviceQueueCreateInfo::default()
-                    .queue_family_index(info.compute_family)
-                    .queue_priorities(&prio),
+                vk::DeviceQueueCreateInfo::default().queue_family_index(info.compute_family).queue_priorities(&prio),
             );
         }
         let mut feats = device_info::required_features();
-        let ext_names: Vec<_> = REQUIRED_DEVICE_EXTENSIONS
-            .iter()
-            .map(|e| e.as_ptr())
-            .collect();
+        let ext_names: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
         let dinfo = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_extension_names(&ext_names)
@@ -239,10 +206,7 @@ impl Context {
         };
         // SAFETY: the families were requested with one queue each above.
         let (gq, cq) = unsafe {
-            (
-                device.get_device_queue(info.graphics_family, 0),
-                device.get_device_queue(info.compute_family, 0),
-            )
+            (device.get_device_queue(info.graphics_family, 0), device.get_device_queue(info.compute_family, 0))
         };
         let handles = RawHandles {
             entry,
@@ -265,20 +229,14 @@ impl Context {
     /// returned context and everything made from it. The device must enable
     /// `REQUIRED_DEVICE_EXTENSIONS` and the features vista requires.
     pub unsafe fn from_raw(handles: RawHandles) -> Result<Context> {
-        let mut info = device_info::query(&handles.instance, handles.physical_device)
-            .map_err(Error::Unsupported)?;
+        let mut info = device_info::query(&handles.instance, handles.physical_device).map_err(Error::Unsupported)?;
         info.graphics_family = handles.graphics_queue_family;
         info.compute_family = handles.compute_queue_family;
         info.async_compute = handles.compute_queue != handles.graphics_queue;
         Self::build(handles, info, false, Arc::new(ValidationLog::default()))
     }
 
-    fn build(
-        h: RawHandles,
-        info: DeviceInfo,
-        owns_handles: bool,
-        log: Arc<ValidationLog>,
-    ) -> Result<Context> {
+    fn build(h: RawHandles, info: DeviceInfo, owns_handles: bool, log: Arc<ValidationLog>) -> Result<Context> {
         let (debug_instance, debug_device, messenger) = if h.debug_utils {
             let di = ash::ext::debug_utils::Instance::new(&h.entry, &h.instance);
             let dd = ash::ext::debug_utils::Device::new(&h.instance, &h.device);
@@ -303,20 +261,11 @@ impl Context {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|source| Error::Allocation {
-            name: "allocator".into(),
-            source,
-        })?;
+        .map_err(|source| Error::Allocation { name: "allocator".into(), source })?;
         let push_descriptor = ash::khr::push_descriptor::Device::new(&h.instance, &h.device);
         let shared = Shared {
-            graphics: Queue {
-                family: h.graphics_queue_family,
-                raw: h.graphics_queue,
-            },
-            compute: Queue {
-                family: h.compute_queue_family,
-                raw: h.compute_queue,
-            },
+            graphics: Queue { family: h.graphics_queue_family, raw: h.graphics_queue },
+            compute: Queue { family: h.compute_queue_family, raw: h.compute_queue },
             entry: h.entry,
             instance: h.instance,
             physical: h.physical_device,
@@ -335,9 +284,7 @@ impl Context {
             validation_log: log,
             info,
         };
-        Ok(Context {
-            shared: Arc::new(shared),
-        })
+        Ok(Context { shared: Arc::new(shared) })
     }
 
     pub fn info(&self) -> &DeviceInfo {
@@ -384,25 +331,17 @@ impl Context {
     /// Call when the fence of frame `frame` (from `frame_submitted`) has
     /// signalled: resources dropped up to that frame are destroyed.
     pub fn frame_completed(&self, frame: u64) {
-        self.shared
-            .frames_completed
-            .fetch_max(frame, Ordering::AcqRel);
+        self.shared.frames_completed.fetch_max(frame, Ordering::AcqRel);
         self.shared.collect_garbage();
     }
 
     /// Waits for all GPU work, then destroys every deferred resource.
     pub fn wait_idle(&self) -> Result<()> {
         // SAFETY: valid device; the queue lock keeps submissions out meanwhile.
-        let _q = self
-            .shared
-            .queue_lock
-            .lock()
-            .unwrap_or_else(|e| e.into_inner());
+        let _q = self.shared.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
         unsafe { self.shared.device.device_wait_idle() }.map_err(vk_err("vkDeviceWaitIdle"))?;
         let submitted = self.shared.frames_submitted.load(Ordering::Acquire);
-        self.shared
-            .frames_completed
-            .fetch_max(submitted, Ordering::AcqRel);
+        self.shared.frames_completed.fetch_max(submitted, Ordering::AcqRel);
         self.shared.collect_garbage();
         Ok(())
     }
@@ -411,9 +350,7 @@ impl Context {
     pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
         if let Some(dd) = &self.shared.debug_device {
             let name = CString::new(name.replace('\0', " ")).unwrap_or_default();
-            let info = vk::DebugUtilsObjectNameInfoEXT::default()
-                .object_handle(handle)
-                .object_name(&name);
+            let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
             // SAFETY: the handle is a live object of this device.
             let _ = unsafe { dd.set_debug_utils_object_name(&info) };
         }
@@ -423,9 +360,7 @@ impl Context {
     /// layer is active (the harness canary). Creates and leaks nothing.
     pub fn provoke_validation_error(&self) {
         // A buffer of size 0 violates VUID-VkBufferCreateInfo-size-00912.
-        let info = vk::BufferCreateInfo::default()
-            .size(0)
-            .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+        let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
         // SAFETY: invalid on purpose but harmless: drivers accept or reject it,
         // and any created handle is destroyed at once.
         unsafe {
@@ -467,12 +402,7 @@ impl Drop for Shared {
         // follows the module documentation.
         unsafe {
             let _ = self.device.device_wait_idle();
-            let all: Vec<_> = self
-                .garbage
-                .get_mut()
-                .unwrap_or_else(|e| e.into_inner())
-                .drain(..)
-                .collect();
+            let all: Vec<_> = self.garbage.get_mut().unwrap_or_else(|e| e.into_inner()).drain(..).collect();
             for (_, g) in all {
                 g.destroy(self);
             }

@@ -51,9 +51,7 @@ pub struct DeviceInfo {
 
 fn cstr(bytes: &[std::ffi::c_char]) -> String {
     // SAFETY: Vulkan fixed-size string arrays are NUL-terminated.
-    unsafe { CStr::from_ptr(bytes.as_ptr()) }
-        .to_string_lossy()
-        .into_owned()
+    unsafe { CStr::from_ptr(bytes.as_ptr()) }.to_string_lossy().into_owned()
 }
 
 pub(crate) fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
@@ -67,23 +65,16 @@ pub(crate) fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
 }
 
 /// Queries everything about `pd`; `Err(reason)` names what is missing.
-pub(crate) fn query(
-    instance: &ash::Instance,
-    pd: vk::PhysicalDevice,
-) -> Result<DeviceInfo, String> {
+pub(crate) fn query(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<DeviceInfo, String> {
     let mut v11 = vk::PhysicalDeviceVulkan11Properties::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Properties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default()
-        .push_next(&mut v11)
-        .push_next(&mut v12);
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut v11).push_next(&mut v12);
     // SAFETY: pd comes from this instance; the chained structs outlive the call.
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let p = props2.properties;
     let name = cstr(&p.device_name);
     let api = p.api_version;
-    if vk::api_version_major(api) < 1
-        || (vk::api_version_major(api) == 1 && vk::api_version_minor(api) < 3)
-    {
+    if vk::api_version_major(api) < 1 || (vk::api_version_major(api) == 1 && vk::api_version_minor(api) < 3) {
         return Err(format!(
             "{name}: Vulkan 1.3 required, device has {}.{}",
             vk::api_version_major(api),
@@ -92,17 +83,10 @@ pub(crate) fn query(
     }
     missing_features(instance, pd).map_err(|m| format!("{name}: missing {m}"))?;
     // SAFETY: valid physical device of this instance.
-    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }
-        .map_err(|e| format!("{name}: {e:?}"))?;
+    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.map_err(|e| format!("{name}: {e:?}"))?;
     for req in REQUIRED_DEVICE_EXTENSIONS {
-        if !exts
-            .iter()
-            .any(|e| e.extension_name_as_c_str().ok() == Some(*req))
-        {
-            return Err(format!(
-                "{name}: missing device extension {}",
-                req.to_string_lossy()
-            ));
+        if !exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(*req)) {
+            return Err(format!("{name}: missing device extension {}", req.to_string_lossy()));
         }
     }
     // SAFETY: valid physical device of this instance.
@@ -146,8 +130,7 @@ pub(crate) fn query(
             max_push_constants_bytes: l.max_push_constants_size,
             max_image_dimension_2d: l.max_image_dimension2_d,
             max_image_array_layers: l.max_image_array_layers,
-            timestamps_supported: l.timestamp_compute_and_graphics == vk::TRUE
-                && graphics.timestamp_valid_bits > 0,
+            timestamps_supported: l.timestamp_compute_and_graphics == vk::TRUE && graphics.timestamp_valid_bits > 0,
             timestamp_period_ns: l.timestamp_period,
         },
         queue_families,
@@ -164,45 +147,32 @@ pub(crate) struct FeatureChain {
 
 pub(crate) fn required_features() -> FeatureChain {
     FeatureChain {
-        core: vk::PhysicalDeviceFeatures::default()
-            .multi_draw_indirect(true)
-            .draw_indirect_first_instance(true),
+        core: vk::PhysicalDeviceFeatures::default().multi_draw_indirect(true).draw_indirect_first_instance(true),
         v12: vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
             .draw_indirect_count(true)
             .host_query_reset(true),
-        v13: vk::PhysicalDeviceVulkan13Features::default()
-            .synchronization2(true)
-            .dynamic_rendering(true),
+        v13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true),
     }
 }
 
 fn missing_features(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<(), String> {
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
-    let mut f2 = vk::PhysicalDeviceFeatures2::default()
-        .push_next(&mut v12)
-        .push_next(&mut v13);
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut v13);
     // SAFETY: pd comes from this instance; the chained structs outlive the call.
     unsafe { instance.get_physical_device_features2(pd, &mut f2) };
     let core = f2.features;
     let checks = [
         ("multiDrawIndirect", core.multi_draw_indirect),
-        (
-            "drawIndirectFirstInstance",
-            core.draw_indirect_first_instance,
-        ),
+        ("drawIndirectFirstInstance", core.draw_indirect_first_instance),
         ("timelineSemaphore", v12.timeline_semaphore),
         ("drawIndirectCount", v12.draw_indirect_count),
         ("hostQueryReset", v12.host_query_reset),
         ("synchronization2", v13.synchronization2),
         ("dynamicRendering", v13.dynamic_rendering),
     ];
-    let missing: Vec<&str> = checks
-        .iter()
-        .filter(|(_, v)| *v != vk::TRUE)
-        .map(|(n, _)| *n)
-        .collect();
+    let missing: Vec<&str> = checks.iter().filter(|(_, v)| *v != vk::TRUE).map(|(n, _)| *n).collect();
     if missing.is_empty() {
         Ok(())
     } else {

@@ -55,18 +55,10 @@ fn build_layout(s: &Shared, name: &str, shaders: &[&ShaderInfo]) -> Result<Layou
     let mut push_size = 0;
     for sh in shaders {
         for b in sh.bindings {
-            assert_eq!(
-                b.set, 0,
-                "{}: vista shaders use descriptor set 0 only ({})",
-                sh.file, b.name
-            );
+            assert_eq!(b.set, 0, "{}: vista shaders use descriptor set 0 only ({})", sh.file, b.name);
             match merged.iter_mut().find(|(m, _)| m.binding == b.binding) {
                 Some((m, stages)) => {
-                    assert_eq!(
-                        m.kind, b.kind,
-                        "{}: binding {} differs between stages",
-                        sh.file, b.binding
-                    );
+                    assert_eq!(m.kind, b.kind, "{}: binding {} differs between stages", sh.file, b.binding);
                     *stages |= sh.stage.vk();
                 }
                 None => merged.push((*b, sh.stage.vk())),
@@ -91,13 +83,9 @@ fn build_layout(s: &Shared, name: &str, shaders: &[&ShaderInfo]) -> Result<Layou
         .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
         .bindings(&vk_bindings);
     // SAFETY: valid device; bindings reflected from validated SPIR-V.
-    let set_layout = unsafe { s.device.create_descriptor_set_layout(&info, None) }
-        .map_err(vk_err("vkCreateDescriptorSetLayout"))?;
-    let ranges = [vk::PushConstantRange {
-        stage_flags: push_stages,
-        offset: 0,
-        size: push_size,
-    }];
+    let set_layout =
+        unsafe { s.device.create_descriptor_set_layout(&info, None) }.map_err(vk_err("vkCreateDescriptorSetLayout"))?;
+    let ranges = [vk::PushConstantRange { stage_flags: push_stages, offset: 0, size: push_size }];
     let set_layouts = [set_layout];
     let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
     if push_size > 0 {
@@ -113,13 +101,7 @@ fn build_layout(s: &Shared, name: &str, shaders: &[&ShaderInfo]) -> Result<Layou
         }
     };
     let _ = name;
-    Ok(Layout {
-        set_layout,
-        layout,
-        bindings: merged.into_iter().map(|(b, _)| b).collect(),
-        push_stages,
-        push_size,
-    })
+    Ok(Layout { set_layout, layout, bindings: merged.into_iter().map(|(b, _)| b).collect(), push_stages, push_size })
 }
 
 fn module(s: &Shared, sh: &ShaderInfo) -> Result<vk::ShaderModule> {
@@ -134,10 +116,7 @@ struct Spec {
 }
 
 fn spec_for(sh: &ShaderInfo, spec: Specialization) -> Spec {
-    let mut out = Spec {
-        entries: Vec::new(),
-        data: Vec::new(),
-    };
+    let mut out = Spec { entries: Vec::new(), data: Vec::new() };
     for &(id, value) in spec {
         if sh.spec_constants.iter().any(|(_, i)| *i == id) {
             out.entries.push(vk::SpecializationMapEntry {
@@ -163,32 +142,21 @@ impl Pipeline {
         let l = build_layout(s, desc.name, &[desc.shader])?;
         let m = module(s, desc.shader)?;
         let spec = spec_for(desc.shader, desc.specialization);
-        let spec_info = vk::SpecializationInfo::default()
-            .map_entries(&spec.entries)
-            .data(bytemuck::cast_slice(&spec.data));
+        let spec_info =
+            vk::SpecializationInfo::default().map_entries(&spec.entries).data(bytemuck::cast_slice(&spec.data));
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(m)
             .name(c"main")
             .specialization_info(&spec_info);
-        let info = vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(l.layout);
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(l.layout);
         // SAFETY: module and layout are live; the module is destroyed after creation.
         let raw = unsafe {
-            let r = s
-                .device
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None);
+            let r = s.device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None);
             s.device.destroy_shader_module(m, None);
             r
         };
-        Self::finish(
-            ctx,
-            desc.name,
-            raw.map(|p| p[0]).map_err(|(_, e)| e),
-            l,
-            vk::PipelineBindPoint::COMPUTE,
-        )
+        Self::finish(ctx, desc.name, raw.map(|p| p[0]).map_err(|(_, e)| e), l, vk::PipelineBindPoint::COMPUTE)
     }
 
     pub fn graphics(ctx: &Context, desc: &GraphicsPipelineDesc) -> Result<Pipeline> {
@@ -207,16 +175,9 @@ impl Pipeline {
                 return Err(e);
             }
         };
-        let (vs, fs) = (
-            spec_for(desc.vertex, desc.specialization),
-            spec_for(desc.fragment, desc.specialization),
-        );
-        let vsi = vk::SpecializationInfo::default()
-            .map_entries(&vs.entries)
-            .data(bytemuck::cast_slice(&vs.data));
-        let fsi = vk::SpecializationInfo::default()
-            .map_entries(&fs.entries)
-            .data(bytemuck::cast_slice(&fs.data));
+        let (vs, fs) = (spec_for(desc.vertex, desc.specialization), spec_for(desc.fragment, desc.specialization));
+        let vsi = vk::SpecializationInfo::default().map_entries(&vs.entries).data(bytemuck::cast_slice(&vs.data));
+        let fsi = vk::SpecializationInfo::default().map_entries(&fs.entries).data(bytemuck::cast_slice(&fs.data));
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
@@ -230,18 +191,15 @@ impl Pipeline {
                 .specialization_info(&fsi),
         ];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
-        let input_assembly =
-            vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
-        let viewport = vk::PipelineViewportStateCreateInfo::default()
-            .viewport_count(1)
-            .scissor_count(1);
+        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)
             .cull_mode(desc.cull_mode)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let multisample =
+            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth_format.is_some())
             .depth_write_enable(desc.depth_format.is_some())
@@ -249,10 +207,7 @@ impl Pipeline {
         let attachments: Vec<_> = desc
             .color_formats
             .iter()
-            .map(|_| {
-                vk::PipelineColorBlendAttachmentState::default()
-                    .color_write_mask(vk::ColorComponentFlags::RGBA)
-            })
+            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
             .collect();
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
@@ -274,20 +229,12 @@ impl Pipeline {
             .push_next(&mut rendering);
         // SAFETY: every pointer refers to locals; modules are destroyed after creation.
         let raw = unsafe {
-            let r = s
-                .device
-                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None);
+            let r = s.device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None);
             s.device.destroy_shader_module(vm, None);
             s.device.destroy_shader_module(fm, None);
             r
         };
-        Self::finish(
-            ctx,
-            desc.name,
-            raw.map(|p| p[0]).map_err(|(_, e)| e),
-            l,
-            vk::PipelineBindPoint::GRAPHICS,
-        )
+        Self::finish(ctx, desc.name, raw.map(|p| p[0]).map_err(|(_, e)| e), l, vk::PipelineBindPoint::GRAPHICS)
     }
 
     fn finish(
@@ -328,7 +275,6 @@ impl Pipeline {
 
 impl Drop for Pipeline {
     fn drop(&mut self) {
-        self.shared
-            .retire(Garbage::Pipeline(self.raw, self.layout, self.set_layout));
+        self.shared.retire(Garbage::Pipeline(self.raw, self.layout, self.set_layout));
     }
 }

@@ -15,21 +15,14 @@ pub struct TimestampPool {
 
 impl TimestampPool {
     pub fn new(ctx: &Context, name: &str, capacity: u32) -> Result<Self> {
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(capacity);
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
         // SAFETY: valid device and create info.
-        let raw = unsafe { ctx.shared.device.create_query_pool(&info, None) }
-            .map_err(vk_err("vkCreateQueryPool"))?;
+        let raw = unsafe { ctx.shared.device.create_query_pool(&info, None) }.map_err(vk_err("vkCreateQueryPool"))?;
         // SAFETY: hostQueryReset is a required feature; the pool is unused.
         unsafe { ctx.shared.device.reset_query_pool(raw, 0, capacity) };
         inc(&ctx.shared.live.query_pools);
         ctx.set_name(raw, name);
-        Ok(TimestampPool {
-            raw,
-            capacity,
-            shared: ctx.shared.clone(),
-        })
+        Ok(TimestampPool { raw, capacity, shared: ctx.shared.clone() })
     }
 
     /// Raw ticks of queries `0..count`, or `None` if any is not available yet.

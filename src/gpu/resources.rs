@@ -34,12 +34,7 @@ pub struct LiveObjects {
 
 impl LiveObjects {
     pub fn total(&self) -> i64 {
-        self.buffers
-            + self.images
-            + self.pipelines
-            + self.query_pools
-            + self.command_pools
-            + self.sync_objects
+        self.buffers + self.images + self.pipelines + self.query_pools + self.command_pools + self.sync_objects
     }
 }
 
@@ -75,11 +70,7 @@ impl Garbage {
     pub(crate) fn destroy(self, s: &Shared) {
         let d = &s.device;
         let free = |a: Allocation| {
-            let _ = s
-                .allocator
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .free(a);
+            let _ = s.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(a);
         };
         let dec = |c: &AtomicI64| c.fetch_sub(1, Ordering::AcqRel);
         // SAFETY: retired objects are no longer used by the host, and every
@@ -151,35 +142,22 @@ fn allocate(
         linear,
         allocation_scheme: AllocationScheme::GpuAllocatorManaged,
     };
-    s.allocator
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .allocate(&desc)
-        .map_err(|source| match source {
-            gpu_allocator::AllocationError::OutOfMemory => Error::OutOfDeviceMemory,
-            source => Error::Allocation {
-                name: name.into(),
-                source,
-            },
-        })
+    s.allocator.lock().unwrap_or_else(|e| e.into_inner()).allocate(&desc).map_err(|source| match source {
+        gpu_allocator::AllocationError::OutOfMemory => Error::OutOfDeviceMemory,
+        source => Error::Allocation { name: name.into(), source },
+    })
 }
 
 impl Buffer {
     pub fn new(ctx: &Context, desc: &BufferDesc) -> Result<Buffer> {
         if desc.size == 0 {
-            return Err(Error::BadInput(format!(
-                "buffer {:?} has size 0",
-                desc.name
-            )));
+            return Err(Error::BadInput(format!("buffer {:?} has size 0", desc.name)));
         }
         let s = &ctx.shared;
-        let info = vk::BufferCreateInfo::default()
-            .size(desc.size)
-            .usage(desc.usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info =
+            vk::BufferCreateInfo::default().size(desc.size).usage(desc.usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: valid device and create info.
-        let raw =
-            unsafe { s.device.create_buffer(&info, None) }.map_err(vk_err("vkCreateBuffer"))?;
+        let raw = unsafe { s.device.create_buffer(&info, None) }.map_err(vk_err("vkCreateBuffer"))?;
         // SAFETY: raw is a live buffer of this device.
         let req = unsafe { s.device.get_buffer_memory_requirements(raw) };
         let allocation = match allocate(s, desc.name, req, desc.location, true) {
@@ -191,17 +169,10 @@ impl Buffer {
             }
         };
         // SAFETY: fresh allocation sized and aligned by the buffer's requirements.
-        if let Err(e) = unsafe {
-            s.device
-                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
-        } {
+        if let Err(e) = unsafe { s.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
             // SAFETY: nothing uses either object yet.
             unsafe { s.device.destroy_buffer(raw, None) };
-            let _ = s
-                .allocator
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .free(allocation);
+            let _ = s.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(allocation);
             return Err(Error::vk("vkBindBufferMemory", e));
         }
         inc(&s.live.buffers);
@@ -217,18 +188,12 @@ impl Buffer {
 
     /// The mapped bytes of a host-visible buffer.
     pub fn mapped(&self) -> Option<&[u8]> {
-        self.allocation
-            .as_ref()?
-            .mapped_slice()
-            .map(|s| &s[..self.size as usize])
+        self.allocation.as_ref()?.mapped_slice().map(|s| &s[..self.size as usize])
     }
 
     pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
         let size = self.size as usize;
-        self.allocation
-            .as_mut()?
-            .mapped_slice_mut()
-            .map(|s| &mut s[..size])
+        self.allocation.as_mut()?.mapped_slice_mut().map(|s| &mut s[..size])
     }
 
     pub fn raw(&self) -> vk::Buffer {
@@ -280,8 +245,7 @@ impl Image {
     pub fn new(ctx: &Context, desc: &ImageDesc) -> Result<Image> {
         let max = ctx.info().limits.max_image_dimension_2d;
         let [w, h] = desc.extent;
-        if w == 0 || h == 0 || w > max || h > max || desc.mip_levels == 0 || desc.array_layers == 0
-        {
+        if w == 0 || h == 0 || w > max || h > max || desc.mip_levels == 0 || desc.array_layers == 0 {
             return Err(Error::BadInput(format!(
                 "image {:?}: extent {w}x{h}, {} mips, {} layers (max side {max})",
                 desc.name, desc.mip_levels, desc.array_layers
@@ -291,11 +255,7 @@ impl Image {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
-            .extent(vk::Extent3D {
-                width: w,
-                height: h,
-                depth: 1,
-            })
+            .extent(vk::Extent3D { width: w, height: h, depth: 1 })
             .mip_levels(desc.mip_levels)
             .array_layers(desc.array_layers)
             .samples(vk::SampleCountFlags::TYPE_1)
@@ -314,16 +274,10 @@ impl Image {
                 return Err(e);
             }
         };
-        let view_type = if desc.array_layers > 1 {
-            vk::ImageViewType::TYPE_2D_ARRAY
-        } else {
-            vk::ImageViewType::TYPE_2D
-        };
-        let view_info = vk::ImageViewCreateInfo::default()
-            .image(raw)
-            .view_type(view_type)
-            .format(desc.format)
-            .subresource_range(
+        let view_type =
+            if desc.array_layers > 1 { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D };
+        let view_info =
+            vk::ImageViewCreateInfo::default().image(raw).view_type(view_type).format(desc.format).subresource_range(
                 vk::ImageSubresourceRange::default()
                     .aspect_mask(aspect_of(desc.format))
                     .level_count(desc.mip_levels)
@@ -341,11 +295,7 @@ impl Image {
             Err(e) => {
                 // SAFETY: nothing uses either object yet.
                 unsafe { s.device.destroy_image(raw, None) };
-                let _ = s
-                    .allocator
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .free(allocation);
+                let _ = s.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(allocation);
                 return Err(Error::vk("vkBindImageMemory/vkCreateImageView", e));
             }
         };

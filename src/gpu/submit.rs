@@ -26,10 +26,7 @@ fn create_slot(ctx: &Context, name: &str) -> Result<Slot> {
     // SAFETY: valid device and create infos; each created object is counted
     // and owned by the returned slot.
     unsafe {
-        let pool = s
-            .device
-            .create_command_pool(&info, None)
-            .map_err(vk_err("vkCreateCommandPool"))?;
+        let pool = s.device.create_command_pool(&info, None).map_err(vk_err("vkCreateCommandPool"))?;
         inc(&s.live.command_pools);
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
@@ -42,26 +39,19 @@ fn create_slot(ctx: &Context, name: &str) -> Result<Slot> {
                 return Err(Error::vk("vkAllocateCommandBuffers", e));
             }
         };
-        let fence = match s.device.create_fence(
-            &vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED),
-            None,
-        ) {
-            Ok(f) => f,
-            Err(e) => {
-                s.retire(Garbage::CommandPool(pool));
-                return Err(Error::vk("vkCreateFence", e));
-            }
-        };
+        let fence =
+            match s.device.create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None) {
+                Ok(f) => f,
+                Err(e) => {
+                    s.retire(Garbage::CommandPool(pool));
+                    return Err(Error::vk("vkCreateFence", e));
+                }
+            };
         inc(&s.live.sync_objects);
         ctx.set_name(pool, name);
         ctx.set_name(cmd, name);
         ctx.set_name(fence, name);
-        Ok(Slot {
-            pool,
-            cmd,
-            fence,
-            frame: 0,
-        })
+        Ok(Slot { pool, cmd, fence, frame: 0 })
     }
 }
 
@@ -72,18 +62,14 @@ fn wait_fence(s: &Shared, fence: vk::Fence) -> Result<()> {
 
 fn begin(s: &Shared, slot: &Slot) -> Result<()> {
     // SAFETY: the slot's fence has signalled, so its buffer is not pending.
+    // The fence is reset only just before submission, so a recording error
+    // leaves it signalled and nobody waits on it forever.
     unsafe {
-        s.device
-            .reset_fences(&[slot.fence])
-            .map_err(vk_err("vkResetFences"))?;
         s.device
             .reset_command_pool(slot.pool, vk::CommandPoolResetFlags::empty())
             .map_err(vk_err("vkResetCommandPool"))?;
-        let bi = vk::CommandBufferBeginInfo::default()
-            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        s.device
-            .begin_command_buffer(slot.cmd, &bi)
-            .map_err(vk_err("vkBeginCommandBuffer"))
+        let bi = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        s.device.begin_command_buffer(slot.cmd, &bi).map_err(vk_err("vkBeginCommandBuffer"))
     }
 }
 
@@ -91,15 +77,12 @@ fn end_and_submit(s: &Shared, slot: &Slot) -> Result<()> {
     let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(slot.cmd)];
     let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
     let _q = s.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
-    // SAFETY: the buffer is in the recording state; the queue is externally
-    // synchronized by `queue_lock`.
+    // SAFETY: the buffer is in the recording state; the fence is signalled
+    // and unused; the queue is externally synchronized by `queue_lock`.
     unsafe {
-        s.device
-            .end_command_buffer(slot.cmd)
-            .map_err(vk_err("vkEndCommandBuffer"))?;
-        s.device
-            .queue_submit2(s.graphics.raw, &[submit], slot.fence)
-            .map_err(vk_err("vkQueueSubmit2"))
+        s.device.end_command_buffer(slot.cmd).map_err(vk_err("vkEndCommandBuffer"))?;
+        s.device.reset_fences(&[slot.fence]).map_err(vk_err("vkResetFences"))?;
+        s.device.queue_submit2(s.graphics.raw, &[submit], slot.fence).map_err(vk_err("vkQueueSubmit2"))
     }
 }
 
@@ -128,19 +111,11 @@ impl FrameRing {
                 }
             }
         }
-        Ok(FrameRing {
-            slots,
-            next: 0,
-            shared: ctx.shared.clone(),
-        })
+        Ok(FrameRing { slots, next: 0, shared: ctx.shared.clone() })
     }
 
     /// Waits for the slot's previous frame, then records the next frame.
-    pub fn record<'c>(
-        &mut self,
-        ctx: &'c Context,
-        f: impl FnOnce(&mut Recorder<'c>) -> Result<()>,
-    ) -> Result<u64> {
+    pub fn record<'c>(&mut self, ctx: &'c Context, f: impl FnOnce(&mut Recorder<'c>) -> Result<()>) -> Result<u64> {
         let s = &ctx.shared;
         let slot = &mut self.slots[self.next];
         wait_fence(s, slot.fence)?;
@@ -178,10 +153,7 @@ impl Drop for FrameRing {
 
 impl Context {
     /// Records, submits and waits: for uploads, readback and tests.
-    pub fn submit_and_wait<'c>(
-        &'c self,
-        f: impl FnOnce(&mut Recorder<'c>) -> Result<()>,
-    ) -> Result<()> {
+    pub fn submit_and_wait<'c>(&'c self, f: impl FnOnce(&mut Recorder<'c>) -> Result<()>) -> Result<()> {
         let slot = create_slot(self, "one_shot")?;
         let result = (|| {
             begin(&self.shared, &slot)?;
@@ -218,10 +190,7 @@ impl Context {
                 location: MemoryLocation::CpuToGpu,
             },
         )?;
-        staging
-            .mapped_mut()
-            .expect("CpuToGpu buffers are mapped")
-            .copy_from_slice(bytes);
+        staging.mapped_mut().expect("CpuToGpu buffers are mapped").copy_from_slice(bytes);
         self.submit_and_wait(|rec| {
             rec.copy_buffer(&staging, dst, bytes.len() as u64);
             Ok(())
@@ -240,17 +209,11 @@ impl Context {
             },
         )?;
         self.submit_and_wait(|rec| {
-            rec.barrier(
-                vk::PipelineStageFlags2::ALL_COMMANDS,
-                vk::PipelineStageFlags2::ALL_COMMANDS,
-            );
+            rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_COMMANDS);
             rec.copy_buffer(src, &staging, src.size);
             Ok(())
         })?;
-        Ok(staging
-            .mapped()
-            .expect("GpuToCpu buffers are mapped")
-            .to_vec())
+        Ok(staging.mapped().expect("GpuToCpu buffers are mapped").to_vec())
     }
 
     /// Reads one mip of one layer, tightly packed; `layout` is the image's
@@ -280,9 +243,6 @@ impl Context {
             rec.image_layout(img, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, layout);
             Ok(())
         })?;
-        Ok(staging
-            .mapped()
-            .expect("GpuToCpu buffers are mapped")
-            .to_vec())
+        Ok(staging.mapped().expect("GpuToCpu buffers are mapped").to_vec())
     }
 }

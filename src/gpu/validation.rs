@@ -28,32 +28,20 @@ pub struct ValidationLog {
 
 impl ValidationLog {
     pub fn messages(&self) -> Vec<ValidationMessage> {
-        self.messages
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clone()
+        self.messages.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
     /// Messages whose id is not in `allow` ((id, reason) pairs).
     pub fn unexpected(&self, allow: &[(&str, &str)]) -> Vec<ValidationMessage> {
-        self.messages()
-            .into_iter()
-            .filter(|m| !allow.iter().any(|(id, _)| *id == m.id_name))
-            .collect()
+        self.messages().into_iter().filter(|m| !allow.iter().any(|(id, _)| *id == m.id_name)).collect()
     }
 
     pub fn clear(&self) {
-        self.messages
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clear();
+        self.messages.lock().unwrap_or_else(|e| e.into_inner()).clear();
     }
 
     fn push(&self, m: ValidationMessage) {
-        self.messages
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .push(m);
+        self.messages.lock().unwrap_or_else(|e| e.into_inner()).push(m);
     }
 }
 
@@ -95,10 +83,7 @@ pub(crate) unsafe extern "system" fn callback(
 
 pub(crate) fn messenger_info(log: &ValidationLog) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
     vk::DebugUtilsMessengerCreateInfoEXT::default()
-        .message_severity(
-            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-        )
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
         .message_type(
             vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                 | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION

@@ -4,8 +4,7 @@
 
 use crate::error::Result;
 use crate::gpu::{
-    vk, Buffer, BufferDesc, ColorTarget, Context, GraphicsPipelineDesc, Image, MemoryLocation,
-    Pipeline, Recorder,
+    vk, Buffer, BufferDesc, ColorTarget, Context, GraphicsPipelineDesc, Image, MemoryLocation, Pipeline, Recorder,
 };
 use crate::passes::smoke_triangle::TARGET_FORMAT;
 use crate::patch_grid::diamond_indices;
@@ -58,11 +57,7 @@ impl DiamondPatch {
             },
         )?;
         ctx.upload(&indices, bytemuck::cast_slice(&idx))?;
-        Ok(DiamondPatch {
-            pipeline,
-            indices,
-            quads: quads_per_side,
-        })
+        Ok(DiamondPatch { pipeline, indices, quads: quads_per_side })
     }
 
     /// Vertex index of grid point (x, y).
@@ -72,13 +67,7 @@ impl DiamondPatch {
 
     /// `target` must be in COLOR_ATTACHMENT_OPTIMAL; it is cleared first.
     pub fn record(&self, rec: &mut Recorder, target: &Image, hole_vertex: Option<u32>) {
-        rec.begin_rendering(
-            &[ColorTarget {
-                image: target,
-                clear: [0.0; 4],
-            }],
-            None,
-        );
+        rec.begin_rendering(&[ColorTarget { image: target, clear: [0.0; 4] }], None);
         rec.bind_pipeline(&self.pipeline);
         let push = DiamondPatchPush {
             quads_per_side: self.quads,

@@ -27,11 +27,7 @@ impl PrefixSum {
         Ok(PrefixSum {
             pipeline: Pipeline::compute(
                 ctx,
-                &ComputePipelineDesc {
-                    name: Self::NAME,
-                    shader: &sh::SHADER,
-                    specialization: &spec,
-                },
+                &ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &spec },
             )?,
         })
     }
@@ -41,13 +37,7 @@ impl PrefixSum {
         sh::WORKGROUP_SIZE[0] * ITEMS_PER_THREAD
     }
 
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        input: &Buffer,
-        output: &Buffer,
-        count: u32,
-    ) -> Result<()> {
+    pub fn record(&self, rec: &mut Recorder, input: &Buffer, output: &Buffer, count: u32) -> Result<()> {
         if count > Self::capacity() || u64::from(count) * 4 > input.size.min(output.size) {
             return Err(Error::BadInput(format!(
                 "prefix_sum of {count} values: capacity {}, buffers {} / {} bytes",
@@ -56,10 +46,8 @@ impl PrefixSum {
                 output.size
             )));
         }
-        let bindings: [(Binding, Resource); 2] = [
-            (sh::INPUT_VALUES, Resource::Buffer(input)),
-            (sh::OUTPUT_SUMS, Resource::Buffer(output)),
-        ];
+        let bindings: [(Binding, Resource); 2] =
+            [(sh::INPUT_VALUES, Resource::Buffer(input)), (sh::OUTPUT_SUMS, Resource::Buffer(output))];
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(&self.pipeline, &bindings);
         rec.push_constants(&self.pipeline, &PrefixSumPush { count });

@@ -6,11 +6,7 @@ use std::path::PathBuf;
 use vista::gpu::{Context, ContextOptions};
 
 #[derive(Parser)]
-#[command(
-    name = "vista",
-    version,
-    about = "GPU-driven terrain renderer for Vulkan"
-)]
+#[command(name = "vista", version, about = "GPU-driven terrain renderer for Vulkan")]
 struct Cli {
     /// Enable the Khronos validation layer (prints every message it reports).
     #[arg(long, global = true)]
@@ -46,14 +42,8 @@ enum Command {
 }
 
 fn parse_size(s: &str) -> Result<[u32; 2], String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size {s:?} is not WIDTHxHEIGHT"))?;
-    let p = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("size {s:?}: {v:?} is not a number"))
-    };
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("size {s:?} is not WIDTHxHEIGHT"))?;
+    let p = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("size {s:?}: {v:?} is not a number"));
     let (w, h) = (p(w)?, p(h)?);
     if w == 0 || h == 0 || w > 16384 || h > 16384 {
         return Err(format!("size {w}x{h} must be between 1x1 and 16384x16384"));
@@ -70,11 +60,8 @@ fn main() {
 }
 
 fn run(cli: Cli) -> Result<()> {
-    let options = ContextOptions {
-        validation: cli.validation,
-        sync_validation: false,
-        device_name: cli.device.clone(),
-    };
+    let options =
+        ContextOptions { validation: cli.validation, sync_validation: false, device_name: cli.device.clone() };
     let ctx = Context::headless(&options).context("creating the Vulkan context")?;
     match cli.command {
         Command::Info { json } => info(&ctx, json),
@@ -84,12 +71,7 @@ fn run(cli: Cli) -> Result<()> {
     drop(ctx);
     let messages = log.messages();
     if !messages.is_empty() {
-        bail!(
-            "{} validation message(s); the first: [{}] {}",
-            messages.len(),
-            messages[0].id_name,
-            messages[0].text
-        );
+        bail!("{} validation message(s); the first: [{}] {}", messages.len(), messages[0].id_name, messages[0].text);
     }
     Ok(())
 }
@@ -105,22 +87,12 @@ fn info(ctx: &Context, json: bool) -> Result<()> {
     println!("vulkan:        {}", i.api_version);
     println!("queue families:");
     for f in &i.queue_families {
-        let caps: Vec<&str> = [
-            (f.graphics, "graphics"),
-            (f.compute, "compute"),
-            (f.transfer, "transfer"),
-        ]
-        .iter()
-        .filter(|c| c.0)
-        .map(|c| c.1)
-        .collect();
-        println!(
-            "  [{}] {} x{} (timestamp bits {})",
-            f.index,
-            caps.join("+"),
-            f.queue_count,
-            f.timestamp_valid_bits
-        );
+        let caps: Vec<&str> = [(f.graphics, "graphics"), (f.compute, "compute"), (f.transfer, "transfer")]
+            .iter()
+            .filter(|c| c.0)
+            .map(|c| c.1)
+            .collect();
+        println!("  [{}] {} x{} (timestamp bits {})", f.index, caps.join("+"), f.queue_count, f.timestamp_valid_bits);
     }
     if i.async_compute {
         println!(
@@ -132,28 +104,16 @@ fn info(ctx: &Context, json: bool) -> Result<()> {
     }
     let l = &i.limits;
     println!("limits:");
-    println!(
-        "  compute shared memory:  {} bytes",
-        l.max_compute_shared_memory_bytes
-    );
+    println!("  compute shared memory:  {} bytes", l.max_compute_shared_memory_bytes);
     println!(
         "  workgroup invocations:  {} (size {:?})",
         l.max_compute_workgroup_invocations, l.max_compute_workgroup_size
     );
     println!("  subgroup size:          {}", l.subgroup_size);
-    println!(
-        "  push constants:         {} bytes",
-        l.max_push_constants_bytes
-    );
-    println!(
-        "  image 2D / layers:      {} / {}",
-        l.max_image_dimension_2d, l.max_image_array_layers
-    );
+    println!("  push constants:         {} bytes", l.max_push_constants_bytes);
+    println!("  image 2D / layers:      {} / {}", l.max_image_dimension_2d, l.max_image_array_layers);
     if l.timestamps_supported {
-        println!(
-            "  timestamps:             yes, period {} ns",
-            l.timestamp_period_ns
-        );
+        println!("  timestamps:             yes, period {} ns", l.timestamp_period_ns);
     } else {
         println!("  timestamps:             no (renders without pass timings)");
     }
@@ -168,19 +128,18 @@ fn render(ctx: &Context, size: [u32; 2], frames: u32, out: Option<PathBuf>) -> R
         bail!("--frames must be at least 1");
     }
     let result = vista::smoke::render(ctx, size, frames)?;
-    let timed = if result.frames.len() > WARMUP_FRAMES {
-        &result.frames[WARMUP_FRAMES..]
-    } else {
-        &result.frames[..]
-    };
-    println!("device: {}  ({} frames, {}x{}; terrain passes arrive with the world; this is the smoke render)", ctx.info().name, frames, size[0], size[1]);
+    let timed = if result.frames.len() > WARMUP_FRAMES { &result.frames[WARMUP_FRAMES..] } else { &result.frames[..] };
+    println!(
+        "device: {}  ({} frames, {}x{}; terrain passes arrive with the world; this is the smoke render)",
+        ctx.info().name,
+        frames,
+        size[0],
+        size[1]
+    );
     if timed.is_empty() {
         println!("no pass timings (timestamps unsupported or no frame finished)");
     } else {
-        println!(
-            "{:<16} {:<9} {:>10} {:>10} {:>10} {:>8}",
-            "pass", "queue", "median ms", "min ms", "max ms", "frames"
-        );
+        println!("{:<16} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
         for s in vista::profiler::summarize(timed) {
             println!(
                 "{:<16} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
@@ -195,14 +154,8 @@ fn render(ctx: &Context, size: [u32; 2], frames: u32, out: Option<PathBuf>) -> R
     }
     if let Some(dir) = out {
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        std::fs::write(
-            dir.join("timings.json"),
-            vista::profiler::to_json(&result.frames),
-        )?;
-        std::fs::write(
-            dir.join("trace.json"),
-            vista::profiler::to_chrome_trace(&result.frames),
-        )?;
+        std::fs::write(dir.join("timings.json"), vista::profiler::to_json(&result.frames))?;
+        std::fs::write(dir.join("trace.json"), vista::profiler::to_chrome_trace(&result.frames))?;
         image::save_buffer(
             dir.join("image.png"),
             &result.image,
@@ -210,10 +163,7 @@ fn render(ctx: &Context, size: [u32; 2], frames: u32, out: Option<PathBuf>) -> R
             result.size[1],
             image::ExtendedColorType::Rgba8,
         )?;
-        println!(
-            "wrote {}/{{image.png, timings.json, trace.json}}",
-            dir.display()
-        );
+        println!("wrote {}/{{image.png, timings.json, trace.json}}", dir.display());
     }
     Ok(())
 }
