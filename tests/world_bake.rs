@@ -8,10 +8,20 @@ use vista::world::*;
 #[derive(Clone, Copy)]
 enum Surface {
     Plane(f64),
-    Tilted { z0: f64, gx: f64, gy: f64 },
-    Paraboloid { a: f64, c: [f64; 2] },
+    Tilted {
+        z0: f64,
+        gx: f64,
+        gy: f64,
+    },
+    Paraboloid {
+        a: f64,
+        c: [f64; 2],
+    },
     /// A V-shaped gorge with near-vertical walls along x = c.
-    Gorge { c: f64, slope: f64 },
+    Gorge {
+        c: f64,
+        slope: f64,
+    },
 }
 
 impl HeightSource for Surface {
@@ -88,7 +98,11 @@ fn check_cones(w: &WorldDesc, node: &BakedNode) -> f64 {
         for px in 0..8 {
             let cone = node.patch_cones[py * 8 + px];
             if cone[3] >= 1.0 {
-                assert_eq!(&cone[..3], &[0.0, 0.0, 0.0], "never-cull cone must have zero axis");
+                assert_eq!(
+                    &cone[..3],
+                    &[0.0, 0.0, 0.0],
+                    "never-cull cone must have zero axis"
+                );
                 widest = 90f64;
                 continue;
             }
@@ -180,7 +194,10 @@ fn plane_and_tilted_plane() {
 fn paraboloid_error_matches_analytic_bound_and_brute_force() {
     let w = test_world();
     let a = 0.004;
-    let src = Surface::Paraboloid { a, c: [256.0, 256.0] };
+    let src = Surface::Paraboloid {
+        a,
+        c: [256.0, 256.0],
+    };
     for id in all_nodes(&w) {
         let node = bake_node(&src, &w, &[], id);
         check_grids(&src, &w, &node);
@@ -190,7 +207,10 @@ fn paraboloid_error_matches_analytic_bound_and_brute_force() {
         let analytic = a * h * h / 2.0;
         let brute = brute_error(&src, &w, id);
         let e = node.max_error_m as f64;
-        assert!((e - analytic).abs() < 2e-4 + 1e-3 * analytic, "{id}: {e} vs {analytic}");
+        assert!(
+            (e - analytic).abs() < 2e-4 + 1e-3 * analytic,
+            "{id}: {e} vs {analytic}"
+        );
         assert!((e - brute).abs() < 2e-4, "{id}: {e} vs brute {brute}");
     }
 }
@@ -205,7 +225,10 @@ fn steep_gorge_cones_hold_and_may_disable_culling() {
     let node = bake_node(&src, &w, &[], NodeId::new(0, 0, 0));
     check_grids(&src, &w, &node);
     let widest = check_cones(&w, &node);
-    assert!(widest > 80.0, "gorge patch should have a wide cone, got {widest}");
+    assert!(
+        widest > 80.0,
+        "gorge patch should have a wide cone, got {widest}"
+    );
     // The rock rule: walls steeper than 45 degrees are cliffs.
     assert!(node.splat.contains(&(Material::Rock as u8)));
 }
@@ -228,7 +251,11 @@ fn samples_outside_extent_clamp_to_edge() {
     let edge = w.encode_height(310.0);
     for i in 0..N {
         let x = 256.0 + i as f64;
-        let expect = if x >= 300.0 { edge } else { w.encode_height(10.0 + x as f32) };
+        let expect = if x >= 300.0 {
+            edge
+        } else {
+            w.encode_height(10.0 + x as f32)
+        };
         assert_eq!(node.heights[i], expect);
     }
 }
@@ -241,7 +268,12 @@ fn holes_clear_alpha_and_flag_patches() {
             center_m: [64.0, 64.0],
             radius_m: 30.0,
         },
-        Hole::Polygon(vec![[0.0, 100.0], [20.0, 100.0], [20.0, 128.0], [0.0, 128.0]]),
+        Hole::Polygon(vec![
+            [0.0, 100.0],
+            [20.0, 100.0],
+            [20.0, 128.0],
+            [0.0, 128.0],
+        ]),
     ];
     let node = bake_node(&Surface::Plane(0.0), &w, &holes, NodeId::new(0, 0, 0));
     for j in 0..N {
@@ -279,7 +311,10 @@ fn layout_rules() {
     assert!(mb.is_valid(NodeId::new(0, 58, 58)));
     assert!(!mb.is_valid(NodeId::new(0, 59, 0)));
     assert!(mb.is_valid(NodeId::new(1, 29, 0)));
-    assert_eq!(mb.valid_children(NodeId::new(1, 29, 29)), vec![NodeId::new(0, 58, 58)]);
+    assert_eq!(
+        mb.valid_children(NodeId::new(1, 29, 29)),
+        vec![NodeId::new(0, 58, 58)]
+    );
     assert!(!mb.is_valid(NodeId::new(6, 0, 0)));
     let root = NodeId::new(5, 1, 1);
     assert_eq!(mb.bounds_m(root), [32768.0, 32768.0, 65536.0, 65536.0]);
@@ -290,18 +325,42 @@ fn layout_rules() {
     assert!(NodeId::new(0, 3, 3).children().is_none());
 
     let bad = [
-        WorldDesc { extent_m: [f64::NAN, 1.0], ..d },
-        WorldDesc { extent_m: [0.0, 1.0], ..d },
-        WorldDesc { spacing_m: -1.0, ..d },
-        WorldDesc { spacing_m: f64::INFINITY, ..d },
-        WorldDesc { height_range_m: [5.0, 5.0], ..d },
-        WorldDesc { height_range_m: [0.0, f32::NAN], ..d },
+        WorldDesc {
+            extent_m: [f64::NAN, 1.0],
+            ..d
+        },
+        WorldDesc {
+            extent_m: [0.0, 1.0],
+            ..d
+        },
+        WorldDesc {
+            spacing_m: -1.0,
+            ..d
+        },
+        WorldDesc {
+            spacing_m: f64::INFINITY,
+            ..d
+        },
+        WorldDesc {
+            height_range_m: [5.0, 5.0],
+            ..d
+        },
+        WorldDesc {
+            height_range_m: [0.0, f32::NAN],
+            ..d
+        },
         WorldDesc { lod_count: 0, ..d },
         WorldDesc { lod_count: 11, ..d },
-        WorldDesc { extent_m: [1e12, 1.0], ..d },
+        WorldDesc {
+            extent_m: [1e12, 1.0],
+            ..d
+        },
     ];
     for b in bad {
-        assert!(matches!(b.validate(), Err(WorldError::InvalidDesc(_))), "{b:?}");
+        assert!(
+            matches!(b.validate(), Err(WorldError::InvalidDesc(_))),
+            "{b:?}"
+        );
     }
 
     let r = [-50.0f32, 1000.0];
@@ -317,7 +376,10 @@ fn layout_rules() {
 #[test]
 fn payload_roundtrip_and_memory_report() {
     let w = test_world();
-    let src = Surface::Paraboloid { a: 0.004, c: [100.0, 50.0] };
+    let src = Surface::Paraboloid {
+        a: 0.004,
+        c: [100.0, 50.0],
+    };
     let node = bake_node(&src, &w, &[], NodeId::new(1, 1, 0));
     let bytes = node.to_bytes();
     assert_eq!(bytes.len(), BakedNode::SERIALIZED_BYTES);

@@ -29,7 +29,8 @@ where
 }
 
 fn small_png16() -> Vec<u8> {
-    let img = ImageBuffer::<Luma<u16>, _>::from_fn(9, 7, |x, y| Luma([(x * 7000 + y * 300) as u16]));
+    let img =
+        ImageBuffer::<Luma<u16>, _>::from_fn(9, 7, |x, y| Luma([(x * 7000 + y * 300) as u16]));
     png_bytes(&img)
 }
 
@@ -94,7 +95,10 @@ fn montblanc_loads_and_reproduces_pixels() {
         let expect = 454.0 + f64::from(v) / 65535.0 * (4810.0 - 454.0);
         let [x, y] = src.grid().pixel_center_m(i as usize, j as usize);
         let got = f64::from(src.sample(x, y));
-        assert!((got - expect).abs() <= 1e-3 * expect, "pixel {i},{j}: {got} vs {expect}");
+        assert!(
+            (got - expect).abs() <= 1e-3 * expect,
+            "pixel {i},{j}: {got} vs {expect}"
+        );
     }
     // Row 0 is north: pixel (0, 0) sits at the max-y edge.
     let [_, y0] = src.grid().pixel_center_m(0, 0);
@@ -102,7 +106,11 @@ fn montblanc_loads_and_reproduces_pixels() {
 
     // A root bakes with sane numbers.
     let node = bake_node(&src, &world, &[], roots[0]);
-    assert!(node.max_error_m > 1.0 && node.max_error_m < 2000.0, "{}", node.max_error_m);
+    assert!(
+        node.max_error_m > 1.0 && node.max_error_m < 2000.0,
+        "{}",
+        node.max_error_m
+    );
     assert!(node.max_height > node.min_height);
 }
 
@@ -130,20 +138,32 @@ fn bad_inputs_give_specific_errors() {
 
     let gray8 = ImageBuffer::<Luma<u8>, _>::from_pixel(4, 4, Luma([9u8]));
     let p = write("gray8.png", &png_bytes(&gray8));
-    assert!(matches!(open(&p), Err(WorldError::WrongPixelFormat { .. })), "8-bit");
+    assert!(
+        matches!(open(&p), Err(WorldError::WrongPixelFormat { .. })),
+        "8-bit"
+    );
 
     let rgb16 = ImageBuffer::<Rgb<u16>, _>::from_pixel(4, 4, Rgb([1u16, 2, 3]));
     let p = write("rgb16.png", &png_bytes(&rgb16));
     let e = open(&p).unwrap_err();
-    assert!(matches!(e, WorldError::WrongPixelFormat { .. }), "rgb16: {e}");
+    assert!(
+        matches!(e, WorldError::WrongPixelFormat { .. }),
+        "rgb16: {e}"
+    );
     assert!(e.to_string().contains("16-bit RGB"), "{e}");
 
     let good = small_png16();
     assert!(open(&write("good.png", &good)).is_ok());
     let p = write("trunc.png", &good[..good.len() / 2]);
-    assert!(matches!(open(&p), Err(WorldError::Corrupt { .. })), "truncated");
+    assert!(
+        matches!(open(&p), Err(WorldError::Corrupt { .. })),
+        "truncated"
+    );
     let p = write("empty.png", &[]);
-    assert!(matches!(open(&p), Err(WorldError::Corrupt { .. })), "empty file");
+    assert!(
+        matches!(open(&p), Err(WorldError::Corrupt { .. })),
+        "empty file"
+    );
 
     for (w, h) in [(0, 7), (9, 0), (100_000, 100_000), (u32::MAX, 1)] {
         let p = write("dims.png", &png_with_dims(w, h));
@@ -179,7 +199,10 @@ fn bad_inputs_give_specific_errors() {
         other => panic!("nan exr: {other:?}"),
     }
     let p = write("trunc.exr", &bytes[..bytes.len() - 10]);
-    assert!(matches!(ExrSource::open(&p, EXTENT), Err(WorldError::Corrupt { .. })));
+    assert!(matches!(
+        ExrSource::open(&p, EXTENT),
+        Err(WorldError::Corrupt { .. })
+    ));
 
     let p = dir.join("rgba.exr");
     exr::prelude::write_rgba_file(&p, 4, 4, |_, _| (0.5f32, 0.5f32, 0.5f32, 1.0f32)).unwrap();

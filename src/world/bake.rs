@@ -98,10 +98,8 @@ pub fn bake_node(
             let (mut mn, mut mx, mut all_hole) = (u16::MAX, 0u16, true);
             for j in 0..PATCH_SAMPLES {
                 for i in 0..PATCH_SAMPLES {
-                    let k = (py * PATCH_QUADS) as usize * n
-                        + j * n
-                        + (px * PATCH_QUADS) as usize
-                        + i;
+                    let k =
+                        (py * PATCH_QUADS) as usize * n + j * n + (px * PATCH_QUADS) as usize + i;
                     mn = mn.min(heights[k]);
                     mx = mx.max(heights[k]);
                     all_hole &= albedo[k][3] == 0;
@@ -160,7 +158,10 @@ fn holes_near(holes: &[Hole], b: [f64; 4], step: f64) -> Vec<&Hole> {
         .iter()
         .filter(|h| {
             let hb = h.bounds();
-            hb[0] <= b[2] + step && hb[2] >= b[0] - step && hb[1] <= b[3] + step && hb[3] >= b[1] - step
+            hb[0] <= b[2] + step
+                && hb[2] >= b[0] - step
+                && hb[1] <= b[3] + step
+                && hb[3] >= b[1] - step
         })
         .collect()
 }
@@ -260,7 +261,9 @@ pub fn bake_world(
         .map(|&id| {
             let (_, outcome) = cache.get_or_bake(id)?;
             bar.inc(1);
-            let bytes = std::fs::metadata(cache.path(id)).map(|m| m.len()).unwrap_or(0);
+            let bytes = std::fs::metadata(cache.path(id))
+                .map(|m| m.len())
+                .unwrap_or(0);
             Ok((id, outcome, bytes))
         })
         .collect::<Result<Vec<_>>>()?;

@@ -98,7 +98,8 @@ impl NodeCache {
         if crc32fast::hash(body) != crc || body[..4] != MAGIC {
             return Err(MissReason::Corrupt);
         }
-        let u32_at = |o: usize| u32::from_le_bytes([body[o], body[o + 1], body[o + 2], body[o + 3]]);
+        let u32_at =
+            |o: usize| u32::from_le_bytes([body[o], body[o + 1], body[o + 2], body[o + 3]]);
         let u64_at = |o: usize| (u64::from(u32_at(o + 4)) << 32) | u64::from(u32_at(o));
         if u32_at(4) != FORMAT_VERSION {
             return Err(MissReason::Corrupt);

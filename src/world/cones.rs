@@ -44,7 +44,11 @@ impl NormalCone {
 /// odd ones along SE-NW, so every odd/odd vertex is the centre of 8
 /// triangles: the diamond pattern the GPU index buffer uses.
 pub fn patch_triangle_normals(heights: &[f32], spacing: f64, px: u32, py: u32) -> Vec<[f64; 3]> {
-    assert_eq!(heights.len(), NODE_SAMPLES * NODE_SAMPLES, "not a node grid");
+    assert_eq!(
+        heights.len(),
+        NODE_SAMPLES * NODE_SAMPLES,
+        "not a node grid"
+    );
     let mut out = Vec::with_capacity((PATCH_QUADS * PATCH_QUADS * 2) as usize);
     let h = |i: u32, j: u32| f64::from(heights[j as usize * NODE_SAMPLES + i as usize]);
     for qy in py * PATCH_QUADS..(py + 1) * PATCH_QUADS {
@@ -94,10 +98,7 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// Largest angle between `axis` and any of `normals`, radians.
 fn max_angle(axis: [f64; 3], normals: &[[f64; 3]]) -> f64 {
-    let min_dot = normals
-        .iter()
-        .map(|&n| dot(axis, n))
-        .fold(1.0f64, f64::min);
+    let min_dot = normals.iter().map(|&n| dot(axis, n)).fold(1.0f64, f64::min);
     min_dot.clamp(-1.0, 1.0).acos()
 }
 
@@ -107,7 +108,9 @@ fn max_angle(axis: [f64; 3], normals: &[[f64; 3]]) -> f64 {
 /// storage never makes it miss a normal.
 pub fn fit_cone(normals: &[[f64; 3]]) -> NormalCone {
     assert!(!normals.is_empty(), "cone of no normals");
-    let sum = normals.iter().fold([0.0; 3], |s, n| [s[0] + n[0], s[1] + n[1], s[2] + n[2]]);
+    let sum = normals
+        .iter()
+        .fold([0.0; 3], |s, n| [s[0] + n[0], s[1] + n[1], s[2] + n[2]]);
     let mut axis = normalize(sum);
     let mut best = (max_angle(axis, normals), axis);
     for it in 1..=CONE_ITERATIONS {

@@ -7,7 +7,10 @@ use super::hash::Fnv64;
 /// A region of the world with no terrain surface, in world metres.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Hole {
-    Circle { center_m: [f64; 2], radius_m: f64 },
+    Circle {
+        center_m: [f64; 2],
+        radius_m: f64,
+    },
     /// A simple or self-intersecting polygon, even-odd rule.
     Polygon(Vec<[f64; 2]>),
 }
@@ -45,8 +48,20 @@ impl Hole {
                 center_m[1] + radius_m,
             ],
             Hole::Polygon(pts) => pts.iter().fold(
-                [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
-                |b, p| [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])],
+                [
+                    f64::INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                ],
+                |b, p| {
+                    [
+                        b[0].min(p[0]),
+                        b[1].min(p[1]),
+                        b[2].max(p[0]),
+                        b[3].max(p[1]),
+                    ]
+                },
             ),
         }
     }

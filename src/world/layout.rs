@@ -112,7 +112,9 @@ impl WorldDesc {
         let bad = |m: String| Err(WorldError::InvalidDesc(m));
         for (axis, e) in ["x", "y"].iter().zip(self.extent_m) {
             if !e.is_finite() || e <= 0.0 {
-                return bad(format!("extent {axis} must be finite and positive, got {e}"));
+                return bad(format!(
+                    "extent {axis} must be finite and positive, got {e}"
+                ));
             }
         }
         let s = self.spacing_m;
@@ -121,10 +123,15 @@ impl WorldDesc {
         }
         let [lo, hi] = self.height_range_m;
         if !lo.is_finite() || !hi.is_finite() || lo >= hi {
-            return bad(format!("height range must be finite with lo < hi, got {lo}..{hi}"));
+            return bad(format!(
+                "height range must be finite with lo < hi, got {lo}..{hi}"
+            ));
         }
         if !(1..=MAX_LOD_COUNT).contains(&self.lod_count) {
-            return bad(format!("lod count must be 1..={MAX_LOD_COUNT}, got {}", self.lod_count));
+            return bad(format!(
+                "lod count must be 1..={MAX_LOD_COUNT}, got {}",
+                self.lod_count
+            ));
         }
         for e in self.extent_m {
             let sectors = (e / self.sector_size_m()).ceil();

@@ -35,6 +35,4 @@ pub use payload::{BakedNode, Material};
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
 pub use source::{GridSource, HeightSource};
-pub use streaming::{
-    Arrival, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer,
-};
+pub use streaming::{Arrival, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};

@@ -48,13 +48,8 @@ const SPLATS: usize = SPLAT_RES * SPLAT_RES;
 
 impl BakedNode {
     /// Size of [`Self::to_bytes`]' output; payloads are fixed-size.
-    pub const SERIALIZED_BYTES: usize = 9
-        + 2 * 2
-        + 4
-        + 8
-        + SAMPLES * (2 + 4 + 4)
-        + SPLATS
-        + PATCHES_PER_NODE * (4 + 16);
+    pub const SERIALIZED_BYTES: usize =
+        9 + 2 * 2 + 4 + 8 + SAMPLES * (2 + 4 + 4) + SPLATS + PATCHES_PER_NODE * (4 + 16);
 
     /// Little-endian serialisation, independent of the host.
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -66,15 +61,19 @@ impl BakedNode {
         out.extend_from_slice(&self.max_height.to_le_bytes());
         out.extend_from_slice(&self.max_error_m.to_le_bytes());
         out.extend_from_slice(&self.patch_all_hole.to_le_bytes());
-        self.heights.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+        self.heights
+            .iter()
+            .for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         self.normals.iter().for_each(|v| out.extend_from_slice(v));
         self.albedo.iter().for_each(|v| out.extend_from_slice(v));
         out.extend_from_slice(&self.splat);
         for mm in &self.patch_min_max {
-            mm.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+            mm.iter()
+                .for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         }
         for c in &self.patch_cones {
-            c.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+            c.iter()
+                .for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         }
         debug_assert_eq!(out.len(), Self::SERIALIZED_BYTES);
         out

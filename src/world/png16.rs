@@ -41,20 +41,28 @@ impl Png16Source {
         let (w, h) = check_header(bytes, label)?;
         let mut reader = ImageReader::new(Cursor::new(bytes));
         reader.set_format(image::ImageFormat::Png);
-        let img = reader
-            .decode()
-            .map_err(|e| WorldError::corrupt(label, e))?;
+        let img = reader.decode().map_err(|e| WorldError::corrupt(label, e))?;
         let DynamicImage::ImageLuma16(img) = img else {
             // The header said 16-bit gray; a decoder disagreeing means the
             // file lies about itself.
-            return Err(WorldError::corrupt(label, "pixel data does not match the header"));
+            return Err(WorldError::corrupt(
+                label,
+                "pixel data does not match the header",
+            ));
         };
         if (img.width(), img.height()) != (w, h) {
-            return Err(WorldError::corrupt(label, "decoded size differs from header"));
+            return Err(WorldError::corrupt(
+                label,
+                "decoded size differs from header",
+            ));
         }
         let [lo, hi] = height_range_m;
         let scale = (hi - lo) / 65535.0;
-        let heights = img.as_raw().iter().map(|&v| lo + f32::from(v) * scale).collect();
+        let heights = img
+            .as_raw()
+            .iter()
+            .map(|&v| lo + f32::from(v) * scale)
+            .collect();
         Ok(Png16Source {
             grid: GridSource::new(w as usize, h as usize, heights, extent_m),
         })
@@ -96,7 +104,10 @@ pub(crate) fn check_params(extent_m: [f64; 2], height_range_m: [f32; 2]) -> Resu
 /// the decoder allocates anything.
 fn check_header(bytes: &[u8], label: &Path) -> Result<(u32, u32)> {
     if bytes.len() < IHDR_PREFIX_LEN || bytes[..8] != PNG_SIGNATURE || &bytes[12..16] != b"IHDR" {
-        return Err(WorldError::corrupt(label, "not a PNG file (bad signature or header)"));
+        return Err(WorldError::corrupt(
+            label,
+            "not a PNG file (bad signature or header)",
+        ));
     }
     let be = |o: usize| u32::from_be_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
     let (w, h) = (be(16), be(20));

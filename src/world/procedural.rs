@@ -31,9 +31,22 @@ const GRADIENTS: [[f64; 2]; 16] = {
     let mut g = [[0.0; 2]; 16];
     // cos/sin of k*22.5 degrees, written out because const fn trig is absent.
     let c = [
-        1.0, 0.923_879_5, 0.707_106_8, 0.382_683_4, 0.0, -0.382_683_4, -0.707_106_8,
-        -0.923_879_5, -1.0, -0.923_879_5, -0.707_106_8, -0.382_683_4, 0.0, 0.382_683_4,
-        0.707_106_8, 0.923_879_5,
+        1.0,
+        0.923_879_5,
+        0.707_106_8,
+        0.382_683_4,
+        0.0,
+        -0.382_683_4,
+        -0.707_106_8,
+        -0.923_879_5,
+        -1.0,
+        -0.923_879_5,
+        -0.707_106_8,
+        -0.382_683_4,
+        0.0,
+        0.382_683_4,
+        0.707_106_8,
+        0.923_879_5,
     ];
     let mut k = 0;
     while k < 16 {
@@ -55,7 +68,10 @@ impl ProceduralSource {
     /// Panics only on a non-finite or empty extent/range (programmer
     /// error: validate the `WorldDesc` first).
     pub fn new(seed: u64, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Self {
-        assert!(check_params(extent_m, height_range_m).is_ok(), "bad procedural params");
+        assert!(
+            check_params(extent_m, height_range_m).is_ok(),
+            "bad procedural params"
+        );
         ProceduralSource {
             seed,
             extent_m,
@@ -77,7 +93,12 @@ impl ProceduralSource {
             fbm(x / 2500.0 + 17.3, y / 2500.0 - 9.1, s ^ 0x22, 3),
         ];
         let (wx, wy) = (x + WARP_M * warp[0], y + WARP_M * warp[1]);
-        let continent = fbm(x / CONTINENT_WAVELENGTH_M, y / CONTINENT_WAVELENGTH_M, s ^ 0x33, 3);
+        let continent = fbm(
+            x / CONTINENT_WAVELENGTH_M,
+            y / CONTINENT_WAVELENGTH_M,
+            s ^ 0x33,
+            3,
+        );
         let mountain_mask = smoothstep(-0.35, 0.45, continent);
         let ridges = ridged(
             wx / MOUNTAIN_WAVELENGTH_M,
@@ -87,14 +108,24 @@ impl ProceduralSource {
         );
         let mut h = 0.12 + 0.08 * continent + mountain_mask * 0.62 * ridges;
         // Valleys: where a warped noise crosses zero, carve a smooth trough.
-        let v = fbm(wx / VALLEY_WAVELENGTH_M, wy / VALLEY_WAVELENGTH_M, s ^ 0x55, 2).abs();
+        let v = fbm(
+            wx / VALLEY_WAVELENGTH_M,
+            wy / VALLEY_WAVELENGTH_M,
+            s ^ 0x55,
+            2,
+        )
+        .abs();
         let carve = smoothstep(0.0, 0.15, v);
         h = 0.05 + (h - 0.05) * (0.35 + 0.65 * carve);
         // Terraces: flat treads and near-vertical risers where the mask is on.
         let cliff = smoothstep(
             0.05,
             0.3,
-            gradient_noise(x / CLIFF_MASK_WAVELENGTH_M, y / CLIFF_MASK_WAVELENGTH_M, s ^ 0x66),
+            gradient_noise(
+                x / CLIFF_MASK_WAVELENGTH_M,
+                y / CLIFF_MASK_WAVELENGTH_M,
+                s ^ 0x66,
+            ),
         );
         if cliff > 0.0 {
             let t = h / TERRACE_STEP;
