@@ -46,13 +46,17 @@ pub fn bake_node(
 
     // f[(j + 1) * FINE + (i + 1)] is the source at min + (i, j) * half.
     let mut f = vec![0f32; FINE * FINE];
-    for (j, row) in f.chunks_exact_mut(FINE).enumerate() {
-        let y = (b[1] + (j as f64 - 1.0) * half).clamp(0.0, ey);
-        for (i, v) in row.iter_mut().enumerate() {
-            let x = (b[0] + (i as f64 - 1.0) * half).clamp(0.0, ex);
-            *v = source.sample(x, y);
-        }
-    }
+    // Sampling dominates the bake; rows in parallel cut a single node's
+    // latency for the streaming loader too.
+    f.par_chunks_exact_mut(FINE)
+        .enumerate()
+        .for_each(|(j, row)| {
+            let y = (b[1] + (j as f64 - 1.0) * half).clamp(0.0, ey);
+            for (i, v) in row.iter_mut().enumerate() {
+                let x = (b[0] + (i as f64 - 1.0) * half).clamp(0.0, ex);
+                *v = source.sample(x, y);
+            }
+        });
     let fine = |i: usize, j: usize| f[(j + 1) * FINE + (i + 1)];
     let coarse = |i: usize, j: usize| fine(2 * i, 2 * j);
 

@@ -112,19 +112,19 @@ pub fn fit_cone(normals: &[[f64; 3]]) -> NormalCone {
         .iter()
         .fold([0.0; 3], |s, n| [s[0] + n[0], s[1] + n[1], s[2] + n[2]]);
     let mut axis = normalize(sum);
-    let mut best = (max_angle(axis, normals), axis);
-    for it in 1..=CONE_ITERATIONS {
-        let far = normals
+    let mut best = (f64::INFINITY, axis);
+    for it in 1..=CONE_ITERATIONS + 1 {
+        // The farthest normal both measures this axis and steers the next.
+        let (min_dot, far) = normals
             .iter()
-            .copied()
-            .min_by(|a, b| dot(axis, *a).total_cmp(&dot(axis, *b)))
-            .unwrap_or(axis);
+            .map(|&n| (dot(axis, n), n))
+            .fold((f64::INFINITY, axis), |a, b| if b.0 < a.0 { b } else { a });
+        let angle = min_dot.clamp(-1.0, 1.0).acos();
+        if angle < best.0 {
+            best = (angle, axis);
+        }
         let t = 1.0 / f64::from(it + 1);
         axis = normalize([0, 1, 2].map(|k| axis[k] + (far[k] - axis[k]) * t));
-        let a = max_angle(axis, normals);
-        if a < best.0 {
-            best = (a, axis);
-        }
     }
     // Measure again with the axis as the GPU will see it (f32).
     let axis32 = normalize(best.1.map(|v| f64::from(v as f32)));

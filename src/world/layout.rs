@@ -96,6 +96,12 @@ impl NodeId {
         ])
     }
 
+    /// Bounds in metres, [min x, min y, max x, max y]; see
+    /// [`WorldDesc::bounds_m`].
+    pub fn bounds_m(&self, world: &WorldDesc) -> [f64; 4] {
+        world.bounds_m(*self)
+    }
+
     /// Whether `self` is `other` or lies inside it.
     pub fn is_within(&self, other: &NodeId) -> bool {
         if self.lod > other.lod {
@@ -135,7 +141,7 @@ impl WorldDesc {
         }
         for e in self.extent_m {
             let sectors = (e / self.sector_size_m()).ceil();
-            if !(sectors <= MAX_SECTORS_PER_SIDE as f64) {
+            if sectors.is_nan() || sectors > MAX_SECTORS_PER_SIDE as f64 {
                 return bad(format!(
                     "{sectors} sectors per side exceeds the limit of {MAX_SECTORS_PER_SIDE}"
                 ));

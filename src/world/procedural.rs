@@ -1,6 +1,8 @@
 //! A deterministic procedural terrain: ridged mountains, carved valleys and
 //! terraced cliffs, evaluated per sample so no world-sized grid ever exists.
 
+use std::f64::consts::FRAC_1_SQRT_2 as R2;
+
 use super::hash::Fnv64;
 use super::layout::WorldDesc;
 use super::png16::check_params;
@@ -33,19 +35,19 @@ const GRADIENTS: [[f64; 2]; 16] = {
     let c = [
         1.0,
         0.923_879_5,
-        0.707_106_8,
+        R2,
         0.382_683_4,
         0.0,
         -0.382_683_4,
-        -0.707_106_8,
+        -R2,
         -0.923_879_5,
         -1.0,
         -0.923_879_5,
-        -0.707_106_8,
+        -R2,
         -0.382_683_4,
         0.0,
         0.382_683_4,
-        0.707_106_8,
+        R2,
         0.923_879_5,
     ];
     let mut k = 0;
@@ -106,7 +108,7 @@ impl ProceduralSource {
             s ^ 0x44,
             MOUNTAIN_OCTAVES,
         );
-        let mut h = 0.12 + 0.08 * continent + mountain_mask * 0.62 * ridges;
+        let mut h = 0.12 + 0.08 * continent + mountain_mask * 0.85 * ridges;
         // Valleys: where a warped noise crosses zero, carve a smooth trough.
         let v = fbm(
             wx / VALLEY_WAVELENGTH_M,
@@ -187,8 +189,9 @@ fn gradient_noise(x: f64, y: f64, seed: u64) -> f64 {
     };
     let fade = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
     let (u, v) = (fade(fx), fade(fy));
-    let a = dot(0, 0) + u * (dot(1, 0) - dot(0, 0));
-    let b = dot(0, 1) + u * (dot(1, 1) - dot(0, 1));
+    let (d00, d10, d01, d11) = (dot(0, 0), dot(1, 0), dot(0, 1), dot(1, 1));
+    let a = d00 + u * (d10 - d00);
+    let b = d01 + u * (d11 - d01);
     a + v * (b - a)
 }
 
@@ -208,6 +211,10 @@ fn fbm(x: f64, y: f64, seed: u64, octaves: u32) -> f64 {
 fn ridged(x: f64, y: f64, seed: u64, octaves: u32) -> f64 {
     let (mut sum, mut amp, mut f, mut weight) = (0.0, 0.5, 1.0, 1.0);
     for o in 0..octaves {
+        if weight <= 0.0 {
+            // Every further octave would be scaled by zero.
+            break;
+        }
         let n = 1.0 - (gradient_noise(x * f, y * f, seed.wrapping_add(u64::from(o))) * 1.4).abs();
         let n = n * n * weight;
         weight = (n * 1.8).clamp(0.0, 1.0);

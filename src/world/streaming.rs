@@ -63,9 +63,9 @@ pub enum Arrival {
     Discard,
 }
 
-/// Which nodes hold slots. Invariants after every call: slots used (pending
-/// + resident) <= budget; the resident set contains each resident node's
-/// parent; once loaded, the roots stay resident.
+/// Which nodes hold slots. Invariants after every call: slots used
+/// (pending and resident) never exceed the budget; the resident set
+/// contains each resident node's parent; once loaded, roots stay resident.
 pub struct Residency {
     world: WorldDesc,
     config: ResidencyConfig,
