@@ -143,3 +143,30 @@ pub fn cone_contains(cone: [f32; 4], n: [f64; 3]) -> bool {
     let half = f64::from(cone[3]).asin();
     dot(axis, n).clamp(-1.0, 1.0).acos() <= half
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cone_is_tight_and_conservative() {
+        // Normals 30 degrees off z in four directions: minimal cone is z, 30.
+        let t = 30f64.to_radians();
+        let ns: Vec<[f64; 3]> = (0..4)
+            .map(|k| {
+                let a = f64::from(k) * std::f64::consts::FRAC_PI_2;
+                [t.sin() * a.cos(), t.sin() * a.sin(), t.cos()]
+            })
+            .collect();
+        let c = fit_cone(&ns);
+        assert!((c.half_angle - t).abs() < 0.02, "{}", c.half_angle);
+        let g = c.to_gpu();
+        assert!(ns.iter().all(|&n| cone_contains(g, n)));
+        // A half-angle of 90 degrees or more cannot be culled.
+        let wide = NormalCone {
+            axis: [0.0, 0.0, 1.0],
+            half_angle: 1.6,
+        };
+        assert_eq!(wide.to_gpu(), [0.0, 0.0, 0.0, 1.0]);
+    }
+}

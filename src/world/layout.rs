@@ -272,3 +272,26 @@ pub fn decode_height(v: u16, range: [f32; 2]) -> f32 {
     let [lo, hi] = range;
     lo + (f32::from(v) / 65535.0) * (hi - lo)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn node_at_and_hash() {
+        let w = WorldDesc::default();
+        assert_eq!(w.node_at(0, 65.0, 1.0), Some(NodeId::new(0, 1, 0)));
+        assert_eq!(w.node_at(5, 10_240.0, 10_240.0), Some(NodeId::new(5, 4, 4)));
+        assert_eq!(w.node_at(0, -1.0, 1.0), None);
+        assert_eq!(w.node_at(0, f64::NAN, 1.0), None);
+        let other = WorldDesc {
+            spacing_m: 1.0,
+            ..w
+        };
+        assert_ne!(w.hash(), other.hash());
+        // Stable across runs and compilers: FNV-1a, not SipHash.
+        assert_eq!(w.hash(), WorldDesc::default().hash());
+        assert!(NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 1)));
+        assert!(!NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 0)));
+    }
+}
