@@ -425,3 +425,10 @@ fn procedural_world_is_deterministic_and_has_cliffs() {
     assert!(w.validate().is_ok());
     let _: Arc<dyn HeightSource> = Arc::new(src);
 }
+
+#[test]
+fn procedural_rejects_bad_params() {
+    assert!(ProceduralSource::new(1, [f64::NAN, 1.0], [0.0, 1.0]).is_err());
+    assert!(ProceduralSource::new(1, [10.0, 10.0], [1.0, 1.0]).is_err());
+    assert!(ProceduralSource::new(1, [10.0, 10.0], [0.0, 1.0]).is_ok());
+}

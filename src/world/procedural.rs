@@ -3,6 +3,7 @@
 
 use std::f64::consts::FRAC_1_SQRT_2 as R2;
 
+use super::error::Result;
 use super::hash::Fnv64;
 use super::layout::WorldDesc;
 use super::png16::check_params;
@@ -67,24 +68,25 @@ pub struct ProceduralSource {
 }
 
 impl ProceduralSource {
-    /// Panics only on a non-finite or empty extent/range (programmer
-    /// error: validate the `WorldDesc` first).
-    pub fn new(seed: u64, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Self {
-        assert!(
-            check_params(extent_m, height_range_m).is_ok(),
-            "bad procedural params"
-        );
-        ProceduralSource {
+    /// Fails on a non-finite or empty extent or height range.
+    pub fn new(seed: u64, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<Self> {
+        check_params(extent_m, height_range_m)?;
+        Ok(ProceduralSource {
             seed,
             extent_m,
             height_range_m,
-        }
+        })
     }
 
     /// The default 10 km world and its generator.
     pub fn default_world(seed: u64) -> (WorldDesc, Self) {
         let w = WorldDesc::default();
-        (w, Self::new(seed, w.extent_m, w.height_range_m))
+        let source = ProceduralSource {
+            seed,
+            extent_m: w.extent_m,
+            height_range_m: w.height_range_m,
+        };
+        (w, source)
     }
 
     /// Normalised height in 0..1 before mapping to the height range.
