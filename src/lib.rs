@@ -2,7 +2,8 @@
 //!
 //! Layers: [`gpu`] owns every unsafe Vulkan call; [`frame`] wraps passes in
 //! labels and timestamps; [`passes`] holds one pass per file; [`shaders`] is
-//! generated at build time from `shaders_glsl/`.
+//! generated at build time from `shaders_glsl/`; [`world`] is the CPU side of
+//! the terrain (height sources, node bake, cache, streaming), with no Vulkan.
 
 pub mod error;
 pub mod frame;
@@ -12,5 +13,6 @@ pub mod patch_grid;
 pub mod profiler;
 pub mod shaders;
 pub mod smoke;
+pub mod world;
 
 pub use error::{Error, Result};

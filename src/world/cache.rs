@@ -1,0 +1,163 @@
+//! One file per baked node, validated by header and checksum on every read.
+//!
+//! Layout (little-endian): magic "VNOD", format version u32, world hash u64,
+//! source id hash u64, holes hash u64, lod u8, x u32, y u32, payload length
+//! u32, payload ([`BakedNode::to_bytes`]), crc32 of all preceding bytes.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+
+use super::bake::bake_node;
+use super::error::{Result, WorldError};
+use super::holes::{holes_hash, Hole};
+use super::layout::{NodeId, WorldDesc};
+use super::payload::BakedNode;
+use super::source::HeightSource;
+
+/// File magic: identifies a vista node file.
+const MAGIC: [u8; 4] = *b"VNOD";
+/// Bumped whenever the file layout or the bake's output changes.
+const FORMAT_VERSION: u32 = 1;
+/// Bytes before the payload.
+const HEADER_BYTES: usize = 4 + 4 + 8 * 3 + 1 + 4 + 4 + 4;
+/// Trailing crc32.
+const CRC_BYTES: usize = 4;
+/// Distinguishes temp files of concurrent writers in one process.
+static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Why a node was (re)baked instead of read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CacheOutcome {
+    Hit,
+    Baked(MissReason),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MissReason {
+    /// No file yet.
+    Missing,
+    /// Wrong magic, version, length or checksum.
+    Corrupt,
+    /// Valid file for another world, source, hole set or node.
+    Stale,
+}
+
+/// Node cache for one world + source + hole set under a directory.
+pub struct NodeCache {
+    dir: PathBuf,
+    world: WorldDesc,
+    source: Arc<dyn HeightSource>,
+    holes: Vec<Hole>,
+    keys: [u64; 3],
+}
+
+impl NodeCache {
+    /// Creates `dir` if needed. Fails on an invalid world.
+    pub fn new(dir: &Path, world: WorldDesc, source: Arc<dyn HeightSource>, holes: Vec<Hole>) -> Result<Self> {
+        world.validate()?;
+        std::fs::create_dir_all(dir).map_err(|e| WorldError::io(dir, e))?;
+        let keys = [world.hash(), source.id_hash(), holes_hash(&holes)];
+        Ok(NodeCache { dir: dir.to_path_buf(), world, source, holes, keys })
+    }
+
+    pub fn world(&self) -> &WorldDesc {
+        &self.world
+    }
+
+    /// `DIR/lod{k}/{x}_{y}.vnode`.
+    pub fn path(&self, id: NodeId) -> PathBuf {
+        self.dir.join(format!("lod{}", id.lod)).join(format!("{}_{}.vnode", id.x, id.y))
+    }
+
+    /// Reads and fully validates a cached node.
+    pub fn read(&self, id: NodeId) -> std::result::Result<BakedNode, MissReason> {
+        let bytes = std::fs::read(self.path(id)).map_err(|_| MissReason::Missing)?;
+        self.decode(id, &bytes)
+    }
+
+    fn decode(&self, id: NodeId, bytes: &[u8]) -> std::result::Result<BakedNode, MissReason> {
+        if bytes.len() < HEADER_BYTES + CRC_BYTES {
+            return Err(MissReason::Corrupt);
+        }
+        let (body, crc) = bytes.split_at(bytes.len() - CRC_BYTES);
+        let crc = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
+        if crc32fast::hash(body) != crc || body[..4] != MAGIC {
+            return Err(MissReason::Corrupt);
+        }
+        let u32_at = |o: usize| u32::from_le_bytes([body[o], body[o + 1], body[o + 2], body[o + 3]]);
+        let u64_at = |o: usize| (u64::from(u32_at(o + 4)) << 32) | u64::from(u32_at(o));
+        if u32_at(4) != FORMAT_VERSION {
+            return Err(MissReason::Corrupt);
+        }
+        let keys = [u64_at(8), u64_at(16), u64_at(24)];
+        let file_id = NodeId::new(body[32], u32_at(33), u32_at(37));
+        if keys != self.keys || file_id != id {
+            return Err(MissReason::Stale);
+        }
+        let len = u32_at(41) as usize;
+        let payload = &body[HEADER_BYTES..];
+        if payload.len() != len {
+            return Err(MissReason::Corrupt);
+        }
+        match BakedNode::from_bytes(payload) {
+            Some(node) if node.id == id => Ok(node),
+            _ => Err(MissReason::Corrupt),
+        }
+    }
+
+    /// Serialises a node to the file format.
+    fn encode(&self, node: &BakedNode) -> Vec<u8> {
+        let payload = node.to_bytes();
+        let mut out = Vec::with_capacity(HEADER_BYTES + payload.len() + CRC_BYTES);
+        out.extend_from_slice(&MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        for k in self.keys {
+            out.extend_from_slice(&k.to_le_bytes());
+        }
+        out.push(node.id.lod);
+        out.extend_from_slice(&node.id.x.to_le_bytes());
+        out.extend_from_slice(&node.id.y.to_le_bytes());
+        out.extend_from_slice(&(payload.len() as u32).to_le_bytes());
+        out.extend_from_slice(&payload);
+        let crc = crc32fast::hash(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
+        out
+    }
+
+    /// Writes atomically (temp file + rename), so readers never see a
+    /// half-written file. Returns the bytes written.
+    pub fn write(&self, node: &BakedNode) -> Result<u64> {
+        let path = self.path(node.id);
+        let dir = path.parent().unwrap_or(&self.dir);
+        std::fs::create_dir_all(dir).map_err(|e| WorldError::io(dir, e))?;
+        let bytes = self.encode(node);
+        let tmp =
+            path.with_extension(format!("tmp{}_{}", std::process::id(), TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)));
+        std::fs::write(&tmp, &bytes).map_err(|e| WorldError::io(&tmp, e))?;
+        std::fs::rename(&tmp, &path).map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            WorldError::io(&path, e)
+        })?;
+        Ok(bytes.len() as u64)
+    }
+
+    /// The cached node if its file is intact and current, else a fresh bake
+    /// that replaces the file.
+    pub fn get_or_bake(&self, id: NodeId) -> Result<(BakedNode, CacheOutcome)> {
+        if !self.world.is_valid(id) {
+            return Err(WorldError::InvalidNode(id));
+        }
+        match self.read(id) {
+            Ok(node) => Ok((node, CacheOutcome::Hit)),
+            Err(reason) => {
+                if reason != MissReason::Missing {
+                    log::debug!("rebaking {id}: cache file {reason:?}");
+                }
+                let node = bake_node(self.source.as_ref(), &self.world, &self.holes, id);
+                self.write(&node)?;
+                Ok((node, CacheOutcome::Baked(reason)))
+            }
+        }
+    }
+}

@@ -1,0 +1,151 @@
+//! Per-patch normal cones for backface culling, computed on exactly the
+//! triangles the GPU draws.
+
+use super::layout::{NODE_SAMPLES, PATCH_QUADS};
+
+/// Angular padding (radians) covering f32 rounding of the stored axis and
+/// of the GPU's own normal arithmetic.
+const CONE_PAD_RAD: f64 = 1e-4;
+/// Refinement steps of the Badoiu-Clarkson enclosing-cone iteration; 32
+/// gets within a few percent of the minimal cone, which is plenty for culling.
+const CONE_ITERATIONS: u32 = 32;
+
+/// A cone of directions: unit axis and half-angle in radians.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalCone {
+    pub axis: [f64; 3],
+    pub half_angle: f64,
+}
+
+impl NormalCone {
+    /// GPU form: axis xyz + sin(half-angle); a half-angle of 90 degrees or
+    /// more cannot be expressed by its sine, so it becomes "never cull".
+    pub fn to_gpu(&self) -> [f32; 4] {
+        if self.half_angle >= std::f64::consts::FRAC_PI_2 {
+            return [0.0, 0.0, 0.0, 1.0];
+        }
+        let a = self.axis.map(|v| v as f32);
+        let s = self.half_angle.sin();
+        // Round the sine up: rounding down would shrink the cone.
+        let mut s32 = s as f32;
+        if f64::from(s32) < s {
+            s32 = f32::from_bits(s32.to_bits() + 1);
+        }
+        if s32 >= 1.0 {
+            return [0.0, 0.0, 0.0, 1.0];
+        }
+        [a[0], a[1], a[2], s32]
+    }
+}
+
+/// Unit normals of the 512 triangles of patch (px, py), from `heights`
+/// (129x129 decoded metres, row 0 south) with `spacing` metres between
+/// samples. Quads whose (x + y) is even are split along the SW-NE diagonal,
+/// odd ones along SE-NW, so every odd/odd vertex is the centre of 8
+/// triangles: the diamond pattern the GPU index buffer uses.
+pub fn patch_triangle_normals(heights: &[f32], spacing: f64, px: u32, py: u32) -> Vec<[f64; 3]> {
+    assert_eq!(heights.len(), NODE_SAMPLES * NODE_SAMPLES, "not a node grid");
+    let mut out = Vec::with_capacity((PATCH_QUADS * PATCH_QUADS * 2) as usize);
+    let h = |i: u32, j: u32| f64::from(heights[j as usize * NODE_SAMPLES + i as usize]);
+    for qy in py * PATCH_QUADS..(py + 1) * PATCH_QUADS {
+        for qx in px * PATCH_QUADS..(px + 1) * PATCH_QUADS {
+            let p = |di: u32, dj: u32| [f64::from(di) * spacing, f64::from(dj) * spacing, h(qx + di, qy + dj)];
+            let (p00, p10, p01, p11) = (p(0, 0), p(1, 0), p(0, 1), p(1, 1));
+            if (qx + qy) % 2 == 0 {
+                out.push(tri_normal(p00, p10, p11));
+                out.push(tri_normal(p00, p11, p01));
+            } else {
+                out.push(tri_normal(p00, p10, p01));
+                out.push(tri_normal(p10, p11, p01));
+            }
+        }
+    }
+    out
+}
+
+fn tri_normal(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    normalize([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
+}
+
+fn normalize(v: [f64; 3]) -> [f64; 3] {
+    let l = dot(v, v).sqrt();
+    if l > 0.0 {
+        v.map(|c| c / l)
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Largest angle between `axis` and any of `normals`, radians.
+fn max_angle(axis: [f64; 3], normals: &[[f64; 3]]) -> f64 {
+    let min_dot = normals.iter().map(|&n| dot(axis, n)).fold(1.0f64, f64::min);
+    min_dot.clamp(-1.0, 1.0).acos()
+}
+
+/// A small cone containing every normal: start from the mean direction, then
+/// walk towards the farthest normal with shrinking steps (Badoiu-Clarkson on
+/// the sphere) and keep the best axis seen. The result is padded so f32
+/// storage never makes it miss a normal.
+pub fn fit_cone(normals: &[[f64; 3]]) -> NormalCone {
+    assert!(!normals.is_empty(), "cone of no normals");
+    let sum = normals.iter().fold([0.0; 3], |s, n| [s[0] + n[0], s[1] + n[1], s[2] + n[2]]);
+    let mut axis = normalize(sum);
+    let mut best = (f64::INFINITY, axis);
+    for it in 1..=CONE_ITERATIONS + 1 {
+        // The farthest normal both measures this axis and steers the next.
+        let (min_dot, far) =
+            normals
+                .iter()
+                .map(|&n| (dot(axis, n), n))
+                .fold((f64::INFINITY, axis), |a, b| if b.0 < a.0 { b } else { a });
+        let angle = min_dot.clamp(-1.0, 1.0).acos();
+        if angle < best.0 {
+            best = (angle, axis);
+        }
+        let t = 1.0 / f64::from(it + 1);
+        axis = normalize([0, 1, 2].map(|k| axis[k] + (far[k] - axis[k]) * t));
+    }
+    // Measure again with the axis as the GPU will see it (f32).
+    let axis32 = normalize(best.1.map(|v| f64::from(v as f32)));
+    NormalCone { axis: axis32, half_angle: max_angle(axis32, normals) + CONE_PAD_RAD }
+}
+
+/// Whether GPU cone `cone` (axis + sin half-angle) contains unit normal `n`.
+pub fn cone_contains(cone: [f32; 4], n: [f64; 3]) -> bool {
+    if cone[3] >= 1.0 {
+        return true;
+    }
+    let axis = normalize([0, 1, 2].map(|k| f64::from(cone[k])));
+    let half = f64::from(cone[3]).asin();
+    dot(axis, n).clamp(-1.0, 1.0).acos() <= half
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cone_is_tight_and_conservative() {
+        // Normals 30 degrees off z in four directions: minimal cone is z, 30.
+        let t = 30f64.to_radians();
+        let ns: Vec<[f64; 3]> = (0..4)
+            .map(|k| {
+                let a = f64::from(k) * std::f64::consts::FRAC_PI_2;
+                [t.sin() * a.cos(), t.sin() * a.sin(), t.cos()]
+            })
+            .collect();
+        let c = fit_cone(&ns);
+        assert!((c.half_angle - t).abs() < 0.02, "{}", c.half_angle);
+        let g = c.to_gpu();
+        assert!(ns.iter().all(|&n| cone_contains(g, n)));
+        // A half-angle of 90 degrees or more cannot be culled.
+        let wide = NormalCone { axis: [0.0, 0.0, 1.0], half_angle: 1.6 };
+        assert_eq!(wide.to_gpu(), [0.0, 0.0, 0.0, 1.0]);
+    }
+}

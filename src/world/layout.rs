@@ -1,0 +1,275 @@
+//! World geometry: the sector grid, the node quadtree and height encoding.
+//!
+//! Conventions: the world's min corner is the origin, x grows east, y grows
+//! north, z is height. Node sample (i, j) lies at
+//! `bounds.min + (i, j) * node_spacing`, stored at index `j * 129 + i`, so
+//! row 0 of every payload is the node's south edge.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use super::error::{Result, WorldError};
+use super::hash::Fnv64;
+
+/// Quads per node side; Far Cry 5's 128x128-quad sector.
+pub const NODE_QUADS: u32 = 128;
+/// Samples per node side: one more than quads so neighbours share edges.
+pub const NODE_SAMPLES: usize = NODE_QUADS as usize + 1;
+/// Patches per node side: a patch is the unit of GPU culling and drawing.
+pub const PATCHES_PER_NODE_SIDE: u32 = 8;
+/// Patches per node.
+pub const PATCHES_PER_NODE: usize = (PATCHES_PER_NODE_SIDE * PATCHES_PER_NODE_SIDE) as usize;
+/// Quads per patch side (128 / 8).
+pub const PATCH_QUADS: u32 = NODE_QUADS / PATCHES_PER_NODE_SIDE;
+/// Samples per patch side.
+pub const PATCH_SAMPLES: usize = PATCH_QUADS as usize + 1;
+/// Splat map texels per node side: one per second sample keeps it small.
+pub const SPLAT_RES: usize = 65;
+/// Most LODs a world may have; keeps `NodeId::lod` and GPU bit fields small.
+pub const MAX_LOD_COUNT: u32 = 10;
+/// Most sectors per world side: beyond this coordinates overflow GPU fields.
+pub const MAX_SECTORS_PER_SIDE: u64 = 1 << 20;
+/// Largest accepted source image side, checked before any pixel allocation.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// Geometry of a world. See the module docs for axis conventions.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WorldDesc {
+    /// World size in metres along x and y.
+    pub extent_m: [f64; 2],
+    /// Heights representable by the R16_UNORM height maps: (lo, hi) metres.
+    pub height_range_m: [f32; 2],
+    /// Distance between LOD-0 samples in metres.
+    pub spacing_m: f64,
+    /// Number of quadtree levels; LOD `lod_count - 1` nodes are the roots.
+    pub lod_count: u32,
+}
+
+impl Default for WorldDesc {
+    /// The default procedural world: Far Cry 5's 10 km map at 0.5 m.
+    fn default() -> Self {
+        WorldDesc { extent_m: [10_240.0, 10_240.0], height_range_m: [0.0, 1600.0], spacing_m: 0.5, lod_count: 6 }
+    }
+}
+
+/// A quadtree cell: LOD and cell coordinates in that LOD's grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct NodeId {
+    pub lod: u8,
+    pub x: u32,
+    pub y: u32,
+}
+
+impl fmt::Display for NodeId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "lod{}/{}_{}", self.lod, self.x, self.y)
+    }
+}
+
+impl NodeId {
+    pub fn new(lod: u8, x: u32, y: u32) -> Self {
+        NodeId { lod, x, y }
+    }
+
+    /// The cell one LOD coarser that contains this one (not checked against
+    /// the world's LOD count).
+    pub fn parent(&self) -> NodeId {
+        NodeId::new(self.lod + 1, self.x / 2, self.y / 2)
+    }
+
+    /// The four cells one LOD finer, SW, SE, NW, NE. Some may be invalid
+    /// where the world extent is not a multiple of the node size.
+    pub fn children(&self) -> Option<[NodeId; 4]> {
+        let lod = self.lod.checked_sub(1)?;
+        let (x, y) = (self.x * 2, self.y * 2);
+        Some([
+            NodeId::new(lod, x, y),
+            NodeId::new(lod, x + 1, y),
+            NodeId::new(lod, x, y + 1),
+            NodeId::new(lod, x + 1, y + 1),
+        ])
+    }
+
+    /// Bounds in metres, [min x, min y, max x, max y]; see
+    /// [`WorldDesc::bounds_m`].
+    pub fn bounds_m(&self, world: &WorldDesc) -> [f64; 4] {
+        world.bounds_m(*self)
+    }
+
+    /// Whether `self` is `other` or lies inside it.
+    pub fn is_within(&self, other: &NodeId) -> bool {
+        if self.lod > other.lod {
+            return false;
+        }
+        let shift = other.lod - self.lod;
+        self.x >> shift == other.x && self.y >> shift == other.y
+    }
+}
+
+impl WorldDesc {
+    /// Checks every field; the rest of the module assumes a validated desc.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(WorldError::InvalidDesc(m));
+        for (axis, e) in ["x", "y"].iter().zip(self.extent_m) {
+            if !e.is_finite() || e <= 0.0 {
+                return bad(format!("extent {axis} must be finite and positive, got {e}"));
+            }
+        }
+        let s = self.spacing_m;
+        if !s.is_finite() || s <= 0.0 {
+            return bad(format!("spacing must be finite and positive, got {s}"));
+        }
+        let [lo, hi] = self.height_range_m;
+        if !lo.is_finite() || !hi.is_finite() || lo >= hi {
+            return bad(format!("height range must be finite with lo < hi, got {lo}..{hi}"));
+        }
+        if !(1..=MAX_LOD_COUNT).contains(&self.lod_count) {
+            return bad(format!("lod count must be 1..={MAX_LOD_COUNT}, got {}", self.lod_count));
+        }
+        for e in self.extent_m {
+            let sectors = (e / self.sector_size_m()).ceil();
+            if sectors.is_nan() || sectors > MAX_SECTORS_PER_SIDE as f64 {
+                return bad(format!("{sectors} sectors per side exceeds the limit of {MAX_SECTORS_PER_SIDE}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Side of a LOD-0 node in metres.
+    pub fn sector_size_m(&self) -> f64 {
+        f64::from(NODE_QUADS) * self.spacing_m
+    }
+
+    /// Side of a node at `lod` in metres.
+    pub fn node_size_m(&self, lod: u8) -> f64 {
+        self.sector_size_m() * f64::from(1u32 << lod)
+    }
+
+    /// Distance between samples of a node at `lod`.
+    pub fn node_spacing_m(&self, lod: u8) -> f64 {
+        self.spacing_m * f64::from(1u32 << lod)
+    }
+
+    /// LOD-0 nodes per side (x, y).
+    pub fn sectors(&self) -> [u32; 2] {
+        self.extent_m.map(|e| (e / self.sector_size_m()).ceil().max(1.0) as u32)
+    }
+
+    /// Cells per side at `lod`: ceil(sectors / 2^lod).
+    pub fn grid(&self, lod: u8) -> [u32; 2] {
+        self.sectors().map(|s| s.div_ceil(1u32 << lod))
+    }
+
+    /// LOD of the always-resident roots.
+    pub fn root_lod(&self) -> u8 {
+        (self.lod_count - 1) as u8
+    }
+
+    /// A cell is valid iff it intersects the world extent. Every cell of the
+    /// ceil-sized grid does, because `(sectors - 1) * sector < extent`.
+    pub fn is_valid(&self, node: NodeId) -> bool {
+        if u32::from(node.lod) >= self.lod_count {
+            return false;
+        }
+        let [gx, gy] = self.grid(node.lod);
+        node.x < gx && node.y < gy
+    }
+
+    /// Valid children of a node (empty at LOD 0).
+    pub fn valid_children(&self, node: NodeId) -> Vec<NodeId> {
+        node.children().map(|c| c.into_iter().filter(|&c| self.is_valid(c)).collect()).unwrap_or_default()
+    }
+
+    /// All valid nodes at the root LOD; together they cover the extent.
+    pub fn roots(&self) -> Vec<NodeId> {
+        self.nodes_at(self.root_lod())
+    }
+
+    /// All valid nodes at `lod`, row by row.
+    pub fn nodes_at(&self, lod: u8) -> Vec<NodeId> {
+        let [gx, gy] = self.grid(lod);
+        (0..gy).flat_map(|y| (0..gx).map(move |x| NodeId::new(lod, x, y))).collect()
+    }
+
+    /// Node bounds in metres: [min x, min y, max x, max y]. Partial cells
+    /// extend past the extent; their samples there clamp to the edge.
+    pub fn bounds_m(&self, node: NodeId) -> [f64; 4] {
+        let s = self.node_size_m(node.lod);
+        let (x0, y0) = (f64::from(node.x) * s, f64::from(node.y) * s);
+        [x0, y0, x0 + s, y0 + s]
+    }
+
+    /// The valid node at `lod` containing a point, if the point is inside
+    /// the extent.
+    pub fn node_at(&self, lod: u8, x_m: f64, y_m: f64) -> Option<NodeId> {
+        let [ex, ey] = self.extent_m;
+        if !(0.0..=ex).contains(&x_m) || !(0.0..=ey).contains(&y_m) {
+            return None;
+        }
+        let s = self.node_size_m(lod);
+        let [gx, gy] = self.grid(lod);
+        let x = ((x_m / s) as u32).min(gx - 1);
+        let y = ((y_m / s) as u32).min(gy - 1);
+        Some(NodeId::new(lod, x, y))
+    }
+
+    /// Hash of every field; part of the cache key.
+    pub fn hash(&self) -> u64 {
+        Fnv64::new()
+            .f64(self.extent_m[0])
+            .f64(self.extent_m[1])
+            .f64(f64::from(self.height_range_m[0]))
+            .f64(f64::from(self.height_range_m[1]))
+            .f64(self.spacing_m)
+            .u64(u64::from(self.lod_count))
+            .finish()
+    }
+
+    /// Height in metres to R16_UNORM over the height range (clamped).
+    pub fn encode_height(&self, h_m: f32) -> u16 {
+        encode_height(h_m, self.height_range_m)
+    }
+
+    /// R16_UNORM value back to metres.
+    pub fn decode_height(&self, v: u16) -> f32 {
+        decode_height(v, self.height_range_m)
+    }
+}
+
+/// Height in metres to R16_UNORM over `range` (lo, hi); clamps outside it
+/// and maps NaN to lo so a bad sample cannot poison a bake.
+pub fn encode_height(h_m: f32, range: [f32; 2]) -> u16 {
+    let [lo, hi] = range;
+    let t = ((h_m - lo) / (hi - lo)).clamp(0.0, 1.0);
+    if t.is_nan() {
+        return 0;
+    }
+    (t * 65535.0).round() as u16
+}
+
+/// R16_UNORM value to metres over `range` (lo, hi), as the GPU decodes it.
+pub fn decode_height(v: u16, range: [f32; 2]) -> f32 {
+    let [lo, hi] = range;
+    lo + (f32::from(v) / 65535.0) * (hi - lo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn node_at_and_hash() {
+        let w = WorldDesc::default();
+        assert_eq!(w.node_at(0, 65.0, 1.0), Some(NodeId::new(0, 1, 0)));
+        assert_eq!(w.node_at(5, 10_240.0, 10_240.0), Some(NodeId::new(5, 4, 4)));
+        assert_eq!(w.node_at(0, -1.0, 1.0), None);
+        assert_eq!(w.node_at(0, f64::NAN, 1.0), None);
+        let other = WorldDesc { spacing_m: 1.0, ..w };
+        assert_ne!(w.hash(), other.hash());
+        // Stable across runs and compilers: FNV-1a, not SipHash.
+        assert_eq!(w.hash(), WorldDesc::default().hash());
+        assert!(NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 1)));
+        assert!(!NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 0)));
+    }
+}

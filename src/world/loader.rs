@@ -1,0 +1,131 @@
+//! Background node loading on a few worker threads. The caller never
+//! blocks: it queues requests and polls for finished payloads.
+
+use std::collections::HashSet;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+
+use super::cache::NodeCache;
+use super::error::{Result, WorldError};
+use super::layout::NodeId;
+use super::payload::BakedNode;
+
+/// Produces a node's payload: usually a cache read or a bake.
+pub type LoadFn = dyn Fn(NodeId) -> Result<BakedNode> + Send + Sync;
+
+/// A pool of loader threads fed through a FIFO queue.
+pub struct Loader {
+    jobs: Option<Sender<NodeId>>,
+    results: Receiver<(NodeId, Result<BakedNode>)>,
+    cancelled: Arc<Mutex<HashSet<NodeId>>>,
+    shutdown: Arc<AtomicBool>,
+    workers: Vec<JoinHandle<()>>,
+}
+
+impl Loader {
+    /// `workers` threads (at least one) running `load`.
+    /// Fails only if the OS refuses to start a thread.
+    pub fn new(workers: usize, load: Arc<LoadFn>) -> Result<Self> {
+        let (job_tx, job_rx) = channel::<NodeId>();
+        let (res_tx, res_rx) = channel();
+        let job_rx = Arc::new(Mutex::new(job_rx));
+        let cancelled = Arc::new(Mutex::new(HashSet::new()));
+        let shutdown = Arc::new(AtomicBool::new(false));
+        let mut loader = Loader {
+            jobs: Some(job_tx),
+            results: res_rx,
+            cancelled: Arc::clone(&cancelled),
+            shutdown: Arc::clone(&shutdown),
+            workers: Vec::new(),
+        };
+        for i in 0..workers.max(1) {
+            let ctx = WorkerCtx {
+                jobs: Arc::clone(&job_rx),
+                results: res_tx.clone(),
+                load: Arc::clone(&load),
+                cancelled: Arc::clone(&cancelled),
+                shutdown: Arc::clone(&shutdown),
+            };
+            let handle = std::thread::Builder::new()
+                .name(format!("vista-loader-{i}"))
+                .spawn(move || ctx.run())
+                .map_err(|e| WorldError::io("<loader thread>", e))?;
+            loader.workers.push(handle);
+        }
+        Ok(loader)
+    }
+
+    /// Loader reading from (and filling) a node cache.
+    pub fn with_cache(workers: usize, cache: Arc<NodeCache>) -> Result<Self> {
+        Self::new(workers, Arc::new(move |id| cache.get_or_bake(id).map(|(node, _)| node)))
+    }
+
+    /// Queues a load; never blocks.
+    pub fn request(&self, id: NodeId) {
+        lock(&self.cancelled).remove(&id);
+        if let Some(jobs) = &self.jobs {
+            // Send only fails once every worker is gone, which poll reports.
+            let _ = jobs.send(id);
+        }
+    }
+
+    /// Asks workers to skip a queued load that is no longer wanted. A load
+    /// already running still completes and is reported.
+    pub fn cancel(&self, id: NodeId) {
+        lock(&self.cancelled).insert(id);
+    }
+
+    /// Everything finished since the last poll; never blocks.
+    pub fn poll(&self) -> Vec<(NodeId, Result<BakedNode>)> {
+        self.results.try_iter().collect()
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A panicking load function poisons nothing we rely on: the set stays
+    // consistent, so recover the guard.
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+struct WorkerCtx {
+    jobs: Arc<Mutex<Receiver<NodeId>>>,
+    results: Sender<(NodeId, Result<BakedNode>)>,
+    load: Arc<LoadFn>,
+    cancelled: Arc<Mutex<HashSet<NodeId>>>,
+    shutdown: Arc<AtomicBool>,
+}
+
+impl WorkerCtx {
+    fn run(self) {
+        loop {
+            let Ok(id) = lock(&self.jobs).recv() else {
+                return;
+            };
+            if self.shutdown.load(Ordering::Relaxed) {
+                return;
+            }
+            if lock(&self.cancelled).remove(&id) {
+                continue;
+            }
+            // A panicking load must not take the worker down with it.
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| (self.load)(id)))
+                .unwrap_or(Err(WorldError::LoaderFailed(id)));
+            if self.results.send((id, result)).is_err() {
+                return;
+            }
+        }
+    }
+}
+
+impl Drop for Loader {
+    fn drop(&mut self) {
+        // Queued jobs are skipped; running ones finish, then workers exit.
+        self.shutdown.store(true, Ordering::Relaxed);
+        self.jobs = None;
+        for w in self.workers.drain(..) {
+            let _ = w.join();
+        }
+    }
+}

@@ -1,0 +1,111 @@
+//! Memory accounting for resident node payloads, CPU and GPU side.
+
+use std::fmt;
+
+use super::layout::{NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
+use super::payload::BakedNode;
+
+/// One payload kind's size per node.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PayloadSize {
+    pub name: &'static str,
+    /// GPU atlas format and layer size.
+    pub gpu_format: &'static str,
+    /// Bytes in a [`BakedNode`] (vector contents).
+    pub cpu_bytes: usize,
+    /// Bytes of one atlas layer.
+    pub gpu_bytes: usize,
+}
+
+/// Per-node payload sizes and totals for `nodes` resident nodes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MemoryReport {
+    pub nodes: usize,
+    pub kinds: Vec<PayloadSize>,
+}
+
+impl MemoryReport {
+    pub fn new(nodes: usize) -> Self {
+        let s = NODE_SAMPLES * NODE_SAMPLES;
+        let sp = SPLAT_RES * SPLAT_RES;
+        let p = PATCHES_PER_NODE;
+        let kind = |name, gpu_format, cpu_bytes, gpu_bytes| PayloadSize { name, gpu_format, cpu_bytes, gpu_bytes };
+        MemoryReport {
+            nodes,
+            kinds: vec![
+                kind("height", "R16_UNORM 129x129", s * 2, s * 2),
+                kind("normal", "RGBA8 129x129", s * 4, s * 4),
+                kind("albedo", "RGBA8 129x129", s * 4, s * 4),
+                kind("splat", "R8_UINT 65x65", sp, sp),
+                kind("patch min/max", "RG16_UINT 8x8", p * 4, p * 4),
+                kind("patch cones", "RGBA32F 8x8", p * 16, p * 16),
+                // id, min/max, error, all-hole mask; on the GPU these live
+                // in the 2 x u32 node description instead.
+                kind("node scalars", "2 x u32 description", 9 + 4 + 4 + 8, 8),
+            ],
+        }
+    }
+
+    pub fn cpu_bytes_per_node(&self) -> usize {
+        self.kinds.iter().map(|k| k.cpu_bytes).sum()
+    }
+
+    pub fn gpu_bytes_per_node(&self) -> usize {
+        self.kinds.iter().map(|k| k.gpu_bytes).sum()
+    }
+
+    pub fn cpu_total(&self) -> usize {
+        self.cpu_bytes_per_node() * self.nodes
+    }
+
+    pub fn gpu_total(&self) -> usize {
+        self.gpu_bytes_per_node() * self.nodes
+    }
+}
+
+/// Payload bytes actually held by a node (vector contents only).
+pub fn node_cpu_bytes(n: &BakedNode) -> usize {
+    n.heights.len() * 2
+        + n.normals.len() * 4
+        + n.albedo.len() * 4
+        + n.splat.len()
+        + n.patch_min_max.len() * 4
+        + n.patch_cones.len() * 16
+}
+
+fn mib(b: usize) -> f64 {
+    b as f64 / (1024.0 * 1024.0)
+}
+
+impl fmt::Display for MemoryReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "{:<14} {:<22} {:>10} {:>10} {:>12} {:>12}",
+            "payload", "GPU format", "CPU B/node", "GPU B/node", "CPU MiB", "GPU MiB"
+        )?;
+        writeln!(f, "{}", "-".repeat(85))?;
+        for k in &self.kinds {
+            writeln!(
+                f,
+                "{:<14} {:<22} {:>10} {:>10} {:>12.2} {:>12.2}",
+                k.name,
+                k.gpu_format,
+                k.cpu_bytes,
+                k.gpu_bytes,
+                mib(k.cpu_bytes * self.nodes),
+                mib(k.gpu_bytes * self.nodes)
+            )?;
+        }
+        writeln!(f, "{}", "-".repeat(85))?;
+        writeln!(
+            f,
+            "{:<37} {:>10} {:>10} {:>12.2} {:>12.2}",
+            format!("total for {} nodes", self.nodes),
+            self.cpu_bytes_per_node(),
+            self.gpu_bytes_per_node(),
+            mib(self.cpu_total()),
+            mib(self.gpu_total())
+        )
+    }
+}

@@ -1,0 +1,37 @@
+//! CPU side of the terrain: world geometry, height sources, node bakes, the
+//! on-disk node cache, streaming residency and memory accounting. No Vulkan
+//! here; the GPU layer consumes [`BakedNode`]s and [`ResidencyChanges`].
+
+mod bake;
+mod cache;
+mod cones;
+mod error;
+mod exr_source;
+mod hash;
+mod holes;
+mod layout;
+mod loader;
+mod memory;
+mod payload;
+mod png16;
+mod procedural;
+mod source;
+mod streaming;
+
+pub use bake::{bake_node, bake_world, nodes_in_region, BakeStats};
+pub use cache::{CacheOutcome, MissReason, NodeCache};
+pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
+pub use error::{Result, WorldError};
+pub use exr_source::{write_height_exr, ExrSource};
+pub use holes::{holes_hash, Hole};
+pub use layout::{
+    decode_height, encode_height, NodeId, WorldDesc, MAX_IMAGE_SIDE, MAX_LOD_COUNT, MAX_SECTORS_PER_SIDE, NODE_QUADS,
+    NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES,
+};
+pub use loader::{LoadFn, Loader};
+pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
+pub use payload::{BakedNode, Material};
+pub use png16::Png16Source;
+pub use procedural::ProceduralSource;
+pub use source::{GridSource, HeightSource};
+pub use streaming::{Arrival, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};

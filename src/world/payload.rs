@@ -1,0 +1,127 @@
+//! The baked payload of one quadtree node and its byte serialisation.
+
+use super::layout::{NodeId, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
+
+/// Splat material ids (index into the renderer's 256-entry palette).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Material {
+    Grass = 0,
+    Rock = 1,
+    Snow = 2,
+    Scree = 3,
+}
+
+/// Everything the GPU needs for one node. Grids are row-major with row 0 at
+/// the node's south edge (index `j * side + i`, x east, y north); patch
+/// arrays are indexed `py * 8 + px`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakedNode {
+    pub id: NodeId,
+    /// 129x129 R16_UNORM heights over the world height range.
+    pub heights: Vec<u16>,
+    /// 129x129 RGBA8: x, y of the unit normal as `n * 127.5 + 127.5` (z is
+    /// positive and implied), b = specular occlusion (255 = none),
+    /// a = smoothness.
+    pub normals: Vec<[u8; 4]>,
+    /// 129x129 RGBA8 albedo; a = 255 solid, 0 hole.
+    pub albedo: Vec<[u8; 4]>,
+    /// 65x65 material ids ([`Material`]), texel (i, j) at sample (2i, 2j).
+    pub splat: Vec<u8>,
+    /// 8x8 exact (min, max) of each patch's 17x17 u16 heights.
+    pub patch_min_max: Vec<[u16; 2]>,
+    /// 8x8 normal cones: axis xyz + sin(half-angle); axis 0 and sin 1 mean
+    /// "never cull" (half-angle of 90 degrees or more).
+    pub patch_cones: Vec<[f32; 4]>,
+    /// Bit `py * 8 + px` set when every sample of that patch is a hole, so
+    /// the cull pass can drop the patch outright.
+    pub patch_all_hole: u64,
+    pub min_height: u16,
+    pub max_height: u16,
+    /// Largest vertical distance (metres) between this node's surface and
+    /// the next finer level's over the node: the error of not refining.
+    pub max_error_m: f32,
+}
+
+const SAMPLES: usize = NODE_SAMPLES * NODE_SAMPLES;
+const SPLATS: usize = SPLAT_RES * SPLAT_RES;
+
+impl BakedNode {
+    /// Size of [`Self::to_bytes`]' output; payloads are fixed-size.
+    pub const SERIALIZED_BYTES: usize =
+        9 + 2 * 2 + 4 + 8 + SAMPLES * (2 + 4 + 4) + SPLATS + PATCHES_PER_NODE * (4 + 16);
+
+    /// Little-endian serialisation, independent of the host.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(Self::SERIALIZED_BYTES);
+        out.push(self.id.lod);
+        out.extend_from_slice(&self.id.x.to_le_bytes());
+        out.extend_from_slice(&self.id.y.to_le_bytes());
+        out.extend_from_slice(&self.min_height.to_le_bytes());
+        out.extend_from_slice(&self.max_height.to_le_bytes());
+        out.extend_from_slice(&self.max_error_m.to_le_bytes());
+        out.extend_from_slice(&self.patch_all_hole.to_le_bytes());
+        self.heights.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+        self.normals.iter().for_each(|v| out.extend_from_slice(v));
+        self.albedo.iter().for_each(|v| out.extend_from_slice(v));
+        out.extend_from_slice(&self.splat);
+        for mm in &self.patch_min_max {
+            mm.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+        }
+        for c in &self.patch_cones {
+            c.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+        }
+        debug_assert_eq!(out.len(), Self::SERIALIZED_BYTES);
+        out
+    }
+
+    /// Inverse of [`Self::to_bytes`]; `None` when the length is wrong.
+    pub fn from_bytes(bytes: &[u8]) -> Option<Self> {
+        if bytes.len() != Self::SERIALIZED_BYTES {
+            return None;
+        }
+        let mut r = Reader { bytes, pos: 0 };
+        let lod = r.take::<1>()[0];
+        let x = u32::from_le_bytes(r.take());
+        let y = u32::from_le_bytes(r.take());
+        let min_height = u16::from_le_bytes(r.take());
+        let max_height = u16::from_le_bytes(r.take());
+        let max_error_m = f32::from_le_bytes(r.take());
+        let patch_all_hole = u64::from_le_bytes(r.take());
+        let heights = (0..SAMPLES).map(|_| u16::from_le_bytes(r.take())).collect();
+        let normals = (0..SAMPLES).map(|_| r.take()).collect();
+        let albedo = (0..SAMPLES).map(|_| r.take()).collect();
+        let splat = (0..SPLATS).map(|_| r.take::<1>()[0]).collect();
+        let patch_min_max =
+            (0..PATCHES_PER_NODE).map(|_| [u16::from_le_bytes(r.take()), u16::from_le_bytes(r.take())]).collect();
+        let patch_cones = (0..PATCHES_PER_NODE).map(|_| [0; 4].map(|_: i32| f32::from_le_bytes(r.take()))).collect();
+        Some(BakedNode {
+            id: NodeId::new(lod, x, y),
+            heights,
+            normals,
+            albedo,
+            splat,
+            patch_min_max,
+            patch_cones,
+            patch_all_hole,
+            min_height,
+            max_height,
+            max_error_m,
+        })
+    }
+}
+
+/// Fixed-size reads over a slice whose total length was checked up front.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> [u8; N] {
+        let mut a = [0u8; N];
+        a.copy_from_slice(&self.bytes[self.pos..self.pos + N]);
+        self.pos += N;
+        a
+    }
+}

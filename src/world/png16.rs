@@ -1,0 +1,117 @@
+//! 16-bit grayscale PNG height maps of any size.
+
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use image::{DynamicImage, ImageReader};
+
+use super::error::{Result, WorldError};
+use super::layout::MAX_IMAGE_SIDE;
+use super::source::{GridSource, HeightSource};
+
+/// The 8-byte PNG file signature.
+const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+/// Signature + IHDR length + "IHDR" + width + height + depth + colour type.
+const IHDR_PREFIX_LEN: usize = 26;
+/// PNG colour type 0: grayscale without alpha.
+const PNG_GRAY: u8 = 0;
+
+/// A 16-bit grayscale PNG whose full 0..65535 range maps linearly to
+/// `height_range_m` and whose image covers `extent_m` (row 0 north).
+#[derive(Clone, Debug)]
+pub struct Png16Source {
+    grid: GridSource,
+}
+
+impl Png16Source {
+    /// Reads and validates `path`.
+    pub fn open(path: &Path, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| WorldError::io(path, e))?;
+        Self::from_bytes(&bytes, path, extent_m, height_range_m)
+    }
+
+    /// Decodes an in-memory PNG; `label` names it in errors.
+    pub fn from_bytes(bytes: &[u8], label: &Path, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<Self> {
+        check_params(extent_m, height_range_m)?;
+        let (w, h) = check_header(bytes, label)?;
+        let mut reader = ImageReader::new(Cursor::new(bytes));
+        reader.set_format(image::ImageFormat::Png);
+        let img = reader.decode().map_err(|e| WorldError::corrupt(label, e))?;
+        let DynamicImage::ImageLuma16(img) = img else {
+            // The header said 16-bit gray; a decoder disagreeing means the
+            // file lies about itself.
+            return Err(WorldError::corrupt(label, "pixel data does not match the header"));
+        };
+        if (img.width(), img.height()) != (w, h) {
+            return Err(WorldError::corrupt(label, "decoded size differs from header"));
+        }
+        let [lo, hi] = height_range_m;
+        let scale = (hi - lo) / 65535.0;
+        let heights = img.as_raw().iter().map(|&v| lo + f32::from(v) * scale).collect();
+        Ok(Png16Source { grid: GridSource::new(w as usize, h as usize, heights, extent_m) })
+    }
+
+    /// The decoded grid, heights in metres.
+    pub fn grid(&self) -> &GridSource {
+        &self.grid
+    }
+}
+
+impl HeightSource for Png16Source {
+    fn sample(&self, x_m: f64, y_m: f64) -> f32 {
+        self.grid.sample(x_m, y_m)
+    }
+
+    fn id_hash(&self) -> u64 {
+        self.grid.id_hash()
+    }
+}
+
+/// Rejects bad caller parameters with a message naming them.
+pub(crate) fn check_params(extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<()> {
+    if extent_m.iter().any(|e| !e.is_finite() || *e <= 0.0) {
+        return Err(WorldError::InvalidDesc(format!(
+            "height map extent must be finite and positive, got {extent_m:?}"
+        )));
+    }
+    let [lo, hi] = height_range_m;
+    if !lo.is_finite() || !hi.is_finite() || lo >= hi {
+        return Err(WorldError::InvalidDesc(format!("height range must be finite with lo < hi, got {lo}..{hi}")));
+    }
+    Ok(())
+}
+
+/// Reads the IHDR chunk by hand so size and pixel format are checked before
+/// the decoder allocates anything.
+fn check_header(bytes: &[u8], label: &Path) -> Result<(u32, u32)> {
+    if bytes.len() < IHDR_PREFIX_LEN || bytes[..8] != PNG_SIGNATURE || &bytes[12..16] != b"IHDR" {
+        return Err(WorldError::corrupt(label, "not a PNG file (bad signature or header)"));
+    }
+    let be = |o: usize| u32::from_be_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let (w, h) = (be(16), be(20));
+    if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        return Err(WorldError::BadDimensions {
+            path: PathBuf::from(label),
+            width: u64::from(w),
+            height: u64::from(h),
+            max: MAX_IMAGE_SIDE,
+        });
+    }
+    let (depth, colour) = (bytes[24], bytes[25]);
+    if depth != 16 || colour != PNG_GRAY {
+        let kind = match colour {
+            0 => "gray",
+            2 => "RGB",
+            3 => "palette",
+            4 => "gray+alpha",
+            6 => "RGBA",
+            _ => "unknown colour type",
+        };
+        return Err(WorldError::WrongPixelFormat {
+            path: PathBuf::from(label),
+            expected: "16-bit grayscale PNG",
+            found: format!("{depth}-bit {kind}"),
+        });
+    }
+    Ok((w, h))
+}

@@ -1,0 +1,189 @@
+//! A deterministic procedural terrain: ridged mountains, carved valleys and
+//! terraced cliffs, evaluated per sample so no world-sized grid ever exists.
+
+use std::f64::consts::FRAC_1_SQRT_2 as R2;
+
+use super::error::Result;
+use super::hash::Fnv64;
+use super::layout::WorldDesc;
+use super::png16::check_params;
+use super::source::HeightSource;
+
+/// Bumped whenever the generator's output changes, so caches rebake.
+const GENERATOR_VERSION: u64 = 1;
+/// Wavelength of the largest mountain features, metres.
+const MOUNTAIN_WAVELENGTH_M: f64 = 4096.0;
+/// Ridged octaves: 4096 m down to 2 m, enough detail for 0.5 m sampling.
+const MOUNTAIN_OCTAVES: u32 = 12;
+/// Wavelength of the mountain/lowland mask, metres.
+const CONTINENT_WAVELENGTH_M: f64 = 9000.0;
+/// Wavelength of the valley network, metres.
+const VALLEY_WAVELENGTH_M: f64 = 3000.0;
+/// Wavelength of the mask choosing where terraces (cliffs) appear, metres.
+const CLIFF_MASK_WAVELENGTH_M: f64 = 1800.0;
+/// Height of one terrace step as a fraction of the height range.
+const TERRACE_STEP: f64 = 0.025;
+/// Terrace profile exponent: the step face is this many times steeper than
+/// the underlying slope, which turns 20-30 degree slopes into >60 degree cliffs.
+const TERRACE_SHARPNESS: i32 = 8;
+/// Domain warp amplitude, metres: bends ridges so they do not look gridded.
+const WARP_M: f64 = 600.0;
+
+/// Unit gradients for the gradient noise (16 evenly spaced directions).
+const GRADIENTS: [[f64; 2]; 16] = {
+    let mut g = [[0.0; 2]; 16];
+    // cos/sin of k*22.5 degrees, written out because const fn trig is absent.
+    let c = [
+        1.0,
+        0.923_879_5,
+        R2,
+        0.382_683_4,
+        0.0,
+        -0.382_683_4,
+        -R2,
+        -0.923_879_5,
+        -1.0,
+        -0.923_879_5,
+        -R2,
+        -0.382_683_4,
+        0.0,
+        0.382_683_4,
+        R2,
+        0.923_879_5,
+    ];
+    let mut k = 0;
+    while k < 16 {
+        g[k] = [c[k], c[(k + 12) % 16]];
+        k += 1;
+    }
+    g
+};
+
+/// Procedural height field; output always lies in the height range.
+#[derive(Clone, Debug)]
+pub struct ProceduralSource {
+    seed: u64,
+    extent_m: [f64; 2],
+    height_range_m: [f32; 2],
+}
+
+impl ProceduralSource {
+    /// Fails on a non-finite or empty extent or height range.
+    pub fn new(seed: u64, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<Self> {
+        check_params(extent_m, height_range_m)?;
+        Ok(ProceduralSource { seed, extent_m, height_range_m })
+    }
+
+    /// The default 10 km world and its generator.
+    pub fn default_world(seed: u64) -> (WorldDesc, Self) {
+        let w = WorldDesc::default();
+        let source = ProceduralSource { seed, extent_m: w.extent_m, height_range_m: w.height_range_m };
+        (w, source)
+    }
+
+    /// Normalised height in 0..1 before mapping to the height range.
+    fn height01(&self, x: f64, y: f64) -> f64 {
+        let s = self.seed;
+        let warp = [fbm(x / 2500.0, y / 2500.0, s ^ 0x11, 3), fbm(x / 2500.0 + 17.3, y / 2500.0 - 9.1, s ^ 0x22, 3)];
+        let (wx, wy) = (x + WARP_M * warp[0], y + WARP_M * warp[1]);
+        let continent = fbm(x / CONTINENT_WAVELENGTH_M, y / CONTINENT_WAVELENGTH_M, s ^ 0x33, 3);
+        let mountain_mask = smoothstep(-0.35, 0.45, continent);
+        let ridges = ridged(wx / MOUNTAIN_WAVELENGTH_M, wy / MOUNTAIN_WAVELENGTH_M, s ^ 0x44, MOUNTAIN_OCTAVES);
+        let mut h = 0.12 + 0.08 * continent + mountain_mask * 0.85 * ridges;
+        // Valleys: where a warped noise crosses zero, carve a smooth trough.
+        let v = fbm(wx / VALLEY_WAVELENGTH_M, wy / VALLEY_WAVELENGTH_M, s ^ 0x55, 2).abs();
+        let carve = smoothstep(0.0, 0.15, v);
+        h = 0.05 + (h - 0.05) * (0.35 + 0.65 * carve);
+        // Terraces: flat treads and near-vertical risers where the mask is on.
+        let cliff =
+            smoothstep(0.05, 0.3, gradient_noise(x / CLIFF_MASK_WAVELENGTH_M, y / CLIFF_MASK_WAVELENGTH_M, s ^ 0x66));
+        if cliff > 0.0 {
+            let t = h / TERRACE_STEP;
+            let terraced = (t.floor() + t.fract().powi(TERRACE_SHARPNESS)) * TERRACE_STEP;
+            h += cliff * (terraced - h);
+        }
+        h.clamp(0.0, 1.0)
+    }
+}
+
+impl HeightSource for ProceduralSource {
+    fn sample(&self, x_m: f64, y_m: f64) -> f32 {
+        let x = x_m.clamp(0.0, self.extent_m[0]);
+        let y = y_m.clamp(0.0, self.extent_m[1]);
+        let h = if x.is_finite() && y.is_finite() { self.height01(x, y) } else { 0.0 };
+        let [lo, hi] = self.height_range_m;
+        (f64::from(lo) + h * f64::from(hi - lo)) as f32
+    }
+
+    fn id_hash(&self) -> u64 {
+        Fnv64::new()
+            .u64(GENERATOR_VERSION)
+            .u64(self.seed)
+            .f64(self.extent_m[0])
+            .f64(self.extent_m[1])
+            .f64(f64::from(self.height_range_m[0]))
+            .f64(f64::from(self.height_range_m[1]))
+            .finish()
+    }
+}
+
+fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
+    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Integer lattice hash (splitmix64 finaliser over the mixed coordinates).
+fn hash2(ix: i64, iy: i64, seed: u64) -> u64 {
+    let mut z =
+        seed ^ (ix as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (iy as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Perlin-style gradient noise, roughly in -0.7..0.7.
+fn gradient_noise(x: f64, y: f64, seed: u64) -> f64 {
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (ix, iy) = (x0 as i64, y0 as i64);
+    let dot = |dx: i64, dy: i64| {
+        let g = GRADIENTS[(hash2(ix + dx, iy + dy, seed) & 15) as usize];
+        g[0] * (fx - dx as f64) + g[1] * (fy - dy as f64)
+    };
+    let fade = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+    let (u, v) = (fade(fx), fade(fy));
+    let (d00, d10, d01, d11) = (dot(0, 0), dot(1, 0), dot(0, 1), dot(1, 1));
+    let a = d00 + u * (d10 - d00);
+    let b = d01 + u * (d11 - d01);
+    a + v * (b - a)
+}
+
+/// Fractal sum of gradient noise, roughly in -1..1.
+fn fbm(x: f64, y: f64, seed: u64, octaves: u32) -> f64 {
+    let (mut sum, mut amp, mut f) = (0.0, 1.0, 1.0);
+    for o in 0..octaves {
+        sum += amp * gradient_noise(x * f, y * f, seed.wrapping_add(u64::from(o)));
+        amp *= 0.5;
+        f *= 2.0;
+    }
+    sum
+}
+
+/// Ridged multifractal (Musgrave): sharp crests, detail concentrated on
+/// ridges because each octave is weighted by the previous one. Roughly 0..1.
+fn ridged(x: f64, y: f64, seed: u64, octaves: u32) -> f64 {
+    let (mut sum, mut amp, mut f, mut weight) = (0.0, 0.5, 1.0, 1.0);
+    for o in 0..octaves {
+        if weight <= 0.0 {
+            // Every further octave would be scaled by zero.
+            break;
+        }
+        let n = 1.0 - (gradient_noise(x * f, y * f, seed.wrapping_add(u64::from(o))) * 1.4).abs();
+        let n = n * n * weight;
+        weight = (n * 1.8).clamp(0.0, 1.0);
+        sum += n * amp;
+        amp *= 0.5;
+        f *= 2.0;
+    }
+    sum
+}

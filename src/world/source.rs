@@ -1,0 +1,105 @@
+//! The height source abstraction and the shared bicubic grid sampler used
+//! by the image-backed sources.
+
+use super::hash::Fnv64;
+
+/// Anything that can answer "how high is the ground here". Sampled from
+/// many bake threads at once, hence `Send + Sync`.
+pub trait HeightSource: Send + Sync {
+    /// Height in metres at a world position. Positions outside the source's
+    /// extent clamp to its edge.
+    fn sample(&self, x_m: f64, y_m: f64) -> f32;
+
+    /// Changes whenever the content or parameters change; part of the
+    /// cache key, so stale baked nodes are never reused.
+    fn id_hash(&self) -> u64;
+}
+
+/// A grid of heights covering a world rectangle, sampled with Catmull-Rom
+/// bicubic interpolation. Pixel (i, j) is an area sample whose centre lies at
+/// `((i + 0.5) * extent_x / w, extent_y - (j + 0.5) * extent_y / h)`: row 0
+/// is the north edge, as in every image format. Catmull-Rom interpolates, so
+/// sampling at a pixel centre returns the pixel exactly.
+#[derive(Clone, Debug)]
+pub struct GridSource {
+    width: usize,
+    height: usize,
+    heights: Vec<f32>,
+    extent_m: [f64; 2],
+    id: u64,
+}
+
+impl GridSource {
+    /// `heights` holds `width * height` finite values, row 0 north. The
+    /// loaders validate their input before calling this, so a mismatch here
+    /// is a programmer error.
+    pub fn new(width: usize, height: usize, heights: Vec<f32>, extent_m: [f64; 2]) -> Self {
+        assert!(width > 0 && height > 0, "empty height grid");
+        assert_eq!(heights.len(), width * height, "height grid size mismatch");
+        let mut h = Fnv64::new().u64(width as u64).u64(height as u64).f64(extent_m[0]).f64(extent_m[1]);
+        for v in &heights {
+            h = h.bytes(&v.to_le_bytes());
+        }
+        GridSource { width, height, id: h.finish(), heights, extent_m }
+    }
+
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Raw value of pixel (i, j), row 0 north.
+    pub fn pixel(&self, i: usize, j: usize) -> f32 {
+        self.heights[j * self.width + i]
+    }
+
+    /// World position of the centre of pixel (i, j).
+    pub fn pixel_center_m(&self, i: usize, j: usize) -> [f64; 2] {
+        let (dx, dy) = self.pixel_size_m();
+        [(i as f64 + 0.5) * dx, self.extent_m[1] - (j as f64 + 0.5) * dy]
+    }
+
+    fn pixel_size_m(&self) -> (f64, f64) {
+        (self.extent_m[0] / self.width as f64, self.extent_m[1] / self.height as f64)
+    }
+
+    fn at(&self, i: isize, j: isize) -> f32 {
+        let i = i.clamp(0, self.width as isize - 1) as usize;
+        let j = j.clamp(0, self.height as isize - 1) as usize;
+        self.heights[j * self.width + i]
+    }
+}
+
+/// Catmull-Rom weights for the 4 taps around fractional position `t`.
+fn catmull_rom(t: f64) -> [f64; 4] {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    [0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0), 0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2)]
+}
+
+impl HeightSource for GridSource {
+    fn sample(&self, x_m: f64, y_m: f64) -> f32 {
+        let (dx, dy) = self.pixel_size_m();
+        // Continuous pixel coordinates, clamped to the outermost centres so
+        // outside points take the edge value.
+        let u = (x_m / dx - 0.5).clamp(0.0, (self.width - 1) as f64);
+        let v = ((self.extent_m[1] - y_m) / dy - 0.5).clamp(0.0, (self.height - 1) as f64);
+        let (u0, v0) = (u.floor(), v.floor());
+        let (wu, wv) = (catmull_rom(u - u0), catmull_rom(v - v0));
+        let (iu, iv) = (u0 as isize, v0 as isize);
+        let mut sum = 0.0;
+        for (b, wy) in wv.iter().enumerate() {
+            let j = iv + b as isize - 1;
+            let row: f64 = wu.iter().enumerate().map(|(a, wx)| wx * f64::from(self.at(iu + a as isize - 1, j))).sum();
+            sum += wy * row;
+        }
+        sum as f32
+    }
+
+    fn id_hash(&self) -> u64 {
+        self.id
+    }
+}

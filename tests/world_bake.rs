@@ -1,0 +1,343 @@
+//! World layout and node bakes checked against analytic surfaces.
+
+use std::sync::Arc;
+
+use vista::world::*;
+
+/// Analytic test surfaces.
+#[derive(Clone, Copy)]
+enum Surface {
+    Plane(f64),
+    Tilted {
+        z0: f64,
+        gx: f64,
+        gy: f64,
+    },
+    Paraboloid {
+        a: f64,
+        c: [f64; 2],
+    },
+    /// A V-shaped gorge with near-vertical walls along x = c.
+    Gorge {
+        c: f64,
+        slope: f64,
+    },
+}
+
+impl HeightSource for Surface {
+    fn sample(&self, x: f64, y: f64) -> f32 {
+        (match *self {
+            Surface::Plane(z) => z,
+            Surface::Tilted { z0, gx, gy } => z0 + gx * x + gy * y,
+            Surface::Paraboloid { a, c } => a * ((x - c[0]).powi(2) + (y - c[1]).powi(2)),
+            Surface::Gorge { c, slope } => 500.0 + slope * (x - c).abs(),
+        }) as f32
+    }
+    fn id_hash(&self) -> u64 {
+        match *self {
+            Surface::Plane(z) => z.to_bits(),
+            Surface::Tilted { z0, gx, gy } => z0.to_bits() ^ gx.to_bits() ^ gy.to_bits() ^ 1,
+            Surface::Paraboloid { a, .. } => a.to_bits() ^ 2,
+            Surface::Gorge { slope, .. } => slope.to_bits() ^ 3,
+        }
+    }
+}
+
+/// 512 m square, 1 m spacing, 3 LODs: 4x4 sectors, one root.
+fn test_world() -> WorldDesc {
+    WorldDesc { extent_m: [512.0, 512.0], height_range_m: [-100.0, 1400.0], spacing_m: 1.0, lod_count: 3 }
+}
+
+fn all_nodes(w: &WorldDesc) -> Vec<NodeId> {
+    (0..w.lod_count as u8).flat_map(|l| w.nodes_at(l)).collect()
+}
+
+const N: usize = NODE_SAMPLES;
+
+/// Checks heights, patch min/max and node min/max against direct
+/// computations on the u16 grid.
+fn check_grids(src: &dyn HeightSource, w: &WorldDesc, node: &BakedNode) {
+    let b = w.bounds_m(node.id);
+    let step = w.node_spacing_m(node.id.lod);
+    for j in 0..N {
+        for i in 0..N {
+            let x = (b[0] + i as f64 * step).min(w.extent_m[0]);
+            let y = (b[1] + j as f64 * step).min(w.extent_m[1]);
+            assert_eq!(node.heights[j * N + i], w.encode_height(src.sample(x, y)));
+        }
+    }
+    for py in 0..8 {
+        for px in 0..8 {
+            let mut mm = [u16::MAX, 0];
+            for j in py * 16..=py * 16 + 16 {
+                for i in px * 16..=px * 16 + 16 {
+                    let v = node.heights[j * N + i];
+                    mm = [mm[0].min(v), mm[1].max(v)];
+                }
+            }
+            assert_eq!(node.patch_min_max[py * 8 + px], mm, "patch {px},{py}");
+        }
+    }
+    assert_eq!(node.min_height, *node.heights.iter().min().unwrap());
+    assert_eq!(node.max_height, *node.heights.iter().max().unwrap());
+}
+
+/// Recomputes every triangle normal of every patch with an independent
+/// diamond triangulation and checks the stored cone contains it.
+fn check_cones(w: &WorldDesc, node: &BakedNode) -> f64 {
+    let s = w.node_spacing_m(node.id.lod);
+    let h = |i: usize, j: usize| w.decode_height(node.heights[j * N + i]) as f64;
+    let p = |i: usize, j: usize| [i as f64 * s, j as f64 * s, h(i, j)];
+    let mut widest = 0f64;
+    for py in 0..8 {
+        for px in 0..8 {
+            let cone = node.patch_cones[py * 8 + px];
+            if cone[3] >= 1.0 {
+                assert_eq!(&cone[..3], &[0.0, 0.0, 0.0], "never-cull cone must have zero axis");
+                widest = 90f64;
+                continue;
+            }
+            let axis = glam::DVec3::new(cone[0] as f64, cone[1] as f64, cone[2] as f64).normalize();
+            let half = (cone[3] as f64).asin();
+            widest = widest.max(half.to_degrees());
+            for qy in py * 16..py * 16 + 16 {
+                for qx in px * 16..px * 16 + 16 {
+                    // Diagonal through the odd/odd corner of the quad.
+                    let tris = if (qx + qy) % 2 == 0 {
+                        [[p(qx, qy), p(qx + 1, qy), p(qx + 1, qy + 1)], [p(qx, qy), p(qx + 1, qy + 1), p(qx, qy + 1)]]
+                    } else {
+                        [[p(qx, qy), p(qx + 1, qy), p(qx, qy + 1)], [p(qx + 1, qy), p(qx + 1, qy + 1), p(qx, qy + 1)]]
+                    };
+                    for t in tris {
+                        let [a, b, c] = t.map(glam::DVec3::from_array);
+                        let n = (b - a).cross(c - a).normalize();
+                        assert!(n.z > 0.0, "triangle facing down: wrong winding");
+                        let ang = n.dot(axis).clamp(-1.0, 1.0).acos();
+                        assert!(ang <= half, "normal outside cone: {ang} > {half}");
+                        assert!(cone_contains(cone, n.to_array()));
+                    }
+                }
+            }
+        }
+    }
+    widest
+}
+
+/// Brute force LOD error: the finer surface at every point of the 2x finer
+/// grid against generic bilinear interpolation of this node's samples.
+fn brute_error(src: &dyn HeightSource, w: &WorldDesc, id: NodeId) -> f64 {
+    let b = w.bounds_m(id);
+    let s = w.node_spacing_m(id.lod);
+    let at = |x: f64, y: f64| src.sample(x.min(w.extent_m[0]), y.min(w.extent_m[1])) as f64;
+    let mut err = 0f64;
+    for fj in 0..=256 {
+        for fi in 0..=256 {
+            let (u, v) = (fi as f64 / 2.0, fj as f64 / 2.0);
+            let (i0, j0) = (u.floor().min(127.0), v.floor().min(127.0));
+            let (tu, tv) = (u - i0, v - j0);
+            let c = |di: f64, dj: f64| at(b[0] + (i0 + di) * s, b[1] + (j0 + dj) * s);
+            let bil = (1.0 - tu) * (1.0 - tv) * c(0.0, 0.0)
+                + tu * (1.0 - tv) * c(1.0, 0.0)
+                + (1.0 - tu) * tv * c(0.0, 1.0)
+                + tu * tv * c(1.0, 1.0);
+            err = err.max((at(b[0] + u * s, b[1] + v * s) - bil).abs());
+        }
+    }
+    err
+}
+
+#[test]
+fn plane_and_tilted_plane() {
+    let w = test_world();
+    for src in [
+        Surface::Plane(123.0),
+        Surface::Tilted { z0: 200.0, gx: 0.3, gy: -0.2 },
+        Surface::Tilted { z0: 0.0, gx: 2.0, gy: 0.5 },
+    ] {
+        for id in all_nodes(&w) {
+            let node = bake_node(&src, &w, &[], id);
+            check_grids(&src, &w, &node);
+            let widest = check_cones(&w, &node);
+            // Quantisation of the heights only: the cones stay tight.
+            assert!(widest < 2.0, "plane cone too wide: {widest} deg");
+            assert!(node.max_error_m < 1e-3, "plane error {}", node.max_error_m);
+            assert_eq!(node.patch_all_hole, 0);
+            assert!(node.albedo.iter().all(|a| a[3] == 255));
+        }
+    }
+}
+
+#[test]
+fn paraboloid_error_matches_analytic_bound_and_brute_force() {
+    let w = test_world();
+    let a = 0.004;
+    let src = Surface::Paraboloid { a, c: [256.0, 256.0] };
+    for id in all_nodes(&w) {
+        let node = bake_node(&src, &w, &[], id);
+        check_grids(&src, &w, &node);
+        check_cones(&w, &node);
+        // Bilinear error of a(x^2 + y^2) peaks at cell centres: a h^2 / 2.
+        let h = w.node_spacing_m(id.lod);
+        let analytic = a * h * h / 2.0;
+        let brute = brute_error(&src, &w, id);
+        let e = node.max_error_m as f64;
+        assert!((e - analytic).abs() < 2e-4 + 1e-3 * analytic, "{id}: {e} vs {analytic}");
+        assert!((e - brute).abs() < 2e-4, "{id}: {e} vs brute {brute}");
+    }
+}
+
+#[test]
+fn steep_gorge_cones_hold_and_may_disable_culling() {
+    let w = test_world();
+    let src = Surface::Gorge { c: 100.3, slope: 40.0 };
+    let node = bake_node(&src, &w, &[], NodeId::new(0, 0, 0));
+    check_grids(&src, &w, &node);
+    let widest = check_cones(&w, &node);
+    assert!(widest > 80.0, "gorge patch should have a wide cone, got {widest}");
+    // The rock rule: walls steeper than 45 degrees are cliffs.
+    assert!(node.splat.contains(&(Material::Rock as u8)));
+}
+
+#[test]
+fn samples_outside_extent_clamp_to_edge() {
+    // 300 m is not a multiple of the 128 m sector: the last column of
+    // nodes is partial and its samples past 300 m repeat the edge.
+    let w = WorldDesc { extent_m: [300.0, 300.0], ..test_world() };
+    assert_eq!(w.sectors(), [3, 3]);
+    let src = Surface::Tilted { z0: 10.0, gx: 1.0, gy: 0.0 };
+    let node = bake_node(&src, &w, &[], NodeId::new(0, 2, 0));
+    let edge = w.encode_height(310.0);
+    for i in 0..N {
+        let x = 256.0 + i as f64;
+        let expect = if x >= 300.0 { edge } else { w.encode_height(10.0 + x as f32) };
+        assert_eq!(node.heights[i], expect);
+    }
+}
+
+#[test]
+fn holes_clear_alpha_and_flag_patches() {
+    let w = test_world();
+    let holes = vec![
+        Hole::Circle { center_m: [64.0, 64.0], radius_m: 30.0 },
+        Hole::Polygon(vec![[0.0, 100.0], [20.0, 100.0], [20.0, 128.0], [0.0, 128.0]]),
+    ];
+    let node = bake_node(&Surface::Plane(0.0), &w, &holes, NodeId::new(0, 0, 0));
+    for j in 0..N {
+        for i in 0..N {
+            let (x, y) = (i as f64, j as f64);
+            let inside = holes.iter().any(|h| h.contains(x, y));
+            assert_eq!(node.albedo[j * N + i][3] == 0, inside, "({x},{y})");
+        }
+    }
+    // Patch (4,4) spans 64..80 m, well inside the circle.
+    assert_ne!(node.patch_all_hole & (1 << (4 * 8 + 4)), 0);
+    assert_eq!(node.patch_all_hole & 1, 0);
+    assert_ne!(holes_hash(&holes), holes_hash(&holes[..1]));
+}
+
+#[test]
+fn layout_rules() {
+    let d = WorldDesc::default();
+    d.validate().unwrap();
+    assert_eq!(d.sectors(), [160, 160]);
+    assert_eq!(d.node_size_m(5), 2048.0);
+    assert_eq!(d.roots().len(), 25);
+
+    // Mont Blanc at 8 m: 59 sectors of 1024 m, not a multiple of 2^k.
+    let mb =
+        WorldDesc { extent_m: [60_000.0, 60_000.0], height_range_m: [454.0, 4810.0], spacing_m: 8.0, lod_count: 6 };
+    mb.validate().unwrap();
+    assert_eq!(mb.sectors(), [59, 59]);
+    assert_eq!(mb.grid(1), [30, 30]);
+    assert_eq!(mb.roots().len(), 4);
+    assert!(mb.is_valid(NodeId::new(0, 58, 58)));
+    assert!(!mb.is_valid(NodeId::new(0, 59, 0)));
+    assert!(mb.is_valid(NodeId::new(1, 29, 0)));
+    assert_eq!(mb.valid_children(NodeId::new(1, 29, 29)), vec![NodeId::new(0, 58, 58)]);
+    assert!(!mb.is_valid(NodeId::new(6, 0, 0)));
+    let root = NodeId::new(5, 1, 1);
+    assert_eq!(mb.bounds_m(root), [32768.0, 32768.0, 65536.0, 65536.0]);
+    for c in root.children().unwrap() {
+        assert_eq!(c.parent(), root);
+        assert!(c.is_within(&root));
+    }
+    assert!(NodeId::new(0, 3, 3).children().is_none());
+
+    let bad = [
+        WorldDesc { extent_m: [f64::NAN, 1.0], ..d },
+        WorldDesc { extent_m: [0.0, 1.0], ..d },
+        WorldDesc { spacing_m: -1.0, ..d },
+        WorldDesc { spacing_m: f64::INFINITY, ..d },
+        WorldDesc { height_range_m: [5.0, 5.0], ..d },
+        WorldDesc { height_range_m: [0.0, f32::NAN], ..d },
+        WorldDesc { lod_count: 0, ..d },
+        WorldDesc { lod_count: 11, ..d },
+        WorldDesc { extent_m: [1e12, 1.0], ..d },
+    ];
+    for b in bad {
+        assert!(matches!(b.validate(), Err(WorldError::InvalidDesc(_))), "{b:?}");
+    }
+
+    let r = [-50.0f32, 1000.0];
+    for h in [-50.0f32, 0.0, 1.234, 999.99, 1000.0] {
+        let back = decode_height(encode_height(h, r), r);
+        assert!((back - h).abs() <= 1050.0 / 65535.0 * 0.51, "{h} -> {back}");
+    }
+    assert_eq!(encode_height(-1e9, r), 0);
+    assert_eq!(encode_height(1e9, r), 65535);
+    assert_eq!(encode_height(f32::NAN, r), 0);
+}
+
+#[test]
+fn payload_roundtrip_and_memory_report() {
+    let w = test_world();
+    let src = Surface::Paraboloid { a: 0.004, c: [100.0, 50.0] };
+    let node = bake_node(&src, &w, &[], NodeId::new(1, 1, 0));
+    let bytes = node.to_bytes();
+    assert_eq!(bytes.len(), BakedNode::SERIALIZED_BYTES);
+    assert_eq!(BakedNode::from_bytes(&bytes), Some(node.clone()));
+    assert_eq!(BakedNode::from_bytes(&bytes[1..]), None);
+
+    let report = MemoryReport::new(512);
+    assert_eq!(report.cpu_bytes_per_node() - report.kinds.last().unwrap().cpu_bytes, node_cpu_bytes(&node));
+    let text = report.to_string();
+    assert!(text.contains("R16_UNORM 129x129") && text.contains("total for 512 nodes"));
+    println!("{report}");
+}
+
+#[test]
+fn procedural_world_is_deterministic_and_has_cliffs() {
+    let (w, src) = ProceduralSource::default_world(7);
+    let (_, same) = ProceduralSource::default_world(7);
+    let (_, other) = ProceduralSource::default_world(8);
+    assert_eq!(src.id_hash(), same.id_hash());
+    assert_ne!(src.id_hash(), other.id_hash());
+    let mut steepest = 0f64;
+    let (mut lo, mut hi) = (f32::MAX, f32::MIN);
+    // Sparse probe of the whole world at 0.5 m offsets for slope.
+    for j in 0..200 {
+        for i in 0..200 {
+            let (x, y) = (i as f64 * 51.2 + 3.0, j as f64 * 51.2 + 7.0);
+            let h = src.sample(x, y);
+            assert_eq!(h, same.sample(x, y));
+            assert!(h.is_finite() && (0.0..=1600.0).contains(&h));
+            lo = lo.min(h);
+            hi = hi.max(h);
+            let dx = (src.sample(x + 0.5, y) - h) as f64 / 0.5;
+            let dy = (src.sample(x, y + 0.5) - h) as f64 / 0.5;
+            steepest = steepest.max(dx.hypot(dy).atan().to_degrees());
+        }
+    }
+    println!("procedural heights {lo}..{hi} m, steepest probe {steepest:.1} deg");
+    assert!(hi - lo > 600.0, "too flat: {lo}..{hi}");
+    assert!(steepest > 60.0, "no cliffs: steepest {steepest}");
+    assert!(w.validate().is_ok());
+    let _: Arc<dyn HeightSource> = Arc::new(src);
+}
+
+#[test]
+fn procedural_rejects_bad_params() {
+    assert!(ProceduralSource::new(1, [f64::NAN, 1.0], [0.0, 1.0]).is_err());
+    assert!(ProceduralSource::new(1, [10.0, 10.0], [1.0, 1.0]).is_err());
+    assert!(ProceduralSource::new(1, [10.0, 10.0], [0.0, 1.0]).is_ok());
+}

@@ -1,0 +1,315 @@
+//! Streaming residency, loader threads, the node cache and bake_world.
+
+use std::collections::HashSet;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use vista::world::*;
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("vista_world_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// Constant-height source: cheap to bake, hash set by the caller.
+struct Flat(f32);
+
+impl HeightSource for Flat {
+    fn sample(&self, _: f64, _: f64) -> f32 {
+        self.0
+    }
+    fn id_hash(&self) -> u64 {
+        u64::from(self.0.to_bits())
+    }
+}
+
+/// Invariants that must hold after every frame. Coverage can only hold
+/// once the roots have arrived.
+fn check_invariants(r: &Residency, rng: &mut Rng) {
+    let w = *r.world();
+    assert!(r.slots_used() <= r.config().budget, "budget exceeded");
+    let resident: HashSet<NodeId> = r.resident().collect();
+    for id in &resident {
+        assert!(w.is_valid(*id));
+        if u32::from(id.lod) + 1 < w.lod_count {
+            assert!(resident.contains(&id.parent()), "{id} resident without its parent");
+        }
+    }
+    if !w.roots().iter().all(|root| resident.contains(root)) {
+        return;
+    }
+    // Every point of the extent lies in a resident valid node.
+    for _ in 0..64 {
+        let (x, y) = (rng.unit() * w.extent_m[0], rng.unit() * w.extent_m[1]);
+        let covered = (0..w.lod_count as u8).filter_map(|l| w.node_at(l, x, y)).any(|n| resident.contains(&n));
+        assert!(covered, "({x},{y}) not covered");
+    }
+}
+
+#[test]
+fn random_paths_keep_budget_roots_and_coverage() {
+    let world = WorldDesc::default();
+    for (seed, budget, lag) in [(1u64, 512usize, false), (2, 60, false), (3, 200, true), (4, 40, true)] {
+        let config = ResidencyConfig { budget, ..ResidencyConfig::default() };
+        let mut r = Residency::new(&world, config).unwrap();
+        let mut rng = Rng(0x1234_5678 ^ seed.wrapping_mul(0x9e37_79b9));
+        let mut pos = [5000.0, 5000.0, 300.0];
+        let mut vel = [0.0, 0.0];
+        let mut loading: Vec<NodeId> = Vec::new();
+        let mut roots_seen = false;
+        for frame in 0..400 {
+            // Wandering walk with occasional teleports, sometimes off-world.
+            if rng.next() % 97 == 0 {
+                pos = [rng.unit() * 12_000.0 - 1000.0, rng.unit() * 12_000.0 - 1000.0, 100.0];
+            }
+            vel = [vel[0] * 0.9 + (rng.unit() - 0.5) * 40.0, vel[1] * 0.9 + (rng.unit() - 0.5) * 40.0];
+            pos = [pos[0] + vel[0], pos[1] + vel[1], pos[2]];
+            let changes = r.update(pos);
+            let resident_before: HashSet<NodeId> = r.resident().collect();
+            for id in &changes.removes {
+                assert!(!resident_before.contains(id), "removed node still resident");
+            }
+            loading.retain(|id| !changes.cancels.contains(id));
+            loading.extend(changes.adds.iter().copied());
+            // Deliver everything, or a random part when lagging.
+            let mut still = Vec::new();
+            for id in loading.drain(..) {
+                if lag && rng.next() % 3 == 0 {
+                    still.push(id);
+                    continue;
+                }
+                match r.on_loaded(id) {
+                    Arrival::Defer => still.push(id),
+                    Arrival::Accept | Arrival::Discard => {}
+                }
+            }
+            loading = still;
+            check_invariants(&r, &mut rng);
+            if world.roots().iter().all(|&root| r.is_resident(root)) {
+                roots_seen = true;
+            }
+            if !lag {
+                // Instant loads: roots (and so coverage) from the first frame.
+                assert!(roots_seen);
+            }
+            if roots_seen {
+                for root in world.roots() {
+                    assert!(r.is_resident(root), "root {root} lost in frame {frame}");
+                }
+            }
+            if !lag && budget >= 512 {
+                // Ample budget, instant loads: finest detail under the camera.
+                if let Some(n) = world.node_at(0, pos[0], pos[1]) {
+                    assert!(r.is_resident(n), "frame {frame}: {n} under camera missing");
+                }
+            }
+        }
+        assert!(roots_seen);
+    }
+}
+
+#[test]
+fn oscillating_camera_causes_no_churn() {
+    let world = WorldDesc::default();
+    let node = NodeId::new(0, 80, 80);
+    let b = world.bounds_m(node);
+    let centre = [(b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0];
+    for (hysteresis, expect_churn) in [(1.25, false), (1.0, true)] {
+        let config = ResidencyConfig { hysteresis, ..ResidencyConfig::default() };
+        let ring = config.ring_factor * world.node_size_m(0);
+        let mut r = Residency::new(&world, config).unwrap();
+        let mut churn = 0;
+        for frame in 0..60 {
+            // A few metres either side of the LOD-0 ring edge of `node`.
+            let dx = if frame % 2 == 0 { ring - 3.0 } else { ring + 3.0 };
+            let ch = r.update([centre[0] + dx, centre[1] + 0.1, 50.0]);
+            for id in &ch.adds {
+                assert_eq!(r.on_loaded(*id), Arrival::Accept);
+            }
+            if frame > 0 {
+                churn += ch.adds.len() + ch.removes.len() + ch.cancels.len();
+            }
+        }
+        assert_eq!(churn > 0, expect_churn, "hysteresis {hysteresis}: churn {churn}");
+    }
+}
+
+#[test]
+fn bad_residency_configs() {
+    let world = WorldDesc::default();
+    let small = ResidencyConfig { budget: 24, ..ResidencyConfig::default() };
+    assert!(matches!(Residency::new(&world, small), Err(WorldError::BudgetTooSmall { roots: 25, budget: 24 })));
+    for (ring_factor, hysteresis) in [(f64::NAN, 1.2), (0.1, 1.2), (2.0, 0.5)] {
+        let c = ResidencyConfig { ring_factor, hysteresis, ..ResidencyConfig::default() };
+        assert!(matches!(Residency::new(&world, c), Err(WorldError::InvalidConfig(_))));
+    }
+}
+
+#[test]
+fn streamer_with_loader_threads() {
+    let world = WorldDesc { extent_m: [4096.0, 4096.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 4 };
+    // Next to the path's end, so it is still wanted when its load fails.
+    let bad = NodeId::new(0, 29, 25);
+    let w2 = world;
+    let load: Arc<LoadFn> = Arc::new(move |id| {
+        std::thread::sleep(Duration::from_millis(1 + u64::from(id.x % 3)));
+        if id == bad {
+            return Err(WorldError::InvalidNode(id));
+        }
+        Ok(bake_node(&Flat(10.0), &w2, &[], id))
+    });
+    let loader = Loader::new(3, load).unwrap();
+    let residency = Residency::new(&world, ResidencyConfig::default()).unwrap();
+    let mut s = Streamer::new(residency, loader);
+    let mut on_gpu: HashSet<NodeId> = HashSet::new();
+    let mut failed = Vec::new();
+    let mut rng = Rng(99);
+    let start = Instant::now();
+    let mut frame_max = Duration::ZERO;
+    for step in 0..400 {
+        let t = step as f64 / 400.0;
+        let pos = [200.0 + t * 3500.0, 300.0 + t * 3000.0, 10.0];
+        let f0 = Instant::now();
+        let frame = s.frame(pos);
+        frame_max = frame_max.max(f0.elapsed());
+        for id in &frame.removed {
+            assert!(on_gpu.remove(id), "removed {id} that never arrived");
+        }
+        for node in &frame.arrived {
+            assert!(on_gpu.insert(node.id), "{} arrived twice", node.id);
+        }
+        failed.extend(frame.failed.into_iter().map(|(id, _)| id));
+        let resident: HashSet<NodeId> = s.residency().resident().collect();
+        assert_eq!(resident, on_gpu, "GPU view and residency disagree");
+        check_invariants(s.residency(), &mut rng);
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    // Let the last requests land, then the path's end must be fully loaded.
+    let end = [3700.0, 3300.0, 10.0];
+    for _ in 0..500 {
+        let frame = s.frame(end);
+        frame.removed.iter().for_each(|id| assert!(on_gpu.remove(id)));
+        frame.arrived.iter().for_each(|n| assert!(on_gpu.insert(n.id)));
+        failed.extend(frame.failed.into_iter().map(|(id, _)| id));
+        let under = world.node_at(0, end[0], end[1]).unwrap();
+        if on_gpu.contains(&under) && failed.contains(&bad) {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert!(on_gpu.contains(&world.node_at(0, end[0], end[1]).unwrap()));
+    assert!(failed.contains(&bad), "the failing node was not reported");
+    assert!(!on_gpu.contains(&bad));
+    println!(
+        "streamer: {} resident at the end, slowest frame {:?}, total {:?}",
+        on_gpu.len(),
+        frame_max,
+        start.elapsed()
+    );
+    // Frames never wait for loads (a load takes >= 1 ms plus a bake).
+    assert!(frame_max < Duration::from_millis(50), "frame blocked: {frame_max:?}");
+}
+
+#[test]
+fn cache_roundtrip_corruption_and_staleness() {
+    let dir = temp_dir("cache");
+    let world = WorldDesc { extent_m: [512.0, 512.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 3 };
+    let id = NodeId::new(1, 1, 0);
+    let cache = NodeCache::new(&dir, world, Arc::new(Flat(42.0)), vec![]).unwrap();
+    let (baked, o) = cache.get_or_bake(id).unwrap();
+    assert_eq!(o, CacheOutcome::Baked(MissReason::Missing));
+    assert_eq!(baked, bake_node(&Flat(42.0), &world, &[], id));
+    let (read, o) = cache.get_or_bake(id).unwrap();
+    assert_eq!(o, CacheOutcome::Hit);
+    assert_eq!(read, baked);
+
+    // Flip one byte anywhere: header, payload or checksum.
+    let path = cache.path(id);
+    let good = std::fs::read(&path).unwrap();
+    for at in [0, 5, 20, 40, 1000, good.len() / 2, good.len() - 1] {
+        let mut b = good.clone();
+        b[at] ^= 0x10;
+        std::fs::write(&path, &b).unwrap();
+        let (n, o) = cache.get_or_bake(id).unwrap();
+        assert_eq!(o, CacheOutcome::Baked(MissReason::Corrupt), "byte {at}");
+        assert_eq!(n, baked);
+        assert_eq!(std::fs::read(&path).unwrap(), good, "file not rewritten");
+    }
+    std::fs::write(&path, &good[..good.len() - 7]).unwrap();
+    assert_eq!(cache.get_or_bake(id).unwrap().1, CacheOutcome::Baked(MissReason::Corrupt));
+    std::fs::write(&path, b"garbage").unwrap();
+    assert_eq!(cache.get_or_bake(id).unwrap().1, CacheOutcome::Baked(MissReason::Corrupt));
+
+    // Another source (different id_hash) or hole set: stale, rebaked.
+    let other = NodeCache::new(&dir, world, Arc::new(Flat(43.0)), vec![]).unwrap();
+    let (n, o) = other.get_or_bake(id).unwrap();
+    assert_eq!(o, CacheOutcome::Baked(MissReason::Stale));
+    assert_ne!(n.heights, baked.heights);
+    let holes = vec![Hole::Circle { center_m: [10.0, 10.0], radius_m: 5.0 }];
+    let holed = NodeCache::new(&dir, world, Arc::new(Flat(43.0)), holes).unwrap();
+    assert_eq!(holed.get_or_bake(id).unwrap().1, CacheOutcome::Baked(MissReason::Stale));
+    assert_eq!(holed.get_or_bake(id).unwrap().1, CacheOutcome::Hit);
+
+    assert!(matches!(cache.get_or_bake(NodeId::new(0, 4, 0)), Err(WorldError::InvalidNode(_))));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bake_world_region_and_timings() {
+    let (world, src) = ProceduralSource::default_world(1);
+    let src: Arc<dyn HeightSource> = Arc::new(src);
+
+    let t = Instant::now();
+    let node = bake_node(src.as_ref(), &world, &[], NodeId::new(0, 80, 80));
+    let one = t.elapsed();
+    assert!(node.max_error_m > 0.0);
+
+    let dir = temp_dir("bake_world");
+    let region = Some([5000.0, 5000.0, 5128.0, 5128.0]);
+    let stats = bake_world(Arc::clone(&src), &world, &[], region, &dir, false).unwrap();
+    let expected = nodes_in_region(&world, region);
+    assert_eq!(stats.nodes_per_lod.iter().sum::<usize>(), expected.len());
+    assert_eq!(stats.nodes_per_lod[0], 9);
+    assert_eq!(stats.baked, expected.len());
+    assert_eq!(
+        stats.bytes_on_disk,
+        expected.len() as u64
+            * std::fs::metadata(NodeCache::new(&dir, world, Arc::clone(&src), vec![]).unwrap().path(expected[0]))
+                .unwrap()
+                .len()
+    );
+    let again = bake_world(Arc::clone(&src), &world, &[], region, &dir, false).unwrap();
+    assert_eq!(again.cached, expected.len());
+
+    let total_nodes: usize = (0..world.lod_count as u8).map(|l| world.nodes_at(l).len()).sum();
+    let per_node_s = stats.seconds / expected.len() as f64;
+    let per_node_bytes = stats.bytes_on_disk as f64 / expected.len() as f64;
+    println!(
+        "one LOD-0 bake: {one:?}; bake_world region: {} nodes {:?} in {:.3} s, {} bytes; \
+         cached pass {:.3} s; full world: {total_nodes} nodes, ~{:.0} s on this machine, ~{:.2} GB",
+        expected.len(),
+        stats.nodes_per_lod,
+        stats.seconds,
+        stats.bytes_on_disk,
+        again.seconds,
+        per_node_s * total_nodes as f64,
+        per_node_bytes * total_nodes as f64 / 1e9
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
