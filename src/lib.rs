@@ -8,9 +8,11 @@
 pub mod error;
 pub mod frame;
 pub mod gpu;
+pub mod gpu_quadtree;
 pub mod passes;
 pub mod patch_grid;
 pub mod profiler;
+pub mod quadtree;
 pub mod shaders;
 pub mod smoke;
 pub mod world;

@@ -17,6 +17,8 @@ pub enum Resource<'a> {
     BufferRange(&'a Buffer, u64, u64),
     /// An image in the given layout (GENERAL for storage images).
     Image(&'a Image, vk::ImageLayout),
+    /// One mip of an image, in the given layout.
+    ImageMip(&'a Image, u32, vk::ImageLayout),
     Sampler(vk::Sampler),
 }
 
@@ -110,7 +112,12 @@ impl<'a> Recorder<'a> {
                 }
                 Resource::Image(img, layout) => image_infos.push(vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),
-                    image_view: img.view,
+                    image_view: img.view(),
+                    image_layout: *layout,
+                }),
+                Resource::ImageMip(img, mip, layout) => image_infos.push(vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: img.mip_view(*mip),
                     image_layout: *layout,
                 }),
                 Resource::Sampler(s) => image_infos.push(vk::DescriptorImageInfo {
@@ -133,7 +140,10 @@ impl<'a> Recorder<'a> {
                         bi += 1;
                         w.buffer_info(&buffer_infos[bi - 1..bi])
                     }
-                    (Resource::Image(..), BindingKind::SampledImage | BindingKind::StorageImage)
+                    (
+                        Resource::Image(..) | Resource::ImageMip(..),
+                        BindingKind::SampledImage | BindingKind::StorageImage,
+                    )
                     | (Resource::Sampler(_), BindingKind::Sampler) => {
                         ii += 1;
                         w.image_info(&image_infos[ii - 1..ii])
@@ -183,7 +193,7 @@ impl<'a> Recorder<'a> {
             .iter()
             .map(|c| {
                 vk::RenderingAttachmentInfo::default()
-                    .image_view(c.image.view)
+                    .image_view(c.image.view())
                     .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                     .load_op(vk::AttachmentLoadOp::CLEAR)
                     .store_op(vk::AttachmentStoreOp::STORE)
@@ -192,7 +202,7 @@ impl<'a> Recorder<'a> {
             .collect();
         let depth_att = depth.map(|d| {
             vk::RenderingAttachmentInfo::default()
-                .image_view(d.view)
+                .image_view(d.view())
                 .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
                 .load_op(vk::AttachmentLoadOp::CLEAR)
                 .store_op(vk::AttachmentStoreOp::STORE)
@@ -296,6 +306,34 @@ impl<'a> Recorder<'a> {
                 img.raw,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 dst.raw,
+                &[region],
+            )
+        };
+    }
+
+    /// Copies tightly packed texels at `offset` of `src` into one mip of one
+    /// layer of `img`, which must be in TRANSFER_DST_OPTIMAL.
+    pub fn copy_buffer_to_image(&mut self, src: &Buffer, offset: u64, img: &Image, mip: u32, layer: u32) {
+        let region = vk::BufferImageCopy::default()
+            .buffer_offset(offset)
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: aspect_of(img.format),
+                mip_level: mip,
+                base_array_layer: layer,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D {
+                width: (img.extent[0] >> mip).max(1),
+                height: (img.extent[1] >> mip).max(1),
+                depth: 1,
+            });
+        // SAFETY: live objects; the caller put the image in TRANSFER_DST_OPTIMAL.
+        unsafe {
+            self.d().cmd_copy_buffer_to_image(
+                self.cmd,
+                src.raw,
+                img.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &[region],
             )
         };

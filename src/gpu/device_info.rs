@@ -147,7 +147,10 @@ pub(crate) struct FeatureChain {
 
 pub(crate) fn required_features() -> FeatureChain {
     FeatureChain {
-        core: vk::PhysicalDeviceFeatures::default().multi_draw_indirect(true).draw_indirect_first_instance(true),
+        core: vk::PhysicalDeviceFeatures::default()
+            .multi_draw_indirect(true)
+            .draw_indirect_first_instance(true)
+            .shader_storage_image_extended_formats(true),
         v12: vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
             .draw_indirect_count(true)
@@ -166,6 +169,8 @@ fn missing_features(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
     let checks = [
         ("multiDrawIndirect", core.multi_draw_indirect),
         ("drawIndirectFirstInstance", core.draw_indirect_first_instance),
+        // R16_UINT storage writes to the quadtree node texture.
+        ("shaderStorageImageExtendedFormats", core.shader_storage_image_extended_formats),
         ("timelineSemaphore", v12.timeline_semaphore),
         ("drawIndirectCount", v12.draw_indirect_count),
         ("hostQueryReset", v12.host_query_reset),

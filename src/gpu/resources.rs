@@ -59,7 +59,7 @@ pub(crate) fn inc(c: &AtomicI64) {
 /// A Vulkan object waiting for the frames that may use it to finish.
 pub(crate) enum Garbage {
     Buffer(vk::Buffer, Allocation),
-    Image(vk::Image, vk::ImageView, Allocation),
+    Image(vk::Image, Vec<vk::ImageView>, Allocation),
     Pipeline(vk::Pipeline, vk::PipelineLayout, vk::DescriptorSetLayout),
     QueryPool(vk::QueryPool),
     CommandPool(vk::CommandPool),
@@ -82,8 +82,10 @@ impl Garbage {
                     free(a);
                     dec(&s.live.buffers);
                 }
-                Garbage::Image(i, v, a) => {
-                    d.destroy_image_view(v, None);
+                Garbage::Image(i, views, a) => {
+                    for v in views {
+                        d.destroy_image_view(v, None);
+                    }
                     d.destroy_image(i, None);
                     free(a);
                     dec(&s.live.images);
@@ -221,7 +223,9 @@ pub struct ImageDesc<'a> {
 
 pub struct Image {
     pub(crate) raw: vk::Image,
-    pub(crate) view: vk::ImageView,
+    /// The whole image; then one view per mip when it has several (storage
+    /// writes address a single mip).
+    pub(crate) views: Vec<vk::ImageView>,
     allocation: Option<Allocation>,
     pub format: vk::Format,
     pub extent: [u32; 2],
@@ -276,35 +280,48 @@ impl Image {
         };
         let view_type =
             if desc.array_layers > 1 { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D };
-        let view_info =
+        let view_info = |base_mip: u32, mips: u32| {
             vk::ImageViewCreateInfo::default().image(raw).view_type(view_type).format(desc.format).subresource_range(
                 vk::ImageSubresourceRange::default()
                     .aspect_mask(aspect_of(desc.format))
-                    .level_count(desc.mip_levels)
+                    .base_mip_level(base_mip)
+                    .level_count(mips)
                     .layer_count(desc.array_layers),
-            );
+            )
+        };
+        let mut infos = vec![view_info(0, desc.mip_levels)];
+        if desc.mip_levels > 1 {
+            infos.extend((0..desc.mip_levels).map(|m| view_info(m, 1)));
+        }
+        let mut views = Vec::with_capacity(infos.len());
         // SAFETY: binding a fresh allocation sized by the image's requirements,
-        // then viewing the whole bound image.
-        let view = unsafe {
-            s.device
-                .bind_image_memory(raw, allocation.memory(), allocation.offset())
-                .and_then(|_| s.device.create_image_view(&view_info, None))
-        };
-        let view = match view {
-            Ok(v) => v,
-            Err(e) => {
-                // SAFETY: nothing uses either object yet.
-                unsafe { s.device.destroy_image(raw, None) };
-                let _ = s.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(allocation);
-                return Err(Error::vk("vkBindImageMemory/vkCreateImageView", e));
+        // then viewing the bound image.
+        let mut result = unsafe { s.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) };
+        for info in &infos {
+            if result.is_err() {
+                break;
             }
-        };
+            // SAFETY: the image is bound; the view covers existing subresources.
+            match unsafe { s.device.create_image_view(info, None) } {
+                Ok(v) => views.push(v),
+                Err(e) => result = Err(e),
+            }
+        }
+        if let Err(e) = result {
+            // SAFETY: nothing uses these objects yet.
+            unsafe {
+                views.iter().for_each(|v| s.device.destroy_image_view(*v, None));
+                s.device.destroy_image(raw, None);
+            }
+            let _ = s.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(allocation);
+            return Err(Error::vk("vkBindImageMemory/vkCreateImageView", e));
+        }
         inc(&s.live.images);
         ctx.set_name(raw, desc.name);
-        ctx.set_name(view, desc.name);
+        views.iter().for_each(|v| ctx.set_name(*v, desc.name));
         Ok(Image {
             raw,
-            view,
+            views,
             allocation: Some(allocation),
             format: desc.format,
             extent: desc.extent,
@@ -319,15 +336,26 @@ impl Image {
         self.raw
     }
 
+    /// View of every mip and layer.
     pub fn view(&self) -> vk::ImageView {
-        self.view
+        self.views[0]
+    }
+
+    /// View of one mip (all layers).
+    pub fn mip_view(&self, mip: u32) -> vk::ImageView {
+        assert!(mip < self.mip_levels, "{}: mip {mip} of {}", self.name, self.mip_levels);
+        if self.mip_levels == 1 {
+            self.views[0]
+        } else {
+            self.views[1 + mip as usize]
+        }
     }
 }
 
 impl Drop for Image {
     fn drop(&mut self) {
         if let Some(a) = self.allocation.take() {
-            self.shared.retire(Garbage::Image(self.raw, self.view, a));
+            self.shared.retire(Garbage::Image(self.raw, std::mem::take(&mut self.views), a));
         }
     }
 }

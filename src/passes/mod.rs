@@ -2,4 +2,5 @@
 
 pub mod diamond_patch;
 pub mod prefix_sum;
+pub mod quadtree_update;
 pub mod smoke_triangle;

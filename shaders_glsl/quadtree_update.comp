@@ -1,0 +1,63 @@
+#version 460
+// Applies one frame's quadtree changes: node-texture texels (value = slot,
+// 0xFFFF empty) and node descriptions. The host coalesces the list so no two
+// threads write the same texel or slot: the order of threads does not matter.
+layout(local_size_x = 64) in;
+
+struct QuadtreeUpdate {
+    uint target;  // mip (= LOD) of a texel write, or TARGET_DESC
+    uint coords;  // x | y << 16 for a texel; the slot for a description
+    uint word0;
+    uint word1;
+};
+
+// Description writes (quadtree.rs TARGET_DESC).
+const uint TARGET_DESC = 0xFFu;
+
+layout(set = 0, binding = 0, std430) readonly buffer Updates { QuadtreeUpdate items[]; } updates;
+layout(set = 0, binding = 1, std430) buffer NodeDescs { uvec2 descs[]; } node_descs;
+// One binding per LOD (a storage image view addresses a single mip); the
+// host binds mip 0 again for LODs past the world's count.
+layout(set = 0, binding = 2, r16ui) uniform writeonly uimage2D node_lod0;
+layout(set = 0, binding = 3, r16ui) uniform writeonly uimage2D node_lod1;
+layout(set = 0, binding = 4, r16ui) uniform writeonly uimage2D node_lod2;
+layout(set = 0, binding = 5, r16ui) uniform writeonly uimage2D node_lod3;
+layout(set = 0, binding = 6, r16ui) uniform writeonly uimage2D node_lod4;
+layout(set = 0, binding = 7, r16ui) uniform writeonly uimage2D node_lod5;
+layout(set = 0, binding = 8, r16ui) uniform writeonly uimage2D node_lod6;
+layout(set = 0, binding = 9, r16ui) uniform writeonly uimage2D node_lod7;
+layout(set = 0, binding = 10, r16ui) uniform writeonly uimage2D node_lod8;
+layout(set = 0, binding = 11, r16ui) uniform writeonly uimage2D node_lod9;
+
+layout(push_constant, std430) uniform QuadtreeUpdatePush { uint count; } pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count) {
+        return;
+    }
+    // Field by field: a whole-struct copy becomes OpCopyLogical, which naga
+    // does not parse.
+    uint target = updates.items[i].target;
+    uint coords = updates.items[i].coords;
+    uint word0 = updates.items[i].word0;
+    if (target == TARGET_DESC) {
+        node_descs.descs[coords] = uvec2(word0, updates.items[i].word1);
+        return;
+    }
+    ivec2 p = ivec2(coords & 0xFFFFu, coords >> 16);
+    uvec4 v = uvec4(word0);
+    switch (target) {
+        case 0u: imageStore(node_lod0, p, v); break;
+        case 1u: imageStore(node_lod1, p, v); break;
+        case 2u: imageStore(node_lod2, p, v); break;
+        case 3u: imageStore(node_lod3, p, v); break;
+        case 4u: imageStore(node_lod4, p, v); break;
+        case 5u: imageStore(node_lod5, p, v); break;
+        case 6u: imageStore(node_lod6, p, v); break;
+        case 7u: imageStore(node_lod7, p, v); break;
+        case 8u: imageStore(node_lod8, p, v); break;
+        case 9u: imageStore(node_lod9, p, v); break;
+        default: break;
+    }
+}

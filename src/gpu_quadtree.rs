@@ -1,0 +1,271 @@
+//! The GPU side of the quadtree: node texture, node description buffer,
+//! payload atlases (one texture array per payload kind, a node slot is a
+//! layer) and the per-frame upload ring that feeds `quadtree_update`.
+//!
+//! Resting layouts between passes: the node texture GENERAL (storage writes
+//! and reads), the atlases SHADER_READ_ONLY_OPTIMAL (sampled); uploads
+//! transition to TRANSFER_DST_OPTIMAL and back.
+
+use crate::error::{Error, Result};
+use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
+use crate::quadtree::{texture_extent, NodeDesc, QuadtreeShadow, QuadtreeUpdate, FIRST_SLOT, MAX_SLOTS};
+use crate::world::{BakedNode, NodeId, WorldDesc, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, SPLAT_RES};
+use std::collections::VecDeque;
+
+/// Most node payloads copied per frame; later arrivals wait a frame (a
+/// node becomes visible to the GPU only once its payload is in the atlas).
+pub const MAX_UPLOADS_PER_FRAME: usize = 16;
+
+struct AtlasKind {
+    name: &'static str,
+    format: vk::Format,
+    side: u32,
+    texel_bytes: u32,
+}
+
+/// Atlas formats, in the order of `payload_bytes`.
+const ATLASES: [AtlasKind; 6] = [
+    AtlasKind { name: "atlas_height", format: vk::Format::R16_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 2 },
+    AtlasKind { name: "atlas_normal", format: vk::Format::R8G8B8A8_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 4 },
+    AtlasKind { name: "atlas_albedo", format: vk::Format::R8G8B8A8_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 4 },
+    AtlasKind { name: "atlas_splat", format: vk::Format::R8_UINT, side: SPLAT_RES as u32, texel_bytes: 1 },
+    AtlasKind {
+        name: "atlas_patch_min_max",
+        format: vk::Format::R16G16_UINT,
+        side: PATCHES_PER_NODE_SIDE as u32,
+        texel_bytes: 4,
+    },
+    AtlasKind {
+        name: "atlas_patch_cones",
+        format: vk::Format::R32G32B32A32_SFLOAT,
+        side: PATCHES_PER_NODE_SIDE as u32,
+        texel_bytes: 16,
+    },
+];
+
+fn payload_bytes(n: &BakedNode) -> [&[u8]; 6] {
+    [
+        bytemuck::cast_slice(&n.heights),
+        bytemuck::cast_slice(&n.normals),
+        bytemuck::cast_slice(&n.albedo),
+        &n.splat,
+        bytemuck::cast_slice(&n.patch_min_max),
+        bytemuck::cast_slice(&n.patch_cones),
+    ]
+}
+
+/// Copy offsets must be multiples of the texel size (16 for RGBA32F).
+const UPLOAD_ALIGN: u64 = 16;
+
+fn aligned_size(a: &AtlasKind) -> u64 {
+    u64::from(a.side * a.side * a.texel_bytes).next_multiple_of(UPLOAD_ALIGN)
+}
+
+fn node_upload_bytes() -> u64 {
+    ATLASES.iter().map(aligned_size).sum()
+}
+
+/// Resting layout of the atlases.
+pub const ATLAS_LAYOUT: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+
+struct RingSlot {
+    updates: Buffer,
+    payloads: Buffer,
+}
+
+pub struct GpuQuadtree {
+    pub shadow: QuadtreeShadow,
+    pub node_texture: Image,
+    pub node_descs: Buffer,
+    pub atlases: Vec<Image>,
+    ring: Vec<RingSlot>,
+    next: usize,
+    current: usize,
+    waiting: VecDeque<(BakedNode, i8)>,
+    update_capacity: u32,
+}
+
+impl GpuQuadtree {
+    /// `slots` resident nodes at most; `frames_in_flight` upload buffers (the
+    /// caller must not record more frames ahead than that).
+    pub fn new(ctx: &Context, world: &WorldDesc, slots: u32, frames_in_flight: usize) -> Result<Self> {
+        if !(1..=MAX_SLOTS).contains(&slots) {
+            return Err(Error::BadInput(format!("slot budget {slots} outside 1..={MAX_SLOTS} (slots are 10-bit)")));
+        }
+        let shadow = QuadtreeShadow::new(world, slots);
+        let extent = texture_extent(world);
+        let node_texture = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "quadtree_nodes",
+                format: vk::Format::R16_UINT,
+                extent,
+                mip_levels: world.lod_count,
+                array_layers: 1,
+                usage: vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_DST
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
+            },
+        )?;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let layers = slots + FIRST_SLOT;
+        let node_descs = Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: "quadtree_node_descs",
+                size: u64::from(layers) * 8,
+                usage: storage | vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::GpuOnly,
+            },
+        )?;
+        let mut atlases = Vec::new();
+        for a in &ATLASES {
+            atlases.push(Image::new(
+                ctx,
+                &ImageDesc {
+                    name: a.name,
+                    format: a.format,
+                    extent: [a.side, a.side],
+                    mip_levels: 1,
+                    array_layers: layers,
+                    usage: vk::ImageUsageFlags::SAMPLED
+                        | vk::ImageUsageFlags::TRANSFER_DST
+                        | vk::ImageUsageFlags::TRANSFER_SRC,
+                },
+            )?);
+        }
+        // Worst case per frame: every slot freed and refilled (texel + desc each).
+        let update_capacity = 4 * layers;
+        let mut ring = Vec::new();
+        for i in 0..frames_in_flight.max(1) {
+            let host = |name: &str, size| {
+                Buffer::new(
+                    ctx,
+                    &BufferDesc {
+                        name,
+                        size,
+                        usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+                        location: MemoryLocation::CpuToGpu,
+                    },
+                )
+            };
+            ring.push(RingSlot {
+                updates: host(&format!("quadtree_updates[{i}]"), u64::from(update_capacity) * 16)?,
+                payloads: host(
+                    &format!("node_payload_uploads[{i}]"),
+                    node_upload_bytes() * MAX_UPLOADS_PER_FRAME as u64,
+                )?,
+            });
+        }
+        // Initial contents: every texel empty or invalid, descriptions zero.
+        let texels: Vec<u8> = shadow.mips.iter().flat_map(|m| bytemuck::cast_slice::<u16, u8>(m).to_vec()).collect();
+        let mut staging = Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: "quadtree_init",
+                size: texels.len() as u64,
+                usage: vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::CpuToGpu,
+            },
+        )?;
+        staging.mapped_mut().expect("mapped").copy_from_slice(&texels);
+        ctx.submit_and_wait(|rec| {
+            rec.image_layout(&node_texture, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+            for a in &atlases {
+                rec.image_layout(a, vk::ImageLayout::UNDEFINED, ATLAS_LAYOUT);
+            }
+            let mut offset = 0;
+            for (lod, m) in shadow.mips.iter().enumerate() {
+                rec.copy_buffer_to_image(&staging, offset, &node_texture, lod as u32, 0);
+                offset += (m.len() * 2) as u64;
+            }
+            rec.image_layout(&node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::GENERAL);
+            rec.fill_buffer(&node_descs, 0);
+            Ok(())
+        })?;
+        Ok(GpuQuadtree {
+            shadow,
+            node_texture,
+            node_descs,
+            atlases,
+            ring,
+            next: 0,
+            current: 0,
+            waiting: VecDeque::new(),
+            update_capacity,
+        })
+    }
+
+    /// Removes a resident (or still waiting) node; its slot is free at once.
+    pub fn remove(&mut self, id: NodeId) {
+        self.waiting.retain(|(n, _)| n.id != id);
+        self.shadow.remove(id);
+    }
+
+    /// Queues an arrived node; it becomes resident when its payload is
+    /// uploaded by `record_updates` (at most MAX_UPLOADS_PER_FRAME a frame).
+    pub fn add(&mut self, node: BakedNode, lod_bias: i8) {
+        self.waiting.push_back((node, lod_bias));
+    }
+
+    /// Nodes queued but not uploaded yet.
+    pub fn waiting(&self) -> usize {
+        self.waiting.len()
+    }
+
+    /// Uploads this frame's payloads and writes the frame's coalesced
+    /// changes into `current_updates()`; returns how many there are.
+    pub fn prepare_frame(&mut self, rec: &mut Recorder) -> Result<u32> {
+        self.current = self.next;
+        let slot_index = self.next;
+        self.next = (self.next + 1) % self.ring.len();
+        let mut uploaded = Vec::new();
+        while uploaded.len() < MAX_UPLOADS_PER_FRAME {
+            let Some((node, bias)) = self.waiting.pop_front() else { break };
+            if self.shadow.slot_of(node.id).is_some() {
+                continue;
+            }
+            let Some(slot) = self.shadow.add(node.id, NodeDesc::from_baked(&node, bias)) else {
+                self.waiting.push_front((node, bias));
+                break;
+            };
+            uploaded.push((node, slot));
+        }
+        let ring = &mut self.ring[slot_index];
+        let mapped = ring.payloads.mapped_mut().expect("mapped");
+        let per_node = node_upload_bytes() as usize;
+        for (i, (node, _)) in uploaded.iter().enumerate() {
+            let mut off = i * per_node;
+            for (bytes, a) in payload_bytes(node).into_iter().zip(&ATLASES) {
+                mapped[off..off + bytes.len()].copy_from_slice(bytes);
+                off += aligned_size(a) as usize;
+            }
+        }
+        if !uploaded.is_empty() {
+            for img in &self.atlases {
+                rec.image_layout(img, ATLAS_LAYOUT, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+            }
+            for (i, (_, slot)) in uploaded.iter().enumerate() {
+                let mut off = (i * per_node) as u64;
+                for (a, img) in ATLASES.iter().zip(&self.atlases) {
+                    rec.copy_buffer_to_image(&ring.payloads, off, img, 0, *slot);
+                    off += aligned_size(a);
+                }
+            }
+            for img in &self.atlases {
+                rec.image_layout(img, vk::ImageLayout::TRANSFER_DST_OPTIMAL, ATLAS_LAYOUT);
+            }
+        }
+        let updates = self.shadow.take_updates();
+        assert!(updates.len() as u32 <= self.update_capacity, "{} updates exceed the ring", updates.len());
+        let bytes: &[u8] = bytemuck::cast_slice::<QuadtreeUpdate, u8>(&updates);
+        ring.updates.mapped_mut().expect("mapped")[..bytes.len()].copy_from_slice(bytes);
+        Ok(updates.len() as u32)
+    }
+
+    /// The update list written by the last `prepare_frame`.
+    pub fn current_updates(&self) -> &Buffer {
+        &self.ring[self.current].updates
+    }
+}

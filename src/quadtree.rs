@@ -1,0 +1,211 @@
+//! The GPU quadtree's CPU shadow (Far Cry 5): the node texture (R16_UINT, one
+//! mip per LOD, value = node slot) and the node description buffer (2 x u32
+//! per slot). The shadow allocates slots and turns a frame's removes and adds
+//! into a coalesced list of writes for the `quadtree_update` pass.
+//! No Vulkan here.
+
+use crate::world::{BakedNode, NodeId, WorldDesc};
+use std::collections::BTreeMap;
+
+/// Node texture value: nothing loaded for this node (quadtree_update.comp, traversal).
+pub const EMPTY: u16 = 0xFFFF;
+/// Node texture value: the node can never exist (outside the world).
+pub const INVALID: u16 = 0xFFFE;
+/// Slot 0 is never allocated: sector data uses 0 for "no node" (10 bits per LOD).
+pub const FIRST_SLOT: u32 = 1;
+/// Slots are 10-bit in sector data, so at most 1023 resident nodes.
+pub const MAX_SLOTS: u32 = 1023;
+/// `QuadtreeUpdate::target` of a description write (else: the mip to write).
+pub const TARGET_DESC: u32 = 0xFF;
+
+/// One write of the `quadtree_update` pass (`QuadtreeUpdate` in the shader).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct QuadtreeUpdate {
+    /// Mip (= LOD) of a node-texture write, or TARGET_DESC.
+    pub target: u32,
+    /// x | y << 16 for a texel; the slot for a description.
+    pub coords: u32,
+    pub word0: u32,
+    pub word1: u32,
+}
+
+/// What a node description holds before packing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NodeDesc {
+    /// Encoded (R16 over the world height range) min and max height.
+    pub min_height: u16,
+    pub max_height: u16,
+    pub lod: u8,
+    /// Signed LOD bias, -8..=7 (per-node refinement nudge).
+    pub lod_bias: i8,
+    pub has_holes: bool,
+}
+
+impl NodeDesc {
+    pub fn from_baked(node: &BakedNode, lod_bias: i8) -> Self {
+        NodeDesc {
+            min_height: node.min_height,
+            max_height: node.max_height,
+            lod: node.id.lod,
+            lod_bias,
+            has_holes: node.albedo.iter().any(|a| a[3] == 0),
+        }
+    }
+
+    /// word0 = min | max << 16; word1 = slot (10 bits) | lod (4) << 10 |
+    /// bias (4, two's complement) << 14 | flags << 18 (bit 18: has holes).
+    pub fn pack(&self, slot: u32) -> [u32; 2] {
+        assert!(slot <= MAX_SLOTS && self.lod < 16 && (-8..=7).contains(&self.lod_bias));
+        let bias = (self.lod_bias as u32) & 0xF;
+        [
+            u32::from(self.min_height) | u32::from(self.max_height) << 16,
+            slot | u32::from(self.lod) << 10 | bias << 14 | u32::from(self.has_holes) << 18,
+        ]
+    }
+}
+
+/// Node texture mip `lod` is `grid` texels square per side; mip 0 is padded
+/// to a multiple of 2^(lods-1) so every mip is exactly half the one above
+/// (plain Vulkan mip sizes would round 59 sectors down to 29 at LOD 1).
+pub fn texture_extent(world: &WorldDesc) -> [u32; 2] {
+    let root = world.grid(world.root_lod());
+    let scale = 1u32 << world.root_lod();
+    [root[0] * scale, root[1] * scale]
+}
+
+pub struct QuadtreeShadow {
+    world: WorldDesc,
+    /// Node texture, one row-major level per LOD.
+    pub mips: Vec<Vec<u16>>,
+    /// Packed descriptions by slot (slot 0 unused).
+    pub descs: Vec<[u32; 2]>,
+    free: Vec<u32>,
+    /// Pending writes of this frame, coalesced: the last write wins.
+    texels: BTreeMap<(u32, u32), u16>,
+    desc_writes: BTreeMap<u32, [u32; 2]>,
+}
+
+impl QuadtreeShadow {
+    /// `slots` resident nodes at most (1..=MAX_SLOTS).
+    pub fn new(world: &WorldDesc, slots: u32) -> Self {
+        assert!((1..=MAX_SLOTS).contains(&slots), "slot budget {slots} outside 1..={MAX_SLOTS}");
+        let [w, h] = texture_extent(world);
+        let mips = (0..world.lod_count)
+            .map(|lod| {
+                let (mw, mh) = (w >> lod, h >> lod);
+                (0..mw * mh)
+                    .map(|i| {
+                        let valid = world.is_valid(NodeId::new(lod as u8, i % mw, i / mw));
+                        if valid {
+                            EMPTY
+                        } else {
+                            INVALID
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        QuadtreeShadow {
+            world: *world,
+            mips,
+            descs: vec![[0, 0]; (slots + FIRST_SLOT) as usize],
+            free: (FIRST_SLOT..slots + FIRST_SLOT).rev().collect(),
+            texels: BTreeMap::new(),
+            desc_writes: BTreeMap::new(),
+        }
+    }
+
+    pub fn extent(&self) -> [u32; 2] {
+        texture_extent(&self.world)
+    }
+
+    pub fn slot_capacity(&self) -> u32 {
+        self.descs.len() as u32 - FIRST_SLOT
+    }
+
+    fn texel_index(&self, id: NodeId) -> usize {
+        let w = self.extent()[0] >> id.lod;
+        (id.y * w + id.x) as usize
+    }
+
+    /// Slot of a resident node.
+    pub fn slot_of(&self, id: NodeId) -> Option<u32> {
+        let v = self.mips[id.lod as usize][self.texel_index(id)];
+        (v != EMPTY && v != INVALID).then_some(u32::from(v))
+    }
+
+    fn set_texel(&mut self, id: NodeId, value: u16) {
+        let i = self.texel_index(id);
+        self.mips[id.lod as usize][i] = value;
+        self.texels.insert((u32::from(id.lod), id.x | id.y << 16), value);
+    }
+
+    /// Frees `id`'s slot; returns it (None if the node was not resident).
+    pub fn remove(&mut self, id: NodeId) -> Option<u32> {
+        let slot = self.slot_of(id)?;
+        self.set_texel(id, EMPTY);
+        self.descs[slot as usize] = [0, 0];
+        self.desc_writes.insert(slot, [0, 0]);
+        self.free.push(slot);
+        Some(slot)
+    }
+
+    /// Allocates a slot for `id`; None when the budget is full (or the node is
+    /// invalid or already resident: programmer errors, asserted).
+    pub fn add(&mut self, id: NodeId, desc: NodeDesc) -> Option<u32> {
+        assert!(self.world.is_valid(id), "node {id} is outside the world");
+        assert!(self.slot_of(id).is_none(), "node {id} is already resident");
+        let slot = self.free.pop()?;
+        self.set_texel(id, slot as u16);
+        let packed = desc.pack(slot);
+        self.descs[slot as usize] = packed;
+        self.desc_writes.insert(slot, packed);
+        Some(slot)
+    }
+
+    /// This frame's writes, order-independent (one per texel and per slot),
+    /// so the GPU may apply them in parallel.
+    pub fn take_updates(&mut self) -> Vec<QuadtreeUpdate> {
+        let texels = std::mem::take(&mut self.texels).into_iter().map(|((lod, coords), v)| QuadtreeUpdate {
+            target: lod,
+            coords,
+            word0: u32::from(v),
+            word1: 0,
+        });
+        let descs = std::mem::take(&mut self.desc_writes).into_iter().map(|(slot, w)| QuadtreeUpdate {
+            target: TARGET_DESC,
+            coords: slot,
+            word0: w[0],
+            word1: w[1],
+        });
+        texels.chain(descs).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pack_places_every_field() {
+        let d = NodeDesc { min_height: 0x1234, max_height: 0xABCD, lod: 5, lod_bias: -2, has_holes: true };
+        let [w0, w1] = d.pack(1000);
+        assert_eq!(w0, 0xABCD_1234);
+        assert_eq!(w1 & 0x3FF, 1000);
+        assert_eq!((w1 >> 10) & 0xF, 5);
+        assert_eq!((((w1 >> 14) & 0xF) as i8) << 4 >> 4, -2);
+        assert_eq!((w1 >> 18) & 1, 1);
+    }
+
+    #[test]
+    fn padded_extent_halves_exactly() {
+        let world =
+            WorldDesc { extent_m: [60000.0, 60000.0], height_range_m: [454.0, 4810.0], spacing_m: 8.0, lod_count: 6 };
+        let [w, h] = texture_extent(&world);
+        assert_eq!([w, h], [64, 64]);
+        for lod in 0..6u8 {
+            assert!(world.grid(lod)[0] <= w >> lod, "lod {lod}");
+        }
+    }
+}
