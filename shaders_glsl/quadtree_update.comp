@@ -11,11 +11,13 @@ struct QuadtreeUpdate {
     uint word1;
 };
 
-// Description writes (quadtree.rs TARGET_DESC).
+// Description and node-error writes (quadtree.rs TARGET_DESC, TARGET_ERROR).
 const uint TARGET_DESC = 0xFFu;
+const uint TARGET_ERROR = 0xFEu;
 
 layout(set = 0, binding = 0, std430) readonly buffer Updates { QuadtreeUpdate items[]; } updates;
 layout(set = 0, binding = 1, std430) buffer NodeDescs { uvec2 descs[]; } node_descs;
+layout(set = 0, binding = 12, std430) buffer NodeErrors { float errors[]; } node_errors;
 // One binding per LOD (a storage image view addresses a single mip); the
 // host binds mip 0 again for LODs past the world's count.
 layout(set = 0, binding = 2, r16ui) uniform writeonly uimage2D node_lod0;
@@ -43,6 +45,10 @@ void main() {
     uint word0 = updates.items[i].word0;
     if (target == TARGET_DESC) {
         node_descs.descs[coords] = uvec2(word0, updates.items[i].word1);
+        return;
+    }
+    if (target == TARGET_ERROR) {
+        node_errors.errors[coords] = uintBitsToFloat(word0);
         return;
     }
     ivec2 p = ivec2(coords & 0xFFFFu, coords >> 16);

@@ -15,6 +15,8 @@ pub enum Error {
     Unsupported(String),
     #[error("bad input: {0}")]
     BadInput(String),
+    #[error(transparent)]
+    World(#[from] crate::world::WorldError),
     #[error("Vulkan call {call} failed: {result:?}")]
     Vulkan { call: &'static str, result: vk::Result },
     #[error("GPU memory allocation for {name:?} failed: {source}")]

@@ -77,6 +77,8 @@ pub struct GpuQuadtree {
     pub shadow: QuadtreeShadow,
     pub node_texture: Image,
     pub node_descs: Buffer,
+    /// f32 LOD error (m) per slot, beside the descriptions.
+    pub node_errors: Buffer,
     pub atlases: Vec<Image>,
     ring: Vec<RingSlot>,
     next: usize,
@@ -119,6 +121,15 @@ impl GpuQuadtree {
                 location: MemoryLocation::GpuOnly,
             },
         )?;
+        let node_errors = Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: "quadtree_node_errors",
+                size: u64::from(layers) * 4,
+                usage: storage | vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::GpuOnly,
+            },
+        )?;
         let mut atlases = Vec::new();
         for a in &ATLASES {
             atlases.push(Image::new(
@@ -135,8 +146,8 @@ impl GpuQuadtree {
                 },
             )?);
         }
-        // Worst case per frame: every slot freed and refilled (texel + desc each).
-        let update_capacity = 4 * layers;
+        // Worst case per frame: every slot freed and refilled (texel, desc, error each).
+        let update_capacity = 6 * layers;
         let mut ring = Vec::new();
         for i in 0..frames_in_flight.max(1) {
             let host = |name: &str, size| {
@@ -182,12 +193,14 @@ impl GpuQuadtree {
             }
             rec.image_layout(&node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::GENERAL);
             rec.fill_buffer(&node_descs, 0);
+            rec.fill_buffer(&node_errors, 0);
             Ok(())
         })?;
         Ok(GpuQuadtree {
             shadow,
             node_texture,
             node_descs,
+            node_errors,
             atlases,
             ring,
             next: 0,

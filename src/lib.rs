@@ -15,6 +15,7 @@ pub mod profiler;
 pub mod quadtree;
 pub mod shaders;
 pub mod smoke;
+pub mod terrain;
 pub mod world;
 
 pub use error::{Error, Result};

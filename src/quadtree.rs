@@ -17,6 +17,9 @@ pub const FIRST_SLOT: u32 = 1;
 pub const MAX_SLOTS: u32 = 1023;
 /// `QuadtreeUpdate::target` of a description write (else: the mip to write).
 pub const TARGET_DESC: u32 = 0xFF;
+/// `QuadtreeUpdate::target` of a node-error write (f32 bits in word0): the
+/// LOD metric does not fit the 2 x u32 description.
+pub const TARGET_ERROR: u32 = 0xFE;
 
 /// One write of the `quadtree_update` pass (`QuadtreeUpdate` in the shader).
 #[repr(C)]
@@ -31,7 +34,7 @@ pub struct QuadtreeUpdate {
 }
 
 /// What a node description holds before packing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NodeDesc {
     /// Encoded (R16 over the world height range) min and max height.
     pub min_height: u16,
@@ -40,6 +43,8 @@ pub struct NodeDesc {
     /// Signed LOD bias, -8..=7 (per-node refinement nudge).
     pub lod_bias: i8,
     pub has_holes: bool,
+    /// Vertical error (m) of drawing this node instead of its children.
+    pub max_error_m: f32,
 }
 
 impl NodeDesc {
@@ -50,6 +55,7 @@ impl NodeDesc {
             lod: node.id.lod,
             lod_bias,
             has_holes: node.albedo.iter().any(|a| a[3] == 0),
+            max_error_m: node.max_error_m,
         }
     }
 
@@ -80,10 +86,13 @@ pub struct QuadtreeShadow {
     pub mips: Vec<Vec<u16>>,
     /// Packed descriptions by slot (slot 0 unused).
     pub descs: Vec<[u32; 2]>,
+    /// LOD error (m) by slot.
+    pub errors: Vec<f32>,
     free: Vec<u32>,
     /// Pending writes of this frame, coalesced: the last write wins.
     texels: BTreeMap<(u32, u32), u16>,
     desc_writes: BTreeMap<u32, [u32; 2]>,
+    error_writes: BTreeMap<u32, f32>,
 }
 
 impl QuadtreeShadow {
@@ -110,9 +119,11 @@ impl QuadtreeShadow {
             world: *world,
             mips,
             descs: vec![[0, 0]; (slots + FIRST_SLOT) as usize],
+            errors: vec![0.0; (slots + FIRST_SLOT) as usize],
             free: (FIRST_SLOT..slots + FIRST_SLOT).rev().collect(),
             texels: BTreeMap::new(),
             desc_writes: BTreeMap::new(),
+            error_writes: BTreeMap::new(),
         }
     }
 
@@ -161,6 +172,8 @@ impl QuadtreeShadow {
         let packed = desc.pack(slot);
         self.descs[slot as usize] = packed;
         self.desc_writes.insert(slot, packed);
+        self.errors[slot as usize] = desc.max_error_m;
+        self.error_writes.insert(slot, desc.max_error_m);
         Some(slot)
     }
 
@@ -179,7 +192,18 @@ impl QuadtreeShadow {
             word0: w[0],
             word1: w[1],
         });
-        texels.chain(descs).collect()
+        let errors = std::mem::take(&mut self.error_writes).into_iter().map(|(slot, e)| QuadtreeUpdate {
+            target: TARGET_ERROR,
+            coords: slot,
+            word0: e.to_bits(),
+            word1: 0,
+        });
+        texels.chain(descs).chain(errors).collect()
+    }
+
+    /// Resident nodes on the GPU side.
+    pub fn resident_count(&self) -> u32 {
+        self.slot_capacity() - self.free.len() as u32
     }
 }
 
@@ -189,7 +213,14 @@ mod tests {
 
     #[test]
     fn pack_places_every_field() {
-        let d = NodeDesc { min_height: 0x1234, max_height: 0xABCD, lod: 5, lod_bias: -2, has_holes: true };
+        let d = NodeDesc {
+            min_height: 0x1234,
+            max_height: 0xABCD,
+            lod: 5,
+            lod_bias: -2,
+            has_holes: true,
+            max_error_m: 0.5,
+        };
         let [w0, w1] = d.pack(1000);
         assert_eq!(w0, 0xABCD_1234);
         assert_eq!(w1 & 0x3FF, 1000);

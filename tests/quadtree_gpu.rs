@@ -33,7 +33,7 @@ fn fake_node(id: NodeId, salt: u16) -> BakedNode {
         patch_all_hole: 0,
         min_height: tag & 0x7FFF,
         max_height: tag | 0x8000,
-        max_error_m: 1.0,
+        max_error_m: f32::from(tag) * 0.01,
     }
 }
 
@@ -79,6 +79,9 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
             let descs = ctx.read_buffer(&tree.node_descs).unwrap();
             let expect: Vec<u32> = tree.shadow.descs.iter().flatten().copied().collect();
             assert_eq!(bytemuck::cast_slice::<u8, u32>(&descs), &expect[..], "step {step}: node descriptions");
+            let errors = ctx.read_buffer(&tree.node_errors).unwrap();
+            let expect: Vec<u32> = tree.shadow.errors.iter().map(|e| e.to_bits()).collect();
+            assert_eq!(bytemuck::cast_slice::<u8, u32>(&errors), &expect[..], "step {step}: node errors");
         }
         assert!(resident.len() as u32 >= slots / 2, "the sequence should fill a good part of the budget");
     });

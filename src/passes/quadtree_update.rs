@@ -46,8 +46,11 @@ impl QuadtreeUpdatePass {
         let updates = tree.current_updates();
         if count > 0 {
             let mips = tree.node_texture.mip_levels;
-            let mut bindings: Vec<(Binding, Resource)> =
-                vec![(sh::UPDATES, Resource::Buffer(updates)), (sh::NODE_DESCS, Resource::Buffer(&tree.node_descs))];
+            let mut bindings: Vec<(Binding, Resource)> = vec![
+                (sh::UPDATES, Resource::Buffer(updates)),
+                (sh::NODE_DESCS, Resource::Buffer(&tree.node_descs)),
+                (sh::NODE_ERRORS, Resource::Buffer(&tree.node_errors)),
+            ];
             for (lod, b) in NODE_LODS.iter().enumerate() {
                 // LODs past the world's count are never written: bind mip 0.
                 let mip = if (lod as u32) < mips { lod as u32 } else { 0 };

@@ -108,6 +108,11 @@ impl Residency {
         self.slots.len()
     }
 
+    /// Nodes requested from the loader and not yet arrived.
+    pub fn pending_count(&self) -> usize {
+        self.slots.values().filter(|s| **s == Slot::Pending).count()
+    }
+
     pub fn is_resident(&self, id: NodeId) -> bool {
         self.slots.get(&id) == Some(&Slot::Resident)
     }

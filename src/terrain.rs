@@ -1,0 +1,117 @@
+//! The terrain as a whole: streaming residency on the CPU (lazy baking on
+//! loader threads, optional disk cache), payload upload and the GPU
+//! quadtree, and the per-frame passes. The caller owns the command buffer
+//! and the frame executor; nothing here waits for the GPU.
+
+use crate::error::Result;
+use crate::frame::{Frame, QueueKind};
+use crate::gpu::Context;
+use crate::gpu_quadtree::GpuQuadtree;
+use crate::passes::quadtree_update::QuadtreeUpdatePass;
+use crate::world::{
+    bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, Residency, ResidencyConfig, Streamer,
+    WorldDesc,
+};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+#[derive(Debug, Clone)]
+pub struct TerrainOptions {
+    /// Resident node slots (Far Cry 5: ~500); at most 1023.
+    pub slots: u32,
+    pub frames_in_flight: usize,
+    pub loader_threads: usize,
+    /// Bake lazily into this cache directory (reused across runs); `None`
+    /// bakes in memory only.
+    pub cache_dir: Option<PathBuf>,
+}
+
+impl Default for TerrainOptions {
+    fn default() -> Self {
+        let threads = std::thread::available_parallelism().map_or(2, |n| n.get()).max(1);
+        TerrainOptions { slots: 512, frames_in_flight: 2, loader_threads: threads, cache_dir: None }
+    }
+}
+
+/// Streaming counters after the last frame.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct TerrainStats {
+    pub resident: usize,
+    pub loading: usize,
+    pub waiting_upload: usize,
+    pub failed: usize,
+    pub arrived_total: usize,
+}
+
+pub struct Terrain {
+    pub world: WorldDesc,
+    streamer: Streamer,
+    pub tree: GpuQuadtree,
+    update: QuadtreeUpdatePass,
+    pub stats: TerrainStats,
+}
+
+impl Terrain {
+    pub fn new(
+        ctx: &Context,
+        world: &WorldDesc,
+        source: Arc<dyn HeightSource>,
+        holes: Vec<Hole>,
+        options: &TerrainOptions,
+    ) -> Result<Self> {
+        world.validate()?;
+        let tree = GpuQuadtree::new(ctx, world, options.slots, options.frames_in_flight)?;
+        let config = ResidencyConfig { budget: options.slots as usize, ..ResidencyConfig::default() };
+        let residency = Residency::new(world, config)?;
+        let threads = options.loader_threads.max(1);
+        let loader = match &options.cache_dir {
+            Some(dir) => Loader::with_cache(threads, Arc::new(NodeCache::new(dir, *world, source, holes)?))?,
+            None => {
+                let w = *world;
+                let load: Arc<LoadFn> = Arc::new(move |id| Ok(bake_node(&*source, &w, &holes, id)));
+                Loader::new(threads, load)?
+            }
+        };
+        Ok(Terrain {
+            world: *world,
+            streamer: Streamer::new(residency, loader),
+            tree,
+            update: QuadtreeUpdatePass::new(ctx)?,
+            stats: TerrainStats::default(),
+        })
+    }
+
+    /// Streams for `camera` (world metres) and records this frame's passes.
+    pub fn record(&mut self, frame: &mut Frame, camera: [f64; 3]) -> Result<()> {
+        let s = self.streamer.frame(camera);
+        for id in &s.removed {
+            self.tree.remove(*id);
+        }
+        self.stats.arrived_total += s.arrived.len();
+        for node in s.arrived {
+            self.tree.add(node, 0);
+        }
+        for (id, e) in &s.failed {
+            log::error!("node {id} failed to load: {e}");
+        }
+        self.stats.failed += s.failed.len();
+        let (tree, update) = (&mut self.tree, &self.update);
+        frame.pass(QuadtreeUpdatePass::NAME, QueueKind::Compute, |rec| update.record(rec, tree))?;
+        let r = self.streamer.residency();
+        self.stats.loading = r.pending_count();
+        self.stats.resident = r.slots_used() - self.stats.loading;
+        self.stats.waiting_upload = self.tree.waiting();
+        Ok(())
+    }
+
+    /// True once nothing is loading or waiting for upload.
+    pub fn settled(&self) -> bool {
+        self.stats.loading == 0 && self.stats.waiting_upload == 0
+    }
+
+    /// Memory of the resident payloads, CPU and GPU side.
+    pub fn memory_report(&self) -> MemoryReport {
+        MemoryReport::new(self.stats.resident)
+    }
+}
