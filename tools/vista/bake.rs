@@ -29,7 +29,7 @@ pub struct BakeArgs {
     pub out: PathBuf,
     /// Bake only nodes (of every LOD) overlapping this rectangle, metres;
     /// the report then extrapolates time and disk size to the whole world.
-    #[arg(long, value_name = "MINX,MINY,MAXX,MAXY", value_parser = parse_region)]
+    #[arg(long, value_name = "MINX,MINY,MAXX,MAXY", value_parser = parse_region, allow_hyphen_values = true)]
     pub region: Option<[f64; 4]>,
     /// No progress bar (it is shown only when stderr is a terminal anyway).
     #[arg(long)]

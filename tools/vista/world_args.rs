@@ -31,14 +31,14 @@ pub struct WorldArgs {
     #[arg(long, value_name = "FILE", help_heading = "World")]
     pub heightmap: Option<PathBuf>,
     /// World size in metres: one number (square) or X,Y.
-    #[arg(long, value_name = "METRES", value_parser = parse_extent, help_heading = "World")]
+    #[arg(long, value_name = "METRES", value_parser = parse_extent, allow_negative_numbers = true, help_heading = "World")]
     pub extent: Option<[f64; 2]>,
     /// Heights in metres that the PNG's 0..65535 maps to; also the range of
     /// the 16-bit height encoding. Optional for EXR (taken from the data).
     #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true, help_heading = "World")]
     pub height_range: Option<Vec<f32>>,
     /// Distance between LOD-0 samples in metres [default: 0.5].
-    #[arg(long, value_name = "METRES", help_heading = "World")]
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true, help_heading = "World")]
     pub spacing: Option<f64>,
     /// Number of quadtree levels (1..=10) [default: 6].
     #[arg(long, value_name = "N", help_heading = "World")]
@@ -48,7 +48,7 @@ pub struct WorldArgs {
     pub seed: Option<u64>,
     /// Cut a circular hole into the terrain (repeatable): centre X,Y and
     /// radius R, metres.
-    #[arg(long, value_name = "X,Y,R", value_parser = parse_hole_circle, help_heading = "World")]
+    #[arg(long, value_name = "X,Y,R", value_parser = parse_hole_circle, allow_hyphen_values = true, help_heading = "World")]
     pub hole_circle: Vec<Hole>,
 }
 
