@@ -148,6 +148,8 @@ fn bad_inputs_fail_with_one_line_naming_the_problem() {
     assert_fails_naming(&["bake", "--out", o, "--hole-circle", "1,2,-1"], &["hole circle"]);
     assert_fails_naming(&["bake"], &["--out"]);
     assert_fails_naming(&["memory", "--slots", "0"], &["--slots"]);
+    // render takes the same world arguments and validates them.
+    assert_fails_naming(&["render", "--heightmap", MONTBLANC], &["--extent"]);
 
     let bad_scene = dir.join("bad.toml");
     std::fs::write(&bad_scene, "[world]\nextent = [1, 2\n").unwrap();

@@ -117,9 +117,8 @@ impl WorldArgs {
 /// Validates before any file is read, so an absurd size fails at once.
 fn check_desc(desc: &WorldDesc) -> Result<()> {
     let [x, y] = desc.extent_m;
-    Ok(desc.validate().with_context(|| {
-        format!("world of {x} x {y} m at {} m spacing with {} LODs", desc.spacing_m, desc.lod_count)
-    })?)
+    desc.validate()
+        .with_context(|| format!("world of {x} x {y} m at {} m spacing with {} LODs", desc.spacing_m, desc.lod_count))
 }
 
 fn open_heightmap(
