@@ -1,9 +1,15 @@
-//! The `vista` command line: device info, rendering with per-pass timings.
+//! The `vista` command line: device info, rendering with per-pass timings,
+//! baking node payloads and memory reports.
+
+mod bake;
+mod scene;
+mod world_args;
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use vista::gpu::{Context, ContextOptions};
+use world_args::WorldArgs;
 
 #[derive(Parser)]
 #[command(name = "vista", version, about = "GPU-driven terrain renderer for Vulkan")]
@@ -38,7 +44,15 @@ enum Command {
         /// Write image.png, timings.json and trace.json (Chrome/Perfetto) here.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Validated now; the smoke render does not draw terrain yet.
+        #[command(flatten)]
+        world: WorldArgs,
     },
+    /// Bake node payloads (every LOD) to disk and report counts, time, disk
+    /// size and, for a region, the extrapolation to the whole world.
+    Bake(bake::BakeArgs),
+    /// Print CPU and GPU memory per payload kind for N resident nodes.
+    Memory(bake::MemoryArgs),
 }
 
 fn parse_size(s: &str) -> Result<[u32; 2], String> {
@@ -53,20 +67,55 @@ fn parse_size(s: &str) -> Result<[u32; 2], String> {
 
 fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    if let Err(e) = run(Cli::parse()) {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => exit_on_usage_error(e),
+    };
+    if let Err(e) = run(cli) {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
 }
 
+/// Help and version print as clap renders them; usage errors collapse to one
+/// line (clap's own spans several, with a usage excerpt).
+fn exit_on_usage_error(e: clap::Error) -> ! {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        e.exit();
+    }
+    let text = e.render().to_string();
+    // The first paragraph names the problem; usage and hints follow.
+    let body = text.trim_start().split("\n\n").next().unwrap_or(&text);
+    let line = body.split_whitespace().collect::<Vec<_>>().join(" ");
+    eprintln!("{line}");
+    std::process::exit(2);
+}
+
 fn run(cli: Cli) -> Result<()> {
     let options =
         ContextOptions { validation: cli.validation, sync_validation: false, device_name: cli.device.clone() };
-    let ctx = Context::headless(&options).context("creating the Vulkan context")?;
     match cli.command {
-        Command::Info { json } => info(&ctx, json),
-        Command::Render { size, frames, out } => render(&ctx, size, frames, out),
-    }?;
+        Command::Info { json } => with_gpu(&options, |ctx| info(ctx, json)),
+        Command::Render { size, frames, out, world } => {
+            // A bad world fails before the (slow) Vulkan start.
+            world.load()?;
+            with_gpu(&options, |ctx| render(ctx, size, frames, out))
+        }
+        // Baking and accounting are CPU-only: no Vulkan needed.
+        Command::Bake(args) => bake::bake(args),
+        Command::Memory(args) => bake::memory(args),
+    }
+}
+
+/// Runs `f` on a fresh context and fails if the validation layer reported
+/// anything.
+fn with_gpu(options: &ContextOptions, f: impl FnOnce(&Context) -> Result<()>) -> Result<()> {
+    let ctx = Context::headless(options).context("creating the Vulkan context")?;
+    f(&ctx)?;
     let log = ctx.validation_log();
     drop(ctx);
     let messages = log.messages();

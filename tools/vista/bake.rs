@@ -1,0 +1,241 @@
+//! `vista bake` and `vista memory`: node payloads to disk, with the figures
+//! needed to size a whole world from a small region.
+
+use std::fmt::Write as _;
+use std::io::{IsTerminal as _, Write as _};
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _, Result};
+use clap::Args;
+use serde::Serialize;
+use vista::world::{bake_world, nodes_in_region, MemoryReport, WorldDesc};
+
+use crate::world_args::{parse_list, LoadedWorld, WorldArgs};
+
+/// Resident slots the bake's memory report assumes (the streamer's default
+/// budget order of magnitude).
+const REPORT_SLOTS: usize = 512;
+/// Upper bound for `--slots`: far beyond any GPU, and keeps byte totals
+/// from overflowing.
+const MAX_SLOTS: u64 = 1 << 24;
+
+#[derive(Args)]
+pub struct BakeArgs {
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// Cache folder for the node files (DIR/lod{k}/{x}_{y}.vnode); files
+    /// already there and valid for this world are reused, not rebaked.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Bake only nodes (of every LOD) overlapping this rectangle, metres;
+    /// the report then extrapolates time and disk size to the whole world.
+    #[arg(long, value_name = "MINX,MINY,MAXX,MAXY", value_parser = parse_region, allow_hyphen_values = true)]
+    pub region: Option<[f64; 4]>,
+    /// No progress bar (it is shown only when stderr is a terminal anyway).
+    #[arg(long)]
+    pub no_progress: bool,
+    /// Also write the figures as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct MemoryArgs {
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// Resident node slots to account for.
+    #[arg(long, default_value_t = REPORT_SLOTS as u64, value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS))]
+    pub slots: u64,
+}
+
+fn parse_region(s: &str) -> Result<[f64; 4], String> {
+    let v = parse_list(s, 4, "region")?;
+    if v[0] >= v[2] || v[1] >= v[3] {
+        return Err(format!("region {s:?} needs MINX < MAXX and MINY < MAXY"));
+    }
+    Ok([v[0], v[1], v[2], v[3]])
+}
+
+#[derive(Serialize)]
+struct BakeReport {
+    source: String,
+    world: WorldDesc,
+    out: PathBuf,
+    region: Option<[f64; 4]>,
+    nodes_per_lod: Vec<usize>,
+    nodes: usize,
+    baked: usize,
+    cached: usize,
+    seconds: f64,
+    bytes_on_disk: u64,
+    bytes_per_node: f64,
+    full_world_nodes: usize,
+    /// Only for a region: per-node figures times the full node count.
+    extrapolated: Option<Extrapolation>,
+    memory: MemoryJson,
+}
+
+#[derive(Serialize)]
+struct Extrapolation {
+    seconds: f64,
+    bytes_on_disk: f64,
+}
+
+#[derive(Serialize)]
+struct MemoryJson {
+    slots: usize,
+    cpu_bytes_per_node: usize,
+    gpu_bytes_per_node: usize,
+    cpu_total: usize,
+    gpu_total: usize,
+}
+
+impl MemoryJson {
+    fn new(r: &MemoryReport) -> Self {
+        MemoryJson {
+            slots: r.nodes,
+            cpu_bytes_per_node: r.cpu_bytes_per_node(),
+            gpu_bytes_per_node: r.gpu_bytes_per_node(),
+            cpu_total: r.cpu_total(),
+            gpu_total: r.gpu_total(),
+        }
+    }
+}
+
+pub fn bake(args: BakeArgs) -> Result<()> {
+    let w = args.world.load()?;
+    if let Some(r) = args.region {
+        let [ex, ey] = w.desc.extent_m;
+        if r[2] <= 0.0 || r[3] <= 0.0 || r[0] >= ex || r[1] >= ey {
+            bail!("--region {},{},{},{} does not overlap the world (0..{ex} x 0..{ey} m)", r[0], r[1], r[2], r[3]);
+        }
+    }
+    let progress = !args.no_progress && std::io::stderr().is_terminal();
+    let stats = bake_world(w.source.clone(), &w.desc, &w.holes, args.region, &args.out, progress)
+        .with_context(|| format!("baking into {}", args.out.display()))?;
+    let nodes = stats.baked + stats.cached;
+    let per_node = |v: f64| if nodes == 0 { 0.0 } else { v / nodes as f64 };
+    let full_world_nodes = nodes_in_region(&w.desc, None).len();
+    let memory = MemoryReport::new(REPORT_SLOTS);
+    let report = BakeReport {
+        source: w.label.clone(),
+        world: w.desc,
+        out: args.out.clone(),
+        region: args.region,
+        nodes_per_lod: stats.nodes_per_lod.clone(),
+        nodes,
+        baked: stats.baked,
+        cached: stats.cached,
+        seconds: stats.seconds,
+        bytes_on_disk: stats.bytes_on_disk,
+        bytes_per_node: per_node(stats.bytes_on_disk as f64),
+        full_world_nodes,
+        extrapolated: args.region.map(|_| Extrapolation {
+            seconds: per_node(stats.seconds) * full_world_nodes as f64,
+            bytes_on_disk: per_node(stats.bytes_on_disk as f64) * full_world_nodes as f64,
+        }),
+        memory: MemoryJson::new(&memory),
+    };
+    // The JSON first: a closed stdout (`| head`) must not lose the file.
+    if let Some(path) = &args.json {
+        write_json(path, &report)?;
+    }
+    let mut out = String::new();
+    print_bake(&mut out, &w, &report)?;
+    write!(out, "\nmemory for {REPORT_SLOTS} resident nodes:\n{memory}")?;
+    if let Some(path) = &args.json {
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    emit(&out)
+}
+
+/// Writes a report to stdout; a reader that went away early is not an error.
+fn emit(text: &str) -> Result<()> {
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => r.context("writing to stdout"),
+    }
+}
+
+fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
+    let d = &w.desc;
+    writeln!(
+        out,
+        "world:    {} ({} x {} m, heights {}..{} m, spacing {} m, {} LODs, {} holes)",
+        w.label,
+        d.extent_m[0],
+        d.extent_m[1],
+        d.height_range_m[0],
+        d.height_range_m[1],
+        d.spacing_m,
+        d.lod_count,
+        w.holes.len()
+    )?;
+    match r.region {
+        Some(g) => writeln!(out, "region:   {},{} .. {},{} m", g[0], g[1], g[2], g[3]),
+        None => writeln!(out, "region:   whole world"),
+    }?;
+    let per_lod: Vec<String> = r.nodes_per_lod.iter().enumerate().map(|(l, n)| format!("lod{l} {n}")).collect();
+    writeln!(out, "nodes:    {} ({})", r.nodes, per_lod.join(", "))?;
+    writeln!(out, "          {} baked, {} cached", r.baked, r.cached)?;
+    writeln!(out, "time:     {:.2} s ({:.2} ms per node)", r.seconds, 1000.0 * r.seconds / r.nodes.max(1) as f64)?;
+    writeln!(
+        out,
+        "disk:     {} in {} ({} per node)",
+        bytes(r.bytes_on_disk as f64),
+        r.out.display(),
+        bytes(r.bytes_per_node)
+    )?;
+    if let Some(x) = &r.extrapolated {
+        // Cached nodes only measure validation, so say which time this is.
+        let basis = if r.baked == 0 { "cache reads" } else { "this run" };
+        writeln!(
+            out,
+            "extrapolated to the whole world ({} nodes, per-node figures of {basis}): {:.1} s, {}",
+            r.full_world_nodes,
+            x.seconds,
+            bytes(x.bytes_on_disk)
+        )?;
+    }
+    Ok(())
+}
+
+/// Human byte count in binary units.
+fn bytes(b: f64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = b;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{v:.0} B")
+    } else {
+        format!("{v:.2} {}", UNITS[u])
+    }
+}
+
+fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    std::fs::write(path, text + "\n").with_context(|| format!("writing --json {}", path.display()))
+}
+
+pub fn memory(args: MemoryArgs) -> Result<()> {
+    let w = args.world.load()?;
+    let mut out = String::new();
+    let full = nodes_in_region(&w.desc, None).len();
+    // Bounded by MAX_SLOTS, so it fits usize everywhere clap runs.
+    let slots = args.slots as usize;
+    writeln!(out, "world:    {} ({} nodes over {} LODs)", w.label, full, w.desc.lod_count)?;
+    writeln!(out, "memory for {slots} resident nodes:")?;
+    write!(out, "{}", MemoryReport::new(slots))?;
+    let all = MemoryReport::new(full);
+    writeln!(
+        out,
+        "every node resident would take {} CPU / {} GPU",
+        bytes(all.cpu_total() as f64),
+        bytes(all.gpu_total() as f64)
+    )?;
+    emit(&out)
+}

@@ -1,0 +1,183 @@
+//! Scene files (TOML): which terrain, its geometry, holes and effect switches.
+//!
+//! ```toml
+//! [world]
+//! source = "procedural"        # or a PNG16 / EXR path, relative to this file
+//! extent = 10240               # metres; or [x, y]
+//! height_range = [0, 1600]
+//! spacing = 0.5
+//! lods = 6
+//! seed = 1
+//!
+//! [[holes]]
+//! circle = [5000, 5000, 20]    # x, y, radius
+//! [[holes]]
+//! polygon = [[0, 0], [10, 0], [5, 8]]
+//!
+//! [effects]
+//! holes = true
+//! cliffs = true
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _, Result};
+use serde::Deserialize;
+use vista::world::Hole;
+
+#[derive(Debug, Default)]
+pub struct Scene {
+    pub world: SceneWorld,
+    holes: Vec<SceneHole>,
+    /// Kept verbatim: each renderer feature reads its own switch.
+    pub effects: BTreeMap<String, bool>,
+    /// For error messages.
+    path: PathBuf,
+}
+
+/// Unknown keys are errors so a typo ("extents") cannot be silently ignored.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    #[serde(default)]
+    world: SceneWorld,
+    #[serde(default)]
+    holes: Vec<SceneHole>,
+    #[serde(default)]
+    effects: BTreeMap<String, bool>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneWorld {
+    #[serde(default)]
+    pub source: SceneSource,
+    pub extent: Option<Extent>,
+    pub height_range: Option<[f32; 2]>,
+    pub spacing: Option<f64>,
+    pub lods: Option<u32>,
+    pub seed: Option<u64>,
+}
+
+#[derive(Debug, Default, Clone, PartialEq)]
+pub enum SceneSource {
+    #[default]
+    Procedural,
+    Path(PathBuf),
+}
+
+impl<'de> Deserialize<'de> for SceneSource {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        Ok(if s == "procedural" { SceneSource::Procedural } else { SceneSource::Path(s.into()) })
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum Extent {
+    Square(f64),
+    Rect([f64; 2]),
+}
+
+impl Extent {
+    pub fn xy(self) -> [f64; 2] {
+        match self {
+            Extent::Square(e) => [e, e],
+            Extent::Rect(r) => r,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneHole {
+    circle: Option<[f64; 3]>,
+    polygon: Option<Vec<[f64; 2]>>,
+}
+
+impl Scene {
+    /// Reads and parses `path`; a relative `source` is resolved against the
+    /// scene file's folder so scenes can travel with their height maps.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("scene file {}", path.display()))?;
+        let raw: RawScene = toml::from_str(&text).map_err(|e| {
+            // toml's Display spans several lines (a source excerpt); one
+            // line with the line number is enough.
+            let line = e.span().map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+            let at = line.map(|l| format!(":{l}")).unwrap_or_default();
+            anyhow::anyhow!("scene file {}{at}: {}", path.display(), e.message().trim())
+        })?;
+        let mut world = raw.world;
+        if let SceneSource::Path(p) = &world.source {
+            if p.is_relative() {
+                let dir = path.parent().unwrap_or(Path::new("."));
+                world.source = SceneSource::Path(dir.join(p));
+            }
+        }
+        Ok(Scene { world, holes: raw.holes, effects: raw.effects, path: path.to_path_buf() })
+    }
+
+    /// The holes, each checked: exactly one shape, finite numbers, a
+    /// positive radius, at least three polygon corners.
+    pub fn holes(&self) -> Result<Vec<Hole>> {
+        let at = |i: usize| format!("scene file {}: hole {}", self.path.display(), i + 1);
+        let mut out = Vec::with_capacity(self.holes.len());
+        for (i, h) in self.holes.iter().enumerate() {
+            let hole = match (&h.circle, &h.polygon) {
+                (Some([x, y, r]), None) => {
+                    if ![*x, *y, *r].iter().all(|v| v.is_finite()) || *r <= 0.0 {
+                        bail!("{}: circle needs finite x, y and a positive radius", at(i));
+                    }
+                    Hole::Circle { center_m: [*x, *y], radius_m: *r }
+                }
+                (None, Some(pts)) => {
+                    if pts.len() < 3 || pts.iter().flatten().any(|v| !v.is_finite()) {
+                        bail!("{}: polygon needs at least 3 corners of finite numbers", at(i));
+                    }
+                    Hole::Polygon(pts.clone())
+                }
+                _ => bail!("{}: give exactly one of circle = [x, y, r] or polygon = [[x, y], ...]", at(i)),
+            };
+            out.push(hole);
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scene> {
+        let dir = std::env::temp_dir().join(format!("vista-scene-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        let p = dir.join(format!("s{}.toml", text.len()));
+        std::fs::write(&p, text)?;
+        Scene::load(&p)
+    }
+
+    #[test]
+    fn parses_world_holes_effects() {
+        let s = parse(
+            "[world]\nsource = \"hm.png\"\nextent = [100, 50]\nheight_range = [0, 10]\n\
+             [[holes]]\ncircle = [1, 2, 3]\n[[holes]]\npolygon = [[0,0],[1,0],[0,1]]\n[effects]\ncliffs = true\n",
+        )
+        .unwrap();
+        assert!(matches!(&s.world.source, SceneSource::Path(p) if p.is_absolute() && p.ends_with("hm.png")));
+        assert_eq!(s.world.extent.unwrap().xy(), [100.0, 50.0]);
+        assert_eq!(s.holes().unwrap().len(), 2);
+        assert_eq!(s.effects.get("cliffs"), Some(&true));
+    }
+
+    #[test]
+    fn errors_are_one_line() {
+        for bad in ["[world\n", "[world]\nextents = 5\n", "[[holes]]\ncircle = [1, 2]\n"] {
+            let e = format!("{:#}", parse(bad).err().unwrap());
+            assert!(!e.contains('\n') && e.contains("scene file"), "{e}");
+        }
+        let s = parse("[[holes]]\ncircle = [1, 2, -3]\n").unwrap();
+        assert!(s.holes().is_err());
+    }
+}
