@@ -32,13 +32,13 @@ const ATLASES: [AtlasKind; 6] = [
     AtlasKind {
         name: "atlas_patch_min_max",
         format: vk::Format::R16G16_UINT,
-        side: PATCHES_PER_NODE_SIDE as u32,
+        side: PATCHES_PER_NODE_SIDE,
         texel_bytes: 4,
     },
     AtlasKind {
         name: "atlas_patch_cones",
         format: vk::Format::R32G32B32A32_SFLOAT,
-        side: PATCHES_PER_NODE_SIDE as u32,
+        side: PATCHES_PER_NODE_SIDE,
         texel_bytes: 16,
     },
 ];
