@@ -16,6 +16,7 @@ pub mod quadtree;
 pub mod shaders;
 pub mod smoke;
 pub mod terrain;
+pub mod traverse_cpu;
 pub mod world;
 
 pub use error::{Error, Result};

@@ -3,38 +3,17 @@
 
 mod common;
 
-use common::{gpu_test, Rng};
+use common::{fake_node, gpu_test, Rng};
 use std::collections::BTreeSet;
 use vista::gpu::vk;
 use vista::gpu_quadtree::{GpuQuadtree, ATLAS_LAYOUT};
 use vista::passes::quadtree_update::QuadtreeUpdatePass;
-use vista::world::{BakedNode, NodeId, WorldDesc, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
+use vista::world::{NodeId, WorldDesc};
 
 /// 8 x 6 sectors of 128 m, 4 LODs: a 1x1 root grid, texture padded to 8x8,
 /// with invalid cells along the top rows.
 fn small_world() -> WorldDesc {
     WorldDesc { extent_m: [1000.0, 700.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 4 }
-}
-
-/// A synthetic node whose payload bytes identify it (no bake needed).
-fn fake_node(id: NodeId, salt: u16) -> BakedNode {
-    let tag = (id.lod as u16) << 12 ^ (id.x as u16) << 6 ^ id.y as u16 ^ salt;
-    let s = NODE_SAMPLES * NODE_SAMPLES;
-    BakedNode {
-        id,
-        heights: (0..s).map(|i| (i as u16).wrapping_mul(31) ^ tag).collect(),
-        normals: vec![[127, 128, 255, tag as u8]; s],
-        albedo: (0..s)
-            .map(|i| [tag as u8, (i % 251) as u8, 7, if i == 5 && salt % 2 == 1 { 0 } else { 255 }])
-            .collect(),
-        splat: (0..SPLAT_RES * SPLAT_RES).map(|i| (i % 4) as u8).collect(),
-        patch_min_max: (0..PATCHES_PER_NODE).map(|i| [i as u16, tag]).collect(),
-        patch_cones: (0..PATCHES_PER_NODE).map(|i| [0.0, 0.0, 1.0, i as f32 / 64.0]).collect(),
-        patch_all_hole: 0,
-        min_height: tag & 0x7FFF,
-        max_height: tag | 0x8000,
-        max_error_m: f32::from(tag) * 0.01,
-    }
 }
 
 fn all_valid(world: &WorldDesc) -> Vec<NodeId> {

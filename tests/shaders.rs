@@ -35,6 +35,15 @@ fn rust_twins_match_reflected_sizes() {
     assert_eq!(size_of::<SmokeTrianglePush>(), shaders::structs::SMOKE_TRIANGLE_PUSH);
     assert_eq!(size_of::<DiamondPatchPush>(), shaders::structs::DIAMOND_PATCH_PUSH);
     assert_eq!(size_of::<PrefixSumPush>() as u32, shaders::prefix_sum::PUSH_CONSTANT_SIZE);
+    use vista::passes::quadtree_update::QuadtreeUpdatePush;
+    use vista::passes::traverse::{TraverseHeader, TraversePush};
+    use vista::quadtree::QuadtreeUpdate;
+    assert_eq!(size_of::<QuadtreeUpdate>(), shaders::structs::QUADTREE_UPDATE);
+    assert_eq!(size_of::<QuadtreeUpdatePush>(), shaders::structs::QUADTREE_UPDATE_PUSH);
+    assert_eq!(size_of::<TraversePush>(), shaders::structs::TRAVERSE_PUSH);
+    assert_eq!(size_of::<TraverseHeader>(), shaders::structs::TRAVERSE_HEADER);
+    assert_eq!(size_of::<TraversePush>() as u32, shaders::traverse::PUSH_CONSTANT_SIZE);
+    assert_eq!(shaders::traverse::PUSH_CONSTANT_SIZE, shaders::traverse_level::PUSH_CONSTANT_SIZE);
 }
 
 #[test]

@@ -272,6 +272,28 @@ impl<'a> Recorder<'a> {
         unsafe { self.d().cmd_fill_buffer(self.cmd, buf.raw, 0, vk::WHOLE_SIZE, value) };
     }
 
+    /// Writes up to 64 KiB of `data` at `offset` inline in the command buffer.
+    pub fn update_buffer(&mut self, buf: &Buffer, offset: u64, data: &[u8]) {
+        assert!(
+            data.len() <= 65536 && data.len() % 4 == 0 && offset + data.len() as u64 <= buf.size,
+            "update of {}",
+            buf.name
+        );
+        // SAFETY: size, alignment and range checked above.
+        unsafe { self.d().cmd_update_buffer(self.cmd, buf.raw, offset, data) };
+    }
+
+    /// Clears every mip and layer of an integer colour image in GENERAL layout.
+    pub fn clear_color_u32(&mut self, img: &Image, value: u32) {
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(vk::REMAINING_MIP_LEVELS)
+            .layer_count(vk::REMAINING_ARRAY_LAYERS);
+        let color = vk::ClearColorValue { uint32: [value; 4] };
+        // SAFETY: live image in GENERAL (valid for clears).
+        unsafe { self.d().cmd_clear_color_image(self.cmd, img.raw, vk::ImageLayout::GENERAL, &color, &[range]) };
+    }
+
     pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, size: u64) {
         assert!(size <= src.size && size <= dst.size, "copy of {size} bytes overruns {} or {}", src.name, dst.name);
         // SAFETY: live buffers, size checked.

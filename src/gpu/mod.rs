@@ -16,7 +16,7 @@ pub use context::{Context, ContextOptions, Queue, RawHandles};
 pub use device_info::{DeviceInfo, Limits, QueueFamilyInfo};
 pub use pipeline::{ComputePipelineDesc, GraphicsPipelineDesc, Pipeline};
 pub use query::TimestampPool;
-pub use resources::{Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation};
+pub use resources::{Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation, Sampler, SamplerDesc};
 pub use shader::{Binding, BindingKind, ShaderInfo, ShaderStage};
 pub use submit::FrameRing;
 pub use validation::{Severity, ValidationLog, ValidationMessage};

@@ -18,6 +18,7 @@ pub(crate) struct LiveCounters {
     pub images: AtomicI64,
     pub pipelines: AtomicI64,
     pub query_pools: AtomicI64,
+    pub samplers: AtomicI64,
     pub command_pools: AtomicI64,
     pub sync_objects: AtomicI64,
 }
@@ -28,13 +29,20 @@ pub struct LiveObjects {
     pub images: i64,
     pub pipelines: i64,
     pub query_pools: i64,
+    pub samplers: i64,
     pub command_pools: i64,
     pub sync_objects: i64,
 }
 
 impl LiveObjects {
     pub fn total(&self) -> i64 {
-        self.buffers + self.images + self.pipelines + self.query_pools + self.command_pools + self.sync_objects
+        self.buffers
+            + self.images
+            + self.pipelines
+            + self.query_pools
+            + self.samplers
+            + self.command_pools
+            + self.sync_objects
     }
 }
 
@@ -46,6 +54,7 @@ impl LiveCounters {
             images: l(&self.images),
             pipelines: l(&self.pipelines),
             query_pools: l(&self.query_pools),
+            samplers: l(&self.samplers),
             command_pools: l(&self.command_pools),
             sync_objects: l(&self.sync_objects),
         }
@@ -62,6 +71,7 @@ pub(crate) enum Garbage {
     Image(vk::Image, Vec<vk::ImageView>, Allocation),
     Pipeline(vk::Pipeline, vk::PipelineLayout, vk::DescriptorSetLayout),
     QueryPool(vk::QueryPool),
+    Sampler(vk::Sampler),
     CommandPool(vk::CommandPool),
     Fence(vk::Fence),
 }
@@ -95,6 +105,10 @@ impl Garbage {
                     d.destroy_pipeline_layout(l, None);
                     d.destroy_descriptor_set_layout(sl, None);
                     dec(&s.live.pipelines);
+                }
+                Garbage::Sampler(x) => {
+                    d.destroy_sampler(x, None);
+                    dec(&s.live.samplers);
                 }
                 Garbage::QueryPool(q) => {
                     d.destroy_query_pool(q, None);
@@ -357,5 +371,45 @@ impl Drop for Image {
         if let Some(a) = self.allocation.take() {
             self.shared.retire(Garbage::Image(self.raw, std::mem::take(&mut self.views), a));
         }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct SamplerDesc<'a> {
+    pub name: &'a str,
+    pub filter: vk::Filter,
+    pub address_mode: vk::SamplerAddressMode,
+}
+
+pub struct Sampler {
+    pub(crate) raw: vk::Sampler,
+    shared: Arc<Shared>,
+}
+
+impl Sampler {
+    pub fn new(ctx: &Context, desc: &SamplerDesc) -> Result<Sampler> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(desc.filter)
+            .min_filter(desc.filter)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(desc.address_mode)
+            .address_mode_v(desc.address_mode)
+            .address_mode_w(desc.address_mode)
+            .max_lod(vk::LOD_CLAMP_NONE);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { ctx.shared.device.create_sampler(&info, None) }.map_err(vk_err("vkCreateSampler"))?;
+        inc(&ctx.shared.live.samplers);
+        ctx.set_name(raw, desc.name);
+        Ok(Sampler { raw, shared: ctx.shared.clone() })
+    }
+
+    pub fn raw(&self) -> vk::Sampler {
+        self.raw
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        self.shared.retire(Garbage::Sampler(self.raw));
     }
 }

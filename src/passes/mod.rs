@@ -4,3 +4,4 @@ pub mod diamond_patch;
 pub mod prefix_sum;
 pub mod quadtree_update;
 pub mod smoke_triangle;
+pub mod traverse;

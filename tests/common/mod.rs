@@ -5,6 +5,7 @@
 #![allow(dead_code)]
 
 use vista::gpu::{Context, ContextOptions};
+use vista::world::{BakedNode, NodeId, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
 
 /// (message id, why it is acceptable). Keep this list short and justified.
 pub const ALLOWLIST: &[(&str, &str)] = &[];
@@ -43,5 +44,26 @@ impl Rng {
 
     pub fn below(&mut self, n: u32) -> u32 {
         (self.next_u64() % u64::from(n)) as u32
+    }
+}
+
+/// A synthetic node whose payload bytes identify it (no bake needed).
+pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
+    let tag = (id.lod as u16) << 12 ^ (id.x as u16) << 6 ^ id.y as u16 ^ salt;
+    let s = NODE_SAMPLES * NODE_SAMPLES;
+    BakedNode {
+        id,
+        heights: (0..s).map(|i| (i as u16).wrapping_mul(31) ^ tag).collect(),
+        normals: vec![[127, 128, 255, tag as u8]; s],
+        albedo: (0..s)
+            .map(|i| [tag as u8, (i % 251) as u8, 7, if i == 5 && salt % 2 == 1 { 0 } else { 255 }])
+            .collect(),
+        splat: (0..SPLAT_RES * SPLAT_RES).map(|i| (i % 4) as u8).collect(),
+        patch_min_max: (0..PATCHES_PER_NODE).map(|i| [i as u16, tag]).collect(),
+        patch_cones: (0..PATCHES_PER_NODE).map(|i| [0.0, 0.0, 1.0, i as f32 / 64.0]).collect(),
+        patch_all_hole: 0,
+        min_height: tag & 0x7FFF,
+        max_height: tag | 0x8000,
+        max_error_m: f32::from(tag) * 0.01,
     }
 }

@@ -1,0 +1,146 @@
+//! CPU reference of the GPU quadtree traversal, LOD map and sector data,
+//! making the same f32 decisions as `traverse_common.glsl` (used by tests
+//! and the debug CLI). No Vulkan.
+
+use crate::quadtree::{QuadtreeShadow, EMPTY, INVALID};
+use crate::world::{NodeId, WorldDesc};
+
+/// Up to this many cameras refine one node list (traverse_common.glsl MAX_CAMERAS).
+pub const MAX_CAMERAS: usize = 4;
+
+/// A view that asks for detail: position in world metres and the projection
+/// scale in pixels per unit of tangent (`viewport_height / (2 tan(fov_y / 2))`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraverseCamera {
+    pub position_m: [f64; 3],
+    pub pixels_per_tan: f64,
+}
+
+impl TraverseCamera {
+    pub fn perspective(position_m: [f64; 3], fov_y_deg: f64, viewport_height_px: u32) -> Self {
+        let pixels_per_tan = f64::from(viewport_height_px) / (2.0 * (fov_y_deg.to_radians() / 2.0).tan());
+        TraverseCamera { position_m, pixels_per_tan }
+    }
+}
+
+/// The accuracy knob and the views it applies to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TraverseParams {
+    pub cameras: Vec<TraverseCamera>,
+    /// Largest accepted projected vertical error, in pixels (default 1).
+    pub target_error_px: f32,
+}
+
+/// f32 inputs exactly as the GPU sees them (the push constants).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct GpuInputs {
+    pub cameras: [[f32; 4]; MAX_CAMERAS],
+    pub camera_count: u32,
+    pub target_error_px: f32,
+    pub sector_size_m: f32,
+    pub height_lo: f32,
+    pub height_scale: f32,
+}
+
+impl GpuInputs {
+    pub fn new(world: &WorldDesc, params: &TraverseParams) -> Self {
+        assert!((1..=MAX_CAMERAS).contains(&params.cameras.len()), "1..={MAX_CAMERAS} cameras");
+        let mut cameras = [[0.0; 4]; MAX_CAMERAS];
+        for (c, cam) in cameras.iter_mut().zip(&params.cameras) {
+            let p = cam.position_m;
+            *c = [p[0] as f32, p[1] as f32, p[2] as f32, cam.pixels_per_tan as f32];
+        }
+        let [lo, hi] = world.height_range_m;
+        GpuInputs {
+            cameras,
+            camera_count: params.cameras.len() as u32,
+            target_error_px: params.target_error_px,
+            sector_size_m: world.sector_size_m() as f32,
+            height_lo: lo,
+            height_scale: (hi - lo) / 65535.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TraverseResult {
+    /// (node, slot), sorted.
+    pub nodes: Vec<(NodeId, u32)>,
+    pub lod_counts: [u32; 16],
+    pub overflow: u32,
+    pub missing_roots: u32,
+}
+
+fn value(t: &QuadtreeShadow, lod: u8, x: u32, y: u32) -> u16 {
+    let w = t.extent()[0] >> lod;
+    t.mips[lod as usize][(y * w + x) as usize]
+}
+
+/// Same operations, same order as `wants_refine` in traverse_common.glsl.
+fn wants_refine(t: &QuadtreeShadow, g: &GpuInputs, n: NodeId, slot: u32) -> bool {
+    let [w0, w1] = t.descs[slot as usize];
+    let size = g.sector_size_m * (1u32 << n.lod) as f32;
+    let bmin = [n.x as f32 * size, n.y as f32 * size, g.height_lo + (w0 & 0xFFFF) as f32 * g.height_scale];
+    let bmax = [bmin[0] + size, bmin[1] + size, g.height_lo + (w0 >> 16) as f32 * g.height_scale];
+    let bias = ((((w1 >> 14) & 0xF) as i32) << 28) >> 28;
+    let err = t.errors[slot as usize] * 2f32.powi(bias);
+    let target_sq = g.target_error_px * g.target_error_px;
+    g.cameras[..g.camera_count as usize].iter().any(|c| {
+        let o: Vec<f32> = (0..3).map(|i| (bmin[i] - c[i]).max(c[i] - bmax[i]).max(0.0)).collect();
+        let d2 = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).max(1e-6);
+        let lhs = err * c[3];
+        lhs * lhs > target_sq * d2
+    })
+}
+
+/// Valid children to draw instead of `n`, or empty to keep `n`.
+fn refinable_children(t: &QuadtreeShadow, g: &GpuInputs, n: NodeId, slot: u32) -> Vec<NodeId> {
+    let Some(children) = n.children() else { return Vec::new() };
+    let mut kids = Vec::new();
+    for c in children {
+        match value(t, c.lod, c.x, c.y) {
+            EMPTY => return Vec::new(),
+            INVALID => {}
+            _ => kids.push(c),
+        }
+    }
+    if kids.is_empty() || !wants_refine(t, g, n, slot) {
+        return Vec::new();
+    }
+    kids
+}
+
+/// The final node list for the resident set in `tree`, with ample lists
+/// (no overflow), as the GPU must produce it (as a set).
+pub fn traverse_cpu(tree: &QuadtreeShadow, world: &WorldDesc, params: &TraverseParams) -> TraverseResult {
+    let g = GpuInputs::new(world, params);
+    let mut out = TraverseResult::default();
+    let root = world.root_lod();
+    let mut list = Vec::new();
+    let [gx, gy] = world.grid(root);
+    for y in 0..gy {
+        for x in 0..gx {
+            match value(tree, root, x, y) {
+                EMPTY => out.missing_roots += 1,
+                INVALID => {}
+                _ => list.push(NodeId::new(root, x, y)),
+            }
+        }
+    }
+    while !list.is_empty() {
+        let mut next = Vec::new();
+        for n in list {
+            let slot = u32::from(value(tree, n.lod, n.x, n.y));
+            let kids = refinable_children(tree, &g, n, slot);
+            if kids.is_empty() {
+                out.lod_counts[n.lod as usize] += 1;
+                out.nodes.push((n, slot));
+            } else {
+                next.extend(kids);
+            }
+        }
+        list = next;
+    }
+    out.nodes.sort();
+    out
+}
