@@ -144,3 +144,69 @@ pub fn traverse_cpu(tree: &QuadtreeShadow, world: &WorldDesc, params: &TraverseP
     out.nodes.sort();
     out
 }
+
+/// The LOD map for a final node list: one byte per sector over the node
+/// texture's padded extent, NO_LOD where no listed node covers it.
+pub fn lod_map_cpu(result: &TraverseResult, world: &WorldDesc) -> Vec<u8> {
+    let [w, h] = crate::quadtree::texture_extent(world);
+    let mut map = vec![crate::passes::lod_map::NO_LOD; (w * h) as usize];
+    for (n, _) in &result.nodes {
+        let k = 1u32 << n.lod;
+        for y in n.y * k..((n.y + 1) * k).min(h) {
+            for x in n.x * k..((n.x + 1) * k).min(w) {
+                map[(y * w + x) as usize] = n.lod;
+            }
+        }
+    }
+    map
+}
+
+/// Sector data: per sector of the padded extent, 10 bits per LOD (0-2 in
+/// word 0, 3-5 in word 1) = the slot of the resident node covering it.
+pub fn sector_data_cpu(tree: &QuadtreeShadow, world: &WorldDesc) -> Vec<[u32; 2]> {
+    let [w, h] = tree.extent();
+    let lods = world.lod_count.min(crate::passes::sector_data::SECTOR_DATA_LODS) as u8;
+    let mut out = vec![[0u32; 2]; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let e = &mut out[(y * w + x) as usize];
+            for k in 0..lods {
+                let v = value(tree, k, x >> k, y >> k);
+                let slot = if v == EMPTY || v == INVALID { 0 } else { u32::from(v) };
+                e[usize::from(k / 3)] |= slot << (10 * u32::from(k % 3));
+            }
+        }
+    }
+    out
+}
+
+/// Height (m) at `p` from the finest resident node, bilinear over its R16
+/// samples (what terrain_sample.glsl computes), or None where nothing is
+/// resident. `heights(slot)` gives a resident node's 129x129 samples.
+pub fn sample_height_cpu<'a>(
+    tree: &QuadtreeShadow,
+    world: &WorldDesc,
+    heights: impl Fn(u32) -> &'a [u16],
+    p: [f64; 2],
+) -> Option<f32> {
+    let sector = world.sector_size_m();
+    let [w, h] = tree.extent();
+    let sx = ((p[0] / sector).floor().max(0.0) as u32).min(w - 1);
+    let sy = ((p[1] / sector).floor().max(0.0) as u32).min(h - 1);
+    let lods = world.lod_count.min(crate::passes::sector_data::SECTOR_DATA_LODS) as u8;
+    let (k, slot) = (0..lods).find_map(|k| {
+        let v = value(tree, k, sx >> k, sy >> k);
+        (v != EMPTY && v != INVALID).then_some((k, u32::from(v)))
+    })?;
+    let node = sector * f64::from(1u32 << k);
+    let spacing = sector / crate::world::NODE_QUADS as f64 * f64::from(1u32 << k);
+    let local = [0, 1].map(|i| ((p[i] - (p[i] / node).floor() * node) / spacing).clamp(0.0, 128.0));
+    let i0 = local.map(|l| (l.floor() as usize).min(127));
+    let f = [local[0] - i0[0] as f64, local[1] - i0[1] as f64];
+    let hs = heights(slot);
+    let s = |x: usize, y: usize| f64::from(hs[y * crate::world::NODE_SAMPLES + x]) / 65535.0;
+    let a = s(i0[0], i0[1]) * (1.0 - f[0]) + s(i0[0] + 1, i0[1]) * f[0];
+    let b = s(i0[0], i0[1] + 1) * (1.0 - f[0]) + s(i0[0] + 1, i0[1] + 1) * f[0];
+    let [lo, hi] = world.height_range_m;
+    Some((f64::from(lo) + (a * (1.0 - f[1]) + b * f[1]) * f64::from(hi - lo)) as f32)
+}

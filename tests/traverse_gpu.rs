@@ -6,11 +6,17 @@ mod common;
 
 use common::{fake_node, gpu_test, Rng};
 use std::collections::BTreeSet;
+use vista::gpu::vk;
 use vista::gpu::Context;
 use vista::gpu_quadtree::GpuQuadtree;
+use vista::passes::lod_map::LodMap;
 use vista::passes::quadtree_update::QuadtreeUpdatePass;
+use vista::passes::sector_data::SectorData;
+use vista::passes::terrain_query::{TerrainQuery, VistaTerrain};
 use vista::passes::traverse::{Traverse, TraverseMode};
-use vista::traverse_cpu::{traverse_cpu, TraverseCamera, TraverseParams, TraverseResult};
+use vista::traverse_cpu::{
+    lod_map_cpu, sample_height_cpu, sector_data_cpu, traverse_cpu, TraverseCamera, TraverseParams, TraverseResult,
+};
 use vista::world::{NodeId, WorldDesc};
 
 /// 32 x 31 sectors of 128 m, 5 LODs: a 2x2 root grid with a partial row.
@@ -24,6 +30,8 @@ struct Scene {
     tree: GpuQuadtree,
     update: QuadtreeUpdatePass,
     resident: BTreeSet<NodeId>,
+    /// Height samples of each node as last added (for CPU sampling).
+    heights: std::collections::HashMap<NodeId, Vec<u16>>,
     rng: Rng,
 }
 
@@ -33,6 +41,7 @@ impl Scene {
             tree: GpuQuadtree::new(ctx, &world(), SLOTS, 1).unwrap(),
             update: QuadtreeUpdatePass::new(ctx).unwrap(),
             resident: BTreeSet::new(),
+            heights: std::collections::HashMap::new(),
             rng: Rng(seed),
         };
         for r in world().roots() {
@@ -48,6 +57,7 @@ impl Scene {
             let a = self.rng.below(60000) as u16;
             (n.min_height, n.max_height) = (a, a + self.rng.below(5000) as u16);
             let bias = if self.rng.below(8) == 0 { self.rng.below(5) as i8 - 2 } else { 0 };
+            self.heights.insert(id, n.heights.clone());
             self.tree.add(n, bias);
         }
     }
@@ -135,6 +145,8 @@ fn gpu_traversal_equals_cpu_reference_for_1000_random_cases() {
     gpu_test(|ctx| {
         let mut scene = Scene::new(ctx, 0xFACADE);
         let traverse = Traverse::new(ctx, &world(), SLOTS).unwrap();
+        let lod_map = LodMap::new(ctx, &world()).unwrap();
+        let sectors = SectorData::new(ctx, &world()).unwrap();
         let mut deepest = 0;
         let mut multi_checked = 0;
         for case in 0..1000 {
@@ -149,11 +161,18 @@ fn gpu_traversal_equals_cpu_reference_for_1000_random_cases() {
             for &mode in modes {
                 ctx.submit_and_wait(|rec| {
                     traverse.record(rec, &scene.tree, &params, mode);
+                    lod_map.record(rec, &traverse);
+                    sectors.record(rec, &scene.tree);
                     Ok(())
                 })
                 .unwrap();
                 let (header, got) = traverse.read_result(ctx).unwrap();
                 assert_eq!(got, expect, "case {case} {mode:?}: GPU list differs from the CPU reference");
+                let map = ctx.read_image(&lod_map.image, 0, 0, vk::ImageLayout::GENERAL, 1).unwrap();
+                assert_eq!(map, lod_map_cpu(&expect, &world()), "case {case} {mode:?}: LOD map");
+                let sd = ctx.read_buffer(&sectors.buffer).unwrap();
+                let sd_expect: Vec<u32> = sector_data_cpu(&scene.tree.shadow, &world()).into_iter().flatten().collect();
+                assert_eq!(bytemuck::cast_slice::<u8, u32>(&sd), &sd_expect[..], "case {case}: sector data");
                 assert_eq!(header.dispatch, [header.node_count, 1, 1], "case {case}: cull dispatch args");
                 assert_eq!(got.overflow, 0);
                 if got.missing_roots == 0 {
@@ -198,5 +217,47 @@ fn overflow_keeps_coarser_nodes_and_is_counted() {
             assert!(got.nodes.len() < ample.nodes.len(), "{mode:?}: overflow keeps coarser (fewer) nodes");
             assert_tiles_exactly_once(&got, &format!("{mode:?} with overflow"));
         }
+    });
+}
+
+#[test]
+fn sector_data_include_samples_the_same_height_as_the_cpu() {
+    gpu_test(|ctx| {
+        let w = world();
+        let mut scene = Scene::new(ctx, 99);
+        for _ in 0..30 {
+            scene.mutate(ctx);
+        }
+        let sectors = SectorData::new(ctx, &w).unwrap();
+        let mut query = TerrainQuery::new(ctx, 4096).unwrap();
+        let mut rng = Rng(4242);
+        let points: Vec<[f32; 2]> =
+            (0..4096).map(|_| [rng.below(4_096_000) as f32 / 1000.0, rng.below(3_900_000) as f32 / 1000.0]).collect();
+        ctx.submit_and_wait(|rec| {
+            sectors.record(rec, &scene.tree);
+            query.record(rec, VistaTerrain::new(&w, &sectors), &scene.tree, &sectors, &points)
+        })
+        .unwrap();
+        // Payload heights per slot: the synthetic nodes are reproducible by id.
+        let by_slot: std::collections::HashMap<u32, Vec<u16>> = scene
+            .resident
+            .iter()
+            .filter_map(|id| scene.tree.shadow.slot_of(*id).map(|s| (s, scene.heights[id].clone())))
+            .collect();
+        let step = (w.height_range_m[1] - w.height_range_m[0]) / 65535.0;
+        let answers = query.answers(points.len());
+        let mut compared = 0;
+        for (p, a) in points.iter().zip(&answers) {
+            let cpu = sample_height_cpu(&scene.tree.shadow, &w, |s| &by_slot[&s], [f64::from(p[0]), f64::from(p[1])]);
+            if let Some(h) = cpu {
+                assert!(
+                    (a.height_m - h).abs() <= step,
+                    "at {p:?}: GPU {} vs CPU {h} (one R16 step = {step})",
+                    a.height_m
+                );
+                compared += 1;
+            }
+        }
+        assert!(compared > 3000, "most points must hit resident nodes ({compared})");
     });
 }

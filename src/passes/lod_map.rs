@@ -1,0 +1,63 @@
+//! `lod_map`: the R8 texture with one texel per sector holding the LOD of the
+//! listed node covering it (0xFF: none), refilled from the traversal's final
+//! node list every frame; the patch stitching reads LOD deltas from it.
+
+use crate::error::Result;
+use crate::gpu::{vk, ComputePipelineDesc, Context, Image, ImageDesc, Pipeline, Recorder, Resource};
+use crate::passes::traverse::Traverse;
+use crate::quadtree::texture_extent;
+use crate::shaders::lod_map as sh;
+use crate::world::WorldDesc;
+
+/// LOD map value of a sector no listed node covers (outside the world, or
+/// its root not resident yet).
+pub const NO_LOD: u8 = 0xFF;
+
+pub struct LodMap {
+    pipeline: Pipeline,
+    /// R8_UINT, the node texture's padded mip-0 extent, GENERAL layout.
+    pub image: Image,
+}
+
+impl LodMap {
+    pub const NAME: &'static str = "lod_map";
+
+    pub fn new(ctx: &Context, world: &WorldDesc) -> Result<Self> {
+        let image = Image::new(
+            ctx,
+            &ImageDesc {
+                name: "lod_map",
+                format: vk::Format::R8_UINT,
+                extent: texture_extent(world),
+                mip_levels: 1,
+                array_layers: 1,
+                usage: vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_DST
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
+            },
+        )?;
+        ctx.submit_and_wait(|rec| {
+            rec.image_layout(&image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
+            Ok(())
+        })?;
+        let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &[] };
+        Ok(LodMap { pipeline: Pipeline::compute(ctx, &desc)?, image })
+    }
+
+    /// Clears, then fills from `traverse`'s output (indirect: one workgroup per node).
+    pub fn record(&self, rec: &mut Recorder, traverse: &Traverse) {
+        rec.clear_color_u32(&self.image, u32::from(NO_LOD));
+        rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::COMPUTE_SHADER);
+        rec.bind_pipeline(&self.pipeline);
+        rec.push_descriptors(
+            &self.pipeline,
+            &[
+                (sh::TRAVERSE_OUT, Resource::Buffer(&traverse.output)),
+                (sh::LOD_MAP, Resource::Image(&self.image, vk::ImageLayout::GENERAL)),
+            ],
+        );
+        rec.dispatch_indirect(&traverse.output, 0);
+        rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::ALL_COMMANDS);
+    }
+}

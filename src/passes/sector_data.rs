@@ -1,0 +1,86 @@
+//! `sector_data`: per sector, the atlas slot of the resident node covering it
+//! at each LOD (10 bits each, 0 = none), rebuilt from the node texture, so
+//! any shader can sample the terrain through terrain_sample.glsl.
+
+use crate::error::Result;
+use crate::gpu::{
+    vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
+    SamplerDesc,
+};
+use crate::gpu_quadtree::GpuQuadtree;
+use crate::quadtree::texture_extent;
+use crate::shaders::sector_data as sh;
+use crate::world::WorldDesc;
+
+/// LODs whose slots fit two u32 at 10 bits (sector_data.comp SECTOR_DATA_LODS);
+/// coarser LODs of a deeper world are not reachable through sector data.
+pub const SECTOR_DATA_LODS: u32 = 6;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SectorDataPush {
+    pub sectors_x: u32,
+    pub sectors_y: u32,
+    pub lod_count: u32,
+    pub pad: u32,
+}
+
+pub struct SectorData {
+    pipeline: Pipeline,
+    sampler: Sampler,
+    /// uvec2 per sector, row-major over the padded extent.
+    pub buffer: Buffer,
+    pub extent: [u32; 2],
+    lod_count: u32,
+}
+
+impl SectorData {
+    pub const NAME: &'static str = "sector_data";
+
+    pub fn new(ctx: &Context, world: &WorldDesc) -> Result<Self> {
+        let extent = texture_extent(world);
+        let buffer = Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: "sector_data",
+                size: u64::from(extent[0] * extent[1]) * 8,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::GpuOnly,
+            },
+        )?;
+        let sampler = Sampler::new(
+            ctx,
+            &SamplerDesc {
+                name: "sector_data_sampler",
+                filter: vk::Filter::NEAREST,
+                address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+            },
+        )?;
+        let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &[] };
+        Ok(SectorData {
+            pipeline: Pipeline::compute(ctx, &desc)?,
+            sampler,
+            buffer,
+            extent,
+            lod_count: world.lod_count.min(SECTOR_DATA_LODS),
+        })
+    }
+
+    pub fn record(&self, rec: &mut Recorder, tree: &GpuQuadtree) {
+        rec.bind_pipeline(&self.pipeline);
+        rec.push_descriptors(
+            &self.pipeline,
+            &[
+                (sh::NODE_TEXTURE, Resource::Image(&tree.node_texture, vk::ImageLayout::GENERAL)),
+                (sh::NODE_SAMPLER, Resource::Sampler(self.sampler.raw())),
+                (sh::SECTOR_DATA, Resource::Buffer(&self.buffer)),
+            ],
+        );
+        let push =
+            SectorDataPush { sectors_x: self.extent[0], sectors_y: self.extent[1], lod_count: self.lod_count, pad: 0 };
+        rec.push_constants(&self.pipeline, &push);
+        let [wx, wy, _] = sh::WORKGROUP_SIZE;
+        rec.dispatch(self.extent[0].div_ceil(wx), self.extent[1].div_ceil(wy), 1);
+        rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::ALL_COMMANDS);
+    }
+}
