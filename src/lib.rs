@@ -5,6 +5,7 @@
 //! generated at build time from `shaders_glsl/`; [`world`] is the CPU side of
 //! the terrain (height sources, node bake, cache, streaming), with no Vulkan.
 
+pub mod bench;
 pub mod error;
 pub mod frame;
 pub mod gpu;

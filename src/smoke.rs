@@ -10,6 +10,7 @@ use crate::passes::diamond_patch::DiamondPatch;
 use crate::passes::prefix_sum::PrefixSum;
 use crate::passes::smoke_triangle::{SmokeTriangle, TARGET_FORMAT};
 use crate::terrain::Terrain;
+use crate::traverse_cpu::{TraverseCamera, TraverseParams};
 use std::time::{Duration, Instant};
 
 pub struct SmokeOutput {
@@ -65,9 +66,12 @@ pub fn render_with(
     let tri_target = Image::new(ctx, &target_desc("smoke_triangle_target"))?;
     let patch_target = Image::new(ctx, &target_desc("diamond_patch_target"))?;
     let mut ring = FrameRing::new(ctx, 2)?;
-    let mut exec = FrameExecutor::new(ctx, 2, 8)?;
+    let mut exec = FrameExecutor::new(ctx, 2, 12)?;
     let mut out = Vec::new();
     let corners = [[-0.8, -0.7, 0.0, 1.0], [0.9, -0.2, 0.0, 1.0], [-0.1, 0.85, 0.0, 1.0]];
+    // One view at `camera`, 60 degrees vertical field of view, 1 px target.
+    let params =
+        TraverseParams { cameras: vec![TraverseCamera::perspective(camera, 60.0, size[1])], target_error_px: 1.0 };
     let start = Instant::now();
     let mut settle_frames = 0;
     let mut settle_seconds = 0.0;
@@ -90,7 +94,7 @@ pub fn render_with(
             rec.image_layout(&patch_target, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
             let mut frame = exec.begin(rec);
             if let Some(t) = terrain.as_deref_mut() {
-                t.record(&mut frame, camera)?;
+                t.record(&mut frame, &params)?;
             }
             frame.pass(PrefixSum::NAME, QueueKind::Compute, |r| scan.record(r, &input, &output, n))?;
             frame.pass(SmokeTriangle::NAME, QueueKind::Graphics, |r| tri.record(r, &tri_target, corners));

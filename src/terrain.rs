@@ -7,7 +7,11 @@ use crate::error::Result;
 use crate::frame::{Frame, QueueKind};
 use crate::gpu::Context;
 use crate::gpu_quadtree::GpuQuadtree;
+use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
+use crate::passes::sector_data::SectorData;
+use crate::passes::traverse::{Traverse, TraverseMode};
+use crate::traverse_cpu::TraverseParams;
 use crate::world::{
     bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, Residency, ResidencyConfig, Streamer,
     WorldDesc,
@@ -49,6 +53,9 @@ pub struct Terrain {
     streamer: Streamer,
     pub tree: GpuQuadtree,
     update: QuadtreeUpdatePass,
+    pub traverse: Traverse,
+    pub lod_map: LodMap,
+    pub sector_data: SectorData,
     pub stats: TerrainStats,
 }
 
@@ -78,13 +85,17 @@ impl Terrain {
             streamer: Streamer::new(residency, loader),
             tree,
             update: QuadtreeUpdatePass::new(ctx)?,
+            traverse: Traverse::new(ctx, world, options.slots)?,
+            lod_map: LodMap::new(ctx, world)?,
+            sector_data: SectorData::new(ctx, world)?,
             stats: TerrainStats::default(),
         })
     }
 
-    /// Streams for `camera` (world metres) and records this frame's passes.
-    pub fn record(&mut self, frame: &mut Frame, camera: [f64; 3]) -> Result<()> {
-        let s = self.streamer.frame(camera);
+    /// Streams around the first camera and records this frame's passes:
+    /// quadtree_update, traverse (one dispatch), lod_map, sector_data.
+    pub fn record(&mut self, frame: &mut Frame, params: &TraverseParams) -> Result<()> {
+        let s = self.streamer.frame(params.cameras[0].position_m);
         for id in &s.removed {
             self.tree.remove(*id);
         }
@@ -98,6 +109,12 @@ impl Terrain {
         self.stats.failed += s.failed.len();
         let (tree, update) = (&mut self.tree, &self.update);
         frame.pass(QuadtreeUpdatePass::NAME, QueueKind::Compute, |rec| update.record(rec, tree))?;
+        let tree = &self.tree;
+        frame.pass(Traverse::NAME, QueueKind::Compute, |rec| {
+            self.traverse.record(rec, tree, params, TraverseMode::SingleDispatch)
+        });
+        frame.pass(LodMap::NAME, QueueKind::Compute, |rec| self.lod_map.record(rec, &self.traverse));
+        frame.pass(SectorData::NAME, QueueKind::Compute, |rec| self.sector_data.record(rec, tree));
         let r = self.streamer.residency();
         self.stats.loading = r.pending_count();
         self.stats.resident = r.slots_used() - self.stats.loading;

@@ -2,6 +2,7 @@
 //! baking node payloads and memory reports.
 
 mod bake;
+mod bench_cmd;
 mod scene;
 mod world_args;
 
@@ -66,9 +67,11 @@ enum Command {
     Bake(bake::BakeArgs),
     /// Print CPU and GPU memory per payload kind for N resident nodes.
     Memory(bake::MemoryArgs),
+    /// GPU-time benchmarks (medians after warm-up), e.g. `vista bench traverse --json t.json`.
+    Bench(bench_cmd::BenchArgs),
 }
 
-fn parse_camera(s: &str) -> Result<[f64; 3], String> {
+pub(crate) fn parse_camera(s: &str) -> Result<[f64; 3], String> {
     let v: Vec<f64> = s
         .split(',')
         .map(|p| p.trim().parse::<f64>())
@@ -134,6 +137,7 @@ fn run(cli: Cli) -> Result<()> {
         // Baking and accounting are CPU-only: no Vulkan needed.
         Command::Bake(args) => bake::bake(args),
         Command::Memory(args) => bake::memory(args),
+        Command::Bench(args) => with_gpu(&options, |ctx| bench_cmd::bench(ctx, args)),
     }
 }
 

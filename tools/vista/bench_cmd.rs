@@ -1,0 +1,102 @@
+//! `vista bench`: GPU-time benchmarks with medians after warm-up.
+
+use crate::world_args::WorldArgs;
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+use vista::bench::{bench_traverse, TraverseBenchConfig};
+use vista::gpu::Context;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum BenchKind {
+    /// One-dispatch vs per-level traversal over resident sets and error targets.
+    Traverse,
+    Cull,
+    Shade,
+    Accuracy,
+    All,
+}
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// What to benchmark.
+    #[arg(value_enum)]
+    kind: BenchKind,
+    /// Write the table as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Resident-set sizes (nodes; at most 1023: slots are 10-bit).
+    #[arg(long, value_delimiter = ',', default_value = "64,256,512,1000")]
+    sets: Vec<u32>,
+    /// Target projected errors in pixels.
+    #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4,8")]
+    targets: Vec<f32>,
+    /// Measured frames per row (after 3 warm-up frames); the median is reported.
+    #[arg(long, default_value_t = 15)]
+    frames: u32,
+    /// Camera position (x,y,z metres); default: 60 m above the world's centre at mid height.
+    #[arg(long, value_parser = crate::parse_camera)]
+    camera: Option<[f64; 3]>,
+    #[command(flatten)]
+    world: WorldArgs,
+}
+
+pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
+    match args.kind {
+        BenchKind::Traverse | BenchKind::All => {}
+        other => bail!(
+            "bench {other:?} needs passes that do not exist yet (cull_patches, tile shading); available: traverse"
+        ),
+    }
+    if args.sets.iter().any(|&n| n == 0 || n > 1023)
+        || args.targets.iter().any(|t| !(t.is_finite() && *t > 0.0))
+        || args.frames == 0
+    {
+        bail!("--sets must be 1..=1023 nodes, --targets positive pixels, --frames at least 1");
+    }
+    let world = args.world.load()?;
+    let d = &world.desc;
+    let mid = f64::from(d.height_range_m[0] + d.height_range_m[1]) / 2.0;
+    let camera = args.camera.unwrap_or([d.extent_m[0] / 2.0, d.extent_m[1] / 2.0, mid + 60.0]);
+    let cfg = TraverseBenchConfig {
+        resident_sets: args.sets,
+        targets_px: args.targets,
+        warmup_frames: 3,
+        frames: args.frames,
+        camera_m: camera,
+        viewport_height_px: 1080,
+    };
+    let rows = bench_traverse(ctx, d, &*world.source, &cfg)?;
+    println!(
+        "bench traverse: {} on {}  camera ({:.0}, {:.0}, {:.0}), 1080 px, 60 deg; median of {} frames after 3 warm-up",
+        world.label,
+        ctx.info().name,
+        camera[0],
+        camera[1],
+        camera[2],
+        cfg.frames
+    );
+    println!(
+        "{:>9} {:>9} {:>9} {:>7} {:>13} {:>13} {:>13}",
+        "requested", "resident", "target px", "final", "one-dispatch", "per-level", "one/per-level"
+    );
+    for r in &rows {
+        println!(
+            "{:>9} {:>9} {:>9} {:>7} {:>10.4} ms {:>10.4} ms {:>13.3}",
+            r.requested,
+            r.resident,
+            r.target_error_px,
+            r.final_nodes,
+            r.single_dispatch_ms,
+            r.multi_dispatch_ms,
+            r.ratio
+        );
+    }
+    if let Some(path) = args.json {
+        let json = serde_json::json!({ "device": ctx.info().name, "world": world.label, "camera_m": camera, "frames": cfg.frames, "rows": rows });
+        std::fs::write(&path, serde_json::to_string_pretty(&json)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
