@@ -34,7 +34,9 @@ fn info_reports_device_queues_and_limits() {
 fn render_prints_pass_timings() {
     let (ok, out, err) = vista(&["--validation", "render", "--size", "64x64", "--frames", "5"]);
     assert!(ok, "{err}");
-    for pass in ["prefix_sum", "smoke_triangle", "diamond_patch"] {
+    for pass in
+        ["quadtree_update", "traverse", "lod_map", "sector_data", "prefix_sum", "smoke_triangle", "diamond_patch"]
+    {
         assert!(out.contains(pass), "no timing for {pass}:\n{out}");
     }
 }
@@ -50,4 +52,36 @@ fn bad_arguments_fail_with_a_clear_message() {
     let (ok, _, err) = vista(&["--device", "no-such-gpu-xyz", "info"]);
     assert!(!ok);
     assert!(err.contains("no-such-gpu-xyz"), "{err}");
+}
+
+#[test]
+fn bench_traverse_writes_a_table_and_json() {
+    let json = std::env::temp_dir().join(format!("vista-bench-{}.json", std::process::id()));
+    let (ok, out, err) = vista(&[
+        "--validation",
+        "bench",
+        "traverse",
+        "--sets",
+        "64",
+        "--targets",
+        "1,8",
+        "--frames",
+        "2",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("one/per-level"), "{out}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for r in rows {
+        assert!(
+            r["single_dispatch_ms"].as_f64().unwrap() > 0.0 && r["multi_dispatch_ms"].as_f64().unwrap() > 0.0,
+            "{r}"
+        );
+        assert!(r["final_nodes"].as_u64().unwrap() > 0);
+    }
+    let (ok, _, err) = vista(&["bench", "cull"]);
+    assert!(!ok && err.contains("traverse"), "{err}");
 }
