@@ -309,18 +309,7 @@ impl<'a> Recorder<'a> {
 
     /// Copies one mip of one layer of `img` (in TRANSFER_SRC_OPTIMAL), tightly packed.
     pub fn copy_image_to_buffer(&mut self, img: &Image, mip: u32, layer: u32, dst: &Buffer) {
-        let region = vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: aspect_of(img.format),
-                mip_level: mip,
-                base_array_layer: layer,
-                layer_count: 1,
-            })
-            .image_extent(vk::Extent3D {
-                width: (img.extent[0] >> mip).max(1),
-                height: (img.extent[1] >> mip).max(1),
-                depth: 1,
-            });
+        let region = packed_region(img, mip, layer, 0);
         // SAFETY: live objects; the layer validates sizes.
         unsafe {
             self.d().cmd_copy_image_to_buffer(
@@ -336,19 +325,7 @@ impl<'a> Recorder<'a> {
     /// Copies tightly packed texels at `offset` of `src` into one mip of one
     /// layer of `img`, which must be in TRANSFER_DST_OPTIMAL.
     pub fn copy_buffer_to_image(&mut self, src: &Buffer, offset: u64, img: &Image, mip: u32, layer: u32) {
-        let region = vk::BufferImageCopy::default()
-            .buffer_offset(offset)
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: aspect_of(img.format),
-                mip_level: mip,
-                base_array_layer: layer,
-                layer_count: 1,
-            })
-            .image_extent(vk::Extent3D {
-                width: (img.extent[0] >> mip).max(1),
-                height: (img.extent[1] >> mip).max(1),
-                depth: 1,
-            });
+        let region = packed_region(img, mip, layer, offset);
         // SAFETY: live objects; the caller put the image in TRANSFER_DST_OPTIMAL.
         unsafe {
             self.d().cmd_copy_buffer_to_image(
@@ -387,4 +364,21 @@ impl<'a> Recorder<'a> {
         // SAFETY: index checked; the query was reset this frame.
         unsafe { self.d().cmd_write_timestamp2(self.cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool.raw, index) };
     }
+}
+
+/// One whole mip of one layer, tightly packed at `offset` in the buffer.
+fn packed_region(img: &Image, mip: u32, layer: u32, offset: u64) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: aspect_of(img.format),
+            mip_level: mip,
+            base_array_layer: layer,
+            layer_count: 1,
+        })
+        .image_extent(vk::Extent3D {
+            width: (img.extent[0] >> mip).max(1),
+            height: (img.extent[1] >> mip).max(1),
+            depth: 1,
+        })
 }
