@@ -40,8 +40,8 @@ impl MemoryReport {
                 kind("patch min/max", "RG16_UINT 8x8", p * 4, p * 4),
                 kind("patch cones", "RGBA32F 8x8", p * 16, p * 16),
                 // id, min/max, error, all-hole mask; on the GPU these live
-                // in the 2 x u32 node description instead.
-                kind("node scalars", "2 x u32 description", 9 + 4 + 4 + 8, 8),
+                // in the 2 x u32 node description, plus the f32 LOD error.
+                kind("node scalars", "2 x u32 desc + f32 error", 9 + 4 + 4 + 8, 12),
             ],
         }
     }
