@@ -24,6 +24,12 @@ pub struct SmokeOutput {
     pub settle_seconds: f64,
 }
 
+/// The render's view: one camera at `camera`, 60 degrees vertical field of
+/// view over the target height, 1 px target error.
+pub fn view_params(camera: [f64; 3], size: [u32; 2]) -> TraverseParams {
+    TraverseParams { cameras: vec![TraverseCamera::perspective(camera, 60.0, size[1])], target_error_px: 1.0 }
+}
+
 /// Renders `frames` frames at `size` with two frames in flight.
 pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput> {
     render_with(ctx, None, [0.0; 3], size, frames, Duration::ZERO)

@@ -241,6 +241,21 @@ fn render(ctx: &Context, world: &world_args::LoadedWorld, run: RenderRun) -> Res
         result.settle_frames,
         result.settle_seconds
     );
+    // Debug check: the last frame's GPU node list against the CPU reference.
+    let (header, gpu) = terrain.traverse.read_result(ctx)?;
+    let cpu = vista::traverse_cpu::traverse_cpu(&terrain.tree.shadow, d, &vista::smoke::view_params(camera, size));
+    let per_lod: Vec<String> = (0..d.lod_count as usize).map(|l| header.lod_counts[l].to_string()).collect();
+    println!(
+        "traverse: {} nodes (per LOD 0..: {}), overflow {}, missing roots {}; CPU reference: {}",
+        header.node_count,
+        per_lod.join("/"),
+        header.overflow,
+        header.missing_roots,
+        if cpu == gpu { "identical" } else { "DIFFERENT" }
+    );
+    if cpu != gpu {
+        bail!("the GPU traversal differs from the CPU reference ({} vs {} nodes)", gpu.nodes.len(), cpu.nodes.len());
+    }
     println!("terrain geometry passes are not drawn yet; smoke passes stand in for them");
     if timed.is_empty() {
         println!("no pass timings (timestamps unsupported or no frame finished)");
