@@ -1,5 +1,8 @@
 //! Height map loaders: real data, every bad input, and a mutation fuzz.
 
+mod common;
+
+use common::Rng;
 use std::io::Cursor;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -182,37 +185,22 @@ fn bad_inputs_give_specific_errors() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Small deterministic xorshift64 generator.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
 fn mutate(rng: &mut Rng, base: &[u8]) -> Vec<u8> {
     let mut b = base.to_vec();
-    match rng.below(4) {
-        0 => b.truncate(rng.below(b.len())),
+    match rng.index(4) {
+        0 => b.truncate(rng.index(b.len())),
         1 => {
-            let at = rng.below(b.len());
-            let extra: Vec<u8> = (0..rng.below(16) + 1).map(|_| rng.next() as u8).collect();
+            let at = rng.index(b.len());
+            let extra: Vec<u8> = (0..rng.index(16) + 1).map(|_| rng.next_u64() as u8).collect();
             b.splice(at..at, extra);
         }
         _ => {
-            for _ in 0..rng.below(8) + 1 {
-                let at = rng.below(b.len());
-                b[at] = match rng.below(3) {
-                    0 => rng.next() as u8,
-                    1 => b[at] ^ (1 << rng.below(8)),
-                    _ => [0u8, 0xff, 0x7f, 0x80][rng.below(4)],
+            for _ in 0..rng.index(8) + 1 {
+                let at = rng.index(b.len());
+                b[at] = match rng.index(3) {
+                    0 => rng.next_u64() as u8,
+                    1 => b[at] ^ (1 << rng.index(8)),
+                    _ => [0u8, 0xff, 0x7f, 0x80][rng.index(4)],
                 };
             }
         }

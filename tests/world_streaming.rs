@@ -1,25 +1,14 @@
 //! Streaming residency, loader threads, the node cache and bake_world.
 
+mod common;
+
+use common::Rng;
 use std::collections::HashSet;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use vista::world::*;
-
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 fn temp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("vista_world_{name}_{}", std::process::id()));
@@ -75,7 +64,7 @@ fn random_paths_keep_budget_roots_and_coverage() {
         let mut roots_seen = false;
         for frame in 0..400 {
             // Wandering walk with occasional teleports, sometimes off-world.
-            if rng.next() % 97 == 0 {
+            if rng.next_u64() % 97 == 0 {
                 pos = [rng.unit() * 12_000.0 - 1000.0, rng.unit() * 12_000.0 - 1000.0, 100.0];
             }
             vel = [vel[0] * 0.9 + (rng.unit() - 0.5) * 40.0, vel[1] * 0.9 + (rng.unit() - 0.5) * 40.0];
@@ -90,7 +79,7 @@ fn random_paths_keep_budget_roots_and_coverage() {
             // Deliver everything, or a random part when lagging.
             let mut still = Vec::new();
             for id in loading.drain(..) {
-                if lag && rng.next() % 3 == 0 {
+                if lag && rng.next_u64() % 3 == 0 {
                     still.push(id);
                     continue;
                 }
