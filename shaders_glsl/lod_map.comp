@@ -6,17 +6,7 @@
 // the world exactly once, so no two threads write the same texel.
 layout(local_size_x = 64) in;
 
-struct TraverseHeader {
-    uint dispatch_x;
-    uint dispatch_y;
-    uint dispatch_z;
-    uint node_count;
-    uint overflow;
-    uint missing_roots;
-    uint pad0;
-    uint pad1;
-    uint lod_counts[16];
-};
+#include "node_list.glsl"
 
 layout(set = 0, binding = 0, std430) readonly buffer TraverseOutput {
     TraverseHeader header;
@@ -26,8 +16,7 @@ layout(set = 0, binding = 1, r8ui) uniform writeonly uimage2D lod_map;
 
 void main() {
     uint n = traverse_out.nodes[gl_WorkGroupID.x].x;
-    uint lod = n >> 28;
-    uint x = n & 0x3FFFu, y = (n >> 14) & 0x3FFFu;
+    uint lod = node_lod(n), x = node_x(n), y = node_y(n);
     uint k = 1u << lod;
     ivec2 size = imageSize(lod_map);
     for (uint i = gl_LocalInvocationID.x; i < k * k; i += gl_WorkGroupSize.x) {

@@ -23,8 +23,9 @@ struct AtlasKind {
     texel_bytes: u32,
 }
 
-/// Atlas formats, in the order of `payload_bytes`.
-const ATLASES: [AtlasKind; 6] = [
+/// Atlas formats, in the order of `payload_bytes`; the `ATLAS_*` indices
+/// name them.
+const ATLASES: [AtlasKind; 7] = [
     AtlasKind { name: "atlas_height", format: vk::Format::R16_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 2 },
     AtlasKind { name: "atlas_normal", format: vk::Format::R8G8B8A8_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 4 },
     AtlasKind { name: "atlas_albedo", format: vk::Format::R8G8B8A8_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 4 },
@@ -41,9 +42,19 @@ const ATLASES: [AtlasKind; 6] = [
         side: PATCHES_PER_NODE_SIDE,
         texel_bytes: 16,
     },
+    AtlasKind { name: "atlas_patch_holes", format: vk::Format::R8_UINT, side: PATCHES_PER_NODE_SIDE, texel_bytes: 1 },
 ];
 
-fn payload_bytes(n: &BakedNode) -> [&[u8]; 6] {
+/// Index of each atlas in [`GpuQuadtree::atlases`].
+pub const ATLAS_HEIGHT: usize = 0;
+pub const ATLAS_NORMAL: usize = 1;
+pub const ATLAS_ALBEDO: usize = 2;
+pub const ATLAS_SPLAT: usize = 3;
+pub const ATLAS_PATCH_MIN_MAX: usize = 4;
+pub const ATLAS_PATCH_CONES: usize = 5;
+pub const ATLAS_PATCH_HOLES: usize = 6;
+
+fn payload_bytes(n: &BakedNode) -> [&[u8]; 7] {
     [
         bytemuck::cast_slice(&n.heights),
         bytemuck::cast_slice(&n.normals),
@@ -51,6 +62,7 @@ fn payload_bytes(n: &BakedNode) -> [&[u8]; 6] {
         &n.splat,
         bytemuck::cast_slice(&n.patch_min_max),
         bytemuck::cast_slice(&n.patch_cones),
+        &n.patch_holes,
     ]
 }
 

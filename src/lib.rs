@@ -1,7 +1,8 @@
 //! vista: a GPU-driven terrain renderer for Vulkan (Far Cry 5 style) on ash.
 //!
 //! Layers: [`gpu`] owns every unsafe Vulkan call; [`frame`] wraps passes in
-//! labels and timestamps; [`passes`] holds one pass per file; [`shaders`] is
+//! labels and timestamps; [`render`] is the renderer an engine records into
+//! ([`render::TerrainRenderer`]); [`passes`] holds one pass per file; [`shaders`] is
 //! generated at build time from `shaders_glsl/`; [`world`] is the CPU side of
 //! the terrain (height sources, node bake, cache, streaming), with no Vulkan.
 
@@ -14,8 +15,8 @@ pub mod passes;
 pub mod patch_grid;
 pub mod profiler;
 pub mod quadtree;
+pub mod render;
 pub mod shaders;
-pub mod smoke;
 pub mod terrain;
 pub mod traverse_cpu;
 pub mod world;

@@ -13,7 +13,8 @@ use crate::passes::sector_data::SectorData;
 use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::traverse_cpu::TraverseParams;
 use crate::world::{
-    bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, Residency, ResidencyConfig, Streamer,
+    bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency, ResidencyConfig,
+    Streamer,
     WorldDesc,
 };
 use serde::Serialize;
@@ -29,12 +30,15 @@ pub struct TerrainOptions {
     /// Bake lazily into this cache directory (reused across runs); `None`
     /// bakes in memory only.
     pub cache_dir: Option<PathBuf>,
+    /// Also keep the families right around the camera (for motion); off,
+    /// only the LOD criterion decides what is resident (exact test sets).
+    pub ring_prefetch: bool,
 }
 
 impl Default for TerrainOptions {
     fn default() -> Self {
         let threads = std::thread::available_parallelism().map_or(2, |n| n.get()).max(1);
-        TerrainOptions { slots: 512, frames_in_flight: 2, loader_threads: threads, cache_dir: None }
+        TerrainOptions { slots: 512, frames_in_flight: 2, loader_threads: threads, cache_dir: None, ring_prefetch: true }
     }
 }
 
@@ -57,6 +61,7 @@ pub struct Terrain {
     pub lod_map: LodMap,
     pub sector_data: SectorData,
     pub stats: TerrainStats,
+    ring_prefetch: bool,
 }
 
 impl Terrain {
@@ -89,13 +94,22 @@ impl Terrain {
             lod_map: LodMap::new(ctx, world)?,
             sector_data: SectorData::new(ctx, world)?,
             stats: TerrainStats::default(),
+            ring_prefetch: options.ring_prefetch,
         })
     }
 
     /// Streams around the first camera and records this frame's passes:
     /// quadtree_update, traverse (one dispatch), lod_map, sector_data.
     pub fn record(&mut self, frame: &mut Frame, params: &TraverseParams) -> Result<()> {
-        let s = self.streamer.frame(params.cameras[0].position_m);
+        let cam = &params.cameras[0];
+        // Load a family a little before the traversal would refine into it.
+        let want = RefineWant {
+            pixels_per_tan: cam.pixels_per_tan,
+            target_error_px: f64::from(params.target_error_px),
+            prefetch: 0.75,
+            ring_factor: if self.ring_prefetch { 0.75 } else { 0.0 },
+        };
+        let s = self.streamer.frame(cam.position_m, Some(&want));
         for id in &s.removed {
             self.tree.remove(*id);
         }

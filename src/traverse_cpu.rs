@@ -145,6 +145,23 @@ pub fn traverse_cpu(tree: &QuadtreeShadow, world: &WorldDesc, params: &TraverseP
     out
 }
 
+/// Per LOD, the nodes of the final list that the camera wants finer but
+/// whose children are not all resident (streaming has not caught up): the
+/// gap between what is drawn and what the view asked for.
+pub fn wanted_finer_cpu(tree: &QuadtreeShadow, world: &WorldDesc, params: &TraverseParams) -> [u32; 16] {
+    let g = GpuInputs::new(world, params);
+    let result = traverse_cpu(tree, world, params);
+    let mut out = [0u32; 16];
+    for (n, slot) in &result.nodes {
+        let Some(children) = n.children() else { continue };
+        let missing = children.iter().any(|c| world.is_valid(*c) && value(tree, c.lod, c.x, c.y) == EMPTY);
+        if missing && wants_refine(tree, &g, *n, *slot) {
+            out[n.lod as usize] += 1;
+        }
+    }
+    out
+}
+
 /// The LOD map for a final node list: one byte per sector over the node
 /// texture's padded extent, NO_LOD where no listed node covers it.
 pub fn lod_map_cpu(result: &TraverseResult, world: &WorldDesc) -> Vec<u8> {

@@ -57,3 +57,121 @@ fn from_raw_wraps_an_engines_device_without_owning_it() {
         assert!(b.is_ok());
     });
 }
+
+/// An engine records vista's frame into a command buffer of its own, on its
+/// own device (wrapped with `Context::from_raw`), submits it itself and
+/// gets terrain in its colour target.
+#[test]
+fn terrain_renderer_records_into_the_engines_command_buffer() {
+    use common::terrain::{view, Surface, MAGENTA, MAGENTA_RGBA};
+    use vista::gpu::{Image, ImageDesc, Recorder};
+    use vista::passes::terrain_geometry::{COLOR_FORMAT, DEPTH_FORMAT};
+    use vista::render::{RenderTargets, RendererOptions, TerrainRenderer};
+    use vista::world::WorldDesc;
+
+    gpu_test(|engine| {
+        // SAFETY: as above, the engine vouches for its handles.
+        let wrapped = unsafe {
+            Context::from_raw(RawHandles {
+                entry: ash::Entry::load().expect("Vulkan loader"),
+                instance: engine.instance().clone(),
+                physical_device: engine.physical_device(),
+                device: engine.device().clone(),
+                graphics_queue_family: engine.graphics_queue().family,
+                graphics_queue: engine.graphics_queue().raw,
+                compute_queue_family: engine.compute_queue().family,
+                compute_queue: engine.compute_queue().raw,
+                debug_utils: true,
+            })
+        }
+        .expect("wrap the engine's handles");
+        let device = engine.device();
+        let size = [64, 64];
+        {
+            let world =
+                WorldDesc { extent_m: [512.0, 512.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 3 };
+            let source = std::sync::Arc::new(Surface::Tilted { z0: 10.0, gx: 0.05, gy: 0.02 });
+            let mut renderer =
+                TerrainRenderer::new(&wrapped, &world, source, Vec::new(), &RendererOptions::default()).unwrap();
+            let image = |name, format, usage| {
+                Image::new(&wrapped, &ImageDesc { name, format, extent: size, mip_levels: 1, array_layers: 1, usage })
+                    .unwrap()
+            };
+            let color = image(
+                "engine_color",
+                COLOR_FORMAT,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            );
+            let depth = image(
+                "engine_depth",
+                DEPTH_FORMAT,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            );
+            let v = view([256.0, 30.0, 200.0], 0.0, -30.0, size, 1.0);
+            // The engine's own pool, command buffer and fence.
+            // SAFETY: plain object creation on the engine's live device.
+            let (pool, cmd, fence) = unsafe {
+                let pool = device
+                    .create_command_pool(
+                        &vk::CommandPoolCreateInfo::default()
+                            .queue_family_index(engine.graphics_queue().family)
+                            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                        None,
+                    )
+                    .unwrap();
+                let cmd = device
+                    .allocate_command_buffers(
+                        &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+                    )
+                    .unwrap()[0];
+                (pool, cmd, device.create_fence(&vk::FenceCreateInfo::default(), None).unwrap())
+            };
+            for frame in 0..400 {
+                // SAFETY: the previous submission's fence was waited on, so
+                // the command buffer is idle and may be re-recorded.
+                unsafe {
+                    device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
+                }
+                // SAFETY: `cmd` is recording, from a graphics+compute family,
+                // and recorded nowhere else meanwhile.
+                let mut rec = unsafe { Recorder::from_raw(&wrapped, cmd) };
+                if frame == 0 {
+                    rec.image_layout(&color, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+                    rec.image_layout(&depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+                }
+                renderer.record(&mut rec, &v, &RenderTargets { color: &color, depth: &depth, clear: MAGENTA }).unwrap();
+                // SAFETY: ends the recording begun above; submits to the
+                // engine's queue and waits, so nothing is in flight after.
+                unsafe {
+                    device.end_command_buffer(cmd).unwrap();
+                    let cmds = [cmd];
+                    device
+                        .queue_submit(engine.graphics_queue().raw, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence)
+                        .unwrap();
+                    let n = wrapped.frame_submitted();
+                    device.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+                    device.reset_fences(&[fence]).unwrap();
+                    wrapped.frame_completed(n);
+                }
+                if frame > 2 && renderer.terrain.settled() {
+                    break;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
+            assert!(renderer.terrain.settled(), "streaming never settled");
+            assert!(renderer.latest_timings().is_some_and(|t| t.passes.iter().any(|p| p.name == "terrain_geometry")));
+            let rgba = wrapped.read_image(&color, 0, 0, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, 4).unwrap();
+            let terrain_px = rgba.chunks(4).filter(|p| *p != MAGENTA_RGBA).count();
+            // Looking 30 degrees down from 190 m over the tilted plane: the
+            // lower half of the image at least is ground.
+            assert!(terrain_px > 64 * 32, "only {terrain_px} terrain pixels");
+            // SAFETY: idle (waited above); these are the engine's objects.
+            unsafe {
+                device.destroy_fence(fence, None);
+                device.destroy_command_pool(pool, None);
+            }
+        }
+        wrapped.wait_idle().unwrap();
+        assert_eq!(wrapped.live_objects().total(), 0);
+    });
+}

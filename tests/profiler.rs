@@ -8,7 +8,7 @@ use common::gpu_test;
 #[test]
 fn smoke_frames_report_every_pass_in_order() {
     gpu_test(|ctx| {
-        let out = vista::smoke::render(ctx, [64, 64], 6).unwrap();
+        let out = common::smoke::render(ctx, [64, 64], 6).unwrap();
         assert!(out.frames.len() >= 3, "timings came back for {} of 6 frames", out.frames.len());
         for f in &out.frames {
             let names: Vec<&str> = f.passes.iter().map(|p| p.name).collect();

@@ -22,7 +22,7 @@ fn canary_validation_layer_reports_a_provoked_error() {
 fn smoke_frames_are_clean_under_synchronization_validation() {
     let options = ContextOptions { sync_validation: true, ..validated() };
     gpu_test_with(&options, |ctx| {
-        let out = vista::smoke::render(ctx, [64, 64], 3).expect("smoke render");
+        let out = common::smoke::render(ctx, [64, 64], 3).expect("smoke render");
         assert_eq!(out.image.len(), 64 * 64 * 4);
     });
 }

@@ -161,7 +161,7 @@ fn plane_and_tilted_plane() {
             // Quantisation of the heights only: the cones stay tight.
             assert!(widest < 2.0, "plane cone too wide: {widest} deg");
             assert!(node.max_error_m < 1e-3, "plane error {}", node.max_error_m);
-            assert_eq!(node.patch_all_hole, 0);
+            assert!(node.patch_holes.iter().all(|&h| h == PATCH_HOLE_NONE));
             assert!(node.albedo.iter().all(|a| a[3] == 255));
         }
     }
@@ -199,9 +199,10 @@ fn steep_gorge_cones_hold_and_may_disable_culling() {
 }
 
 #[test]
-fn samples_outside_extent_clamp_to_edge() {
+fn samples_outside_extent_clamp_to_edge_and_are_holes() {
     // 300 m is not a multiple of the 128 m sector: the last column of
-    // nodes is partial and its samples past 300 m repeat the edge.
+    // nodes is partial and its samples past 300 m repeat the edge's height
+    // and are holes (the world ends at its extent, no streaks).
     let w = WorldDesc { extent_m: [300.0, 300.0], ..test_world() };
     assert_eq!(w.sectors(), [3, 3]);
     let src = Surface::Tilted { z0: 10.0, gx: 1.0, gy: 0.0 };
@@ -211,7 +212,13 @@ fn samples_outside_extent_clamp_to_edge() {
         let x = 256.0 + i as f64;
         let expect = if x >= 300.0 { edge } else { w.encode_height(10.0 + x as f32) };
         assert_eq!(node.heights[i], expect);
+        assert_eq!(node.albedo[i][3] == 0, x > 300.0, "hole flag at x = {x}");
     }
+    // Patches 0 and 1 (x 256..288 m) lie inside, patch 2 (288..304 m) is
+    // cut at 300 m, patches 3..8 lie wholly beyond the extent.
+    let row: Vec<u8> = (0..8).map(|px| node.patch_holes[px]).collect();
+    let (none, some, all) = (PATCH_HOLE_NONE, PATCH_HOLE_SOME, PATCH_HOLE_ALL);
+    assert_eq!(row, [none, none, some, all, all, all, all, all]);
 }
 
 #[test]
@@ -229,9 +236,11 @@ fn holes_clear_alpha_and_flag_patches() {
             assert_eq!(node.albedo[j * N + i][3] == 0, inside, "({x},{y})");
         }
     }
-    // Patch (4,4) spans 64..80 m, well inside the circle.
-    assert_ne!(node.patch_all_hole & (1 << (4 * 8 + 4)), 0);
-    assert_eq!(node.patch_all_hole & 1, 0);
+    // Patch (4,4) spans 64..80 m, well inside the circle; patch (0,0) is
+    // untouched; patch (2,2) (32..48 m) is cut by the circle's rim.
+    assert_eq!(node.patch_holes[4 * 8 + 4], PATCH_HOLE_ALL);
+    assert_eq!(node.patch_holes[0], PATCH_HOLE_NONE);
+    assert_eq!(node.patch_holes[2 * 8 + 2], PATCH_HOLE_SOME);
     assert_ne!(holes_hash(&holes), holes_hash(&holes[..1]));
 }
 

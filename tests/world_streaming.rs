@@ -38,6 +38,10 @@ fn check_invariants(r: &Residency, rng: &mut Rng) {
         assert!(w.is_valid(*id));
         if u32::from(id.lod) + 1 < w.lod_count {
             assert!(resident.contains(&id.parent()), "{id} resident without its parent");
+            // Families load and leave together: every sibling holds a slot.
+            for sib in w.valid_children(id.parent()) {
+                assert!(r.is_resident(sib) || r.is_pending(sib), "{id} held without its sibling {sib}");
+            }
         }
     }
     if !w.roots().iter().all(|root| resident.contains(root)) {
@@ -114,6 +118,32 @@ fn random_paths_keep_budget_roots_and_coverage() {
 }
 
 #[test]
+fn error_criterion_wants_the_families_the_camera_refines() {
+    // A high camera over the middle: the rings alone never reach the far
+    // corner root's children, but a large baked error on that resident root
+    // makes its children wanted.
+    let world = WorldDesc::default();
+    let mut r = Residency::new(&world, ResidencyConfig::default()).unwrap();
+    let cam = [5000.0, 5000.0, 20_000.0];
+    let want = RefineWant { pixels_per_tan: 1000.0, target_error_px: 1.0, prefetch: 1.0, ring_factor: 0.75 };
+    for id in r.update_with(cam, Some(&want)).adds {
+        assert_eq!(r.on_loaded(id), Arrival::Accept);
+    }
+    let root = world.node_at(world.root_lod(), 10.0, 10.0).unwrap();
+    let kids = world.valid_children(root);
+    assert!(kids.iter().all(|k| !r.is_resident(*k) && !r.is_pending(*k)), "the rings reach the corner");
+    // 30 m of error seen from ~20.3 km at 1000 px per unit tan: 1.47 px > 1.
+    r.note_bounds(root, 30.0, [0.0, 100.0]);
+    let adds = r.update_with(cam, Some(&want)).adds;
+    assert_eq!(adds.iter().copied().collect::<HashSet<_>>(), kids.iter().copied().collect::<HashSet<_>>());
+    // 10 m (0.49 px) is below target / hysteresis (0.8 px): the held
+    // family is dropped (still loading here, so its loads are cancelled).
+    r.note_bounds(root, 10.0, [0.0, 100.0]);
+    let ch = r.update_with(cam, Some(&want));
+    assert_eq!(ch.cancels.iter().copied().collect::<HashSet<_>>(), kids.iter().copied().collect::<HashSet<_>>());
+}
+
+#[test]
 fn oscillating_camera_causes_no_churn() {
     let world = WorldDesc::default();
     let node = NodeId::new(0, 80, 80);
@@ -175,7 +205,7 @@ fn streamer_with_loader_threads() {
         let t = step as f64 / 400.0;
         let pos = [200.0 + t * 3500.0, 300.0 + t * 3000.0, 10.0];
         let f0 = Instant::now();
-        let frame = s.frame(pos);
+        let frame = s.frame(pos, None);
         frame_max = frame_max.max(f0.elapsed());
         for id in &frame.removed {
             assert!(on_gpu.remove(id), "removed {id} that never arrived");
@@ -192,7 +222,7 @@ fn streamer_with_loader_threads() {
     // Let the last requests land, then the path's end must be fully loaded.
     let end = [3700.0, 3300.0, 10.0];
     for _ in 0..500 {
-        let frame = s.frame(end);
+        let frame = s.frame(end, None);
         frame.removed.iter().for_each(|id| assert!(on_gpu.remove(id)));
         frame.arrived.iter().for_each(|n| assert!(on_gpu.insert(n.id)));
         failed.extend(frame.failed.into_iter().map(|(id, _)| id));

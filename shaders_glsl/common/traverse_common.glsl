@@ -10,23 +10,7 @@ const uint NODE_INVALID = 0xFFFEu;
 // Up to this many cameras refine the same node list (traverse.rs MAX_CAMERAS).
 const uint MAX_CAMERAS = 4u;
 
-// Packed node reference: lod (4 bits) << 28 | y (14 bits) << 14 | x (14 bits).
-uint pack_node(uint lod, uint x, uint y) { return (lod << 28) | (y << 14) | x; }
-uint node_lod(uint n) { return n >> 28; }
-uint node_x(uint n) { return n & 0x3FFFu; }
-uint node_y(uint n) { return (n >> 14) & 0x3FFFu; }
-
-struct TraverseHeader {
-    uint dispatch_x;     // indirect args for cull_patches: one workgroup per node
-    uint dispatch_y;
-    uint dispatch_z;
-    uint node_count;
-    uint overflow;       // nodes kept coarser because a list was full
-    uint missing_roots;  // valid roots not resident yet (coverage gap)
-    uint pad0;
-    uint pad1;
-    uint lod_counts[16];
-};
+#include "node_list.glsl"
 
 layout(set = 0, binding = 0) uniform utexture2D node_texture;
 layout(set = 0, binding = 1) uniform sampler node_sampler;

@@ -250,6 +250,24 @@ impl<'a> Recorder<'a> {
         }
     }
 
+    /// One `VkDrawIndexedIndirectCommand` at `offset` of `args` (written on
+    /// the GPU), drawing with the u32 `indices`.
+    pub fn draw_indexed_indirect(&mut self, indices: &Buffer, args: &Buffer, offset: u64) {
+        let size = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u64;
+        assert!(
+            offset % 4 == 0 && offset + size <= args.size,
+            "indirect draw at {offset} overruns {} ({} bytes)",
+            args.name,
+            args.size
+        );
+        // SAFETY: live buffers, the command's range checked above;
+        // multiDrawIndirect is not needed for one draw.
+        unsafe {
+            self.d().cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
+            self.d().cmd_draw_indexed_indirect(self.cmd, args.raw, offset, 1, size as u32);
+        }
+    }
+
     /// `VkDrawIndexedIndirectCommand`s from `args`, count read from `count`.
     pub fn draw_indexed_indirect_count(
         &mut self,

@@ -77,6 +77,11 @@ impl Traverse {
     pub const NAME: &'static str = "traverse";
     pub const LEVEL_NAME: &'static str = "traverse_level";
 
+    /// Entries of the final node list (nodes past it are counted, not listed).
+    pub fn final_capacity(&self) -> u32 {
+        self.final_capacity
+    }
+
     /// Checks the fixed bounds against the device and the slot budget.
     pub fn new(ctx: &Context, world: &WorldDesc, slots: u32) -> Result<Self> {
         let limit = ctx.info().limits.max_compute_shared_memory_bytes;

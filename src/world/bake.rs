@@ -12,7 +12,7 @@ use super::cones::{fit_cone, patch_triangle_normals};
 use super::error::Result;
 use super::holes::Hole;
 use super::layout::{NodeId, WorldDesc, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES};
-use super::payload::{BakedNode, Material};
+use super::payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 use super::source::HeightSource;
 
 /// Samples per side of the 2x finer grid used for the LOD error (257) plus
@@ -29,7 +29,9 @@ const NO_OCCLUSION: u8 = 255;
 const SNOW_LINE: f32 = 0.72;
 
 /// Bakes one node. `id` must be valid in `world` (programmer error
-/// otherwise). Samples beyond the world extent clamp to its edge.
+/// otherwise). Samples beyond the world extent take the edge's height (so
+/// bounds and cones stay sane) and are holes, so a world whose extent is not
+/// a multiple of the node size ends cleanly at its edge.
 pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], id: NodeId) -> BakedNode {
     assert!(world.is_valid(id), "bake_node on invalid node {id}");
     let b = world.bounds_m(id);
@@ -71,7 +73,7 @@ pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], i
             let slope_deg = (nrm[2].clamp(-1.0, 1.0).acos() as f32).to_degrees();
             let mat = material(slope_deg, coarse(i, j), snow_m);
             let pos = [b[0] + i as f64 * step, b[1] + j as f64 * step];
-            let solid = !hole_here.iter().any(|h| h.contains(pos[0], pos[1]));
+            let solid = !beyond_extent(pos, world.extent_m, step) && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]));
             let (rgb, smooth) = material_look(mat, slope_deg);
             normals.push([snorm8(nrm[0]), snorm8(nrm[1]), NO_OCCLUSION, smooth]);
             albedo.push([rgb[0], rgb[1], rgb[2], if solid { 255 } else { 0 }]);
@@ -84,22 +86,24 @@ pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], i
     let decoded: Vec<f32> = heights.iter().map(|&v| world.decode_height(v)).collect();
     let mut patch_min_max = Vec::new();
     let mut patch_cones = Vec::new();
-    let mut patch_all_hole = 0u64;
+    let mut patch_holes = Vec::new();
     for py in 0..PATCHES_PER_NODE_SIDE {
         for px in 0..PATCHES_PER_NODE_SIDE {
-            let (mut mn, mut mx, mut all_hole) = (u16::MAX, 0u16, true);
+            let (mut mn, mut mx, mut holes_seen) = (u16::MAX, 0u16, 0usize);
             for j in 0..PATCH_SAMPLES {
                 for i in 0..PATCH_SAMPLES {
                     let k = (py * PATCH_QUADS) as usize * n + j * n + (px * PATCH_QUADS) as usize + i;
                     mn = mn.min(heights[k]);
                     mx = mx.max(heights[k]);
-                    all_hole &= albedo[k][3] == 0;
+                    holes_seen += usize::from(albedo[k][3] == 0);
                 }
             }
             patch_min_max.push([mn, mx]);
-            if all_hole {
-                patch_all_hole |= 1 << (py * PATCHES_PER_NODE_SIDE + px);
-            }
+            patch_holes.push(match holes_seen {
+                0 => PATCH_HOLE_NONE,
+                n if n == PATCH_SAMPLES * PATCH_SAMPLES => PATCH_HOLE_ALL,
+                _ => PATCH_HOLE_SOME,
+            });
             let tri = patch_triangle_normals(&decoded, step, px, py);
             patch_cones.push(fit_cone(&tri).to_gpu());
         }
@@ -116,7 +120,7 @@ pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], i
         splat,
         patch_min_max,
         patch_cones,
-        patch_all_hole,
+        patch_holes,
         min_height,
         max_height,
         max_error_m,
@@ -141,6 +145,13 @@ fn max_refinement_error(fine: &impl Fn(usize, usize) -> f32) -> f32 {
         }
     }
     err as f32
+}
+
+/// A sample position past the world's extent (beyond rounding of the
+/// sample grid) has no terrain.
+fn beyond_extent(pos: [f64; 2], extent: [f64; 2], step: f64) -> bool {
+    let slack = step * 1e-6;
+    pos[0] > extent[0] + slack || pos[1] > extent[1] + slack
 }
 
 /// Holes whose bounds come within a sample of the node; usually none.

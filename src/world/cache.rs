@@ -18,7 +18,7 @@ use super::source::HeightSource;
 /// File magic: identifies a vista node file.
 const MAGIC: [u8; 4] = *b"VNOD";
 /// Bumped whenever the file layout or the bake's output changes.
-const FORMAT_VERSION: u32 = 1;
+const FORMAT_VERSION: u32 = 2;
 /// Bytes before the payload.
 const HEADER_BYTES: usize = 4 + 4 + 8 * 3 + 1 + 4 + 4 + 4;
 /// Trailing crc32.

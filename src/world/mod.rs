@@ -30,8 +30,8 @@ pub use layout::{
 };
 pub use loader::{LoadFn, Loader};
 pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
-pub use payload::{BakedNode, Material};
+pub use payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
 pub use source::{GridSource, HeightSource};
-pub use streaming::{Arrival, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};
+pub use streaming::{Arrival, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};

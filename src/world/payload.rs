@@ -12,6 +12,13 @@ pub enum Material {
     Scree = 3,
 }
 
+/// Patch hole summary: no sample of the patch is a hole.
+pub const PATCH_HOLE_NONE: u8 = 0;
+/// Some samples of the patch are holes: its vertices test the hole mask.
+pub const PATCH_HOLE_SOME: u8 = 1;
+/// Every sample is a hole: the cull pass removes the patch.
+pub const PATCH_HOLE_ALL: u8 = 2;
+
 /// Everything the GPU needs for one node. Grids are row-major with row 0 at
 /// the node's south edge (index `j * side + i`, x east, y north); patch
 /// arrays are indexed `py * 8 + px`.
@@ -33,9 +40,9 @@ pub struct BakedNode {
     /// 8x8 normal cones: axis xyz + sin(half-angle); axis 0 and sin 1 mean
     /// "never cull" (half-angle of 90 degrees or more).
     pub patch_cones: Vec<[f32; 4]>,
-    /// Bit `py * 8 + px` set when every sample of that patch is a hole, so
-    /// the cull pass can drop the patch outright.
-    pub patch_all_hole: u64,
+    /// 8x8 hole summary per patch ([`PATCH_HOLE_NONE`], [`PATCH_HOLE_SOME`],
+    /// [`PATCH_HOLE_ALL`]): the cull pass drops all-hole patches outright.
+    pub patch_holes: Vec<u8>,
     pub min_height: u16,
     pub max_height: u16,
     /// Largest vertical distance (metres) between this node's surface and
@@ -49,7 +56,7 @@ const SPLATS: usize = SPLAT_RES * SPLAT_RES;
 impl BakedNode {
     /// Size of [`Self::to_bytes`]' output; payloads are fixed-size.
     pub const SERIALIZED_BYTES: usize =
-        9 + 2 * 2 + 4 + 8 + SAMPLES * (2 + 4 + 4) + SPLATS + PATCHES_PER_NODE * (4 + 16);
+        9 + 2 * 2 + 4 + SAMPLES * (2 + 4 + 4) + SPLATS + PATCHES_PER_NODE * (1 + 4 + 16);
 
     /// Little-endian serialisation, independent of the host.
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -60,7 +67,7 @@ impl BakedNode {
         out.extend_from_slice(&self.min_height.to_le_bytes());
         out.extend_from_slice(&self.max_height.to_le_bytes());
         out.extend_from_slice(&self.max_error_m.to_le_bytes());
-        out.extend_from_slice(&self.patch_all_hole.to_le_bytes());
+        out.extend_from_slice(&self.patch_holes);
         self.heights.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         self.normals.iter().for_each(|v| out.extend_from_slice(v));
         self.albedo.iter().for_each(|v| out.extend_from_slice(v));
@@ -87,7 +94,7 @@ impl BakedNode {
         let min_height = u16::from_le_bytes(r.take());
         let max_height = u16::from_le_bytes(r.take());
         let max_error_m = f32::from_le_bytes(r.take());
-        let patch_all_hole = u64::from_le_bytes(r.take());
+        let patch_holes = (0..PATCHES_PER_NODE).map(|_| r.take::<1>()[0]).collect();
         let heights = (0..SAMPLES).map(|_| u16::from_le_bytes(r.take())).collect();
         let normals = (0..SAMPLES).map(|_| r.take()).collect();
         let albedo = (0..SAMPLES).map(|_| r.take()).collect();
@@ -103,7 +110,7 @@ impl BakedNode {
             splat,
             patch_min_max,
             patch_cones,
-            patch_all_hole,
+            patch_holes,
             min_height,
             max_height,
             max_error_m,

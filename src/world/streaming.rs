@@ -1,5 +1,10 @@
 //! Streaming residency after Far Cry 5: a ring of each LOD around the
 //! camera, roots always resident, nearest-first within a slot budget.
+//! Nodes are loaded and evicted in sibling families (the traversal refines a
+//! node only when all its valid children are resident, so a lone child is
+//! useless), and a family is also wanted wherever its resident parent's
+//! projected error exceeds the renderer's target ([`RefineWant`]), so every
+//! refinement the camera asks for becomes possible within the budget.
 //!
 //! [`Residency`] is the bookkeeping (what is wanted, pending, resident);
 //! [`Streamer`] ties it to a [`Loader`] and tells the GPU side, per frame,
@@ -28,6 +33,30 @@ impl Default for ResidencyConfig {
     fn default() -> Self {
         ResidencyConfig { budget: 512, ring_factor: 1.75, hysteresis: 1.25 }
     }
+}
+
+/// The renderer's LOD criterion as streaming sees it: a resident node whose
+/// projected vertical error exceeds `prefetch * target_error_px` pixels
+/// wants its children loaded (prefetch below 1 loads them a little before
+/// the traversal asks for them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefineWant {
+    /// viewport_height / (2 tan(fov_y / 2)).
+    pub pixels_per_tan: f64,
+    pub target_error_px: f64,
+    pub prefetch: f64,
+    /// Ring factor replacing the config's while this criterion decides: the
+    /// ring then only keeps the families right around the camera (for
+    /// motion), so the budget goes where the error asks for detail; 0
+    /// turns the rings off (tests that need an exact resident set).
+    pub ring_factor: f64,
+}
+
+/// What streaming keeps of a resident node to apply [`RefineWant`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct NodeBounds {
+    max_error_m: f32,
+    z: [f32; 2],
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,6 +97,7 @@ pub struct Residency {
     roots: Vec<NodeId>,
     slots: HashMap<NodeId, Slot>,
     failed: HashSet<NodeId>,
+    bounds: HashMap<NodeId, NodeBounds>,
 }
 
 impl Residency {
@@ -88,7 +118,14 @@ impl Residency {
         if roots.len() > c.budget {
             return Err(WorldError::BudgetTooSmall { roots: roots.len(), budget: c.budget });
         }
-        Ok(Residency { world: *world, config, roots, slots: HashMap::new(), failed: HashSet::new() })
+        Ok(Residency {
+            world: *world,
+            config,
+            roots,
+            slots: HashMap::new(),
+            failed: HashSet::new(),
+            bounds: HashMap::new(),
+        })
     }
 
     pub fn world(&self) -> &WorldDesc {
@@ -127,39 +164,55 @@ impl Residency {
     }
 
     /// Recomputes the wanted set for a camera position (metres; z unused)
-    /// and returns the difference to the current slots.
+    /// from the rings alone and returns the difference to the current slots.
     pub fn update(&mut self, camera_pos_m: [f64; 3]) -> ResidencyChanges {
+        self.update_with(camera_pos_m, None)
+    }
+
+    /// As [`Residency::update`], also wanting the children of every resident
+    /// node whose projected error `want` finds too large. Families come
+    /// whole or not at all, nearest first.
+    pub fn update_with(&mut self, camera_pos_m: [f64; 3], want: Option<&RefineWant>) -> ResidencyChanges {
         let cam = [camera_pos_m[0], camera_pos_m[1]];
-        // Top-down: a node is a candidate only if its parent is one.
-        let mut candidates = Vec::new();
+        // Top-down: a family is a candidate only if its parent's is one.
+        let mut candidates: Vec<(f64, NodeId, Vec<NodeId>)> = Vec::new();
         let mut stack = self.roots.clone();
         while let Some(n) = stack.pop() {
-            for c in self.world.valid_children(n) {
-                if self.failed.contains(&c) {
-                    continue;
-                }
-                let ring = self.config.ring_factor * self.world.node_size_m(c.lod);
-                let limit = if self.slots.contains_key(&c) { ring * self.config.hysteresis } else { ring };
-                let b = self.world.bounds_m(c);
-                let centre = [(b[0] + b[2]) * 0.5, (b[1] + b[3]) * 0.5];
-                if dist(cam, centre) <= limit {
-                    candidates.push((dist_to_box(cam, b), c));
-                    stack.push(c);
-                }
+            if self.failed.contains(&n) {
+                continue;
+            }
+            let family: Vec<NodeId> =
+                self.world.valid_children(n).into_iter().filter(|c| !self.failed.contains(c)).collect();
+            if family.is_empty() {
+                continue;
+            }
+            let held = family.iter().any(|c| self.slots.contains_key(c));
+            // With an error criterion the rings only prefetch around the
+            // camera; without one they decide alone.
+            let in_ring = family.iter().any(|c| {
+                let factor = want.map_or(self.config.ring_factor, |w| w.ring_factor);
+                let ring = factor * self.world.node_size_m(c.lod);
+                let limit = if held { ring * self.config.hysteresis } else { ring };
+                let b = self.world.bounds_m(*c);
+                dist(cam, [(b[0] + b[2]) * 0.5, (b[1] + b[3]) * 0.5]) <= limit
+            });
+            if in_ring || want.is_some_and(|w| self.wants_refine(n, camera_pos_m, w, held)) {
+                candidates.push((dist_to_box(cam, self.world.bounds_m(n)), n, family.clone()));
+                stack.extend(family);
             }
         }
-        // Nearest first, coarser first on ties: a parent is never closer
-        // than its child, so parents always come before their children.
+        // Nearest first, coarser first on ties: a parent is never farther
+        // than its child, so a family comes after its parent's family.
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.lod.cmp(&a.1.lod)));
         let mut selected: HashSet<NodeId> = self.roots.iter().copied().collect();
         let mut order = self.roots.clone();
-        for (_, c) in candidates {
-            if selected.len() >= self.config.budget {
-                break;
+        for (_, parent, family) in candidates {
+            if selected.len() + family.len() > self.config.budget {
+                continue;
             }
-            if selected.contains(&c.parent()) {
-                selected.insert(c);
-                order.push(c);
+            if selected.contains(&parent) {
+                selected.extend(family.iter().copied());
+                order.extend(family);
             }
         }
 
@@ -169,6 +222,7 @@ impl Residency {
         dropped.sort_by_key(|(id, _)| (id.lod, id.x, id.y));
         for (id, slot) in dropped {
             self.slots.remove(&id);
+            self.bounds.remove(&id);
             match slot {
                 Slot::Resident => changes.removes.push(id),
                 Slot::Pending => changes.cancels.push(id),
@@ -181,6 +235,29 @@ impl Residency {
             }
         }
         changes
+    }
+
+    /// Whether resident node `n`'s projected error asks for its children.
+    fn wants_refine(&self, n: NodeId, cam: [f64; 3], w: &RefineWant, held: bool) -> bool {
+        let Some(nb) = self.bounds.get(&n) else { return false };
+        let b = self.world.bounds_m(n);
+        let d = [
+            (b[0] - cam[0]).max(cam[0] - b[2]).max(0.0),
+            (b[1] - cam[1]).max(cam[1] - b[3]).max(0.0),
+            (f64::from(nb.z[0]) - cam[2]).max(cam[2] - f64::from(nb.z[1])).max(0.0),
+        ];
+        let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-3);
+        // Held families stay until their error falls well below the target.
+        let threshold = w.target_error_px * w.prefetch * if held { 1.0 / self.config.hysteresis } else { 1.0 };
+        f64::from(nb.max_error_m) * w.pixels_per_tan / dist > threshold
+    }
+
+    /// Records a resident node's error and height range (metres), which
+    /// [`RefineWant`] needs to decide on its children.
+    pub fn note_bounds(&mut self, id: NodeId, max_error_m: f32, z_m: [f32; 2]) {
+        if self.is_resident(id) {
+            self.bounds.insert(id, NodeBounds { max_error_m, z: z_m });
+        }
     }
 
     /// A requested payload finished loading.
@@ -242,10 +319,11 @@ impl Streamer {
         &self.residency
     }
 
-    /// Never blocks: updates the wanted set, queues loads and collects
-    /// whatever finished.
-    pub fn frame(&mut self, camera_pos_m: [f64; 3]) -> StreamFrame {
-        let changes = self.residency.update(camera_pos_m);
+    /// Never blocks: updates the wanted set (rings, and `want`'s error
+    /// criterion on resident nodes), queues loads and collects whatever
+    /// finished.
+    pub fn frame(&mut self, camera_pos_m: [f64; 3], want: Option<&RefineWant>) -> StreamFrame {
+        let changes = self.residency.update_with(camera_pos_m, want);
         for id in &changes.cancels {
             self.loader.cancel(*id);
             self.parked.remove(id);
@@ -270,7 +348,14 @@ impl Streamer {
         ids.sort_by_key(|id| std::cmp::Reverse(id.lod));
         for id in ids {
             match self.residency.on_loaded(id) {
-                Arrival::Accept => frame.arrived.extend(self.parked.remove(&id)),
+                Arrival::Accept => {
+                    if let Some(node) = self.parked.remove(&id) {
+                        let w = self.residency.world;
+                        let z = [w.decode_height(node.min_height), w.decode_height(node.max_height)];
+                        self.residency.note_bounds(id, node.max_error_m, z);
+                        frame.arrived.push(node);
+                    }
+                }
                 Arrival::Discard => {
                     self.parked.remove(&id);
                 }

@@ -71,9 +71,11 @@ pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
         splat: (0..SPLAT_RES * SPLAT_RES).map(|i| (i % 4) as u8).collect(),
         patch_min_max: (0..PATCHES_PER_NODE).map(|i| [i as u16, tag]).collect(),
         patch_cones: (0..PATCHES_PER_NODE).map(|i| [0.0, 0.0, 1.0, i as f32 / 64.0]).collect(),
-        patch_all_hole: 0,
+        patch_holes: (0..PATCHES_PER_NODE).map(|i| (i % 3) as u8).collect(),
         min_height: tag & 0x7FFF,
         max_height: tag | 0x8000,
         max_error_m: f32::from(tag) * 0.01,
     }
 }
+pub mod smoke;
+pub mod terrain;

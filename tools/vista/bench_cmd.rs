@@ -35,7 +35,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 15)]
     frames: u32,
     /// Camera position (x,y,z metres); default: 60 m above the world's centre at mid height.
-    #[arg(long, value_parser = crate::parse_camera)]
+    #[arg(long, value_parser = crate::render_cmd::parse_position)]
     camera: Option<[f64; 3]>,
     #[command(flatten)]
     world: WorldArgs,

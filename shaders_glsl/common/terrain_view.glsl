@@ -1,0 +1,37 @@
+// The per-frame view every terrain pass reads (render/view.rs TerrainViewGpu).
+// Positions on the GPU are relative to the camera: a vertex's LOD-0 sample
+// index (an exact integer) minus the camera's anchor sample, times the
+// spacing, minus the camera's offset inside that sample cell. Both sides of
+// a LOD seam compute the same integers, so shared edges are bit-identical,
+// and a camera far from the origin loses no precision.
+#ifndef VISTA_TERRAIN_VIEW_GLSL
+#define VISTA_TERRAIN_VIEW_GLSL
+
+struct TerrainView {
+    mat4 view_proj;         // camera-relative metres -> clip (reversed-Z, infinite far)
+    vec4 frustum[5];        // camera-relative planes, xyz inward normal, w offset (left, right, top, bottom, near)
+    vec4 sun_dir;           // xyz: unit vector toward the sun (world); w: unused
+    vec4 sun_color;         // rgb: sun radiance on a surface facing it (linear)
+    vec4 sky_color;         // rgb: sky ambient on an upward surface (linear)
+    ivec2 camera_sample;    // LOD-0 sample index of the camera's anchor
+    vec2 camera_frac;       // camera xy minus the anchor's position (m)
+    float camera_z;         // camera height (m)
+    float spacing_m;        // LOD-0 sample spacing
+    float height_lo;        // world height range low end (m)
+    float height_scale;     // metres per R16 step: (hi - lo) / 65535
+    float height_range;     // hi - lo (m), for UNORM samples
+    uint lod_map_w;         // LOD map extent (sectors, padded)
+    uint lod_map_h;
+    uint pad;
+};
+
+// LOD-0 sample index -> camera-relative metres (x, y). Takes fields, not
+// the struct: a by-value copy out of a block is OpCopyLogical, which naga
+// cannot parse.
+vec2 view_rel_xy(ivec2 sample_index, ivec2 camera_sample, vec2 camera_frac, float spacing_m) {
+    precise vec2 d = vec2(sample_index - camera_sample) * spacing_m;
+    precise vec2 r = d - camera_frac;
+    return r;
+}
+
+#endif

@@ -1,0 +1,174 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Far Cry 5's patch culling: one workgroup per listed node (indirect, from
+// traverse), one thread per patch (8x8). Stages, each switchable: frustum
+// (patch box from the baked per-patch min/max), backface (the patch's normal
+// cone against the camera-to-corner vectors of all 8 box corners), all-hole
+// removal. Survivors get their 4 edge LOD deltas from the LOD map and are
+// appended to the patch list whose header is the indexed-indirect draw.
+layout(local_size_x = 64) in;
+#include "node_list.glsl"
+#include "terrain_view.glsl"
+#include "patch_list.glsl"
+
+// Patch hole summary values (payload.rs PATCH_HOLE_ALL).
+layout(constant_id = 0) const uint PATCH_HOLE_ALL = 2u;
+// Patches per node side (world PATCHES_PER_NODE_SIDE) and quads per patch side.
+layout(constant_id = 1) const uint PATCHES_PER_SIDE = 8u;
+layout(constant_id = 2) const uint PATCH_QUADS = 16u;
+// LOD map value where no listed node covers a sector (lod_map.rs NO_LOD).
+layout(constant_id = 3) const uint NO_LOD = 255u;
+// Largest stitched LOD delta: a patch edge has PATCH_QUADS = 2^4 quads.
+layout(constant_id = 4) const uint MAX_DELTA = 4u;
+
+layout(set = 0, binding = 0, std430) readonly buffer TraverseOutput {
+    TraverseHeader header;
+    uvec2 nodes[];
+} traverse_out;
+layout(set = 0, binding = 1, std430) readonly buffer View { TerrainView v; } view;
+layout(set = 0, binding = 2, r8ui) uniform readonly uimage2D lod_map;
+layout(set = 0, binding = 3) uniform utexture2DArray patch_min_max;
+layout(set = 0, binding = 4) uniform texture2DArray patch_cones;
+layout(set = 0, binding = 5) uniform utexture2DArray patch_holes;
+layout(set = 0, binding = 6) uniform sampler nearest;
+layout(set = 0, binding = 7, std430) buffer PatchList {
+    PatchListHeader header;
+    uvec2 patches[];
+} patch_list;
+
+// Stage switches (cull_patches.rs CullStages).
+const uint STAGE_FRUSTUM = 1u;
+const uint STAGE_CONE = 2u;
+const uint STAGE_HOLE = 4u;
+
+layout(push_constant, std430) uniform CullPush {
+    uint stages;
+    uint capacity;  // entries of patch_list.patches
+    uint pad0;
+    uint pad1;
+} pc;
+
+shared uint s_frustum;
+shared uint s_cone;
+shared uint s_hole;
+
+bool box_outside_frustum(vec3 lo, vec3 hi) {
+    for (uint i = 0u; i < 5u; ++i) {
+        vec4 p = view.v.frustum[i];
+        // The corner farthest along the inward normal.
+        vec3 far_corner = mix(lo, hi, greaterThanEqual(p.xyz, vec3(0.0)));
+        if (dot(p.xyz, far_corner) + p.w < 0.0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// Every triangle faces away iff every normal n in the cone has
+// dot(n, corner - camera) > 0 for every point of the box; the set of
+// such view vectors is a convex cone, so testing the 8 corners suffices:
+// dot(axis, d) > sin(half-angle) * |d| for each corner vector d.
+bool cone_faces_away(vec4 cone, vec3 lo, vec3 hi) {
+    if (cone.w >= 1.0) {
+        return false;
+    }
+    for (uint c = 0u; c < 8u; ++c) {
+        vec3 d = vec3((c & 1u) != 0u ? hi.x : lo.x, (c & 2u) != 0u ? hi.y : lo.y, (c & 4u) != 0u ? hi.z : lo.z);
+        if (!(dot(cone.xyz, d) > cone.w * length(d))) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// LOD delta toward a neighbour sector: how many LODs coarser it is, 0 for
+// finer, equal, unlisted or outside sectors, at most MAX_DELTA.
+uint edge_delta(ivec2 sector, uint lod) {
+    if (any(lessThan(sector, ivec2(0))) || sector.x >= int(view.v.lod_map_w) || sector.y >= int(view.v.lod_map_h)) {
+        return 0u;
+    }
+    uint n = imageLoad(lod_map, sector).r;
+    if (n == NO_LOD || n <= lod) {
+        return 0u;
+    }
+    return min(n - lod, MAX_DELTA);
+}
+
+void main() {
+    // Spec constants read into variables: expressions of spec constants
+    // alone become OpSpecConstantOp, which naga cannot parse.
+    uint per_side = PATCHES_PER_SIDE, quads = PATCH_QUADS;
+    uint t = gl_LocalInvocationID.x;
+    if (t == 0u) {
+        s_frustum = 0u;
+        s_cone = 0u;
+        s_hole = 0u;
+    }
+    barrier();
+    uvec2 entry = traverse_out.nodes[gl_WorkGroupID.x];
+    uint n = entry.x, slot = entry.y;
+    uint lod = node_lod(n);
+    ivec2 node = ivec2(node_x(n), node_y(n));
+    ivec2 pxy = ivec2(t % per_side, t / per_side);
+    int node_samples = int(per_side * quads);
+
+    // Camera-relative box from exact LOD-0 sample indices.
+    ivec2 s0 = (node * node_samples + pxy * int(quads)) << lod;
+    ivec2 s1 = s0 + (int(quads) << lod);
+    uvec2 mm = texelFetch(usampler2DArray(patch_min_max, nearest), ivec3(pxy, int(slot)), 0).xy;
+    vec3 lo = vec3(view_rel_xy(s0, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m),
+                   view.v.height_lo + float(mm.x) * view.v.height_scale - view.v.camera_z);
+    vec3 hi = vec3(view_rel_xy(s1, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m),
+                   view.v.height_lo + float(mm.y) * view.v.height_scale - view.v.camera_z);
+    // Rounding of the box (f32, relative to the camera) must never shrink it.
+    vec3 pad = 1e-4 * (abs(lo) + abs(hi)) + 1e-3;
+    lo -= pad;
+    hi += pad;
+
+    // Edge LOD deltas from the neighbouring sectors (only border patches
+    // can have a neighbour of another node), looked up at the middle of the
+    // patch edge, in units of 1/(2 * PATCHES_PER_SIDE) sector so patches
+    // smaller than a sector (LOD < 3) find the right row or column.
+    int halves = 2 * int(per_side);
+    ivec2 sector0 = node << lod;
+    ivec2 sector1 = (node + 1) << lod;
+    ivec2 mid = (sector0 * halves + ((2 * pxy + 1) << lod)) / halves;
+    int row = mid.y, col = mid.x;
+    uint dw = pxy.x == 0 ? edge_delta(ivec2(sector0.x - 1, row), lod) : 0u;
+    uint de = pxy.x == int(per_side) - 1 ? edge_delta(ivec2(sector1.x, row), lod) : 0u;
+    uint ds = pxy.y == 0 ? edge_delta(ivec2(col, sector0.y - 1), lod) : 0u;
+    uint dn = pxy.y == int(per_side) - 1 ? edge_delta(ivec2(col, sector1.y), lod) : 0u;
+    uint deltas = dw | (de << 4) | (ds << 8) | (dn << 12);
+
+    bool keep = (pc.stages & STAGE_FRUSTUM) == 0u || !box_outside_frustum(lo, hi);
+    if (keep) {
+        atomicAdd(s_frustum, 1u);
+    }
+    // Stitched edges move vertices onto the coarser grid, making triangles
+    // the baked cone does not bound: only unstitched patches are cone-tested.
+    if (keep && (pc.stages & STAGE_CONE) != 0u && deltas == 0u) {
+        vec4 cone = texelFetch(sampler2DArray(patch_cones, nearest), ivec3(pxy, int(slot)), 0);
+        keep = !cone_faces_away(cone, lo, hi);
+    }
+    if (keep) {
+        atomicAdd(s_cone, 1u);
+    }
+    if (keep && (pc.stages & STAGE_HOLE) != 0u) {
+        keep = texelFetch(usampler2DArray(patch_holes, nearest), ivec3(pxy, int(slot)), 0).r != PATCH_HOLE_ALL;
+    }
+    if (keep) {
+        atomicAdd(s_hole, 1u);
+        uint i = atomicAdd(patch_list.header.instance_count, 1u);
+        if (i < pc.capacity) {
+            uint index = uint(pxy.y) * per_side + uint(pxy.x);
+            patch_list.patches[i] = uvec2(n, slot | (index << 10) | (deltas << 16));
+        }
+    }
+    barrier();
+    if (t == 0u) {
+        atomicAdd(patch_list.header.patches_in, gl_WorkGroupSize.x);
+        atomicAdd(patch_list.header.after_frustum, s_frustum);
+        atomicAdd(patch_list.header.after_cone, s_cone);
+        atomicAdd(patch_list.header.after_hole, s_hole);
+    }
+}

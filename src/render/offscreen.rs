@@ -1,0 +1,140 @@
+//! The headless frame loop of `vista render`, the benchmarks and the tests:
+//! owns a colour and a depth target and a ring of command buffers, records
+//! frames through [`TerrainRenderer`] exactly as an engine would, and reads
+//! the last picture back.
+
+use crate::error::Result;
+use crate::frame::FrameTimings;
+use crate::gpu::{vk, Context, FrameRing, Image, ImageDesc};
+use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::renderer::TerrainRenderer;
+use crate::render::view::{linear_depth, View};
+use std::time::{Duration, Instant};
+
+/// A frame read back: RGBA8 (row 0 at the top) and the raw reversed-Z depth.
+pub struct Capture {
+    pub size: [u32; 2],
+    pub rgba: Vec<u8>,
+    pub depth: Vec<f32>,
+}
+
+impl Capture {
+    /// Linear view depth in metres along the forward axis, 0 where no terrain.
+    pub fn linear_depth(&self, near_m: f64) -> Vec<f32> {
+        self.depth.iter().map(|&d| linear_depth(d, near_m)).collect()
+    }
+
+    pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
+        let i = ((y * self.size[0] + x) * 4) as usize;
+        [self.rgba[i], self.rgba[i + 1], self.rgba[i + 2], self.rgba[i + 3]]
+    }
+}
+
+/// How long streaming took to settle before the measured frames.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Settle {
+    pub frames: u32,
+    pub seconds: f64,
+    /// False when the timeout ended the wait with loads still outstanding.
+    pub settled: bool,
+}
+
+pub struct Offscreen {
+    pub color: Image,
+    pub depth: Image,
+    ring: FrameRing,
+    /// Set once the targets left UNDEFINED for their attachment layouts.
+    initialised: bool,
+    pub clear: [f32; 4],
+}
+
+impl Offscreen {
+    pub fn new(ctx: &Context, size: [u32; 2], frames_in_flight: usize, clear: [f32; 4]) -> Result<Self> {
+        let image = |name, format, usage| {
+            Image::new(ctx, &ImageDesc { name, format, extent: size, mip_levels: 1, array_layers: 1, usage })
+        };
+        let color = image(
+            "offscreen_color",
+            COLOR_FORMAT,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+        )?;
+        let depth = image(
+            "offscreen_depth",
+            DEPTH_FORMAT,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+        )?;
+        Ok(Offscreen { color, depth, ring: FrameRing::new(ctx, frames_in_flight)?, initialised: false, clear })
+    }
+
+    /// Records and submits one frame (waits only for the ring slot's fence).
+    pub fn frame(&mut self, ctx: &Context, renderer: &mut TerrainRenderer, view: &View) -> Result<()> {
+        let (color, depth, clear, init) = (&self.color, &self.depth, self.clear, !self.initialised);
+        self.ring.record(ctx, |rec| {
+            if init {
+                rec.image_layout(color, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+                rec.image_layout(depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+            }
+            renderer.record(rec, view, &RenderTargets { color, depth, clear })
+        })?;
+        self.initialised = true;
+        Ok(())
+    }
+
+    /// Renders until nothing is loading or waiting for upload (at least one
+    /// frame, then one more so the traversal sees the last arrivals), or
+    /// until `timeout`.
+    pub fn settle(
+        &mut self,
+        ctx: &Context,
+        renderer: &mut TerrainRenderer,
+        view: &View,
+        timeout: Duration,
+    ) -> Result<Settle> {
+        let start = Instant::now();
+        let mut frames = 0;
+        loop {
+            self.frame(ctx, renderer, view)?;
+            frames += 1;
+            if frames > 1 && renderer.terrain.settled() {
+                self.frame(ctx, renderer, view)?;
+                return Ok(Settle { frames: frames + 1, seconds: start.elapsed().as_secs_f64(), settled: true });
+            }
+            if start.elapsed() >= timeout {
+                return Ok(Settle { frames, seconds: start.elapsed().as_secs_f64(), settled: false });
+            }
+            // Give the loader threads the cores while nodes are baking.
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+
+    /// Renders `frames` frames and returns the timings of every frame that
+    /// came back meanwhile (one frame late: the last frame's are not among
+    /// them), oldest first.
+    pub fn run(
+        &mut self,
+        ctx: &Context,
+        renderer: &mut TerrainRenderer,
+        view: &View,
+        frames: u32,
+    ) -> Result<Vec<FrameTimings>> {
+        let mut out: Vec<FrameTimings> = Vec::new();
+        for _ in 0..frames {
+            self.frame(ctx, renderer, view)?;
+            if let Some(t) = renderer.latest_timings() {
+                if out.last().is_none_or(|l| l.frame < t.frame) {
+                    out.push(t.clone());
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Waits for every submitted frame and reads the targets back.
+    pub fn capture(&self, ctx: &Context) -> Result<Capture> {
+        self.ring.wait_all(ctx)?;
+        let size = self.color.extent;
+        let rgba = ctx.read_image(&self.color, 0, 0, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, 4)?;
+        let raw = ctx.read_image(&self.depth, 0, 0, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, 4)?;
+        Ok(Capture { size, rgba, depth: bytemuck::pod_collect_to_vec(&raw) })
+    }
+}

@@ -1,0 +1,48 @@
+//! What one frame drew: patch counts per culling stage, triangles, nodes per
+//! LOD against what the camera wanted. Read back after the frames (waits):
+//! for tools and tests, not for an engine's frame loop.
+
+use crate::error::Result;
+use crate::gpu::Context;
+use crate::passes::cull_patches::CullCounters;
+use crate::render::renderer::TerrainRenderer;
+use crate::render::view::View;
+use crate::traverse_cpu::wanted_finer_cpu;
+use crate::world::PATCH_QUADS;
+use serde::Serialize;
+
+/// Triangles of one patch instance (16x16 quads, 2 each).
+pub const TRIANGLES_PER_PATCH: u64 = (PATCH_QUADS * PATCH_QUADS * 2) as u64;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct RenderStats {
+    pub patches: CullCounters,
+    /// Patch instances x triangles per patch (hole triangles included: they
+    /// are submitted and dropped by the rasterizer).
+    pub triangles_drawn: u64,
+    pub node_count: u32,
+    /// Final nodes drawn, by LOD.
+    pub nodes_per_lod: Vec<u32>,
+    /// Of those, nodes the camera wants finer whose children are not resident.
+    pub wanted_finer_per_lod: Vec<u32>,
+    pub overflow: u32,
+    pub missing_roots: u32,
+}
+
+/// The last recorded frame's numbers; waits for the GPU.
+pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result<RenderStats> {
+    let patches = renderer.cull.read_counters(ctx)?;
+    let terrain = &renderer.terrain;
+    let (header, _) = terrain.traverse.read_result(ctx)?;
+    let lods = terrain.world.lod_count as usize;
+    let wanted = wanted_finer_cpu(&terrain.tree.shadow, &terrain.world, &view.traverse_params());
+    Ok(RenderStats {
+        patches,
+        triangles_drawn: u64::from(patches.drawn) * TRIANGLES_PER_PATCH,
+        node_count: header.node_count,
+        nodes_per_lod: header.lod_counts[..lods].to_vec(),
+        wanted_finer_per_lod: wanted[..lods].to_vec(),
+        overflow: header.overflow,
+        missing_roots: header.missing_roots,
+    })
+}

@@ -1,0 +1,320 @@
+//! The view of one frame: camera (world metres in f64, compass yaw, pitch
+//! above the horizon), vertical field of view, target size and the accuracy
+//! knob; and its GPU form, made relative to the camera in f64 before it is
+//! rounded to f32.
+//!
+//! Conventions (ARCHITECTURE.md): x east, y north, z up; yaw 0 looks toward
+//! +y, 90 toward +x; pitch -90 looks straight down; image row 0 is the top.
+//! Depth is reversed-Z with an infinite far plane: a point at view depth
+//! `d` (metres along the forward axis) stores `near_m / d`.
+
+use crate::error::{Error, Result};
+use crate::traverse_cpu::{TraverseCamera, TraverseParams};
+use crate::world::{HeightSource, WorldDesc};
+use glam::{DMat4, DVec3, DVec4};
+
+/// Near plane distance (m): reversed-Z float depth keeps precision far away,
+/// so it can be small enough for a camera standing on the ground.
+pub const DEFAULT_NEAR_M: f64 = 0.1;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    pub position_m: [f64; 3],
+    /// Compass heading in degrees: 0 looks toward +y (north), 90 toward +x.
+    pub yaw_deg: f64,
+    /// Degrees above the horizon: -90 looks straight down.
+    pub pitch_deg: f64,
+}
+
+impl Camera {
+    /// Unit forward, right and up vectors (world axes).
+    pub fn basis(&self) -> [DVec3; 3] {
+        let (sy, cy) = self.yaw_deg.to_radians().sin_cos();
+        let (sp, cp) = self.pitch_deg.to_radians().sin_cos();
+        let forward = DVec3::new(sy * cp, cy * cp, sp);
+        let right = DVec3::new(cy, -sy, 0.0);
+        [forward, right, right.cross(forward)]
+    }
+}
+
+/// Everything that decides one frame's picture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct View {
+    pub camera: Camera,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f64,
+    /// Target width and height in pixels.
+    pub size: [u32; 2],
+    /// Largest accepted projected vertical error in pixels (the accuracy knob).
+    pub target_error_px: f32,
+    pub near_m: f64,
+}
+
+impl View {
+    /// Checks what a user can get wrong; every renderer entry point calls it.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::BadInput(m));
+        let c = &self.camera;
+        if !c.position_m.iter().all(|v| v.is_finite()) {
+            return bad(format!("camera position {:?} is not finite", c.position_m));
+        }
+        if !c.yaw_deg.is_finite() || !(-90.0..=90.0).contains(&c.pitch_deg) {
+            return bad(format!("camera yaw {} / pitch {} must be finite, pitch within -90..=90", c.yaw_deg, c.pitch_deg));
+        }
+        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
+            return bad(format!("field of view {} degrees must be strictly between 0 and 180", self.fov_y_deg));
+        }
+        if self.size[0] == 0 || self.size[1] == 0 {
+            return bad(format!("target size {}x{} is empty", self.size[0], self.size[1]));
+        }
+        if !(self.target_error_px.is_finite() && self.target_error_px > 0.0) {
+            return bad(format!("target error {} px must be a positive number", self.target_error_px));
+        }
+        if !(self.near_m.is_finite() && self.near_m > 0.0) {
+            return bad(format!("near plane {} m must be positive", self.near_m));
+        }
+        Ok(())
+    }
+
+    /// Focal length in units of half the target height: 1 / tan(fov / 2).
+    pub fn focal(&self) -> f64 {
+        1.0 / (self.fov_y_deg.to_radians() / 2.0).tan()
+    }
+
+    /// Camera-relative metres -> clip space (reversed-Z, infinite far).
+    /// Rows: x = right * f / aspect, y = -up * f (row 0 is the top),
+    /// z = near (constant), w = depth along forward.
+    pub fn view_proj(&self) -> DMat4 {
+        let [forward, right, up] = self.camera.basis();
+        let f = self.focal();
+        let aspect = f64::from(self.size[0]) / f64::from(self.size[1]);
+        let r0 = (right * (f / aspect)).extend(0.0);
+        let r1 = (-up * f).extend(0.0);
+        let r2 = DVec4::new(0.0, 0.0, 0.0, self.near_m);
+        let r3 = forward.extend(0.0);
+        DMat4::from_cols(r0, r1, r2, r3).transpose()
+    }
+
+    /// Inward planes (xyz unit normal, w) of the left, right, top, bottom and
+    /// near sides, camera-relative; the far plane is at infinity.
+    pub fn frustum_planes(&self) -> [DVec4; 5] {
+        let m = self.view_proj();
+        let row = |i: usize| m.row(i);
+        let planes = [row(3) + row(0), row(3) - row(0), row(3) + row(1), row(3) - row(1), row(3) - row(2)];
+        planes.map(|p| p / p.truncate().length())
+    }
+
+    /// Pixel position (x right, y down, pixel centres at +0.5) and view
+    /// depth of a world point, or None behind the near plane.
+    pub fn project(&self, world_m: [f64; 3]) -> Option<([f64; 2], f64)> {
+        let rel = DVec3::from(world_m) - DVec3::from(self.camera.position_m);
+        let c = self.view_proj() * rel.extend(1.0);
+        if c.w < self.near_m {
+            return None;
+        }
+        let ndc = [c.x / c.w, c.y / c.w];
+        let px = [(ndc[0] + 1.0) * 0.5 * f64::from(self.size[0]), (ndc[1] + 1.0) * 0.5 * f64::from(self.size[1])];
+        Some((px, c.w))
+    }
+
+    /// The world-space ray through pixel (x, y) (pixel centre at +0.5):
+    /// unit direction from the camera.
+    pub fn ray(&self, px: [f64; 2]) -> DVec3 {
+        let [forward, right, up] = self.camera.basis();
+        let f = self.focal();
+        let aspect = f64::from(self.size[0]) / f64::from(self.size[1]);
+        let nx = px[0] / f64::from(self.size[0]) * 2.0 - 1.0;
+        let ny = px[1] / f64::from(self.size[1]) * 2.0 - 1.0;
+        (forward + right * (nx * aspect / f) - up * (ny / f)).normalize()
+    }
+
+    /// The traversal's view of this camera.
+    pub fn traverse_params(&self) -> TraverseParams {
+        TraverseParams {
+            cameras: vec![TraverseCamera::perspective(self.camera.position_m, self.fov_y_deg, self.size[1])],
+            target_error_px: self.target_error_px,
+        }
+    }
+
+    /// The GPU twin, made relative to the camera in f64.
+    pub fn gpu(&self, world: &WorldDesc, lod_map_extent: [u32; 2], light: &Lighting) -> TerrainViewGpu {
+        let p = self.camera.position_m;
+        let s = world.spacing_m;
+        let anchor = [(p[0] / s).floor(), (p[1] / s).floor()];
+        let [lo, hi] = world.height_range_m;
+        let vp = self.view_proj().as_mat4();
+        let f4 = |v: DVec4| v.as_vec4().to_array();
+        TerrainViewGpu {
+            view_proj: vp.to_cols_array_2d(),
+            frustum: self.frustum_planes().map(f4),
+            sun_dir: light.sun_dir().extend(0.0).as_vec4().to_array(),
+            sun_color: [light.sun_color[0], light.sun_color[1], light.sun_color[2], 0.0],
+            sky_color: [light.sky_color[0], light.sky_color[1], light.sky_color[2], 0.0],
+            camera_sample: anchor.map(|a| a as i32),
+            camera_frac: [(p[0] - anchor[0] * s) as f32, (p[1] - anchor[1] * s) as f32],
+            camera_z: p[2] as f32,
+            spacing_m: s as f32,
+            height_lo: lo,
+            height_scale: (hi - lo) / 65535.0,
+            height_range: hi - lo,
+            lod_map_w: lod_map_extent[0],
+            lod_map_h: lod_map_extent[1],
+            pad: 0,
+        }
+    }
+}
+
+/// A default view that shows a world's relief: from above the middle of
+/// its south edge, looking north and down over the terrain, high enough
+/// (a twentieth of the world's size above the ground) to see across it.
+pub fn overview_camera(world: &WorldDesc, source: &dyn HeightSource) -> Camera {
+    let [ex, ey] = world.extent_m;
+    let (x, y) = (ex * 0.5, ey * 0.04);
+    let ground = f64::from(source.sample(x, y)).clamp(f64::from(world.height_range_m[0]), f64::from(world.height_range_m[1]));
+    Camera { position_m: [x, y, ground + 0.05 * ex.max(ey)], yaw_deg: 0.0, pitch_deg: -20.0 }
+}
+
+/// The simple lighting of the lit output (sun + sky ambient).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lighting {
+    /// Compass direction the sun shines from, degrees.
+    pub sun_azimuth_deg: f64,
+    /// Sun elevation above the horizon, degrees.
+    pub sun_elevation_deg: f64,
+    pub sun_color: [f32; 3],
+    pub sky_color: [f32; 3],
+}
+
+impl Default for Lighting {
+    /// Afternoon sun from the south-west, low enough to show relief.
+    fn default() -> Self {
+        Lighting {
+            sun_azimuth_deg: 225.0,
+            sun_elevation_deg: 30.0,
+            sun_color: [1.55, 1.45, 1.3],
+            sky_color: [0.35, 0.42, 0.55],
+        }
+    }
+}
+
+impl Lighting {
+    /// Unit vector toward the sun.
+    pub fn sun_dir(&self) -> DVec3 {
+        let (sa, ca) = self.sun_azimuth_deg.to_radians().sin_cos();
+        let (se, ce) = self.sun_elevation_deg.to_radians().sin_cos();
+        DVec3::new(sa * ce, ca * ce, se)
+    }
+}
+
+/// Host twin of `TerrainView` (terrain_view.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TerrainViewGpu {
+    pub view_proj: [[f32; 4]; 4],
+    pub frustum: [[f32; 4]; 5],
+    pub sun_dir: [f32; 4],
+    pub sun_color: [f32; 4],
+    pub sky_color: [f32; 4],
+    pub camera_sample: [i32; 2],
+    pub camera_frac: [f32; 2],
+    pub camera_z: f32,
+    pub spacing_m: f32,
+    pub height_lo: f32,
+    pub height_scale: f32,
+    pub height_range: f32,
+    pub lod_map_w: u32,
+    pub lod_map_h: u32,
+    pub pad: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<TerrainViewGpu>() == crate::shaders::structs::TERRAIN_VIEW);
+
+/// Linear view depth (m) from a reversed-Z depth value; 0 where nothing was
+/// drawn (the clear value).
+pub fn linear_depth(depth: f32, near_m: f64) -> f32 {
+    if depth > 0.0 {
+        (near_m / f64::from(depth)) as f32
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn view(yaw: f64, pitch: f64) -> View {
+        View {
+            camera: Camera { position_m: [100.0, 200.0, 50.0], yaw_deg: yaw, pitch_deg: pitch },
+            fov_y_deg: 60.0,
+            size: [200, 100],
+            target_error_px: 1.0,
+            near_m: DEFAULT_NEAR_M,
+        }
+    }
+
+    #[test]
+    fn compass_conventions() {
+        // Yaw 0 looks north (+y): a point north of the camera is centred.
+        let v = view(0.0, 0.0);
+        let (px, d) = v.project([100.0, 300.0, 50.0]).unwrap();
+        assert!((px[0] - 100.0).abs() < 1e-9 && (px[1] - 50.0).abs() < 1e-9 && (d - 100.0).abs() < 1e-9);
+        // East of that point lies to the right; higher lies toward row 0.
+        assert!(v.project([110.0, 300.0, 50.0]).unwrap().0[0] > 100.0);
+        assert!(v.project([100.0, 300.0, 60.0]).unwrap().0[1] < 50.0);
+        // Yaw 90 looks east.
+        assert!((view(90.0, 0.0).project([200.0, 200.0, 50.0]).unwrap().0[0] - 100.0).abs() < 1e-9);
+        // Pitch -90 looks straight down, north at the top of the image.
+        let down = view(0.0, -90.0);
+        let (px, d) = down.project([100.0, 210.0, 0.0]).unwrap();
+        assert!((d - 50.0).abs() < 1e-9 && px[1] < 50.0 && (px[0] - 100.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn rays_and_projection_agree_and_depth_is_reversed() {
+        let v = view(37.0, -20.0);
+        for px in [[0.5, 0.5], [199.5, 0.5], [100.0, 50.0], [13.25, 88.5]] {
+            let p = DVec3::from(v.camera.position_m) + v.ray(px) * 321.0;
+            let (q, _) = v.project(p.to_array()).unwrap();
+            assert!((q[0] - px[0]).abs() < 1e-9 && (q[1] - px[1]).abs() < 1e-9, "{px:?} -> {q:?}");
+        }
+        let c = v.view_proj() * DVec4::new(0.0, 0.0, 0.0, 1.0);
+        assert_eq!(c.w, 0.0, "the camera itself is at w = 0");
+        let [forward, ..] = v.camera.basis();
+        for d in [0.1, 1.0, 1e3, 1e6] {
+            let c = v.view_proj() * (forward * d).extend(1.0);
+            assert!((c.z / c.w - DEFAULT_NEAR_M / d).abs() < 1e-12);
+            assert!((f64::from(linear_depth((c.z / c.w) as f32, DEFAULT_NEAR_M)) - d).abs() < d * 1e-6);
+        }
+    }
+
+    #[test]
+    fn frustum_planes_contain_exactly_the_visible_points() {
+        let v = view(200.0, 10.0);
+        let planes = v.frustum_planes();
+        for (px, inside) in [([0.6, 0.6], true), ([199.4, 99.4], true), ([-2.0, 50.0], false), ([100.0, 103.0], false)] {
+            let p = v.ray(px) * 500.0;
+            let ok = planes.iter().all(|pl| pl.truncate().dot(p) + pl.w >= 0.0);
+            assert_eq!(ok, inside, "{px:?}");
+        }
+        // Behind the near plane is outside.
+        let p = v.camera.basis()[0] * 0.05;
+        assert!(planes[4].truncate().dot(p) + planes[4].w < 0.0);
+    }
+
+    #[test]
+    fn bad_views_are_errors() {
+        let ok = view(0.0, 0.0);
+        assert!(ok.validate().is_ok());
+        for bad in [
+            View { fov_y_deg: 0.0, ..ok.clone() },
+            View { fov_y_deg: 180.0, ..ok.clone() },
+            View { size: [0, 10], ..ok.clone() },
+            View { target_error_px: f32::NAN, ..ok.clone() },
+            View { camera: Camera { pitch_deg: 91.0, ..ok.camera }, ..ok.clone() },
+            View { camera: Camera { position_m: [f64::INFINITY, 0.0, 0.0], ..ok.camera }, ..ok.clone() },
+        ] {
+            assert!(bad.validate().is_err(), "{bad:?}");
+        }
+    }
+}

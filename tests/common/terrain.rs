@@ -1,0 +1,147 @@
+//! Analytic height sources with closed-form ray intersections, and a rig
+//! that renders them through `TerrainRenderer` + `Offscreen` exactly as
+//! `vista render` does.
+
+use std::sync::Arc;
+use std::time::Duration;
+use vista::gpu::Context;
+use vista::passes::cull_patches::CullStages;
+use vista::render::offscreen::{Capture, Offscreen};
+use vista::render::{Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
+use vista::terrain::TerrainOptions;
+use vista::world::{HeightSource, Hole, WorldDesc};
+
+/// Background of the test images: no lit terrain colour is magenta.
+pub const MAGENTA: [f32; 4] = [1.0, 0.0, 1.0, 1.0];
+pub const MAGENTA_RGBA: [u8; 4] = [255, 0, 255, 255];
+
+#[derive(Clone, Copy, Debug)]
+pub enum Surface {
+    Plane(f64),
+    Tilted { z0: f64, gx: f64, gy: f64 },
+    /// z0 + a * |p - c|^2
+    Paraboloid { z0: f64, a: f64, c: [f64; 2] },
+    /// A plane at z0 with a cone of height h and radius r at c.
+    Bump { z0: f64, c: [f64; 2], r: f64, h: f64 },
+    /// Rolling hills with steep flanks (both ridge sides face the camera somewhere).
+    Hills,
+}
+
+impl Surface {
+    pub fn height(&self, x: f64, y: f64) -> f64 {
+        match *self {
+            Surface::Plane(z) => z,
+            Surface::Tilted { z0, gx, gy } => z0 + gx * x + gy * y,
+            Surface::Paraboloid { z0, a, c } => z0 + a * ((x - c[0]).powi(2) + (y - c[1]).powi(2)),
+            Surface::Bump { z0, c, r, h } => z0 + h * (1.0 - (x - c[0]).hypot(y - c[1]) / r).max(0.0),
+            Surface::Hills => {
+                300.0 + 120.0 * (x / 97.0).sin() * (y / 131.0).cos() + 40.0 * (x / 23.0 + y / 31.0).sin()
+            }
+        }
+    }
+
+    /// Distance along the unit ray `d` from `o` to the surface (None: no hit
+    /// ahead), closed form for the planes and the paraboloid.
+    pub fn intersect(&self, o: [f64; 3], d: [f64; 3]) -> Option<f64> {
+        let t = match *self {
+            Surface::Plane(z) => (z - o[2]) / d[2],
+            Surface::Tilted { z0, gx, gy } => (z0 + gx * o[0] + gy * o[1] - o[2]) / (d[2] - gx * d[0] - gy * d[1]),
+            Surface::Paraboloid { z0, a, c } => {
+                let (px, py) = (o[0] - c[0], o[1] - c[1]);
+                let qa = a * (d[0] * d[0] + d[1] * d[1]);
+                let qb = 2.0 * a * (px * d[0] + py * d[1]) - d[2];
+                let qc = a * (px * px + py * py) + z0 - o[2];
+                if qa.abs() < 1e-15 {
+                    -qc / qb
+                } else {
+                    let disc = qb * qb - 4.0 * qa * qc;
+                    if disc < 0.0 {
+                        return None;
+                    }
+                    let q = -0.5 * (qb + qb.signum() * disc.sqrt());
+                    let (t0, t1) = (q / qa, qc / q);
+                    let (lo, hi) = (t0.min(t1), t0.max(t1));
+                    if lo > 0.0 {
+                        lo
+                    } else {
+                        hi
+                    }
+                }
+            }
+            _ => panic!("no closed-form intersection for {self:?}"),
+        };
+        (t.is_finite() && t > 0.0).then_some(t)
+    }
+
+    /// Height gradient (dz/dx, dz/dy).
+    pub fn gradient(&self, x: f64, y: f64) -> [f64; 2] {
+        match *self {
+            Surface::Plane(_) => [0.0, 0.0],
+            Surface::Tilted { gx, gy, .. } => [gx, gy],
+            Surface::Paraboloid { a, c, .. } => [2.0 * a * (x - c[0]), 2.0 * a * (y - c[1])],
+            _ => panic!("no gradient for {self:?}"),
+        }
+    }
+}
+
+impl HeightSource for Surface {
+    fn sample(&self, x: f64, y: f64) -> f32 {
+        self.height(x, y) as f32
+    }
+    fn id_hash(&self) -> u64 {
+        let s = format!("{self:?}");
+        s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+    }
+}
+
+pub fn view(position: [f64; 3], yaw: f64, pitch: f64, size: [u32; 2], target_error_px: f32) -> View {
+    View {
+        camera: Camera { position_m: position, yaw_deg: yaw, pitch_deg: pitch },
+        fov_y_deg: 60.0,
+        size,
+        target_error_px,
+        near_m: DEFAULT_NEAR_M,
+    }
+}
+
+pub struct Rig {
+    pub renderer: TerrainRenderer,
+    pub off: Offscreen,
+    pub world: WorldDesc,
+}
+
+impl Rig {
+    /// `rings`: keep the families around the camera too; off, only the LOD
+    /// criterion decides what is resident (an exact, view-driven set).
+    pub fn new(
+        ctx: &Context,
+        world: WorldDesc,
+        surface: Surface,
+        holes: Vec<Hole>,
+        size: [u32; 2],
+        rings: bool,
+    ) -> Rig {
+        let options = RendererOptions {
+            terrain: TerrainOptions { slots: 400, loader_threads: 2, ring_prefetch: rings, ..TerrainOptions::default() },
+            ..RendererOptions::default()
+        };
+        let renderer = TerrainRenderer::new(ctx, &world, Arc::new(surface), holes, &options).expect("renderer");
+        let off = Offscreen::new(ctx, size, 2, MAGENTA).expect("targets");
+        Rig { renderer, off, world }
+    }
+
+    /// Streams until settled, renders `view` with `stages`, reads it back.
+    pub fn shot(&mut self, ctx: &Context, view: &View, stages: CullStages) -> Capture {
+        self.renderer.stages = stages;
+        let s = self.off.settle(ctx, &mut self.renderer, view, Duration::from_secs(300)).expect("frames");
+        assert!(s.settled, "streaming did not settle");
+        self.off.capture(ctx).expect("capture")
+    }
+
+    /// One more frame of the same view (same resident set) with `stages`.
+    pub fn again(&mut self, ctx: &Context, view: &View, stages: CullStages) -> Capture {
+        self.renderer.stages = stages;
+        self.off.frame(ctx, &mut self.renderer, view).expect("frame");
+        self.off.capture(ctx).expect("capture")
+    }
+}

@@ -1,0 +1,272 @@
+//! `vista render`: streams the world, renders it through `TerrainRenderer`
+//! exactly as an engine would, prints per-pass GPU medians, patch counts per
+//! culling stage, triangles and nodes per LOD, and writes the picture, the
+//! depth and the numbers with `--out`.
+
+use crate::world_args::{LoadedWorld, WorldArgs};
+use anyhow::{bail, Context as _, Result};
+use clap::Args;
+use std::path::{Path, PathBuf};
+use vista::frame::FrameTimings;
+use vista::gpu::Context;
+use vista::passes::cull_patches::CullStages;
+use vista::render::offscreen::{Capture, Offscreen};
+use vista::render::stats::RenderStats;
+use vista::render::{overview_camera, Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
+use vista::terrain::TerrainOptions;
+
+/// Frames excluded from medians (pipeline creation, first-use costs).
+const WARMUP_FRAMES: usize = 2;
+/// Background of the lit image where there is no terrain (sky blue, linear).
+const SKY_CLEAR: [f32; 4] = [0.55, 0.68, 0.85, 1.0];
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Target size, e.g. 1280x720.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: [u32; 2],
+    /// Measured frames after streaming settled (the first 2 are warm-up).
+    #[arg(long, default_value_t = 12)]
+    pub frames: u32,
+    /// Write image.png, depth.exr, timings.json, trace.json and stats.json here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Camera X,Y,Z[,YAW,PITCH]: world metres (x east, y north, z up, origin
+    /// at the south-west corner); YAW compass degrees (0 = +y, 90 = +x);
+    /// PITCH degrees above the horizon (-90 = straight down). Default: above
+    /// the south edge looking north over the world.
+    #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
+    pub camera: Option<CameraArg>,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = 60.0)]
+    pub fov: f64,
+    /// Largest accepted projected vertical error in pixels (the accuracy knob).
+    #[arg(long, default_value_t = 1.0)]
+    pub target_error: f32,
+    /// Culling stages to run: any of frustum,cone,hole, or none.
+    #[arg(long, default_value = "frustum,cone,hole", value_parser = parse_stages)]
+    pub cull: CullStages,
+    /// Resident node slots (at most 1023: slots are 10-bit).
+    #[arg(long, default_value_t = 512)]
+    pub slots: u32,
+    /// Cache baked nodes here across runs (default: bake in memory only).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// Longest wait for the streamed set to become resident before the measured frames.
+    #[arg(long, default_value_t = 120.0)]
+    pub settle_seconds: f64,
+    /// The world to render (default: the procedural world, baked lazily).
+    #[command(flatten)]
+    pub world: WorldArgs,
+}
+
+/// `--camera` as given: a position, and a heading and pitch if given.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraArg {
+    pub position: [f64; 3],
+    pub angles: Option<[f64; 2]>,
+}
+
+fn numbers(s: &str, what: &str) -> Result<Vec<f64>, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("{what} {s:?} is not a comma-separated list of numbers"))?;
+    if v.iter().any(|c| !c.is_finite()) {
+        return Err(format!("{what} {s:?} has a value that is not a finite number"));
+    }
+    Ok(v)
+}
+
+pub(crate) fn parse_position(s: &str) -> Result<[f64; 3], String> {
+    match numbers(s, "camera")?[..] {
+        [x, y, z] => Ok([x, y, z]),
+        _ => Err(format!("camera {s:?} is not X,Y,Z in metres")),
+    }
+}
+
+fn parse_camera(s: &str) -> Result<CameraArg, String> {
+    match numbers(s, "camera")?[..] {
+        [x, y, z] => Ok(CameraArg { position: [x, y, z], angles: None }),
+        [x, y, z, yaw, pitch] if (-90.0..=90.0).contains(&pitch) => {
+            Ok(CameraArg { position: [x, y, z], angles: Some([yaw, pitch]) })
+        }
+        [.., pitch] if s.split(',').count() == 5 => {
+            Err(format!("camera pitch {pitch} is outside -90..=90 degrees (-90 looks straight down)"))
+        }
+        _ => Err(format!("camera {s:?} is not X,Y,Z or X,Y,Z,YAW,PITCH")),
+    }
+}
+
+fn parse_size(s: &str) -> Result<[u32; 2], String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("size {s:?} is not WIDTHxHEIGHT"))?;
+    let p = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("size {s:?}: {v:?} is not a whole number"));
+    let (w, h) = (p(w)?, p(h)?);
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!("size {w}x{h} must be between 1x1 and 16384x16384"));
+    }
+    Ok([w, h])
+}
+
+pub(crate) fn parse_stages(s: &str) -> Result<CullStages, String> {
+    let mut st = CullStages::NONE;
+    if s.trim() == "none" {
+        return Ok(st);
+    }
+    for part in s.split(',') {
+        match part.trim() {
+            "frustum" => st.frustum = true,
+            "cone" => st.cone = true,
+            "hole" => st.hole = true,
+            other => return Err(format!("culling stage {other:?} is not one of frustum, cone, hole, none")),
+        }
+    }
+    Ok(st)
+}
+
+/// The view the arguments ask for (the default camera needs the world).
+pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    if !(args.settle_seconds.is_finite() && args.settle_seconds >= 0.0) {
+        bail!("--settle-seconds must be a non-negative number");
+    }
+    let camera = match args.camera {
+        None => overview_camera(&world.desc, &*world.source),
+        Some(CameraArg { position, angles }) => {
+            let [yaw_deg, pitch_deg] = angles.unwrap_or([0.0, -20.0]);
+            Camera { position_m: position, yaw_deg, pitch_deg }
+        }
+    };
+    let view =
+        View { camera, fov_y_deg: args.fov, size: args.size, target_error_px: args.target_error, near_m: DEFAULT_NEAR_M };
+    if let Err(e) = view.validate() {
+        bail!("{}", e.to_string().replace("field of view", "--fov").replace("target error", "--target-error"));
+    }
+    Ok(view)
+}
+
+pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
+    let options = RendererOptions {
+        terrain: TerrainOptions { slots: args.slots, cache_dir: args.cache.clone(), ..TerrainOptions::default() },
+        stages: args.cull,
+        ..RendererOptions::default()
+    };
+    let d = &world.desc;
+    let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)?;
+    let mut off = Offscreen::new(ctx, view.size, options.terrain.frames_in_flight, SKY_CLEAR)?;
+    let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
+    let frames = off.run(ctx, &mut renderer, view, args.frames)?;
+    let capture = off.capture(ctx)?;
+    let timed = if frames.len() > WARMUP_FRAMES { &frames[WARMUP_FRAMES..] } else { &frames[..] };
+    let c = &view.camera;
+    println!("device: {}  ({} measured frames, {}x{})", ctx.info().name, args.frames, view.size[0], view.size[1]);
+    println!(
+        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m, yaw {:.1}, pitch {:.1}, fov {:.1}, target error {} px",
+        world.label, c.position_m[0], c.position_m[1], c.position_m[2], c.yaw_deg, c.pitch_deg, view.fov_y_deg, view.target_error_px
+    );
+    let st = &renderer.terrain.stats;
+    println!(
+        "stream: {} resident of {} slots, {} loading, {} waiting upload, {} failed; {} after {} frames, {:.2} s (lazy bake)",
+        st.resident,
+        args.slots,
+        st.loading,
+        st.waiting_upload,
+        st.failed,
+        if settle.settled { "settled" } else { "NOT settled (--settle-seconds ran out)" },
+        settle.frames,
+        settle.seconds
+    );
+    let stats = vista::render::stats::collect(ctx, &renderer, view)?;
+    print_stats(&stats);
+    print_timings(timed);
+    if let Some(dir) = &args.out {
+        write_outputs(dir, &frames, &capture, view, &stats)?;
+    }
+    print!("{}", renderer.terrain.memory_report());
+    Ok(())
+}
+
+fn print_stats(s: &RenderStats) {
+    let p = &s.patches;
+    println!(
+        "patches: {} in, {} after frustum, {} after cone, {} after hole, {} drawn ({} triangles submitted)",
+        p.patches_in, p.after_frustum, p.after_cone, p.after_hole, p.drawn, s.triangles_drawn
+    );
+    let per_lod: Vec<String> = s
+        .nodes_per_lod
+        .iter()
+        .zip(&s.wanted_finer_per_lod)
+        .enumerate()
+        .map(|(l, (n, w))| if *w > 0 { format!("LOD{l} {n} ({w} wanted finer)") } else { format!("LOD{l} {n}") })
+        .collect();
+    println!(
+        "nodes:   {} drawn: {}; overflow {}, missing roots {}",
+        s.node_count,
+        per_lod.join(", "),
+        s.overflow,
+        s.missing_roots
+    );
+    println!("         ('wanted finer': the camera asks for more detail there but the children are not resident yet)");
+}
+
+fn print_timings(timed: &[FrameTimings]) {
+    if timed.is_empty() {
+        println!("no pass timings (timestamps unsupported or no frame finished)");
+        return;
+    }
+    println!("{:<17} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
+    let mut total = 0.0;
+    for s in vista::profiler::summarize(timed) {
+        total += s.median_ms;
+        println!(
+            "{:<17} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
+            s.name,
+            format!("{:?}", s.queue).to_lowercase(),
+            s.median_ms,
+            s.min_ms,
+            s.max_ms,
+            s.samples
+        );
+    }
+    println!("{:<17} {:<9} {:>10.4}", "sum of medians", "", total);
+}
+
+fn write_outputs(
+    dir: &Path,
+    frames: &[FrameTimings],
+    capture: &Capture,
+    view: &View,
+    stats: &RenderStats,
+) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    std::fs::write(dir.join("timings.json"), vista::profiler::to_json(frames))?;
+    std::fs::write(dir.join("trace.json"), vista::profiler::to_chrome_trace(frames))?;
+    std::fs::write(dir.join("stats.json"), serde_json::to_string_pretty(stats)?)?;
+    let [w, h] = capture.size;
+    image::save_buffer(dir.join("image.png"), &capture.rgba, w, h, image::ExtendedColorType::Rgba8)
+        .with_context(|| format!("writing {}", dir.join("image.png").display()))?;
+    let depth = capture.linear_depth(view.near_m);
+    let exr_path = dir.join("depth.exr");
+    write_depth_exr(&exr_path, [w as usize, h as usize], depth)
+        .with_context(|| format!("writing {}", exr_path.display()))?;
+    println!("wrote {}/{{image.png, depth.exr, timings.json, trace.json, stats.json}}", dir.display());
+    Ok(())
+}
+
+/// One float32 channel `Z`: linear view depth in metres along the camera's
+/// forward axis, 0 where no terrain; row 0 is the top of the image.
+fn write_depth_exr(path: &Path, size: [usize; 2], depth: Vec<f32>) -> Result<()> {
+    use exr::prelude::*;
+    let channel = AnyChannel::new("Z", FlatSamples::F32(depth));
+    let layer = Layer::new(
+        (size[0], size[1]),
+        LayerAttributes::named("depth"),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(vec![channel])),
+    );
+    Image::from_layer(layer).write().non_parallel().to_file(path)?;
+    Ok(())
+}
