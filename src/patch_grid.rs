@@ -6,7 +6,7 @@
 /// Counter-clockwise triangles (seen from +z) of an n x n quad grid with
 /// (n+1)^2 vertices in row-major order.
 pub fn diamond_indices(n: u32) -> Vec<u32> {
-    assert!(n >= 1 && n % 2 == 0, "diamond pattern needs an even quad count, got {n}");
+    assert!(n >= 1 && n.is_multiple_of(2), "diamond pattern needs an even quad count, got {n}");
     let v = |x: u32, y: u32| y * (n + 1) + x;
     let mut out = Vec::with_capacity((n * n * 6) as usize);
     for y in 0..n {

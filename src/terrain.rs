@@ -14,8 +14,7 @@ use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::traverse_cpu::TraverseParams;
 use crate::world::{
     bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency, ResidencyConfig,
-    Streamer,
-    WorldDesc,
+    Streamer, WorldDesc,
 };
 use serde::Serialize;
 use std::path::PathBuf;
@@ -38,7 +37,13 @@ pub struct TerrainOptions {
 impl Default for TerrainOptions {
     fn default() -> Self {
         let threads = std::thread::available_parallelism().map_or(2, |n| n.get()).max(1);
-        TerrainOptions { slots: 512, frames_in_flight: 2, loader_threads: threads, cache_dir: None, ring_prefetch: true }
+        TerrainOptions {
+            slots: 512,
+            frames_in_flight: 2,
+            loader_threads: threads,
+            cache_dir: None,
+            ring_prefetch: true,
+        }
     }
 }
 

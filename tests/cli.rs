@@ -31,13 +31,59 @@ fn info_reports_device_queues_and_limits() {
 }
 
 #[test]
-fn render_prints_pass_timings() {
-    let (ok, out, err) = vista(&["--validation", "render", "--size", "64x64", "--frames", "5"]);
+fn render_prints_pass_timings_and_writes_every_output() {
+    let dir = std::env::temp_dir().join(format!("vista-render-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let args = ["--validation", "render", "--size", "64x48", "--frames", "5", "--out", dir.to_str().unwrap()];
+    let (ok, out, err) = vista(&args);
     assert!(ok, "{err}");
-    for pass in
-        ["quadtree_update", "traverse", "lod_map", "sector_data", "prefix_sum", "smoke_triangle", "diamond_patch"]
-    {
-        assert!(out.contains(pass), "no timing for {pass}:\n{out}");
+    // One table row per pass: name, queue, then a median in ms.
+    for pass in ["quadtree_update", "traverse", "lod_map", "sector_data", "cull_patches", "terrain_geometry"] {
+        let row = out.lines().find(|l| l.split_whitespace().next() == Some(pass));
+        let fields: Vec<&str> =
+            row.unwrap_or_else(|| panic!("no timing row for {pass}:\n{out}")).split_whitespace().collect();
+        assert!(fields[2].parse::<f64>().is_ok_and(|ms| ms > 0.0), "{pass}: no median in {fields:?}");
+    }
+    assert!(out.contains("patches:") && out.contains("triangles submitted"), "{out}");
+    let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("stats.json")).unwrap()).unwrap();
+    let p = &stats["patches"];
+    let n = |k: &str| p[k].as_u64().unwrap_or_else(|| panic!("stats.json lacks patches.{k}"));
+    assert!(n("patches_in") >= n("after_frustum") && n("after_frustum") >= n("after_cone"));
+    assert!(n("after_cone") >= n("after_hole") && n("after_hole") == n("drawn") && n("drawn") > 0, "{p}");
+    assert_eq!(stats["triangles_drawn"].as_u64(), Some(n("drawn") * 512));
+    let img = image::open(dir.join("image.png")).unwrap();
+    assert_eq!((img.width(), img.height()), (64, 48));
+    let depth = exr::prelude::read_first_flat_layer_from_file(dir.join("depth.exr")).unwrap();
+    assert_eq!(depth.layer_data.size.0, 64);
+    let z = &depth.layer_data.channel_data.list;
+    assert_eq!(z.len(), 1, "one channel");
+    assert_eq!(z[0].name.to_string(), "Z");
+    let values: Vec<f32> = z[0].sample_data.values_as_f32().collect();
+    // The default view looks down over the world from its south edge: the
+    // bottom row is ground a few hundred metres away, the top row sky.
+    assert!(values[47 * 64..].iter().all(|&d| d > 50.0 && d < 5000.0), "bottom row depth");
+    assert!(values[..64].iter().all(|&d| d == 0.0), "top row should be sky (0)");
+    for f in ["timings.json", "trace.json"] {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_views_fail_with_a_one_line_message() {
+    for (args, needle) in [
+        (&["render", "--camera", "1,2"][..], "X,Y,Z"),
+        (&["render", "--camera", "1,2,3,4"][..], "X,Y,Z"),
+        (&["render", "--camera", "1,2,3,0,-120"][..], "pitch"),
+        (&["render", "--camera", "1,nan,3"][..], "camera"),
+        (&["render", "--fov", "0"][..], "--fov"),
+        (&["render", "--fov", "180"][..], "--fov"),
+        (&["render", "--target-error", "0"][..], "--target-error"),
+        (&["render", "--cull", "frustum,bogus"][..], "bogus"),
+    ] {
+        let (ok, _, err) = vista(args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(err.contains(needle) && err.trim().lines().count() == 1, "{args:?}: {err}");
     }
 }
 
@@ -82,6 +128,27 @@ fn bench_traverse_writes_a_table_and_json() {
         );
         assert!(r["final_nodes"].as_u64().unwrap() > 0);
     }
-    let (ok, _, err) = vista(&["bench", "cull"]);
-    assert!(!ok && err.contains("traverse"), "{err}");
+    let (ok, _, err) = vista(&["bench", "shade"]);
+    assert!(!ok && err.contains("traverse, cull"), "{err}");
+}
+
+#[test]
+fn bench_cull_writes_a_row_per_view() {
+    let json = std::env::temp_dir().join(format!("vista-bench-cull-{}.json", std::process::id()));
+    let args =
+        ["bench", "cull", "--extent", "2048", "--spacing", "2", "--lods", "4", "--size", "64x48", "--frames", "1"];
+    let (ok, out, err) = vista(&[&args[..], &["--json", json.to_str().unwrap()]].concat());
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    let views: Vec<&str> = rows.iter().map(|r| r["view"].as_str().unwrap()).collect();
+    assert_eq!(views, ["ground", "low flight", "high flight", "facing ridge"], "{out}");
+    for r in rows {
+        let (all, none) = (&r["all"]["counters"], &r["none"]["counters"]);
+        // Culling off draws every selected patch; on, never more.
+        assert_eq!(none["drawn"], none["patches_in"], "{r}");
+        assert!(all["drawn"].as_u64() <= all["patches_in"].as_u64(), "{r}");
+        assert!(r["all"]["geometry_ms"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    let _ = std::fs::remove_file(&json);
 }

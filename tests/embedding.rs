@@ -146,7 +146,11 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
                     device.end_command_buffer(cmd).unwrap();
                     let cmds = [cmd];
                     device
-                        .queue_submit(engine.graphics_queue().raw, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence)
+                        .queue_submit(
+                            engine.graphics_queue().raw,
+                            &[vk::SubmitInfo::default().command_buffers(&cmds)],
+                            fence,
+                        )
                         .unwrap();
                     let n = wrapped.frame_submitted();
                     device.wait_for_fences(&[fence], true, u64::MAX).unwrap();

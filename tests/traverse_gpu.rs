@@ -149,10 +149,10 @@ fn gpu_traversal_equals_cpu_reference_for_1000_random_cases() {
         let sectors = SectorData::new(ctx, &world()).unwrap();
         let mut deepest = 0;
         let mut multi_checked = 0;
-        for case in 0..1000 {
+        for case in 0..1000u32 {
             scene.mutate(ctx);
             let params = scene.random_params();
-            let modes: &[TraverseMode] = if case % 10 == 0 {
+            let modes: &[TraverseMode] = if case.is_multiple_of(10) {
                 &[TraverseMode::SingleDispatch, TraverseMode::MultiDispatch]
             } else {
                 &[TraverseMode::SingleDispatch]

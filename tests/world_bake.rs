@@ -103,7 +103,7 @@ fn check_cones(w: &WorldDesc, node: &BakedNode) -> f64 {
             for qy in py * 16..py * 16 + 16 {
                 for qx in px * 16..px * 16 + 16 {
                     // Diagonal through the odd/odd corner of the quad.
-                    let tris = if (qx + qy) % 2 == 0 {
+                    let tris = if (qx + qy).is_multiple_of(2) {
                         [[p(qx, qy), p(qx + 1, qy), p(qx + 1, qy + 1)], [p(qx, qy), p(qx + 1, qy + 1), p(qx, qy + 1)]]
                     } else {
                         [[p(qx, qy), p(qx + 1, qy), p(qx, qy + 1)], [p(qx + 1, qy), p(qx + 1, qy + 1), p(qx, qy + 1)]]

@@ -216,9 +216,9 @@ fn fuzzed_files_never_panic() {
     let (_, exr) = exr_bytes(&dir, "base.exr", 6, 5, &data);
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let (mut ok, mut err) = (0, 0);
-    for i in 0..300 {
+    for i in 0..300u32 {
         let mut p = mutate(&mut rng, &png);
-        if i % 2 == 0 {
+        if i.is_multiple_of(2) {
             fix_png_crcs(&mut p);
         }
         let e = mutate(&mut rng, &exr);

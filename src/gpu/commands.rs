@@ -255,7 +255,7 @@ impl<'a> Recorder<'a> {
     pub fn draw_indexed_indirect(&mut self, indices: &Buffer, args: &Buffer, offset: u64) {
         let size = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u64;
         assert!(
-            offset % 4 == 0 && offset + size <= args.size,
+            offset.is_multiple_of(4) && offset + size <= args.size,
             "indirect draw at {offset} overruns {} ({} bytes)",
             args.name,
             args.size
@@ -293,7 +293,7 @@ impl<'a> Recorder<'a> {
     /// Writes up to 64 KiB of `data` at `offset` inline in the command buffer.
     pub fn update_buffer(&mut self, buf: &Buffer, offset: u64, data: &[u8]) {
         assert!(
-            data.len() <= 65536 && data.len() % 4 == 0 && offset + data.len() as u64 <= buf.size,
+            data.len() <= 65536 && data.len().is_multiple_of(4) && offset + data.len() as u64 <= buf.size,
             "update of {}",
             buf.name
         );

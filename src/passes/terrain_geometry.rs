@@ -108,7 +108,14 @@ impl TerrainGeometry {
     }
 
     /// Clears the targets and draws `cull`'s patch list.
-    pub fn record(&self, rec: &mut Recorder, targets: &RenderTargets, view: &Buffer, cull: &CullPatches, tree: &GpuQuadtree) {
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        targets: &RenderTargets,
+        view: &Buffer,
+        cull: &CullPatches,
+        tree: &GpuQuadtree,
+    ) {
         rec.begin_rendering(&[ColorTarget { image: targets.color, clear: targets.clear }], Some(targets.depth));
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(

@@ -4,8 +4,8 @@
 //! and tests.
 
 pub mod offscreen;
-pub mod stats;
 pub mod renderer;
+pub mod stats;
 pub mod view;
 
 pub use crate::passes::terrain_geometry::RenderTargets;

@@ -59,7 +59,10 @@ impl View {
             return bad(format!("camera position {:?} is not finite", c.position_m));
         }
         if !c.yaw_deg.is_finite() || !(-90.0..=90.0).contains(&c.pitch_deg) {
-            return bad(format!("camera yaw {} / pitch {} must be finite, pitch within -90..=90", c.yaw_deg, c.pitch_deg));
+            return bad(format!(
+                "camera yaw {} / pitch {} must be finite, pitch within -90..=90",
+                c.yaw_deg, c.pitch_deg
+            ));
         }
         if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
             return bad(format!("field of view {} degrees must be strictly between 0 and 180", self.fov_y_deg));
@@ -170,7 +173,8 @@ impl View {
 pub fn overview_camera(world: &WorldDesc, source: &dyn HeightSource) -> Camera {
     let [ex, ey] = world.extent_m;
     let (x, y) = (ex * 0.5, ey * 0.04);
-    let ground = f64::from(source.sample(x, y)).clamp(f64::from(world.height_range_m[0]), f64::from(world.height_range_m[1]));
+    let ground =
+        f64::from(source.sample(x, y)).clamp(f64::from(world.height_range_m[0]), f64::from(world.height_range_m[1]));
     Camera { position_m: [x, y, ground + 0.05 * ex.max(ey)], yaw_deg: 0.0, pitch_deg: -20.0 }
 }
 
@@ -292,7 +296,8 @@ mod tests {
     fn frustum_planes_contain_exactly_the_visible_points() {
         let v = view(200.0, 10.0);
         let planes = v.frustum_planes();
-        for (px, inside) in [([0.6, 0.6], true), ([199.4, 99.4], true), ([-2.0, 50.0], false), ([100.0, 103.0], false)] {
+        for (px, inside) in [([0.6, 0.6], true), ([199.4, 99.4], true), ([-2.0, 50.0], false), ([100.0, 103.0], false)]
+        {
             let p = v.ray(px) * 500.0;
             let ok = planes.iter().all(|pl| pl.truncate().dot(p) + pl.w >= 0.0);
             assert_eq!(ok, inside, "{px:?}");

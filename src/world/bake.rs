@@ -73,7 +73,8 @@ pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], i
             let slope_deg = (nrm[2].clamp(-1.0, 1.0).acos() as f32).to_degrees();
             let mat = material(slope_deg, coarse(i, j), snow_m);
             let pos = [b[0] + i as f64 * step, b[1] + j as f64 * step];
-            let solid = !beyond_extent(pos, world.extent_m, step) && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]));
+            let solid =
+                !beyond_extent(pos, world.extent_m, step) && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]));
             let (rgb, smooth) = material_look(mat, slope_deg);
             normals.push([snorm8(nrm[0]), snorm8(nrm[1]), NO_OCCLUSION, smooth]);
             albedo.push([rgb[0], rgb[1], rgb[2], if solid { 255 } else { 0 }]);

@@ -51,7 +51,7 @@ pub fn patch_triangle_normals(heights: &[f32], spacing: f64, px: u32, py: u32) -
         for qx in px * PATCH_QUADS..(px + 1) * PATCH_QUADS {
             let p = |di: u32, dj: u32| [f64::from(di) * spacing, f64::from(dj) * spacing, h(qx + di, qy + dj)];
             let (p00, p10, p01, p11) = (p(0, 0), p(1, 0), p(0, 1), p(1, 1));
-            if (qx + qy) % 2 == 0 {
+            if (qx + qy).is_multiple_of(2) {
                 out.push(tri_normal(p00, p10, p11));
                 out.push(tri_normal(p00, p11, p01));
             } else {

@@ -154,6 +154,11 @@ impl Residency {
         self.slots.get(&id) == Some(&Slot::Resident)
     }
 
+    /// A load of `id` failed: it is never wanted again.
+    pub fn is_failed(&self, id: NodeId) -> bool {
+        self.failed.contains(&id)
+    }
+
     pub fn is_pending(&self, id: NodeId) -> bool {
         self.slots.get(&id) == Some(&Slot::Pending)
     }

@@ -24,7 +24,8 @@ pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput>
     let n = PrefixSum::capacity();
     let usage =
         vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
-    let buffer = |name| Buffer::new(ctx, &BufferDesc { name, size: u64::from(n) * 4, usage, location: MemoryLocation::GpuOnly });
+    let buffer =
+        |name| Buffer::new(ctx, &BufferDesc { name, size: u64::from(n) * 4, usage, location: MemoryLocation::GpuOnly });
     let (input, output) = (buffer("smoke_scan_input")?, buffer("smoke_scan_output")?);
     ctx.upload(&input, bytemuck::cast_slice(&(0..n).collect::<Vec<u32>>()))?;
     let target = |name| {

@@ -18,11 +18,24 @@ pub const MAGENTA_RGBA: [u8; 4] = [255, 0, 255, 255];
 #[derive(Clone, Copy, Debug)]
 pub enum Surface {
     Plane(f64),
-    Tilted { z0: f64, gx: f64, gy: f64 },
+    Tilted {
+        z0: f64,
+        gx: f64,
+        gy: f64,
+    },
     /// z0 + a * |p - c|^2
-    Paraboloid { z0: f64, a: f64, c: [f64; 2] },
+    Paraboloid {
+        z0: f64,
+        a: f64,
+        c: [f64; 2],
+    },
     /// A plane at z0 with a cone of height h and radius r at c.
-    Bump { z0: f64, c: [f64; 2], r: f64, h: f64 },
+    Bump {
+        z0: f64,
+        c: [f64; 2],
+        r: f64,
+        h: f64,
+    },
     /// Rolling hills with steep flanks (both ridge sides face the camera somewhere).
     Hills,
 }
@@ -34,9 +47,7 @@ impl Surface {
             Surface::Tilted { z0, gx, gy } => z0 + gx * x + gy * y,
             Surface::Paraboloid { z0, a, c } => z0 + a * ((x - c[0]).powi(2) + (y - c[1]).powi(2)),
             Surface::Bump { z0, c, r, h } => z0 + h * (1.0 - (x - c[0]).hypot(y - c[1]) / r).max(0.0),
-            Surface::Hills => {
-                300.0 + 120.0 * (x / 97.0).sin() * (y / 131.0).cos() + 40.0 * (x / 23.0 + y / 31.0).sin()
-            }
+            Surface::Hills => 300.0 + 120.0 * (x / 97.0).sin() * (y / 131.0).cos() + 40.0 * (x / 23.0 + y / 31.0).sin(),
         }
     }
 
@@ -122,7 +133,12 @@ impl Rig {
         rings: bool,
     ) -> Rig {
         let options = RendererOptions {
-            terrain: TerrainOptions { slots: 400, loader_threads: 2, ring_prefetch: rings, ..TerrainOptions::default() },
+            terrain: TerrainOptions {
+                slots: 400,
+                loader_threads: 2,
+                ring_prefetch: rings,
+                ..TerrainOptions::default()
+            },
             ..RendererOptions::default()
         };
         let renderer = TerrainRenderer::new(ctx, &world, Arc::new(surface), holes, &options).expect("renderer");

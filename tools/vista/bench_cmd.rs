@@ -11,6 +11,8 @@ use vista::gpu::Context;
 pub enum BenchKind {
     /// One-dispatch vs per-level traversal over resident sets and error targets.
     Traverse,
+    /// Patch culling per view: patches per stage, triangles vs the full mesh,
+    /// (traverse + cull) vs geometry time, the cone stage's cost and saving.
     Cull,
     Shade,
     Accuracy,
@@ -31,9 +33,16 @@ pub struct BenchArgs {
     /// Target projected errors in pixels.
     #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4,8")]
     targets: Vec<f32>,
-    /// Measured frames per row (after 3 warm-up frames); the median is reported.
-    #[arg(long, default_value_t = 15)]
-    frames: u32,
+    /// Measured frames per row (after warm-up); the median is reported
+    /// [default: 15 for traverse, 7 per stage block for cull].
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Target size of `bench cull`.
+    #[arg(long, default_value = "1280x720", value_parser = crate::render_cmd::parse_size)]
+    size: [u32; 2],
+    /// Target projected error of `bench cull`, pixels.
+    #[arg(long, default_value_t = 1.0)]
+    target_error: f32,
     /// Camera position (x,y,z metres); default: 60 m above the world's centre at mid height.
     #[arg(long, value_parser = crate::render_cmd::parse_position)]
     camera: Option<[f64; 3]>,
@@ -43,14 +52,20 @@ pub struct BenchArgs {
 
 pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
     match args.kind {
-        BenchKind::Traverse | BenchKind::All => {}
+        BenchKind::Traverse => traverse(ctx, args),
+        BenchKind::Cull => crate::bench_cull_cmd::cull(ctx, &args.world, args.frames.unwrap_or(7), args.size, args.target_error, args.json.as_deref()),
         other => bail!(
-            "bench {other:?} needs passes that do not exist yet (cull_patches, tile shading); available: traverse"
+            "bench {} needs passes that do not exist yet (tile shading, the accuracy reference); available: traverse, cull",
+            format!("{other:?}").to_lowercase()
         ),
     }
+}
+
+fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
+    let frames = args.frames.unwrap_or(15);
     if args.sets.iter().any(|&n| n == 0 || n > 1023)
         || args.targets.iter().any(|t| !(t.is_finite() && *t > 0.0))
-        || args.frames == 0
+        || frames == 0
     {
         bail!("--sets must be 1..=1023 nodes, --targets positive pixels, --frames at least 1");
     }
@@ -62,7 +77,7 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
         resident_sets: args.sets,
         targets_px: args.targets,
         warmup_frames: 3,
-        frames: args.frames,
+        frames,
         camera_m: camera,
         viewport_height_px: 1080,
     };

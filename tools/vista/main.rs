@@ -3,6 +3,7 @@
 
 mod bake;
 mod bench_cmd;
+mod bench_cull_cmd;
 mod render_cmd;
 mod scene;
 mod world_args;
@@ -150,4 +151,3 @@ fn info(ctx: &Context, json: bool) -> Result<()> {
     }
     Ok(())
 }
-

@@ -99,7 +99,7 @@ fn parse_camera(s: &str) -> Result<CameraArg, String> {
     }
 }
 
-fn parse_size(s: &str) -> Result<[u32; 2], String> {
+pub(crate) fn parse_size(s: &str) -> Result<[u32; 2], String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("size {s:?} is not WIDTHxHEIGHT"))?;
     let p = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("size {s:?}: {v:?} is not a whole number"));
     let (w, h) = (p(w)?, p(h)?);
@@ -140,8 +140,13 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
             Camera { position_m: position, yaw_deg, pitch_deg }
         }
     };
-    let view =
-        View { camera, fov_y_deg: args.fov, size: args.size, target_error_px: args.target_error, near_m: DEFAULT_NEAR_M };
+    let view = View {
+        camera,
+        fov_y_deg: args.fov,
+        size: args.size,
+        target_error_px: args.target_error,
+        near_m: DEFAULT_NEAR_M,
+    };
     if let Err(e) = view.validate() {
         bail!("{}", e.to_string().replace("field of view", "--fov").replace("target error", "--target-error"));
     }
@@ -165,7 +170,14 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     println!("device: {}  ({} measured frames, {}x{})", ctx.info().name, args.frames, view.size[0], view.size[1]);
     println!(
         "world:  {}  camera ({:.1}, {:.1}, {:.1}) m, yaw {:.1}, pitch {:.1}, fov {:.1}, target error {} px",
-        world.label, c.position_m[0], c.position_m[1], c.position_m[2], c.yaw_deg, c.pitch_deg, view.fov_y_deg, view.target_error_px
+        world.label,
+        c.position_m[0],
+        c.position_m[1],
+        c.position_m[2],
+        c.yaw_deg,
+        c.pitch_deg,
+        view.fov_y_deg,
+        view.target_error_px
     );
     let st = &renderer.terrain.stats;
     println!(

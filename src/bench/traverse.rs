@@ -1,4 +1,4 @@
-//! Benchmarks behind `vista bench`: GPU times from the frame executor's
+//! `vista bench traverse`: one-dispatch vs per-level traversal; GPU times from the frame executor's
 //! timestamps, medians over frames after warm-up, variants timed in the same
 //! frames so their ratio is measured under the same conditions.
 

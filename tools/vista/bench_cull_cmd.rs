@@ -1,0 +1,90 @@
+//! `vista bench cull [WORLD]`: the patch-culling table of one world.
+
+use crate::world_args::WorldArgs;
+use anyhow::{bail, Context as _, Result};
+use std::path::Path;
+use std::time::Duration;
+use vista::bench::{bench_cull, cull_views, CullBenchConfig};
+use vista::gpu::Context;
+use vista::render::{RendererOptions, TerrainRenderer};
+
+pub fn cull(
+    ctx: &Context,
+    world_args: &WorldArgs,
+    frames: u32,
+    size: [u32; 2],
+    target_error_px: f32,
+    json: Option<&Path>,
+) -> Result<()> {
+    if frames == 0 || !(target_error_px.is_finite() && target_error_px > 0.0) {
+        bail!("--frames must be at least 1 and --target-error a positive number of pixels");
+    }
+    let world = world_args.load()?;
+    let d = world.desc;
+    let mut renderer =
+        TerrainRenderer::new(ctx, &d, world.source.clone(), world.holes.clone(), &RendererOptions::default())?;
+    let views = cull_views(&d, &*world.source);
+    let cfg =
+        CullBenchConfig { size, target_error_px, warmup_frames: 2, frames, settle_timeout: Duration::from_secs(300) };
+    let rows = bench_cull(ctx, &mut renderer, &views, &cfg)?;
+    println!(
+        "bench cull: {} on {}, {}x{}, 60 deg, target {} px; median of {} frames per stage block after 2 warm-up",
+        world.label,
+        ctx.info().name,
+        size[0],
+        size[1],
+        target_error_px,
+        frames
+    );
+    println!(
+        "{:<13} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>10} {:>9} {:>9} {:>11} {:>11} {:>9}",
+        "view",
+        "nodes",
+        "in",
+        "frustum",
+        "cone",
+        "hole",
+        "drawn",
+        "tri/full",
+        "drawn/sel",
+        "(tr+cu)/g",
+        "cone cost",
+        "cone saves",
+        "g off/on"
+    );
+    for r in &rows {
+        let c = &r.all.counters;
+        println!(
+            "{:<13} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>10.2e} {:>9.3} {:>9.4} {:>8.3} ms {:>8.3} ms {:>9.2}",
+            r.view,
+            r.nodes,
+            c.patches_in,
+            c.after_frustum,
+            c.after_cone,
+            c.after_hole,
+            c.drawn,
+            r.triangles_vs_full_res,
+            r.drawn_vs_selected,
+            r.traverse_cull_vs_geometry,
+            r.cone_cost_ms,
+            r.cone_saves_ms,
+            r.geometry_off_vs_on
+        );
+    }
+    println!("per-pass medians (ms), all stages / no cone / culling off:");
+    for r in &rows {
+        let t =
+            |x: &vista::bench::cull::CullTiming| format!("{:.3}+{:.3}+{:.2}", x.traverse_ms, x.cull_ms, x.geometry_ms);
+        println!("  {:<13} traverse+cull+geometry  {}  /  {}  /  {}", r.view, t(&r.all), t(&r.no_cone), t(&r.none));
+    }
+    if let Some(path) = json {
+        let doc = serde_json::json!({
+            "device": ctx.info().name, "world": world.label, "size": size,
+            "target_error_px": target_error_px, "frames": frames, "rows": rows,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
