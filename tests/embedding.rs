@@ -7,25 +7,30 @@ use common::gpu_test;
 use vista::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, RawHandles};
 use vista::passes::prefix_sum::PrefixSum;
 
+/// A context around `engine`'s handles, as an engine would make one.
+fn wrap(engine: &Context) -> Context {
+    // SAFETY (the engine's side of the contract): the handles are live,
+    // belong together, and `engine` outlives the wrapper.
+    unsafe {
+        Context::from_raw(RawHandles {
+            entry: ash::Entry::load().expect("Vulkan loader"),
+            instance: engine.instance().clone(),
+            physical_device: engine.physical_device(),
+            device: engine.device().clone(),
+            graphics_queue_family: engine.graphics_queue().family,
+            graphics_queue: engine.graphics_queue().raw,
+            compute_queue_family: engine.compute_queue().family,
+            compute_queue: engine.compute_queue().raw,
+            debug_utils: true,
+        })
+    }
+    .expect("wrap the engine's handles")
+}
+
 #[test]
 fn from_raw_wraps_an_engines_device_without_owning_it() {
     gpu_test(|engine| {
-        // SAFETY (the engine's side of the contract): the handles are live,
-        // belong together, and `engine` outlives `wrapped`.
-        let wrapped = unsafe {
-            Context::from_raw(RawHandles {
-                entry: ash::Entry::load().expect("Vulkan loader"),
-                instance: engine.instance().clone(),
-                physical_device: engine.physical_device(),
-                device: engine.device().clone(),
-                graphics_queue_family: engine.graphics_queue().family,
-                graphics_queue: engine.graphics_queue().raw,
-                compute_queue_family: engine.compute_queue().family,
-                compute_queue: engine.compute_queue().raw,
-                debug_utils: true,
-            })
-        }
-        .expect("wrap the engine's handles");
+        let wrapped = wrap(engine);
         assert_eq!(wrapped.info().name, engine.info().name);
         assert_eq!(wrapped.info().async_compute, engine.info().async_compute);
         {
@@ -70,21 +75,7 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
     use vista::world::WorldDesc;
 
     gpu_test(|engine| {
-        // SAFETY: as above, the engine vouches for its handles.
-        let wrapped = unsafe {
-            Context::from_raw(RawHandles {
-                entry: ash::Entry::load().expect("Vulkan loader"),
-                instance: engine.instance().clone(),
-                physical_device: engine.physical_device(),
-                device: engine.device().clone(),
-                graphics_queue_family: engine.graphics_queue().family,
-                graphics_queue: engine.graphics_queue().raw,
-                compute_queue_family: engine.compute_queue().family,
-                compute_queue: engine.compute_queue().raw,
-                debug_utils: true,
-            })
-        }
-        .expect("wrap the engine's handles");
+        let wrapped = wrap(engine);
         let device = engine.device();
         let size = [64, 64];
         {

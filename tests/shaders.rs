@@ -44,6 +44,17 @@ fn rust_twins_match_reflected_sizes() {
     assert_eq!(size_of::<TraverseHeader>(), shaders::structs::TRAVERSE_HEADER);
     assert_eq!(size_of::<TraversePush>() as u32, shaders::traverse::PUSH_CONSTANT_SIZE);
     assert_eq!(shaders::traverse::PUSH_CONSTANT_SIZE, shaders::traverse_level::PUSH_CONSTANT_SIZE);
+    use vista::passes::cull_patches::{CullPush, PatchListHeader};
+    use vista::passes::terrain_geometry::GeometryPush;
+    use vista::render::TerrainViewGpu;
+    assert_eq!(size_of::<CullPush>(), shaders::structs::CULL_PUSH);
+    assert_eq!(size_of::<CullPush>() as u32, shaders::cull_patches::PUSH_CONSTANT_SIZE);
+    assert_eq!(size_of::<PatchListHeader>(), shaders::structs::PATCH_LIST_HEADER);
+    // The header leads with a VkDrawIndexedIndirectCommand.
+    assert_eq!(std::mem::offset_of!(PatchListHeader, first_instance) + 4, 20);
+    assert_eq!(size_of::<GeometryPush>(), shaders::structs::GEOMETRY_PUSH);
+    assert_eq!(size_of::<GeometryPush>() as u32, shaders::terrain_geometry_vert::PUSH_CONSTANT_SIZE);
+    assert_eq!(size_of::<TerrainViewGpu>(), shaders::structs::TERRAIN_VIEW);
 }
 
 #[test]

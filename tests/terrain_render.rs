@@ -338,3 +338,19 @@ fn cone_culling_removes_only_patches_whose_every_triangle_faces_away() {
         eprintln!("{culled_total} cone-culled patches checked triangle by triangle");
     });
 }
+
+/// The whole terrain frame (streaming uploads, traversal, culling, the
+/// indirect draw) under synchronization validation: no hazard between
+/// passes or between frames in flight.
+#[test]
+fn terrain_frames_are_clean_under_synchronization_validation() {
+    let options = vista::gpu::ContextOptions { sync_validation: true, ..common::validated() };
+    common::gpu_test_with(&options, |ctx| {
+        let mut rig = Rig::new(ctx, hills_world(), Surface::Hills, Vec::new(), [48, 48], true);
+        for yaw in [0.0, 170.0, 300.0] {
+            let v = view([512.0, 512.0, 700.0], yaw, -45.0, [48, 48], 1.0);
+            let c = rig.shot(ctx, &v, CullStages::ALL);
+            assert!(c.depth.iter().any(|&d| d > 0.0), "nothing drawn");
+        }
+    });
+}

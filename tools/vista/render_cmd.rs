@@ -192,7 +192,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         settle.seconds
     );
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
-    print_stats(&stats);
+    print_stats(&stats, args.cull);
     print_timings(timed);
     if let Some(dir) = &args.out {
         write_outputs(dir, &frames, &capture, view, &stats)?;
@@ -201,11 +201,17 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     Ok(())
 }
 
-fn print_stats(s: &RenderStats) {
+fn print_stats(s: &RenderStats, stages: CullStages) {
     let p = &s.patches;
+    let stage = |on: bool, name: &str, n: u32| if on { format!("{n} after {name}") } else { format!("{name} off") };
     println!(
-        "patches: {} in, {} after frustum, {} after cone, {} after hole, {} drawn ({} triangles submitted)",
-        p.patches_in, p.after_frustum, p.after_cone, p.after_hole, p.drawn, s.triangles_drawn
+        "patches: {} in, {}, {}, {}, {} drawn ({} triangles submitted)",
+        p.patches_in,
+        stage(stages.frustum, "frustum", p.after_frustum),
+        stage(stages.cone, "cone", p.after_cone),
+        stage(stages.hole, "hole", p.after_hole),
+        p.drawn,
+        s.triangles_drawn
     );
     let per_lod: Vec<String> = s
         .nodes_per_lod
