@@ -158,8 +158,10 @@ impl CullPatches {
         Ok(CullPatches { pipeline: Pipeline::compute(ctx, &desc)?, sampler, list, capacity, index_count })
     }
 
-    /// Resets the draw args and counters, then culls the patches of every
-    /// node in `traverse`'s list against `view` (a TerrainView buffer).
+    /// Writes this frame's view (`view_bytes`, a TerrainView, into `view`)
+    /// and resets the draw args and counters behind one barrier, then culls
+    /// the patches of every node in `traverse`'s list.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder,
@@ -167,10 +169,12 @@ impl CullPatches {
         tree: &GpuQuadtree,
         lod_map: &LodMap,
         view: &Buffer,
+        view_bytes: &[u8],
         stages: CullStages,
     ) {
         let header = PatchListHeader { index_count: self.index_count, ..PatchListHeader::default() };
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
+        rec.update_buffer(view, 0, view_bytes);
         rec.update_buffer(&self.list, 0, bytemuck::bytes_of(&header));
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         rec.bind_pipeline(&self.pipeline);

@@ -100,9 +100,8 @@ impl TerrainRenderer {
         self.terrain.record(&mut frame, &view.traverse_params())?;
         let (terrain, cull, stages, view_buffer) = (&self.terrain, &self.cull, self.stages, &self.view_buffer);
         frame.pass(CullPatches::NAME, QueueKind::Compute, |r| {
-            r.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
-            r.update_buffer(view_buffer, 0, bytemuck::bytes_of(&gpu));
-            cull.record(r, &terrain.traverse, &terrain.tree, &terrain.lod_map, view_buffer, stages);
+            let view_bytes = bytemuck::bytes_of(&gpu);
+            cull.record(r, &terrain.traverse, &terrain.tree, &terrain.lod_map, view_buffer, view_bytes, stages);
         });
         let geometry = &self.geometry;
         frame.pass(TerrainGeometry::NAME, QueueKind::Graphics, |r| {
