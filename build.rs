@@ -41,7 +41,11 @@ fn main() {
         }
         panic!("{} shader(s) failed to compile: see the messages above", errors.len());
     }
-    let code = shader_compiler::generate_module(&shaders).unwrap_or_else(|e| panic!("{e}"));
+    let constants_file = include_dir.join("constants.glsl");
+    let text = std::fs::read_to_string(&constants_file).expect("shaders_glsl/common/constants.glsl is missing");
+    let constants = shader_compiler::parse_constants(&text, &constants_file.display().to_string())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let code = shader_compiler::generate_module(&shaders, &constants).unwrap_or_else(|e| panic!("{e}"));
     let out = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("shaders.rs");
     std::fs::write(&out, code).expect("cannot write generated shader module");
 }

@@ -19,6 +19,74 @@ pub struct ReflectedBinding {
     pub kind: &'static str,
 }
 
+/// A named GLSL struct as the SPIR-V lays it out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StructLayout {
+    pub name: String,
+    pub size: u32,
+    pub members: Vec<(String, u32, u32)>,
+}
+
+/// One `#define NAME VALUEu` of `common/constants.glsl`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SharedConstant {
+    pub name: String,
+    pub value: u32,
+    /// The comment lines just above it.
+    pub doc: String,
+}
+
+/// Parses `common/constants.glsl`: include guards, comments, blank lines and
+/// `#define NAME VALUE` with an unsigned decimal or hex literal ending in
+/// `u`. Anything else is an error naming the line, so the file stays a plain
+/// table both sides can trust.
+pub fn parse_constants(text: &str, file: &str) -> Result<Vec<SharedConstant>, String> {
+    let mut out: Vec<SharedConstant> = Vec::new();
+    // A comment documents the defines right below it, up to a blank line.
+    let mut doc = Vec::new();
+    let mut after_define = false;
+    for (i, line) in text.lines().enumerate() {
+        let l = line.trim();
+        let at = || format!("{file}:{}", i + 1);
+        if let Some(c) = l.strip_prefix("//") {
+            if after_define {
+                doc.clear();
+                after_define = false;
+            }
+            doc.push(c.trim().to_string());
+            continue;
+        }
+        if l.is_empty() || l.starts_with("#ifndef") || l.starts_with("#endif") {
+            doc.clear();
+            after_define = false;
+            continue;
+        }
+        let parts: Vec<&str> = l.split_whitespace().collect();
+        match parts.as_slice() {
+            ["#define", guard] if guard.starts_with("VISTA_") => {}
+            ["#define", name, value] => {
+                let digits =
+                    value.strip_suffix('u').ok_or_else(|| format!("{}: {name}: value needs a `u` suffix", at()))?;
+                let parsed = match digits.strip_prefix("0x") {
+                    Some(hex) => u32::from_str_radix(hex, 16),
+                    None => digits.parse(),
+                };
+                let value = parsed.map_err(|e| format!("{}: {name}: bad value {value}: {e}", at()))?;
+                if !name.chars().all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_') {
+                    return Err(format!("{}: {name}: names are UPPER_SNAKE_CASE", at()));
+                }
+                if out.iter().any(|c| c.name == *name) {
+                    return Err(format!("{}: {name} defined twice", at()));
+                }
+                out.push(SharedConstant { name: name.to_string(), value, doc: doc.join(" ") });
+                after_define = true;
+            }
+            _ => return Err(format!("{}: expected `#define NAME VALUEu`, got `{l}`", at())),
+        }
+    }
+    Ok(out)
+}
+
 #[derive(Debug, Clone)]
 pub struct CompiledShader {
     /// Rust module name: the file stem for compute shaders (it names the
@@ -33,8 +101,9 @@ pub struct CompiledShader {
     pub push_constant_size: u32,
     /// (name, constant id) of each specialization constant.
     pub spec_constants: Vec<(String, u32)>,
-    /// (name, size in bytes) of each named struct type.
-    pub structs: Vec<(String, u32)>,
+    /// Each named struct type: name, size in bytes, and its members as
+    /// (name, byte offset, byte size).
+    pub structs: Vec<StructLayout>,
     /// Files pulled in through `#include`, for `rerun-if-changed`.
     pub includes: Vec<PathBuf>,
 }
@@ -201,7 +270,17 @@ fn reflect(words: &[u32], file: &str, stage: naga::ShaderStage) -> Result<Compil
         .types
         .iter()
         .filter_map(|(_, t)| match (&t.name, &t.inner) {
-            (Some(n), naga::TypeInner::Struct { span, .. }) if !n.is_empty() => Some((n.clone(), *span)),
+            (Some(n), naga::TypeInner::Struct { span, members }) if !n.is_empty() => Some(StructLayout {
+                name: n.clone(),
+                size: *span,
+                members: members
+                    .iter()
+                    .map(|m| {
+                        let size = module.types[m.ty].inner.size(module.to_ctx());
+                        (m.name.clone().unwrap_or_default(), m.offset, size)
+                    })
+                    .collect(),
+            }),
             _ => None,
         })
         .collect();
@@ -232,13 +311,25 @@ fn const_ident(name: &str) -> String {
     out
 }
 
-/// Rust source of the generated `shaders` module. Struct sizes are collected
-/// across all shaders; two shaders disagreeing on a struct's size is an error.
-pub fn generate_module(shaders: &[CompiledShader]) -> Result<String, String> {
+/// Rust source of the generated `shaders` module. Struct layouts are
+/// collected across all shaders; two shaders disagreeing on a struct's size
+/// or member offsets is an error.
+pub fn generate_module(shaders: &[CompiledShader], constants: &[SharedConstant]) -> Result<String, String> {
     let mut s = String::from("// @generated by build.rs from shaders_glsl/: do not edit.\n");
-    let mut structs: BTreeMap<String, (u32, String)> = BTreeMap::new();
+    s.push_str(
+        "/// The constants of `shaders_glsl/common/constants.glsl`, shared by host and shaders.\npub mod consts {\n",
+    );
+    for c in constants {
+        let _ = writeln!(s, "    /// {}\n    pub const {}: u32 = {};", c.doc, c.name, c.value);
+    }
+    let all: Vec<String> = constants.iter().map(|c| format!("({:?}, {})", c.name, c.name)).collect();
+    let _ =
+        writeln!(s, "    /// Every constant by name.\n    pub const ALL: &[(&str, u32)] = &[{}];\n}}", all.join(", "));
+    let mut structs: BTreeMap<String, (StructLayout, String)> = BTreeMap::new();
     for sh in shaders {
         let _ = writeln!(s, "/// `{}`\npub mod {} {{\n    use crate::gpu::shader::*;", sh.file, sh.module);
+        let pass = sh.module.trim_end_matches("_vert").trim_end_matches("_frag");
+        let _ = writeln!(s, "    /// The pass (and timer label) this shader belongs to: its file stem.\n    pub const PASS: &str = {pass:?};");
         for b in &sh.bindings {
             let _ = writeln!(
                 s,
@@ -267,20 +358,27 @@ pub fn generate_module(shaders: &[CompiledShader]) -> Result<String, String> {
             list.join(", "),
             specs.join(", ")
         );
-        for (name, size) in &sh.structs {
-            match structs.get(name) {
-                Some((old, where_)) if old != size => {
-                    return Err(format!("struct {name} is {old} bytes in {where_} but {size} bytes in {}", sh.file))
+        for st in &sh.structs {
+            match structs.get(&st.name) {
+                Some((old, where_)) if old != st => {
+                    return Err(format!(
+                        "struct {} differs between {where_} ({} bytes, {:?}) and {} ({} bytes, {:?})",
+                        st.name, old.size, old.members, sh.file, st.size, st.members
+                    ))
                 }
                 _ => {
-                    structs.insert(name.clone(), (*size, sh.file.clone()));
+                    structs.insert(st.name.clone(), (st.clone(), sh.file.clone()));
                 }
             }
         }
     }
     s.push_str("/// Byte size of every named GLSL struct, as the SPIR-V lays it out.\npub mod structs {\n");
-    for (name, (size, _)) in &structs {
-        let _ = writeln!(s, "    pub const {}: usize = {size};", const_ident(name));
+    for (name, (st, _)) in &structs {
+        let _ = writeln!(s, "    pub const {}: usize = {};", const_ident(name), st.size);
+    }
+    s.push_str("}\n/// Members of every named GLSL struct: (name, byte offset, byte size).\npub mod layouts {\n");
+    for (name, (st, _)) in &structs {
+        let _ = writeln!(s, "    pub const {}: &[(&str, usize, usize)] = &{:?};", const_ident(name), st.members);
     }
     s.push_str("}\n/// Every shader of the crate.\npub static ALL: &[&crate::gpu::shader::ShaderInfo] = &[");
     for sh in shaders {

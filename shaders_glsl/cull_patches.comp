@@ -11,15 +11,9 @@ layout(local_size_x = 64) in;
 #include "terrain_view.glsl"
 #include "patch_list.glsl"
 
-// Patch hole summary values (payload.rs PATCH_HOLE_ALL).
-layout(constant_id = 0) const uint PATCH_HOLE_ALL = 2u;
 // Patches per node side (world PATCHES_PER_NODE_SIDE) and quads per patch side.
 layout(constant_id = 1) const uint PATCHES_PER_SIDE = 8u;
 layout(constant_id = 2) const uint PATCH_QUADS = 16u;
-// LOD map value where no listed node covers a sector (lod_map.rs NO_LOD).
-layout(constant_id = 3) const uint NO_LOD = 255u;
-// Largest stitched LOD delta: a patch edge has PATCH_QUADS = 2^4 quads.
-layout(constant_id = 4) const uint MAX_DELTA = 4u;
 
 layout(set = 0, binding = 0, std430) readonly buffer TraverseOutput {
     TraverseHeader header;
@@ -35,11 +29,6 @@ layout(set = 0, binding = 7, std430) buffer PatchList {
     PatchListHeader header;
     uvec2 patches[];
 } patch_list;
-
-// Stage switches (cull_patches.rs CullStages).
-const uint STAGE_FRUSTUM = 1u;
-const uint STAGE_CONE = 2u;
-const uint STAGE_HOLE = 4u;
 
 layout(push_constant, std430) uniform CullPush {
     uint stages;
@@ -82,7 +71,7 @@ bool cone_faces_away(vec4 cone, vec3 lo, vec3 hi) {
 }
 
 // LOD delta toward a neighbour sector: how many LODs coarser it is, 0 for
-// finer, equal, unlisted or outside sectors, at most MAX_DELTA.
+// finer, equal, unlisted or outside sectors, at most MAX_LOD_DELTA.
 uint edge_delta(ivec2 sector, uint lod) {
     if (any(lessThan(sector, ivec2(0))) || sector.x >= int(view.v.lod_map_w) || sector.y >= int(view.v.lod_map_h)) {
         return 0u;
@@ -91,7 +80,7 @@ uint edge_delta(ivec2 sector, uint lod) {
     if (n == NO_LOD || n <= lod) {
         return 0u;
     }
-    return min(n - lod, MAX_DELTA);
+    return min(n - lod, MAX_LOD_DELTA);
 }
 
 void main() {
@@ -138,22 +127,23 @@ void main() {
     uint de = pxy.x == int(per_side) - 1 ? edge_delta(ivec2(sector1.x, row), lod) : 0u;
     uint ds = pxy.y == 0 ? edge_delta(ivec2(col, sector0.y - 1), lod) : 0u;
     uint dn = pxy.y == int(per_side) - 1 ? edge_delta(ivec2(col, sector1.y), lod) : 0u;
-    uint deltas = dw | (de << 4) | (ds << 8) | (dn << 12);
+    uint b = PATCH_DELTA_BITS;
+    uint deltas = (dw << (b * EDGE_WEST)) | (de << (b * EDGE_EAST)) | (ds << (b * EDGE_SOUTH)) | (dn << (b * EDGE_NORTH));
 
-    bool keep = (pc.stages & STAGE_FRUSTUM) == 0u || !box_outside_frustum(lo, hi);
+    bool keep = (pc.stages & CULL_STAGE_FRUSTUM) == 0u || !box_outside_frustum(lo, hi);
     if (keep) {
         atomicAdd(s_frustum, 1u);
     }
     // Stitched edges move vertices onto the coarser grid, making triangles
     // the baked cone does not bound: only unstitched patches are cone-tested.
-    if (keep && (pc.stages & STAGE_CONE) != 0u && deltas == 0u) {
+    if (keep && (pc.stages & CULL_STAGE_CONE) != 0u && deltas == 0u) {
         vec4 cone = texelFetch(sampler2DArray(patch_cones, nearest), ivec3(pxy, int(slot)), 0);
         keep = !cone_faces_away(cone, lo, hi);
     }
     if (keep) {
         atomicAdd(s_cone, 1u);
     }
-    if (keep && (pc.stages & STAGE_HOLE) != 0u) {
+    if (keep && (pc.stages & CULL_STAGE_HOLE) != 0u) {
         keep = texelFetch(usampler2DArray(patch_holes, nearest), ivec3(pxy, int(slot)), 0).r != PATCH_HOLE_ALL;
     }
     if (keep) {
@@ -161,7 +151,7 @@ void main() {
         uint i = atomicAdd(patch_list.header.instance_count, 1u);
         if (i < pc.capacity) {
             uint index = uint(pxy.y) * per_side + uint(pxy.x);
-            patch_list.patches[i] = uvec2(n, slot | (index << 10) | (deltas << 16));
+            patch_list.patches[i] = uvec2(n, pack_patch(slot, index, deltas));
         }
     }
     barrier();

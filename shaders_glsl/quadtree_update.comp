@@ -2,18 +2,16 @@
 // Applies one frame's quadtree changes: node-texture texels (value = slot,
 // 0xFFFF empty) and node descriptions. The host coalesces the list so no two
 // threads write the same texel or slot: the order of threads does not matter.
+#extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 64) in;
+#include "constants.glsl"
 
 struct QuadtreeUpdate {
-    uint target;  // mip (= LOD) of a texel write, or TARGET_DESC
+    uint target;  // mip (= LOD) of a texel write, or UPDATE_TARGET_*
     uint coords;  // x | y << 16 for a texel; the slot for a description
     uint word0;
     uint word1;
 };
-
-// Description and node-error writes (quadtree.rs TARGET_DESC, TARGET_ERROR).
-const uint TARGET_DESC = 0xFFu;
-const uint TARGET_ERROR = 0xFEu;
 
 layout(set = 0, binding = 0, std430) readonly buffer Updates { QuadtreeUpdate items[]; } updates;
 layout(set = 0, binding = 1, std430) buffer NodeDescs { uvec2 descs[]; } node_descs;
@@ -43,15 +41,15 @@ void main() {
     uint target = updates.items[i].target;
     uint coords = updates.items[i].coords;
     uint word0 = updates.items[i].word0;
-    if (target == TARGET_DESC) {
+    if (target == UPDATE_TARGET_DESC) {
         node_descs.descs[coords] = uvec2(word0, updates.items[i].word1);
         return;
     }
-    if (target == TARGET_ERROR) {
+    if (target == UPDATE_TARGET_ERROR) {
         node_errors.errors[coords] = uintBitsToFloat(word0);
         return;
     }
-    ivec2 p = ivec2(coords & 0xFFFFu, coords >> 16);
+    ivec2 p = ivec2(bitfieldExtract(coords, 0, int(HALF_BITS)), coords >> HALF_BITS);
     uvec4 v = uvec4(word0);
     switch (target) {
         case 0u: imageStore(node_lod0, p, v); break;

@@ -3,10 +3,9 @@
 // resident node covering it at that LOD (0 = none), LODs 0-2 in .x and 3-5
 // in .y. Any shader can then sample the terrain at the finest resident
 // detail through terrain_sample.glsl. Rebuilt from the node texture.
+#extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 8, local_size_y = 8) in;
-
-// LODs that fit two u32 at 10 bits each (sector_data.rs SECTOR_DATA_LODS).
-const uint SECTOR_DATA_LODS = 6u;
+#include "constants.glsl"
 
 layout(set = 0, binding = 0) uniform utexture2D node_texture;
 layout(set = 0, binding = 1) uniform sampler node_sampler;
@@ -21,11 +20,12 @@ void main() {
     uvec2 packed = uvec2(0u);
     for (uint k = 0u; k < min(pc.lod_count, SECTOR_DATA_LODS); ++k) {
         uint v = texelFetch(usampler2D(node_texture, node_sampler), ivec2(s >> k), int(k)).r;
-        uint slot = v < 0xFFFEu ? v : 0u;
-        if (k < 3u) {
-            packed.x |= slot << (10u * k);
+        uint slot = v < NODE_INVALID ? v : 0u;
+        uint shift = SLOT_BITS * (k % SECTOR_LODS_PER_WORD);
+        if (k < SECTOR_LODS_PER_WORD) {
+            packed.x |= slot << shift;
         } else {
-            packed.y |= slot << (10u * (k - 3u));
+            packed.y |= slot << shift;
         }
     }
     sector_data.sectors[s.y * pc.sectors_x + s.x] = packed;

@@ -7,11 +7,8 @@
 layout(local_size_x = 256) in;
 #include "traverse_common.glsl"
 
-// Entries per shared list: the resident-slot bound (slots are 10-bit), so
-// the two lists take 8 KiB of the 32 KiB lavapipe offers (traverse.rs
-// SHARED_LIST_CAPACITY).
-const uint SHARED_LIST_CAPACITY = 1024u;
-
+// The two lists take 8 KiB of the 32 KiB lavapipe offers
+// (constants.glsl SHARED_LIST_CAPACITY).
 shared uint lists[2][SHARED_LIST_CAPACITY];
 shared uint counts[2];
 

@@ -15,7 +15,7 @@ struct LevelArgs {
 
 // The host zeroes `x`/`count` and sets y = z = 1 before the first level.
 layout(set = 0, binding = 5, std430) buffer TraverseLevels {
-    LevelArgs levels[16];
+    LevelArgs levels[MAX_LEVELS];
     uint items[];  // level l's list at items[l * list_capacity ...]
 } traverse_levels;
 
@@ -35,9 +35,6 @@ void push_level(uint l, uint n_kids, uint kids[4], uint n, uint slot) {
     atomicAdd(traverse_out.header.overflow, 1u);
     emit_final(n, slot);
 }
-
-// `current_lod` of the last, single-thread dispatch (traverse.rs LEVEL_FINALIZE).
-const uint LEVEL_FINALIZE = 0xFFu;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -1,24 +1,26 @@
 //! vista: a GPU-driven terrain renderer for Vulkan (Far Cry 5 style) on ash.
 //!
-//! Layers: [`gpu`] owns every unsafe Vulkan call; [`frame`] wraps passes in
-//! labels and timestamps; [`render`] is the renderer an engine records into
-//! ([`render::TerrainRenderer`]); [`passes`] holds one pass per file; [`shaders`] is
-//! generated at build time from `shaders_glsl/`; [`world`] is the CPU side of
-//! the terrain (height sources, node bake, cache, streaming), with no Vulkan.
+//! Layers, each using only those above it:
+//! - [`shaders`]: generated at build time from `shaders_glsl/` (SPIR-V,
+//!   reflection, struct layouts, the constants shared with shaders);
+//! - [`gpu`]: every unsafe Vulkan call; [`frame`]: the frame executor
+//!   (labels, timestamps) and profiler output;
+//! - [`world`]: the CPU side of the terrain (height sources, bake, cache,
+//!   streaming), no Vulkan; [`terrain`]: streaming feeding the GPU quadtree;
+//! - [`passes`]: one pass per file; [`reference`]: a CPU twin per pass;
+//! - [`render`]: the renderer an engine records into
+//!   ([`render::TerrainRenderer`]) and the frame order; [`bench`]: the
+//!   `vista bench` kinds.
 
 pub mod bench;
 pub mod error;
 pub mod frame;
 pub mod gpu;
-pub mod gpu_quadtree;
 pub mod passes;
-pub mod patch_grid;
-pub mod profiler;
-pub mod quadtree;
+pub mod reference;
 pub mod render;
 pub mod shaders;
 pub mod terrain;
-pub mod traverse_cpu;
 pub mod world;
 
 pub use error::{Error, Result};

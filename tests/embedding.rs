@@ -127,8 +127,8 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
                 // and recorded nowhere else meanwhile.
                 let mut rec = unsafe { Recorder::from_raw(&wrapped, cmd) };
                 if frame == 0 {
-                    rec.image_layout(&color, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                    rec.image_layout(&depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+                    rec.discard_to(&color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+                    rec.discard_to(&depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
                 }
                 renderer.record(&mut rec, &v, &RenderTargets { color: &color, depth: &depth, clear: MAGENTA }).unwrap();
                 // SAFETY: ends the recording begun above; submits to the
@@ -155,7 +155,7 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
             }
             assert!(renderer.terrain.settled(), "streaming never settled");
             assert!(renderer.latest_timings().is_some_and(|t| t.passes.iter().any(|p| p.name == "terrain_geometry")));
-            let rgba = wrapped.read_image(&color, 0, 0, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, 4).unwrap();
+            let rgba = wrapped.read_image(&color, 0, 0, 4).unwrap();
             let terrain_px = rgba.chunks(4).filter(|p| *p != MAGENTA_RGBA).count();
             // Looking 30 degrees down from 190 m over the tilted plane: the
             // lower half of the image at least is ground.

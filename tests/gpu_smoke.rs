@@ -2,11 +2,11 @@
 
 mod common;
 
+use common::diamond_patch::DiamondPatch;
+use common::smoke_triangle::{SmokeTriangle, TARGET_FORMAT};
 use common::{gpu_test, Rng};
 use vista::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation};
-use vista::passes::diamond_patch::DiamondPatch;
 use vista::passes::prefix_sum::PrefixSum;
-use vista::passes::smoke_triangle::{SmokeTriangle, TARGET_FORMAT};
 
 fn storage(ctx: &Context, name: &str, bytes: u64) -> Buffer {
     let usage =
@@ -59,12 +59,12 @@ fn target(ctx: &Context, size: u32) -> Image {
 /// Alpha of each pixel after `draw`, row-major from the top row.
 fn covered(ctx: &Context, img: &Image, draw: impl FnOnce(&mut vista::gpu::Recorder)) -> Vec<bool> {
     ctx.submit_and_wait(|rec| {
-        rec.image_layout(img, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+        rec.discard_to(img, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
         draw(rec);
         Ok(())
     })
     .unwrap();
-    let px = ctx.read_image(img, 0, 0, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, 4).unwrap();
+    let px = ctx.read_image(img, 0, 0, 4).unwrap();
     px.chunks(4).map(|p| p[3] == 255).collect()
 }
 

@@ -1,9 +1,15 @@
-//! The frame executor returns per-pass GPU timings as data, late, and they
-//! export as JSON and Chrome trace.
+//! The frame executor returns per-pass GPU timings as data, late, in pass
+//! order, and they measure the work: a pass with thousands of times more
+//! triangles takes longer and starts after the tiny one ends. They export as
+//! JSON (with medians) and Chrome trace.
 
 mod common;
 
+use common::diamond_patch::DiamondPatch;
 use common::gpu_test;
+use common::smoke_triangle::{SmokeTriangle, TARGET_FORMAT};
+use vista::frame::{FrameExecutor, FrameTimings, QueueKind};
+use vista::gpu::{vk, FrameRing, Image, ImageDesc};
 
 #[test]
 fn smoke_frames_report_every_pass_in_order() {
@@ -13,17 +19,81 @@ fn smoke_frames_report_every_pass_in_order() {
         for f in &out.frames {
             let names: Vec<&str> = f.passes.iter().map(|p| p.name).collect();
             assert_eq!(names, ["prefix_sum", "smoke_triangle", "diamond_patch"]);
-            for p in &f.passes {
-                assert!(p.gpu_ms.is_finite() && p.gpu_ms >= 0.0 && p.start_ms >= 0.0, "{p:?}");
-            }
             assert!(f.passes.windows(2).all(|w| w[1].start_ms >= w[0].start_ms));
         }
         let frames: Vec<u64> = out.frames.iter().map(|f| f.frame).collect();
         assert!(frames.windows(2).all(|w| w[1] > w[0]), "frames arrive in order: {frames:?}");
-        let json: serde_json::Value = serde_json::from_str(&vista::profiler::to_json(&out.frames)).unwrap();
-        assert_eq!(json["summary"].as_array().unwrap().len(), 3);
-        let trace: serde_json::Value = serde_json::from_str(&vista::profiler::to_chrome_trace(&out.frames)).unwrap();
+        // The JSON summary's medians are the medians of the frames' numbers.
+        let json: serde_json::Value = serde_json::from_str(&vista::frame::profiler::to_json(&out.frames)).unwrap();
+        let summary = json["summary"].as_array().unwrap();
+        assert_eq!(summary.len(), 3);
+        for s in summary {
+            let name = s["name"].as_str().unwrap();
+            let mut v: Vec<f64> =
+                out.frames.iter().flat_map(|f| f.passes.iter().filter(|p| p.name == name).map(|p| p.gpu_ms)).collect();
+            v.sort_by(f64::total_cmp);
+            let n = v.len();
+            let median = if n % 2 == 1 { v[n / 2] } else { (v[n / 2 - 1] + v[n / 2]) / 2.0 };
+            assert_eq!(s["median_ms"].as_f64(), Some(median), "{name}");
+        }
+        let trace: serde_json::Value =
+            serde_json::from_str(&vista::frame::profiler::to_chrome_trace(&out.frames)).unwrap();
         let events = trace["traceEvents"].as_array().unwrap();
         assert_eq!(events.iter().filter(|e| e["ph"] == "X").count(), out.frames.len() * 3);
+    });
+}
+
+#[test]
+fn a_large_pass_times_longer_than_a_tiny_one_and_after_it() {
+    gpu_test(|ctx| {
+        let target = |name, side| {
+            Image::new(
+                ctx,
+                &ImageDesc {
+                    name,
+                    format: TARGET_FORMAT,
+                    extent: [side, side],
+                    mip_levels: 1,
+                    array_layers: 1,
+                    usage: vk::ImageUsageFlags::COLOR_ATTACHMENT,
+                },
+            )
+            .unwrap()
+        };
+        // One triangle into 8x8 pixels against 2 x 256^2 = 131072 triangles
+        // into 512x512: over 10^5 times the vertex work, serial on lavapipe.
+        let (small, large) = (target("tiny_target", 8), target("large_target", 512));
+        let tri = SmokeTriangle::new(ctx).unwrap();
+        let patch = DiamondPatch::new(ctx, 256).unwrap();
+        let corners = [[-1.0, -1.0, 0.0, 1.0], [1.0, -1.0, 0.0, 1.0], [-1.0, 1.0, 0.0, 1.0]];
+        let mut ring = FrameRing::new(ctx, 2).unwrap();
+        let mut exec = FrameExecutor::new(ctx, 2, 2).unwrap();
+        let mut frames: Vec<FrameTimings> = Vec::new();
+        for _ in 0..4 {
+            ring.record(ctx, |rec| {
+                rec.discard_to(&small, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+                rec.discard_to(&large, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+                let mut frame = exec.begin(rec);
+                frame.pass("tiny", QueueKind::Graphics, |r| tri.record(r, &small, corners));
+                frame.pass("large", QueueKind::Graphics, |r| patch.record(r, &large, None));
+                Ok(())
+            })
+            .unwrap();
+            if let Some(t) = exec.latest() {
+                if frames.last().is_none_or(|l| l.frame < t.frame) {
+                    frames.push(t.clone());
+                }
+            }
+        }
+        ring.wait_all(ctx).unwrap();
+        assert!(!frames.is_empty(), "no timings came back");
+        for f in &frames {
+            let [tiny, large] = [&f.passes[0], &f.passes[1]];
+            assert_eq!((tiny.name, large.name), ("tiny", "large"));
+            assert!(large.gpu_ms > tiny.gpu_ms, "frame {}: large {large:?} vs tiny {tiny:?}", f.frame);
+            // Passes run in order: the large one starts once the tiny one ended
+            // (both timestamps come from the same clock).
+            assert!(large.start_ms >= tiny.start_ms + tiny.gpu_ms - 1e-6, "frame {}: {f:?}", f.frame);
+        }
     });
 }

@@ -5,9 +5,8 @@ mod common;
 
 use common::{fake_node, gpu_test, Rng};
 use std::collections::BTreeSet;
-use vista::gpu::vk;
-use vista::gpu_quadtree::{GpuQuadtree, ATLAS_LAYOUT};
 use vista::passes::quadtree_update::QuadtreeUpdatePass;
+use vista::terrain::gpu_quadtree::GpuQuadtree;
 use vista::world::{NodeId, WorldDesc};
 
 /// 8 x 6 sectors of 128 m, 4 LODs: a 1x1 root grid, texture padded to 8x8,
@@ -52,7 +51,7 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
             // Over budget, the rest waits; mirror what became resident.
             resident.retain(|id| tree.shadow.slot_of(*id).is_some());
             for (lod, expect) in tree.shadow.mips.iter().enumerate() {
-                let got = ctx.read_image(&tree.node_texture, lod as u32, 0, vk::ImageLayout::GENERAL, 2).unwrap();
+                let got = ctx.read_image(&tree.node_texture, lod as u32, 0, 2).unwrap();
                 assert_eq!(bytemuck::cast_slice::<u8, u16>(&got), &expect[..], "step {step}: node texture mip {lod}");
             }
             let descs = ctx.read_buffer(&tree.node_descs).unwrap();
@@ -80,11 +79,11 @@ fn payloads_land_in_the_atlas_layer_of_their_slot() {
         for (i, id) in nodes.iter().enumerate() {
             let slot = tree.shadow.slot_of(*id).expect("resident");
             let node = fake_node(*id, i as u16);
-            let h = ctx.read_image(&tree.atlases[0], 0, slot, ATLAS_LAYOUT, 2).unwrap();
+            let h = ctx.read_image(&tree.atlases[0], 0, slot, 2).unwrap();
             assert_eq!(bytemuck::cast_slice::<u8, u16>(&h), &node.heights[..], "heights of {id} in layer {slot}");
-            let a = ctx.read_image(&tree.atlases[2], 0, slot, ATLAS_LAYOUT, 4).unwrap();
+            let a = ctx.read_image(&tree.atlases[2], 0, slot, 4).unwrap();
             assert_eq!(a, bytemuck::cast_slice::<[u8; 4], u8>(&node.albedo), "albedo of {id}");
-            let c = ctx.read_image(&tree.atlases[5], 0, slot, ATLAS_LAYOUT, 16).unwrap();
+            let c = ctx.read_image(&tree.atlases[5], 0, slot, 16).unwrap();
             assert_eq!(c, bytemuck::cast_slice::<[f32; 4], u8>(&node.patch_cones), "cones of {id}");
         }
     });

@@ -1,60 +1,224 @@
-//! Every shader validates, Rust twins match the reflected struct sizes, and a
-//! broken shader is reported with its file and line.
+//! The generated shader bank: it holds every shader file, Rust twins of GPU
+//! structs match the reflected layouts member by member, shared constants
+//! have one source, and a broken shader is reported with its file and line.
 
 #[path = "../build/shader_compiler.rs"]
 #[allow(dead_code)]
 mod shader_compiler;
 
-use vista::shaders;
+use std::mem::{offset_of, size_of};
+use std::path::Path;
+use vista::shaders::{self, layouts, structs};
+
+fn shader_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders_glsl")
+}
 
 #[test]
-fn every_shader_parses_and_validates_with_naga() {
-    assert!(shaders::ALL.len() >= 5);
-    for sh in shaders::ALL {
-        let bytes: Vec<u8> = sh.spirv.iter().flat_map(|w| w.to_le_bytes()).collect();
-        let opts = naga::front::spv::Options {
-            adjust_coordinate_space: false,
-            strict_capabilities: false,
-            block_ctx_dump_prefix: None,
+fn the_bank_holds_every_shader_file_once() {
+    let mut on_disk: Vec<String> = std::fs::read_dir(shader_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    on_disk.sort();
+    let mut in_bank: Vec<String> =
+        shaders::ALL.iter().map(|s| Path::new(s.file).file_name().unwrap().to_string_lossy().into_owned()).collect();
+    in_bank.sort();
+    assert_eq!(in_bank, on_disk);
+    for s in shaders::ALL {
+        // The pass name is the file stem; graphics stages add their stage.
+        let stem = Path::new(s.file).file_stem().unwrap().to_str().unwrap();
+        let expect = match s.stage {
+            vista::gpu::ShaderStage::Compute => stem.to_string(),
+            vista::gpu::ShaderStage::Vertex => format!("{stem}_vert"),
+            vista::gpu::ShaderStage::Fragment => format!("{stem}_frag"),
         };
-        let module = naga::front::spv::parse_u8_slice(&bytes, &opts).unwrap_or_else(|e| panic!("{}: {e}", sh.file));
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{}: {e}", sh.file));
-        assert_eq!(sh.spirv[0], 0x0723_0203, "{}: SPIR-V magic", sh.file);
+        assert_eq!(s.name, expect);
+    }
+}
+
+/// (field name, byte offset, byte size) of a Rust struct's fields.
+macro_rules! fields {
+    ($t:ty: $($f:ident),+ $(,)?) => {{
+        fn size_of_field<T, F>(_: fn(&T) -> &F) -> usize {
+            size_of::<F>()
+        }
+        (size_of::<$t>(), vec![$((stringify!($f), offset_of!($t, $f), size_of_field(|t: &$t| &t.$f))),+])
+    }};
+}
+
+/// The GLSL member name a Rust field stands for: `pad0`/`pad1` are the
+/// elements of a Rust `pad` array, `dispatch_x/y/z` of `dispatch`.
+fn stem(glsl: &str) -> &str {
+    let s = glsl.trim_end_matches(|c: char| c.is_ascii_digit());
+    s.strip_suffix("_x").or(s.strip_suffix("_y")).or(s.strip_suffix("_z")).unwrap_or(s)
+}
+
+/// Every GLSL member lies inside the Rust field of its name, the members of
+/// a field tile it exactly, and the sizes agree: a swapped or missing field
+/// fails here even when the total size matches.
+fn check_layout(what: &str, rust: (usize, Vec<(&str, usize, usize)>), glsl: &[(&str, usize, usize)], size: usize) {
+    let (rust_size, fields) = rust;
+    assert_eq!(rust_size, size, "{what}: Rust size vs GLSL size");
+    for (name, off, len) in &fields {
+        let inside: Vec<_> = glsl.iter().filter(|(_, o, _)| (*off..off + len).contains(o)).collect();
+        assert!(!inside.is_empty(), "{what}.{name}: no GLSL member at bytes {off}..{}", off + len);
+        for (m, _, _) in &inside {
+            assert!(*m == *name || stem(m) == *name, "{what}.{name} at {off} holds GLSL member {m}");
+        }
+        let covered: usize = inside.iter().map(|(_, _, s)| s).sum();
+        assert_eq!((inside[0].1, covered), (*off, *len), "{what}.{name}: GLSL members {inside:?} do not tile it");
+    }
+    for (m, o, _) in glsl {
+        assert!(fields.iter().any(|(_, off, len)| (*off..off + len).contains(o)), "{what}: GLSL member {m} unmatched");
     }
 }
 
 #[test]
-fn rust_twins_match_reflected_sizes() {
-    use std::mem::size_of;
-    use vista::passes::{
-        diamond_patch::DiamondPatchPush, prefix_sum::PrefixSumPush, smoke_triangle::SmokeTrianglePush,
-    };
-    assert_eq!(size_of::<PrefixSumPush>(), shaders::structs::PREFIX_SUM_PUSH);
-    assert_eq!(size_of::<SmokeTrianglePush>(), shaders::structs::SMOKE_TRIANGLE_PUSH);
-    assert_eq!(size_of::<DiamondPatchPush>(), shaders::structs::DIAMOND_PATCH_PUSH);
-    assert_eq!(size_of::<PrefixSumPush>() as u32, shaders::prefix_sum::PUSH_CONSTANT_SIZE);
+fn rust_twins_match_reflected_layouts() {
+    use vista::passes::cull_patches::{CullPush, PatchListHeader};
+    use vista::passes::prefix_sum::PrefixSumPush;
     use vista::passes::quadtree_update::QuadtreeUpdatePush;
-    use vista::passes::traverse::{TraverseHeader, TraversePush};
-    use vista::quadtree::QuadtreeUpdate;
-    assert_eq!(size_of::<QuadtreeUpdate>(), shaders::structs::QUADTREE_UPDATE);
-    assert_eq!(size_of::<QuadtreeUpdatePush>(), shaders::structs::QUADTREE_UPDATE_PUSH);
-    assert_eq!(size_of::<TraversePush>(), shaders::structs::TRAVERSE_PUSH);
-    assert_eq!(size_of::<TraverseHeader>(), shaders::structs::TRAVERSE_HEADER);
+    use vista::passes::sector_data::SectorDataPush;
+    use vista::passes::terrain_geometry::GeometryPush;
+    use vista::passes::terrain_query::{TerrainQueryPush, VistaTerrain};
+    use vista::passes::traverse::{LevelArgs, TraverseHeader, TraversePush};
+    use vista::render::TerrainViewGpu;
+    use vista::terrain::quadtree::QuadtreeUpdate;
+
+    check_layout("PrefixSumPush", fields!(PrefixSumPush: count), layouts::PREFIX_SUM_PUSH, structs::PREFIX_SUM_PUSH);
+    check_layout(
+        "QuadtreeUpdate",
+        fields!(QuadtreeUpdate: target, coords, word0, word1),
+        layouts::QUADTREE_UPDATE,
+        structs::QUADTREE_UPDATE,
+    );
+    check_layout(
+        "QuadtreeUpdatePush",
+        fields!(QuadtreeUpdatePush: count),
+        layouts::QUADTREE_UPDATE_PUSH,
+        structs::QUADTREE_UPDATE_PUSH,
+    );
+    check_layout(
+        "TraversePush",
+        fields!(TraversePush: cameras, camera_count, target_error_px, sector_size_m, lod_count, root_grid_x,
+            root_grid_y, height_lo, height_scale, list_capacity, final_capacity, current_lod, pad),
+        layouts::TRAVERSE_PUSH,
+        structs::TRAVERSE_PUSH,
+    );
+    check_layout(
+        "TraverseHeader",
+        fields!(TraverseHeader: dispatch, node_count, overflow, missing_roots, pad, lod_counts),
+        layouts::TRAVERSE_HEADER,
+        structs::TRAVERSE_HEADER,
+    );
+    check_layout("LevelArgs", fields!(LevelArgs: x, y, z, count), layouts::LEVEL_ARGS, structs::LEVEL_ARGS);
+    check_layout(
+        "SectorDataPush",
+        fields!(SectorDataPush: sectors_x, sectors_y, lod_count, pad),
+        layouts::SECTOR_DATA_PUSH,
+        structs::SECTOR_DATA_PUSH,
+    );
+    check_layout(
+        "VistaTerrain",
+        fields!(VistaTerrain: sector_size_m, spacing_m, sectors_x, sectors_y, lod_count, height_lo, height_range, pad),
+        layouts::VISTA_TERRAIN,
+        structs::VISTA_TERRAIN,
+    );
+    check_layout(
+        "TerrainQueryPush",
+        fields!(TerrainQueryPush: terrain, count, pad),
+        layouts::TERRAIN_QUERY_PUSH,
+        structs::TERRAIN_QUERY_PUSH,
+    );
+    check_layout("CullPush", fields!(CullPush: stages, capacity, pad), layouts::CULL_PUSH, structs::CULL_PUSH);
+    check_layout(
+        "PatchListHeader",
+        fields!(PatchListHeader: index_count, instance_count, first_index, vertex_offset, first_instance, patches_in,
+            after_frustum, after_cone, after_hole, pad),
+        layouts::PATCH_LIST_HEADER,
+        structs::PATCH_LIST_HEADER,
+    );
+    // The header leads with a VkDrawIndexedIndirectCommand.
+    assert_eq!(offset_of!(PatchListHeader, first_instance) + 4, 20);
+    check_layout("GeometryPush", fields!(GeometryPush: nan_bits, pad), layouts::GEOMETRY_PUSH, structs::GEOMETRY_PUSH);
+    check_layout(
+        "TerrainViewGpu",
+        fields!(TerrainViewGpu: view_proj, frustum, sun_dir, sun_color, sky_color, camera_sample, camera_frac,
+            camera_z, spacing_m, height_lo, height_scale, height_range, lod_map_w, lod_map_h, pad),
+        layouts::TERRAIN_VIEW,
+        structs::TERRAIN_VIEW,
+    );
+    // Push-constant blocks are exactly what the pipelines were built with.
     assert_eq!(size_of::<TraversePush>() as u32, shaders::traverse::PUSH_CONSTANT_SIZE);
     assert_eq!(shaders::traverse::PUSH_CONSTANT_SIZE, shaders::traverse_level::PUSH_CONSTANT_SIZE);
-    use vista::passes::cull_patches::{CullPush, PatchListHeader};
-    use vista::passes::terrain_geometry::GeometryPush;
-    use vista::render::TerrainViewGpu;
-    assert_eq!(size_of::<CullPush>(), shaders::structs::CULL_PUSH);
     assert_eq!(size_of::<CullPush>() as u32, shaders::cull_patches::PUSH_CONSTANT_SIZE);
-    assert_eq!(size_of::<PatchListHeader>(), shaders::structs::PATCH_LIST_HEADER);
-    // The header leads with a VkDrawIndexedIndirectCommand.
-    assert_eq!(std::mem::offset_of!(PatchListHeader, first_instance) + 4, 20);
-    assert_eq!(size_of::<GeometryPush>(), shaders::structs::GEOMETRY_PUSH);
     assert_eq!(size_of::<GeometryPush>() as u32, shaders::terrain_geometry_vert::PUSH_CONSTANT_SIZE);
-    assert_eq!(size_of::<TerrainViewGpu>(), shaders::structs::TERRAIN_VIEW);
+    assert_eq!(size_of::<SectorDataPush>() as u32, shaders::sector_data::PUSH_CONSTANT_SIZE);
+    assert_eq!(size_of::<TerrainQueryPush>() as u32, shaders::terrain_query::PUSH_CONSTANT_SIZE);
+}
+
+#[test]
+fn a_swapped_field_fails_the_layout_check() {
+    #[repr(C)]
+    struct Swapped {
+        capacity: u32,
+        stages: u32,
+        pad: [u32; 2],
+    }
+    let r = std::panic::catch_unwind(|| {
+        check_layout("Swapped", fields!(Swapped: capacity, stages, pad), layouts::CULL_PUSH, structs::CULL_PUSH)
+    });
+    assert!(r.is_err(), "same size, swapped fields: must fail");
+}
+
+#[test]
+fn shared_constants_have_one_source() {
+    // No shader redeclares a name of constants.glsl (a second copy could
+    // drift); the table itself parses to what the bank exports.
+    let dir = shader_dir();
+    let text = std::fs::read_to_string(dir.join("common/constants.glsl")).unwrap();
+    let parsed = shader_compiler::parse_constants(&text, "constants.glsl").unwrap();
+    let exported: Vec<(String, u32)> = shaders::consts::ALL.iter().map(|(n, v)| (n.to_string(), *v)).collect();
+    assert_eq!(parsed.iter().map(|c| (c.name.clone(), c.value)).collect::<Vec<_>>(), exported);
+    let files = std::fs::read_dir(&dir).unwrap().chain(std::fs::read_dir(dir.join("common")).unwrap());
+    for path in files.map(|e| e.unwrap().path()).filter(|p| p.is_file() && !p.ends_with("constants.glsl")) {
+        let src = std::fs::read_to_string(&path).unwrap();
+        for (name, _) in shaders::consts::ALL {
+            for decl in [format!("const uint {name} "), format!("#define {name} ")] {
+                assert!(!src.contains(&decl), "{}: redeclares {name}; include constants.glsl", path.display());
+            }
+        }
+    }
+    // Values the host relies on, derived independently of the table.
+    use shaders::consts as k;
+    assert_eq!(k::MAX_SLOTS, (1 << k::SLOT_BITS) - 1, "slots fill the 10-bit fields");
+    const { assert!(k::SHARED_LIST_CAPACITY > k::MAX_SLOTS, "a shared list holds every resident node") };
+    assert_eq!(k::NODE_EMPTY, u32::from(u16::MAX), "R16 node texture");
+    assert_eq!(k::SECTOR_DATA_LODS, 2 * k::SECTOR_LODS_PER_WORD, "two u32 words per sector");
+    const { assert!(k::SECTOR_LODS_PER_WORD * k::SLOT_BITS <= 32) };
+    assert_eq!(k::PATCH_DELTA_SHIFT + 4 * k::PATCH_DELTA_BITS, 32, "four deltas end the word");
+    assert_eq!(1u32 << k::MAX_LOD_DELTA, vista::world::PATCH_QUADS);
+}
+
+#[test]
+fn the_constants_table_rejects_anything_but_defines() {
+    let ok = "// doc\n#define A 1u\n#define B 0x10u\n";
+    let c = shader_compiler::parse_constants(ok, "t").unwrap();
+    assert_eq!(c.iter().map(|c| (c.name.as_str(), c.value)).collect::<Vec<_>>(), [("A", 1), ("B", 16)]);
+    assert_eq!(c[1].doc, "doc", "a comment documents the defines below it");
+    for (bad, why) in [
+        ("#define A 1\n", "needs a `u` suffix"),
+        ("#define A 1u\n#define A 2u\n", "defined twice"),
+        ("const uint A = 1u;\n", "expected `#define"),
+        ("#define a 1u\n", "UPPER_SNAKE_CASE"),
+        ("#define A 0xZZu\n", "bad value"),
+    ] {
+        let err = shader_compiler::parse_constants(bad, "t.glsl").expect_err(bad);
+        assert!(err.contains(why) && err.contains("t.glsl:"), "{bad:?}: {err}");
+    }
 }
 
 #[test]

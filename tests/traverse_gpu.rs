@@ -6,17 +6,15 @@ mod common;
 
 use common::{fake_node, gpu_test, Rng};
 use std::collections::BTreeSet;
-use vista::gpu::vk;
 use vista::gpu::Context;
-use vista::gpu_quadtree::GpuQuadtree;
 use vista::passes::lod_map::LodMap;
 use vista::passes::quadtree_update::QuadtreeUpdatePass;
 use vista::passes::sector_data::SectorData;
 use vista::passes::terrain_query::{TerrainQuery, VistaTerrain};
 use vista::passes::traverse::{Traverse, TraverseMode};
-use vista::traverse_cpu::{
-    lod_map_cpu, sample_height_cpu, sector_data_cpu, traverse_cpu, TraverseCamera, TraverseParams, TraverseResult,
-};
+use vista::reference::{lod_map_cpu, sample_height_cpu, sector_data_cpu, traverse_cpu};
+use vista::terrain::gpu_quadtree::GpuQuadtree;
+use vista::terrain::selection::{TraverseCamera, TraverseParams, TraverseResult};
 use vista::world::{NodeId, WorldDesc};
 
 /// 32 x 31 sectors of 128 m, 5 LODs: a 2x2 root grid with a partial row.
@@ -168,7 +166,7 @@ fn gpu_traversal_equals_cpu_reference_for_1000_random_cases() {
                 .unwrap();
                 let (header, got) = traverse.read_result(ctx).unwrap();
                 assert_eq!(got, expect, "case {case} {mode:?}: GPU list differs from the CPU reference");
-                let map = ctx.read_image(&lod_map.image, 0, 0, vk::ImageLayout::GENERAL, 1).unwrap();
+                let map = ctx.read_image(&lod_map.image, 0, 0, 1).unwrap();
                 assert_eq!(map, lod_map_cpu(&expect, &world()), "case {case} {mode:?}: LOD map");
                 let sd = ctx.read_buffer(&sectors.buffer).unwrap();
                 let sd_expect: Vec<u32> = sector_data_cpu(&scene.tree.shadow, &world()).into_iter().flatten().collect();

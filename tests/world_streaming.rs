@@ -202,14 +202,10 @@ fn streamer_with_loader_threads() {
     let mut on_gpu: HashSet<NodeId> = HashSet::new();
     let mut failed = Vec::new();
     let mut rng = Rng(99);
-    let start = Instant::now();
-    let mut frame_max = Duration::ZERO;
     for step in 0..400 {
         let t = step as f64 / 400.0;
         let pos = [200.0 + t * 3500.0, 300.0 + t * 3000.0, 10.0];
-        let f0 = Instant::now();
         let frame = s.frame(pos, None);
-        frame_max = frame_max.max(f0.elapsed());
         for id in &frame.removed {
             assert!(on_gpu.remove(id), "removed {id} that never arrived");
         }
@@ -238,14 +234,62 @@ fn streamer_with_loader_threads() {
     assert!(on_gpu.contains(&world.node_at(0, end[0], end[1]).unwrap()));
     assert!(failed.contains(&bad), "the failing node was not reported");
     assert!(!on_gpu.contains(&bad));
-    println!(
-        "streamer: {} resident at the end, slowest frame {:?}, total {:?}",
-        on_gpu.len(),
-        frame_max,
-        start.elapsed()
-    );
-    // Frames never wait for loads (a load takes >= 1 ms plus a bake).
-    assert!(frame_max < Duration::from_millis(50), "frame blocked: {frame_max:?}");
+    println!("streamer: {} resident at the end", on_gpu.len());
+}
+
+/// Frames never wait for loads, shown without a clock: every load is held
+/// behind a gate while frames run, so a frame that waited on one could not
+/// return. The loads are in flight meanwhile (started, none arrived), and
+/// all land once the gate opens. The watchdog only turns a deadlock into a
+/// failure instead of a hung test.
+#[test]
+fn frames_never_wait_for_loads() {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use std::sync::{Condvar, Mutex};
+    let world = WorldDesc { extent_m: [2048.0, 2048.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 3 };
+    let gate = Arc::new((Mutex::new(false), Condvar::new()));
+    let started = Arc::new(AtomicUsize::new(0));
+    let (g, st, w2) = (Arc::clone(&gate), Arc::clone(&started), world);
+    let load: Arc<LoadFn> = Arc::new(move |id| {
+        st.fetch_add(1, Ordering::SeqCst);
+        let (open, cv) = &*g;
+        let _open = cv.wait_while(open.lock().unwrap(), |o| !*o).unwrap();
+        Ok(bake_node(&Flat(10.0), &w2, &[], id))
+    });
+    let open_gate = |gate: &(Mutex<bool>, Condvar)| {
+        *gate.0.lock().unwrap() = true;
+        gate.1.notify_all();
+    };
+    let fired = Arc::new(AtomicBool::new(false));
+    let (wg, wf) = (Arc::clone(&gate), Arc::clone(&fired));
+    std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_secs(120));
+        if !*wg.0.lock().unwrap() {
+            wf.store(true, Ordering::SeqCst);
+            open_gate(&wg);
+        }
+    });
+    let loader = Loader::new(2, load).unwrap();
+    let mut s = Streamer::new(Residency::new(&world, ResidencyConfig::default()).unwrap(), loader);
+    let pos = [1000.0, 1000.0, 10.0];
+    for frame in 0..50 {
+        let f = s.frame(pos, None);
+        assert!(f.arrived.is_empty() && f.failed.is_empty(), "frame {frame}: a gated load finished");
+        // Let the loader threads pick requests up (no clock involved in the check).
+        while frame == 0 && started.load(Ordering::SeqCst) == 0 {
+            std::thread::yield_now();
+        }
+    }
+    assert!(!fired.load(Ordering::SeqCst), "a frame waited for a load (watchdog opened the gate)");
+    assert!(started.load(Ordering::SeqCst) >= 1, "no load was in flight");
+    assert!(s.residency().pending_count() > 0, "requests are pending while gated");
+    open_gate(&gate);
+    let mut arrived = 0;
+    while s.residency().pending_count() > 0 {
+        arrived += s.frame(pos, None).arrived.len();
+        std::thread::yield_now();
+    }
+    assert!(arrived > 0 && !fired.load(Ordering::SeqCst));
 }
 
 #[test]
@@ -305,10 +349,14 @@ fn bake_world_region_and_timings() {
     let dir = temp_dir("bake_world");
     let region = Some([5000.0, 5000.0, 5128.0, 5128.0]);
     let stats = bake_world(Arc::clone(&src), &world, &[], region, &dir, false).unwrap();
+    // Counted by hand, not by the bake's own region function: nodes of
+    // side 64 * 2^lod m overlapping [5000, 5128) on each axis. LOD 0: 78..=80
+    // (3); LOD 1 (128 m): 39..=40; LOD 2 (256 m): 19..=20; LOD 3 (512 m):
+    // 9..=10; LOD 4 (1024 m): 4..=5 (5120 < 5128); LOD 5 (2048 m): 2 only.
+    assert_eq!(stats.nodes_per_lod, [9, 4, 4, 4, 4, 1]);
+    assert_eq!(stats.baked, 26);
     let expected = nodes_in_region(&world, region);
-    assert_eq!(stats.nodes_per_lod.iter().sum::<usize>(), expected.len());
-    assert_eq!(stats.nodes_per_lod[0], 9);
-    assert_eq!(stats.baked, expected.len());
+    assert_eq!(expected.len(), 26);
     assert_eq!(
         stats.bytes_on_disk,
         expected.len() as u64

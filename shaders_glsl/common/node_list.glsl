@@ -4,11 +4,13 @@
 #ifndef VISTA_NODE_LIST_GLSL
 #define VISTA_NODE_LIST_GLSL
 
-// Packed node reference: lod (4 bits) << 28 | y (14 bits) << 14 | x (14 bits).
-uint pack_node(uint lod, uint x, uint y) { return (lod << 28) | (y << 14) | x; }
-uint node_lod(uint n) { return n >> 28; }
-uint node_x(uint n) { return n & 0x3FFFu; }
-uint node_y(uint n) { return (n >> 14) & 0x3FFFu; }
+#include "constants.glsl"
+
+// Packed node reference (constants.glsl NODE_REF_*).
+uint pack_node(uint lod, uint x, uint y) { return (lod << NODE_REF_LOD_SHIFT) | (y << NODE_REF_Y_SHIFT) | x; }
+uint node_lod(uint n) { return n >> NODE_REF_LOD_SHIFT; }
+uint node_x(uint n) { return n & NODE_REF_COORD_MASK; }
+uint node_y(uint n) { return (n >> NODE_REF_Y_SHIFT) & NODE_REF_COORD_MASK; }
 
 struct TraverseHeader {
     uint dispatch_x;     // indirect args for lod_map / cull_patches: one workgroup per node
@@ -19,7 +21,7 @@ struct TraverseHeader {
     uint missing_roots;  // valid roots not resident yet (coverage gap)
     uint pad0;
     uint pad1;
-    uint lod_counts[16];
+    uint lod_counts[MAX_LEVELS];
 };
 
 #endif

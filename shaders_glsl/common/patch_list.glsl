@@ -19,16 +19,17 @@ struct PatchListHeader {
     uint pad2;
 };
 
-// Patch record: x = packed node (node_list.glsl); y = slot (10 bits) |
-// patch index py * 8 + px (6 bits) << 10 | LOD deltas << 16, 4 bits per
-// edge: west, east, south, north (bits 16, 20, 24, 28).
-const uint EDGE_WEST = 0u;
-const uint EDGE_EAST = 1u;
-const uint EDGE_SOUTH = 2u;
-const uint EDGE_NORTH = 3u;
+#include "constants.glsl"
 
-uint patch_slot(uvec2 p) { return p.y & 0x3FFu; }
-uint patch_index(uvec2 p) { return (p.y >> 10) & 0x3Fu; }
-uint patch_delta(uvec2 p, uint edge) { return (p.y >> (16u + 4u * edge)) & 0xFu; }
+// Patch record: x = packed node (node_list.glsl); y = slot | patch index
+// (py * 8 + px) | LOD deltas, one per edge in EDGE_* order (constants.glsl).
+uint pack_patch(uint slot, uint index, uint deltas) {
+    return slot | (index << PATCH_INDEX_SHIFT) | (deltas << PATCH_DELTA_SHIFT);
+}
+uint patch_slot(uvec2 p) { return bitfieldExtract(p.y, 0, int(SLOT_BITS)); }
+uint patch_index(uvec2 p) { return (p.y >> PATCH_INDEX_SHIFT) & PATCH_INDEX_MASK; }
+uint patch_delta(uvec2 p, uint edge) {
+    return bitfieldExtract(p.y, int(PATCH_DELTA_SHIFT + PATCH_DELTA_BITS * edge), int(PATCH_DELTA_BITS));
+}
 
 #endif

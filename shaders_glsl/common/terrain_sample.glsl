@@ -30,6 +30,7 @@ struct VistaTerrain {
 
 #if !defined(VISTA_TERRAIN_DECLARE_ONLY) && !defined(VISTA_TERRAIN_SAMPLE_GLSL)
 #define VISTA_TERRAIN_SAMPLE_GLSL
+#include "constants.glsl"
 
 struct VistaNodeHit {
     uint slot;   // 0 = nothing resident covers the point
@@ -42,7 +43,7 @@ VistaNodeHit vista_find_node(vec2 p) {
     uvec2 d = VISTA_SECTOR(uint(s.y) * VISTA_TERRAIN.sectors_x + uint(s.x));
     VistaNodeHit hit = VistaNodeHit(0u, 0u, vec2(0.0));
     for (uint k = 0u; k < VISTA_TERRAIN.lod_count; ++k) {
-        uint slot = ((k < 3u ? d.x : d.y) >> (10u * (k % 3u))) & 0x3FFu;
+        uint slot = bitfieldExtract(k < SECTOR_LODS_PER_WORD ? d.x : d.y, int(SLOT_BITS * (k % SECTOR_LODS_PER_WORD)), int(SLOT_BITS));
         if (slot != 0u) {
             float node = VISTA_TERRAIN.sector_size_m * float(1u << k);
             vec2 origin = floor(p / node) * node;

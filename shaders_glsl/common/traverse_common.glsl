@@ -4,12 +4,6 @@
 #ifndef VISTA_TRAVERSE_COMMON_GLSL
 #define VISTA_TRAVERSE_COMMON_GLSL
 
-// Node texture values (quadtree.rs EMPTY / INVALID).
-const uint NODE_EMPTY = 0xFFFFu;
-const uint NODE_INVALID = 0xFFFEu;
-// Up to this many cameras refine the same node list (traverse.rs MAX_CAMERAS).
-const uint MAX_CAMERAS = 4u;
-
 #include "node_list.glsl"
 
 layout(set = 0, binding = 0) uniform utexture2D node_texture;
@@ -44,13 +38,13 @@ uint node_value(uint lod, uint x, uint y) {
 // Projected vertical error in pixels against the target, for any camera:
 // err * w / dist > target, compared squared. Only correctly rounded
 // operations (add, mul, ldexp), no contraction, so the CPU reference
-// (traverse_cpu.rs) makes bit-identical decisions.
+// (src/reference/traverse.rs) makes bit-identical decisions.
 bool wants_refine(uint lod, uint x, uint y, uint slot) {
     uvec2 d = node_descs.descs[slot];
     precise float size = pc.sector_size_m * float(1u << lod);
-    precise vec3 bmin = vec3(float(x) * size, float(y) * size, pc.height_lo + float(d.x & 0xFFFFu) * pc.height_scale);
-    precise vec3 bmax = vec3(bmin.x + size, bmin.y + size, pc.height_lo + float(d.x >> 16) * pc.height_scale);
-    int bias = bitfieldExtract(int(d.y), 14, 4);
+    precise vec3 bmin = vec3(float(x) * size, float(y) * size, pc.height_lo + float(bitfieldExtract(d.x, 0, int(HALF_BITS))) * pc.height_scale);
+    precise vec3 bmax = vec3(bmin.x + size, bmin.y + size, pc.height_lo + float(d.x >> HALF_BITS) * pc.height_scale);
+    int bias = bitfieldExtract(int(d.y), int(DESC_BIAS_SHIFT), int(DESC_BIAS_BITS));
     precise float err = ldexp(node_errors.errors[slot], bias);
     precise float target_sq = pc.target_error_px * pc.target_error_px;
     for (uint c = 0; c < pc.camera_count; ++c) {

@@ -4,11 +4,11 @@
 //! and with culling off, in one run; per-pass GPU medians after warm-up.
 
 use crate::error::Result;
+use crate::frame::profiler::summarize;
 use crate::gpu::Context;
 use crate::passes::cull_patches::{CullCounters, CullPatches, CullStages};
 use crate::passes::terrain_geometry::TerrainGeometry;
 use crate::passes::traverse::Traverse;
-use crate::profiler::summarize;
 use crate::render::offscreen::Offscreen;
 use crate::render::view::{Camera, View, DEFAULT_NEAR_M};
 use crate::render::TerrainRenderer;

@@ -3,13 +3,13 @@
 //! frames so their ratio is measured under the same conditions.
 
 use crate::error::Result;
+use crate::frame::profiler::summarize;
 use crate::frame::{FrameExecutor, QueueKind};
 use crate::gpu::{Context, FrameRing};
-use crate::gpu_quadtree::GpuQuadtree;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::traverse::{Traverse, TraverseMode};
-use crate::profiler::summarize;
-use crate::traverse_cpu::{TraverseCamera, TraverseParams};
+use crate::terrain::gpu_quadtree::GpuQuadtree;
+use crate::terrain::selection::{TraverseCamera, TraverseParams};
 use crate::world::{bake_node, HeightSource, NodeId, WorldDesc};
 use rayon::prelude::*;
 use serde::Serialize;

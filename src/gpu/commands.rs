@@ -1,30 +1,39 @@
-//! Safe recording into a command buffer: synchronization2 barriers, push
-//! descriptors checked against reflection, dispatch, (indirect) draws,
-//! dynamic rendering, debug labels and timestamps.
+//! Safe recording into a command buffer: synchronization2 barriers and
+//! layout transitions, push descriptors checked against reflection,
+//! dispatches and (indirect) draws, dynamic rendering. Transfers, labels and
+//! queries are in `transfer.rs`.
+//!
+//! "Safe" is checked, not assumed: the recorder tracks whether a rendering
+//! scope is open and which pipeline is bound at each bind point, every
+//! image carries the layout its recorded transitions leave it in, and
+//! indirect arguments are bounds- and usage-checked. A violation is a
+//! programmer error and panics before the command reaches Vulkan.
 
 use super::context::Context;
 use super::pipeline::Pipeline;
-use super::query::TimestampPool;
 use super::resources::{aspect_of, Buffer, Image};
 use super::shader::{Binding, BindingKind};
 use ash::vk;
-use std::ffi::CString;
 
 /// A resource bound to a reflected binding.
 pub enum Resource<'a> {
     Buffer(&'a Buffer),
     /// (buffer, offset, size)
     BufferRange(&'a Buffer, u64, u64),
-    /// An image in the given layout (GENERAL for storage images).
+    /// An image that must be in the given layout (GENERAL for storage images).
     Image(&'a Image, vk::ImageLayout),
-    /// One mip of an image, in the given layout.
+    /// One mip of an image, which must be in the given layout.
     ImageMip(&'a Image, u32, vk::ImageLayout),
     Sampler(vk::Sampler),
 }
 
 pub struct Recorder<'a> {
-    ctx: &'a Context,
-    cmd: vk::CommandBuffer,
+    pub(super) ctx: &'a Context,
+    pub(super) cmd: vk::CommandBuffer,
+    /// A dynamic rendering scope is open.
+    pub(super) rendering: bool,
+    compute: Option<vk::Pipeline>,
+    graphics: Option<vk::Pipeline>,
 }
 
 /// A color attachment for `begin_rendering`, cleared to `clear`.
@@ -38,10 +47,12 @@ impl<'a> Recorder<'a> {
     ///
     /// # Safety
     /// `cmd` must be a command buffer of `ctx`'s device in the recording
-    /// state, allocated from a pool of a queue family that supports the
-    /// commands recorded, and not recorded into elsewhere meanwhile.
+    /// state, outside any render pass or rendering scope, allocated from a
+    /// pool of a queue family that supports the commands recorded, and not
+    /// recorded into elsewhere while this recorder lives. Images used here
+    /// must be in the layouts their [`Image::layout`] reports.
     pub unsafe fn from_raw(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
-        Recorder { ctx, cmd }
+        Recorder { ctx, cmd, rendering: false, compute: None, graphics: None }
     }
 
     pub fn context(&self) -> &'a Context {
@@ -52,25 +63,48 @@ impl<'a> Recorder<'a> {
         self.cmd
     }
 
-    fn d(&self) -> &ash::Device {
+    /// True while a `begin_rendering` scope is open.
+    pub fn is_rendering(&self) -> bool {
+        self.rendering
+    }
+
+    pub(super) fn d(&self) -> &ash::Device {
         &self.ctx.shared.device
+    }
+
+    pub(super) fn outside_rendering(&self, what: &str) {
+        assert!(!self.rendering, "{what} inside a rendering scope (call end_rendering first)");
     }
 
     /// Makes all earlier writes visible to all later reads (on lavapipe every
     /// barrier drains all work anyway; on real GPUs passes pick narrower ones).
     pub fn barrier(&mut self, src: vk::PipelineStageFlags2, dst: vk::PipelineStageFlags2) {
+        self.outside_rendering("barrier");
         let mb = [vk::MemoryBarrier2::default()
             .src_stage_mask(src)
             .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
             .dst_stage_mask(dst)
             .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)];
         let dep = vk::DependencyInfo::default().memory_barriers(&mb);
-        // SAFETY: recording state guaranteed by construction.
+        // SAFETY: recording state by construction; outside rendering (checked).
         unsafe { self.d().cmd_pipeline_barrier2(self.cmd, &dep) };
     }
 
-    /// Full barrier plus a layout transition of every subresource of `image`.
-    pub fn image_layout(&mut self, image: &Image, old: vk::ImageLayout, new: vk::ImageLayout) {
+    /// Full barrier plus a transition of every subresource of `image` from
+    /// its tracked layout to `new` (contents kept).
+    pub fn transition(&mut self, image: &Image, new: vk::ImageLayout) {
+        self.layout_barrier(image, image.layout(), new);
+    }
+
+    /// Like `transition`, but from UNDEFINED: the contents may be dropped
+    /// (a target that is cleared next).
+    pub fn discard_to(&mut self, image: &Image, new: vk::ImageLayout) {
+        self.layout_barrier(image, vk::ImageLayout::UNDEFINED, new);
+    }
+
+    fn layout_barrier(&mut self, image: &Image, old: vk::ImageLayout, new: vk::ImageLayout) {
+        self.outside_rendering("layout transition");
+        assert_ne!(new, vk::ImageLayout::UNDEFINED, "{}: cannot transition to UNDEFINED", image.name);
         let range = vk::ImageSubresourceRange::default()
             .aspect_mask(aspect_of(image.format))
             .level_count(vk::REMAINING_MIP_LEVELS)
@@ -87,39 +121,49 @@ impl<'a> Recorder<'a> {
             .image(image.raw)
             .subresource_range(range)];
         let dep = vk::DependencyInfo::default().image_memory_barriers(&ib);
-        // SAFETY: image is live for the borrow; recording state by construction.
+        // SAFETY: image is live for the borrow; `old` is its tracked layout
+        // (or UNDEFINED, always valid); outside rendering (checked).
         unsafe { self.d().cmd_pipeline_barrier2(self.cmd, &dep) };
+        image.set_layout(new);
     }
 
     pub fn bind_pipeline(&mut self, p: &Pipeline) {
+        match p.bind_point {
+            vk::PipelineBindPoint::COMPUTE => self.compute = Some(p.raw),
+            _ => self.graphics = Some(p.raw),
+        }
         // SAFETY: live pipeline.
         unsafe { self.d().cmd_bind_pipeline(self.cmd, p.bind_point, p.raw) };
     }
 
+    fn assert_bound(&self, p: &Pipeline, what: &str) {
+        let bound = if p.bind_point == vk::PipelineBindPoint::COMPUTE { self.compute } else { self.graphics };
+        assert_eq!(bound, Some(p.raw), "{what} for pipeline {}, which is not the bound one", p.name);
+    }
+
     /// Binds resources to `p`'s reflected bindings; the kind of each resource
-    /// must match the shader's declaration (a programmer error otherwise).
+    /// must match the shader's declaration and each image must be in the
+    /// layout named (programmer errors otherwise).
     pub fn push_descriptors(&mut self, p: &Pipeline, bindings: &[(Binding, Resource)]) {
+        self.assert_bound(p, "push_descriptors");
         let mut buffer_infos = Vec::with_capacity(bindings.len());
         let mut image_infos = Vec::with_capacity(bindings.len());
         for (b, r) in bindings {
             assert!(p.bindings.contains(b), "{}: binding {} is not part of pipeline {}", b.name, b.binding, p.name);
+            let image_info = |img: &Image, view, layout: vk::ImageLayout| {
+                assert_eq!(img.layout(), layout, "{}: image {} bound as {layout:?}", b.name, img.name);
+                vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: view, image_layout: layout }
+            };
             match r {
                 Resource::Buffer(buf) => {
                     buffer_infos.push(vk::DescriptorBufferInfo { buffer: buf.raw, offset: 0, range: vk::WHOLE_SIZE })
                 }
                 Resource::BufferRange(buf, offset, size) => {
+                    assert!(offset + size <= buf.size, "{}: range {offset}+{size} overruns {}", b.name, buf.name);
                     buffer_infos.push(vk::DescriptorBufferInfo { buffer: buf.raw, offset: *offset, range: *size })
                 }
-                Resource::Image(img, layout) => image_infos.push(vk::DescriptorImageInfo {
-                    sampler: vk::Sampler::null(),
-                    image_view: img.view(),
-                    image_layout: *layout,
-                }),
-                Resource::ImageMip(img, mip, layout) => image_infos.push(vk::DescriptorImageInfo {
-                    sampler: vk::Sampler::null(),
-                    image_view: img.mip_view(*mip),
-                    image_layout: *layout,
-                }),
+                Resource::Image(img, layout) => image_infos.push(image_info(img, img.view(), *layout)),
+                Resource::ImageMip(img, mip, layout) => image_infos.push(image_info(img, img.mip_view(*mip), *layout)),
                 Resource::Sampler(s) => image_infos.push(vk::DescriptorImageInfo {
                     sampler: *s,
                     image_view: vk::ImageView::null(),
@@ -161,6 +205,7 @@ impl<'a> Recorder<'a> {
 
     /// `data` must be exactly the reflected push-constant block.
     pub fn push_constants<T: bytemuck::Pod>(&mut self, p: &Pipeline, data: &T) {
+        self.assert_bound(p, "push_constants");
         let bytes = bytemuck::bytes_of(data);
         assert_eq!(
             bytes.len() as u32,
@@ -175,20 +220,39 @@ impl<'a> Recorder<'a> {
     }
 
     pub fn dispatch(&mut self, x: u32, y: u32, z: u32) {
-        // SAFETY: recording state by construction.
+        self.outside_rendering("dispatch");
+        assert!(self.compute.is_some(), "dispatch with no compute pipeline bound");
+        let max = self.ctx.info().limits.max_compute_workgroup_count;
+        assert!(x <= max[0] && y <= max[1] && z <= max[2], "dispatch {x}x{y}x{z} exceeds the device's {max:?}");
+        // SAFETY: outside rendering, compute pipeline bound, counts in limits (checked).
         unsafe { self.d().cmd_dispatch(self.cmd, x, y, z) };
     }
 
+    /// One `VkDispatchIndirectCommand` at `offset` of `args` (written on the
+    /// GPU; its counts are the shader writer's to keep in limits).
     pub fn dispatch_indirect(&mut self, args: &Buffer, offset: u64) {
-        // SAFETY: live buffer; bounds are the validation layer's to check.
+        self.outside_rendering("dispatch_indirect");
+        assert!(self.compute.is_some(), "dispatch_indirect with no compute pipeline bound");
+        indirect_range(args, offset, std::mem::size_of::<vk::DispatchIndirectCommand>() as u64);
+        // SAFETY: live buffer with INDIRECT usage, range checked; pipeline bound.
         unsafe { self.d().cmd_dispatch_indirect(self.cmd, args.raw, offset) };
     }
 
     /// Begins dynamic rendering into `colors` (+ optional depth cleared to
-    /// 0, reversed-Z), with a full-target viewport and scissor.
+    /// 0, reversed-Z), with a full-target viewport and scissor. The targets
+    /// must be in COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL.
     pub fn begin_rendering(&mut self, colors: &[ColorTarget], depth: Option<&Image>) {
+        self.outside_rendering("begin_rendering");
         let extent =
             colors.first().map(|c| c.image.extent).or(depth.map(|d| d.extent)).expect("begin_rendering needs a target");
+        for (img, layout) in colors
+            .iter()
+            .map(|c| (c.image, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL))
+            .chain(depth.map(|d| (d, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)))
+        {
+            assert_eq!(img.layout(), layout, "render target {} is not in {layout:?}", img.name);
+            assert_eq!(img.extent, extent, "render target {} differs in size from the first", img.name);
+        }
         let color_atts: Vec<_> = colors
             .iter()
             .map(|c| {
@@ -224,26 +288,38 @@ impl<'a> Recorder<'a> {
             min_depth: 0.0,
             max_depth: 1.0,
         };
-        // SAFETY: attachments are live and in the layouts named above.
+        // SAFETY: attachments are live, equally sized and in the layouts
+        // named above (checked); no scope was open (checked).
         unsafe {
             self.d().cmd_begin_rendering(self.cmd, &info);
             self.d().cmd_set_viewport(self.cmd, 0, &[viewport]);
             self.d().cmd_set_scissor(self.cmd, 0, &[area]);
         }
+        self.rendering = true;
     }
 
     pub fn end_rendering(&mut self) {
-        // SAFETY: paired with begin_rendering by the caller.
+        assert!(self.rendering, "end_rendering without begin_rendering");
+        // SAFETY: a scope is open (checked).
         unsafe { self.d().cmd_end_rendering(self.cmd) };
+        self.rendering = false;
+    }
+
+    fn drawable(&self, what: &str) {
+        assert!(self.rendering, "{what} outside a rendering scope");
+        assert!(self.graphics.is_some(), "{what} with no graphics pipeline bound");
     }
 
     pub fn draw(&mut self, vertices: u32, instances: u32) {
-        // SAFETY: inside a rendering scope with a bound graphics pipeline.
+        self.drawable("draw");
+        // SAFETY: inside a rendering scope with a bound graphics pipeline (checked).
         unsafe { self.d().cmd_draw(self.cmd, vertices, instances, 0, 0) };
     }
 
     pub fn draw_indexed(&mut self, indices: &Buffer, index_count: u32, instances: u32) {
-        // SAFETY: live u32 index buffer.
+        self.drawable("draw_indexed");
+        index_buffer(indices, index_count);
+        // SAFETY: rendering, pipeline bound, index range checked.
         unsafe {
             self.d().cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
             self.d().cmd_draw_indexed(self.cmd, index_count, instances, 0, 0, 0);
@@ -253,15 +329,12 @@ impl<'a> Recorder<'a> {
     /// One `VkDrawIndexedIndirectCommand` at `offset` of `args` (written on
     /// the GPU), drawing with the u32 `indices`.
     pub fn draw_indexed_indirect(&mut self, indices: &Buffer, args: &Buffer, offset: u64) {
+        self.drawable("draw_indexed_indirect");
         let size = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u64;
-        assert!(
-            offset.is_multiple_of(4) && offset + size <= args.size,
-            "indirect draw at {offset} overruns {} ({} bytes)",
-            args.name,
-            args.size
-        );
-        // SAFETY: live buffers, the command's range checked above;
-        // multiDrawIndirect is not needed for one draw.
+        indirect_range(args, offset, size);
+        index_buffer(indices, 0);
+        // SAFETY: rendering, pipeline bound, the command's range and the
+        // usages checked; multiDrawIndirect is not needed for one draw.
         unsafe {
             self.d().cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
             self.d().cmd_draw_indexed_indirect(self.cmd, args.raw, offset, 1, size as u32);
@@ -277,126 +350,43 @@ impl<'a> Recorder<'a> {
         count_offset: u64,
         max_draws: u32,
     ) {
+        self.drawable("draw_indexed_indirect_count");
         let stride = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u32;
-        // SAFETY: live buffers; drawIndirectCount is a required feature.
+        indirect_range(args, 0, u64::from(stride) * u64::from(max_draws));
+        indirect_range(count, count_offset, 4);
+        index_buffer(indices, 0);
+        // SAFETY: rendering, pipeline bound, ranges and usages checked;
+        // drawIndirectCount is a required feature.
         unsafe {
             self.d().cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
             self.d().cmd_draw_indexed_indirect_count(self.cmd, args.raw, 0, count.raw, count_offset, max_draws, stride);
         }
     }
+}
 
-    pub fn fill_buffer(&mut self, buf: &Buffer, value: u32) {
-        // SAFETY: live buffer, whole range.
-        unsafe { self.d().cmd_fill_buffer(self.cmd, buf.raw, 0, vk::WHOLE_SIZE, value) };
-    }
-
-    /// Writes up to 64 KiB of `data` at `offset` inline in the command buffer.
-    pub fn update_buffer(&mut self, buf: &Buffer, offset: u64, data: &[u8]) {
-        assert!(
-            data.len() <= 65536 && data.len().is_multiple_of(4) && offset + data.len() as u64 <= buf.size,
-            "update of {}",
-            buf.name
-        );
-        // SAFETY: size, alignment and range checked above.
-        unsafe { self.d().cmd_update_buffer(self.cmd, buf.raw, offset, data) };
-    }
-
-    /// Clears every mip and layer of an integer colour image in GENERAL layout.
-    pub fn clear_color_u32(&mut self, img: &Image, value: u32) {
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(vk::ImageAspectFlags::COLOR)
-            .level_count(vk::REMAINING_MIP_LEVELS)
-            .layer_count(vk::REMAINING_ARRAY_LAYERS);
-        let color = vk::ClearColorValue { uint32: [value; 4] };
-        // SAFETY: live image in GENERAL (valid for clears).
-        unsafe { self.d().cmd_clear_color_image(self.cmd, img.raw, vk::ImageLayout::GENERAL, &color, &[range]) };
-    }
-
-    pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, size: u64) {
-        assert!(size <= src.size && size <= dst.size, "copy of {size} bytes overruns {} or {}", src.name, dst.name);
-        // SAFETY: live buffers, size checked.
-        unsafe {
-            self.d().cmd_copy_buffer(
-                self.cmd,
-                src.raw,
-                dst.raw,
-                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }],
-            )
-        };
-    }
-
-    /// Copies one mip of one layer of `img` (in TRANSFER_SRC_OPTIMAL), tightly packed.
-    pub fn copy_image_to_buffer(&mut self, img: &Image, mip: u32, layer: u32, dst: &Buffer) {
-        let region = packed_region(img, mip, layer, 0);
-        // SAFETY: live objects; the layer validates sizes.
-        unsafe {
-            self.d().cmd_copy_image_to_buffer(
-                self.cmd,
-                img.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                dst.raw,
-                &[region],
-            )
-        };
-    }
-
-    /// Copies tightly packed texels at `offset` of `src` into one mip of one
-    /// layer of `img`, which must be in TRANSFER_DST_OPTIMAL.
-    pub fn copy_buffer_to_image(&mut self, src: &Buffer, offset: u64, img: &Image, mip: u32, layer: u32) {
-        let region = packed_region(img, mip, layer, offset);
-        // SAFETY: live objects; the caller put the image in TRANSFER_DST_OPTIMAL.
-        unsafe {
-            self.d().cmd_copy_buffer_to_image(
-                self.cmd,
-                src.raw,
-                img.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[region],
-            )
-        };
-    }
-
-    /// Opens a debug-utils label (RenderDoc / Nsight show the pass by name).
-    pub fn begin_label(&mut self, name: &str) {
-        if let Some(dd) = &self.ctx.shared.debug_device {
-            let name = CString::new(name).unwrap_or_default();
-            // SAFETY: valid command buffer; debug utils loaded.
-            unsafe { dd.cmd_begin_debug_utils_label(self.cmd, &vk::DebugUtilsLabelEXT::default().label_name(&name)) };
+impl Drop for Recorder<'_> {
+    fn drop(&mut self) {
+        // A scope left open would make the caller's next command invalid.
+        if !std::thread::panicking() {
+            assert!(!self.rendering, "recorder dropped inside a rendering scope");
         }
-    }
-
-    pub fn end_label(&mut self) {
-        if let Some(dd) = &self.ctx.shared.debug_device {
-            // SAFETY: paired with begin_label.
-            unsafe { dd.cmd_end_debug_utils_label(self.cmd) };
-        }
-    }
-
-    pub fn reset_queries(&mut self, pool: &TimestampPool, first: u32, count: u32) {
-        // SAFETY: range within the pool (asserted by the pool's user).
-        unsafe { self.d().cmd_reset_query_pool(self.cmd, pool.raw, first, count) };
-    }
-
-    pub fn write_timestamp(&mut self, pool: &TimestampPool, index: u32) {
-        assert!(index < pool.capacity, "timestamp {index} outside pool of {}", pool.capacity);
-        // SAFETY: index checked; the query was reset this frame.
-        unsafe { self.d().cmd_write_timestamp2(self.cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool.raw, index) };
     }
 }
 
-/// One whole mip of one layer, tightly packed at `offset` in the buffer.
-fn packed_region(img: &Image, mip: u32, layer: u32, offset: u64) -> vk::BufferImageCopy {
-    vk::BufferImageCopy::default()
-        .buffer_offset(offset)
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: aspect_of(img.format),
-            mip_level: mip,
-            base_array_layer: layer,
-            layer_count: 1,
-        })
-        .image_extent(vk::Extent3D {
-            width: (img.extent[0] >> mip).max(1),
-            height: (img.extent[1] >> mip).max(1),
-            depth: 1,
-        })
+/// `size` bytes of indirect arguments at `offset` of `args`: aligned, in
+/// bounds, and the buffer made for indirect use.
+fn indirect_range(args: &Buffer, offset: u64, size: u64) {
+    assert!(
+        offset.is_multiple_of(4) && offset + size <= args.size,
+        "indirect arguments at {offset} (+{size}) overrun {} ({} bytes)",
+        args.name,
+        args.size
+    );
+    assert!(args.usage.contains(vk::BufferUsageFlags::INDIRECT_BUFFER), "{} lacks INDIRECT_BUFFER usage", args.name);
+}
+
+/// A u32 index buffer holding at least `count` indices.
+fn index_buffer(indices: &Buffer, count: u32) {
+    assert!(indices.usage.contains(vk::BufferUsageFlags::INDEX_BUFFER), "{} lacks INDEX_BUFFER usage", indices.name);
+    assert!(u64::from(count) * 4 <= indices.size, "{count} indices overrun {}", indices.name);
 }

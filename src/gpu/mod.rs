@@ -8,6 +8,7 @@ pub mod query;
 pub mod resources;
 pub mod shader;
 pub mod submit;
+mod transfer;
 pub mod validation;
 
 pub use ash::vk;

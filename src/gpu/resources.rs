@@ -8,7 +8,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 pub use gpu_allocator::MemoryLocation;
 use serde::Serialize;
-use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::atomic::{AtomicI32, AtomicI64, Ordering};
 use std::sync::Arc;
 
 /// Live-object counters; tests assert they are all zero at teardown.
@@ -140,6 +140,8 @@ pub struct Buffer {
     pub(crate) raw: vk::Buffer,
     allocation: Option<Allocation>,
     pub size: u64,
+    /// What the buffer was created for; the recorder checks it.
+    pub usage: vk::BufferUsageFlags,
     pub name: String,
     shared: Arc<Shared>,
 }
@@ -197,6 +199,7 @@ impl Buffer {
             raw,
             allocation: Some(allocation),
             size: desc.size,
+            usage: desc.usage,
             name: desc.name.to_string(),
             shared: s.clone(),
         })
@@ -246,6 +249,9 @@ pub struct Image {
     pub mip_levels: u32,
     pub array_layers: u32,
     pub name: String,
+    /// Layout of every subresource after the last command recorded for it
+    /// (see [`Image::layout`]).
+    layout: AtomicI32,
     shared: Arc<Shared>,
 }
 
@@ -260,6 +266,19 @@ pub(crate) fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
 }
 
 impl Image {
+    /// The layout every subresource is in once the commands recorded so far
+    /// have executed. The recorder sets it on each transition and checks it
+    /// wherever a command needs a layout. It follows recording order, which
+    /// is submission order on vista's queues: a command buffer recorded and
+    /// then dropped unsubmitted leaves it wrong (a programmer error).
+    pub fn layout(&self) -> vk::ImageLayout {
+        vk::ImageLayout::from_raw(self.layout.load(Ordering::Relaxed))
+    }
+
+    pub(crate) fn set_layout(&self, layout: vk::ImageLayout) {
+        self.layout.store(layout.as_raw(), Ordering::Relaxed);
+    }
+
     pub fn new(ctx: &Context, desc: &ImageDesc) -> Result<Image> {
         let max = ctx.info().limits.max_image_dimension_2d;
         let [w, h] = desc.extent;
@@ -342,6 +361,7 @@ impl Image {
             mip_levels: desc.mip_levels,
             array_layers: desc.array_layers,
             name: desc.name.to_string(),
+            layout: AtomicI32::new(vk::ImageLayout::UNDEFINED.as_raw()),
             shared: s.clone(),
         })
     }

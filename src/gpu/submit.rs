@@ -216,16 +216,12 @@ impl Context {
         Ok(staging.mapped().expect("GpuToCpu buffers are mapped").to_vec())
     }
 
-    /// Reads one mip of one layer, tightly packed; `layout` is the image's
-    /// current layout and is restored afterwards.
-    pub fn read_image(
-        &self,
-        img: &Image,
-        mip: u32,
-        layer: u32,
-        layout: vk::ImageLayout,
-        bytes_per_texel: u64,
-    ) -> Result<Vec<u8>> {
+    /// Reads one mip of one layer, tightly packed; the image returns to its
+    /// tracked layout afterwards. Reading an image nothing was recorded into
+    /// is a programmer error.
+    pub fn read_image(&self, img: &Image, mip: u32, layer: u32, bytes_per_texel: u64) -> Result<Vec<u8>> {
+        let layout = img.layout();
+        assert_ne!(layout, vk::ImageLayout::UNDEFINED, "read of {}, which holds nothing yet", img.name);
         let w = (img.extent[0] >> mip).max(1) as u64;
         let h = (img.extent[1] >> mip).max(1) as u64;
         let staging = Buffer::new(
@@ -238,9 +234,9 @@ impl Context {
             },
         )?;
         self.submit_and_wait(|rec| {
-            rec.image_layout(img, layout, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+            rec.transition(img, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
             rec.copy_image_to_buffer(img, mip, layer, &staging);
-            rec.image_layout(img, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, layout);
+            rec.transition(img, layout);
             Ok(())
         })?;
         Ok(staging.mapped().expect("GpuToCpu buffers are mapped").to_vec())

@@ -10,16 +10,21 @@ use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
     SamplerDesc,
 };
-use crate::gpu_quadtree::{GpuQuadtree, ATLAS_LAYOUT, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_PATCH_MIN_MAX};
-use crate::passes::lod_map::{LodMap, NO_LOD};
+use crate::passes::lod_map::LodMap;
 use crate::passes::traverse::Traverse;
+use crate::shaders::consts as k;
 use crate::shaders::{cull_patches as sh, structs};
-use crate::world::{PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_HOLE_ALL, PATCH_QUADS};
+use crate::terrain::gpu_quadtree::{
+    GpuQuadtree, ATLAS_LAYOUT, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_PATCH_MIN_MAX,
+};
+use crate::terrain::quadtree::node_from_ref;
+use crate::world::{PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS};
 use serde::Serialize;
 
 /// Largest stitched LOD delta: a patch edge of 2^4 quads can snap to a grid
 /// at most 2^4 times coarser without moving its corners.
-pub const MAX_LOD_DELTA: u32 = PATCH_QUADS.trailing_zeros();
+pub const MAX_LOD_DELTA: u32 = k::MAX_LOD_DELTA;
+const _: () = assert!(MAX_LOD_DELTA == PATCH_QUADS.trailing_zeros());
 
 /// Which culling stages run (all by default; tests and benchmarks switch
 /// them off to show what each removes and costs).
@@ -34,9 +39,12 @@ impl CullStages {
     pub const ALL: CullStages = CullStages { frustum: true, cone: true, hole: true };
     pub const NONE: CullStages = CullStages { frustum: false, cone: false, hole: false };
 
-    /// Bits of `CullPush::stages` (cull_patches.comp STAGE_*).
+    /// Bits of `CullPush::stages`.
     fn bits(self) -> u32 {
-        u32::from(self.frustum) | u32::from(self.cone) << 1 | u32::from(self.hole) << 2
+        let bit = |on: bool, b: u32| if on { b } else { 0 };
+        bit(self.frustum, k::CULL_STAGE_FRUSTUM)
+            | bit(self.cone, k::CULL_STAGE_CONE)
+            | bit(self.hole, k::CULL_STAGE_HOLE)
     }
 }
 
@@ -99,13 +107,16 @@ pub struct PatchRecord {
 
 impl PatchRecord {
     fn unpack([n, w]: [u32; 2]) -> Self {
+        let node = node_from_ref(n);
+        let field = |shift: u32, bits: u32| (w >> shift) & ((1 << bits) - 1);
+        let delta = |edge: u32| field(k::PATCH_DELTA_SHIFT + k::PATCH_DELTA_BITS * edge, k::PATCH_DELTA_BITS) as u8;
         PatchRecord {
-            lod: (n >> 28) as u8,
-            node_x: n & 0x3FFF,
-            node_y: (n >> 14) & 0x3FFF,
-            slot: w & 0x3FF,
-            patch: (w >> 10) & 0x3F,
-            deltas: [0, 1, 2, 3].map(|e| ((w >> (16 + 4 * e)) & 0xF) as u8),
+            lod: node.lod,
+            node_x: node.x,
+            node_y: node.y,
+            slot: field(0, k::SLOT_BITS),
+            patch: (w >> k::PATCH_INDEX_SHIFT) & k::PATCH_INDEX_MASK,
+            deltas: [k::EDGE_WEST, k::EDGE_EAST, k::EDGE_SOUTH, k::EDGE_NORTH].map(delta),
         }
     }
 }
@@ -120,7 +131,7 @@ pub struct CullPatches {
 }
 
 impl CullPatches {
-    pub const NAME: &'static str = "cull_patches";
+    pub const NAME: &'static str = sh::PASS;
 
     /// Room for every patch of the traversal's largest final list;
     /// `index_count` is the patch mesh's, written into the draw args.
@@ -147,13 +158,7 @@ impl CullPatches {
                 address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
             },
         )?;
-        let spec = [
-            (sh::SPEC_PATCH_HOLE_ALL, u32::from(PATCH_HOLE_ALL)),
-            (sh::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE),
-            (sh::SPEC_PATCH_QUADS, PATCH_QUADS),
-            (sh::SPEC_NO_LOD, u32::from(NO_LOD)),
-            (sh::SPEC_MAX_DELTA, MAX_LOD_DELTA),
-        ];
+        let spec = [(sh::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)];
         let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &spec };
         Ok(CullPatches { pipeline: Pipeline::compute(ctx, &desc)?, sampler, list, capacity, index_count })
     }

@@ -5,13 +5,13 @@
 use crate::error::Result;
 use crate::gpu::{vk, ComputePipelineDesc, Context, Image, ImageDesc, Pipeline, Recorder, Resource};
 use crate::passes::traverse::Traverse;
-use crate::quadtree::texture_extent;
 use crate::shaders::lod_map as sh;
+use crate::terrain::quadtree::texture_extent;
 use crate::world::WorldDesc;
 
 /// LOD map value of a sector no listed node covers (outside the world, or
 /// its root not resident yet).
-pub const NO_LOD: u8 = 0xFF;
+pub const NO_LOD: u8 = crate::shaders::consts::NO_LOD as u8;
 
 pub struct LodMap {
     pipeline: Pipeline,
@@ -20,7 +20,7 @@ pub struct LodMap {
 }
 
 impl LodMap {
-    pub const NAME: &'static str = "lod_map";
+    pub const NAME: &'static str = sh::PASS;
 
     pub fn new(ctx: &Context, world: &WorldDesc) -> Result<Self> {
         let image = Image::new(
@@ -38,7 +38,7 @@ impl LodMap {
             },
         )?;
         ctx.submit_and_wait(|rec| {
-            rec.image_layout(&image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
+            rec.discard_to(&image, vk::ImageLayout::GENERAL);
             Ok(())
         })?;
         let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &[] };

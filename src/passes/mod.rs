@@ -1,12 +1,10 @@
 //! One pass per file; the pass, its shader and its timer label share a name.
 
 pub mod cull_patches;
-pub mod diamond_patch;
 pub mod lod_map;
 pub mod prefix_sum;
 pub mod quadtree_update;
 pub mod sector_data;
-pub mod smoke_triangle;
 pub mod terrain_geometry;
 pub mod terrain_query;
 pub mod traverse;

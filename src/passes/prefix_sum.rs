@@ -20,7 +20,7 @@ pub struct PrefixSum {
 }
 
 impl PrefixSum {
-    pub const NAME: &'static str = "prefix_sum";
+    pub const NAME: &'static str = sh::PASS;
 
     pub fn new(ctx: &Context) -> Result<Self> {
         let spec = [(sh::SPEC_ITEMS_PER_THREAD, ITEMS_PER_THREAD)];
@@ -33,6 +33,11 @@ impl PrefixSum {
     }
 
     /// Largest input one dispatch scans.
+    /// The compute pipeline (tests bind it to probe the recorder's checks).
+    pub fn pipeline(&self) -> &Pipeline {
+        &self.pipeline
+    }
+
     pub fn capacity() -> u32 {
         sh::WORKGROUP_SIZE[0] * ITEMS_PER_THREAD
     }

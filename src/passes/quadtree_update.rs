@@ -4,8 +4,8 @@
 
 use crate::error::Result;
 use crate::gpu::{vk, Binding, ComputePipelineDesc, Context, Pipeline, Recorder, Resource};
-use crate::gpu_quadtree::GpuQuadtree;
 use crate::shaders::quadtree_update as sh;
+use crate::terrain::gpu_quadtree::GpuQuadtree;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -32,7 +32,7 @@ pub struct QuadtreeUpdatePass {
 }
 
 impl QuadtreeUpdatePass {
-    pub const NAME: &'static str = "quadtree_update";
+    pub const NAME: &'static str = sh::PASS;
 
     pub fn new(ctx: &Context) -> Result<Self> {
         let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &[] };

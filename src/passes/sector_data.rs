@@ -7,14 +7,14 @@ use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
     SamplerDesc,
 };
-use crate::gpu_quadtree::GpuQuadtree;
-use crate::quadtree::texture_extent;
 use crate::shaders::sector_data as sh;
+use crate::terrain::gpu_quadtree::GpuQuadtree;
+use crate::terrain::quadtree::texture_extent;
 use crate::world::WorldDesc;
 
 /// LODs whose slots fit two u32 at 10 bits (sector_data.comp SECTOR_DATA_LODS);
 /// coarser LODs of a deeper world are not reachable through sector data.
-pub const SECTOR_DATA_LODS: u32 = 6;
+pub const SECTOR_DATA_LODS: u32 = crate::shaders::consts::SECTOR_DATA_LODS;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -35,7 +35,7 @@ pub struct SectorData {
 }
 
 impl SectorData {
-    pub const NAME: &'static str = "sector_data";
+    pub const NAME: &'static str = sh::PASS;
 
     pub fn new(ctx: &Context, world: &WorldDesc) -> Result<Self> {
         let extent = texture_extent(world);

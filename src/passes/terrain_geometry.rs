@@ -9,10 +9,10 @@ use crate::gpu::{
     vk, Buffer, BufferDesc, ColorTarget, Context, GraphicsPipelineDesc, Image, MemoryLocation, Pipeline, Recorder,
     Resource, Sampler, SamplerDesc,
 };
-use crate::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
 use crate::passes::cull_patches::CullPatches;
-use crate::patch_grid::diamond_indices;
 use crate::shaders::{terrain_geometry_frag as fs, terrain_geometry_vert as vs};
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
+use crate::terrain::patch_grid::diamond_indices;
 use crate::world::{PATCHES_PER_NODE_SIDE, PATCH_QUADS};
 
 /// Colour target format of the lit output (gamma-encoded by the shader).
@@ -57,7 +57,7 @@ pub struct TerrainGeometry {
 }
 
 impl TerrainGeometry {
-    pub const NAME: &'static str = "terrain_geometry";
+    pub const NAME: &'static str = vs::PASS;
 
     /// `holes`: whether hole vertices are tested at all (a world without
     /// holes compiles the test out through a specialization constant).

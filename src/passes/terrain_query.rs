@@ -6,9 +6,9 @@ use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
     SamplerDesc,
 };
-use crate::gpu_quadtree::{GpuQuadtree, ATLAS_LAYOUT};
 use crate::passes::sector_data::{SectorData, SECTOR_DATA_LODS};
 use crate::shaders::terrain_query as sh;
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_LAYOUT};
 use crate::world::{WorldDesc, NODE_QUADS};
 
 /// Host twin of `VistaTerrain` (terrain_sample.glsl).
@@ -68,7 +68,7 @@ pub struct QueryAnswer {
 }
 
 impl TerrainQuery {
-    pub const NAME: &'static str = "terrain_query";
+    pub const NAME: &'static str = sh::PASS;
 
     pub fn new(ctx: &Context, capacity: u32) -> Result<Self> {
         if capacity == 0 {

@@ -9,20 +9,21 @@ use crate::gpu::{
     vk, Binding, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource,
     Sampler, SamplerDesc,
 };
-use crate::gpu_quadtree::GpuQuadtree;
-use crate::shaders::{structs, traverse as single, traverse_level as multi};
-use crate::traverse_cpu::{GpuInputs, TraverseParams, TraverseResult, MAX_CAMERAS};
+use crate::shaders::{consts as k, structs, traverse as single, traverse_level as multi};
+use crate::terrain::gpu_quadtree::GpuQuadtree;
+use crate::terrain::quadtree::node_from_ref;
+use crate::terrain::selection::{GpuInputs, TraverseParams, TraverseResult, MAX_CAMERAS};
 use crate::world::{NodeId, WorldDesc};
 
-/// Entries of each shared-memory list (traverse.comp SHARED_LIST_CAPACITY):
-/// every entry is a distinct resident node, so the slot budget bounds it.
-pub const SHARED_LIST_CAPACITY: u32 = 1024;
+/// Entries of each shared-memory list: every entry is a distinct resident
+/// node, so the slot budget bounds it.
+pub const SHARED_LIST_CAPACITY: u32 = k::SHARED_LIST_CAPACITY;
 /// Shared memory of traverse.comp: two lists plus two counters.
 pub const SHARED_BYTES: u32 = 2 * SHARED_LIST_CAPACITY * 4 + 8;
-/// `current_lod` of the finalize dispatch (traverse_level.comp LEVEL_FINALIZE).
-const LEVEL_FINALIZE: u32 = 0xFF;
-/// Levels of the `TraverseLevels` / `lod_counts` arrays (traverse_common.glsl).
-const MAX_LEVELS: usize = 16;
+/// `current_lod` of the finalize dispatch.
+const LEVEL_FINALIZE: u32 = k::LEVEL_FINALIZE;
+/// Levels of the `TraverseLevels` / `lod_counts` arrays.
+const MAX_LEVELS: usize = k::MAX_LEVELS as usize;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -53,6 +54,18 @@ pub struct TraverseHeader {
     pub lod_counts: [u32; MAX_LEVELS],
 }
 
+/// One level's indirect dispatch and list length (traverse_level.comp).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LevelArgs {
+    pub x: u32,
+    pub y: u32,
+    pub z: u32,
+    pub count: u32,
+}
+
+const LEVEL_ARGS_BYTES: u64 = std::mem::size_of::<LevelArgs>() as u64;
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TraverseMode {
     /// One dispatch, lists in shared memory.
@@ -74,8 +87,8 @@ pub struct Traverse {
 }
 
 impl Traverse {
-    pub const NAME: &'static str = "traverse";
-    pub const LEVEL_NAME: &'static str = "traverse_level";
+    pub const NAME: &'static str = single::PASS;
+    pub const LEVEL_NAME: &'static str = multi::PASS;
 
     /// Entries of the final node list (nodes past it are counted, not listed).
     pub fn final_capacity(&self) -> u32 {
@@ -127,7 +140,7 @@ impl Traverse {
                 ctx,
                 &BufferDesc {
                     name: "traverse_levels",
-                    size: (MAX_LEVELS * 16) as u64 + u64::from(world.lod_count * SHARED_LIST_CAPACITY) * 4,
+                    size: MAX_LEVELS as u64 * LEVEL_ARGS_BYTES + u64::from(world.lod_count * SHARED_LIST_CAPACITY) * 4,
                     usage: storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
                     location: MemoryLocation::GpuOnly,
                 },
@@ -180,7 +193,7 @@ impl Traverse {
             (single::TRAVERSE_OUT, Resource::Buffer(&self.output)),
         ];
         if mode == TraverseMode::MultiDispatch {
-            let init: Vec<u32> = (0..MAX_LEVELS).flat_map(|_| [0, 1, 1, 0]).collect();
+            let init = [LevelArgs { x: 0, y: 1, z: 1, count: 0 }; MAX_LEVELS];
             rec.update_buffer(&self.levels, 0, bytemuck::cast_slice(&init));
             bindings.push((multi::TRAVERSE_LEVELS, Resource::Buffer(&self.levels)));
         }
@@ -200,7 +213,7 @@ impl Traverse {
                     if lod == root {
                         rec.dispatch((gx * gy).div_ceil(multi::WORKGROUP_SIZE[0]), 1, 1);
                     } else {
-                        rec.dispatch_indirect(&self.levels, u64::from(lod) * 16);
+                        rec.dispatch_indirect(&self.levels, u64::from(lod) * LEVEL_ARGS_BYTES);
                     }
                     rec.barrier(
                         vk::PipelineStageFlags2::COMPUTE_SHADER,
@@ -221,8 +234,7 @@ impl Traverse {
         let header: TraverseHeader = bytemuck::pod_read_unaligned(&bytes[..hsize]);
         let n = (header.node_count.min(self.final_capacity)) as usize;
         let raw: &[[u32; 2]] = bytemuck::cast_slice(&bytes[hsize..hsize + n * 8]);
-        let mut nodes: Vec<(NodeId, u32)> =
-            raw.iter().map(|[p, slot]| (NodeId::new((p >> 28) as u8, p & 0x3FFF, (p >> 14) & 0x3FFF), *slot)).collect();
+        let mut nodes: Vec<(NodeId, u32)> = raw.iter().map(|[p, slot]| (node_from_ref(*p), *slot)).collect();
         nodes.sort();
         let result = TraverseResult {
             nodes,

@@ -71,8 +71,8 @@ impl Offscreen {
         let (color, depth, clear, init) = (&self.color, &self.depth, self.clear, !self.initialised);
         self.ring.record(ctx, |rec| {
             if init {
-                rec.image_layout(color, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                rec.image_layout(depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+                rec.discard_to(color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+                rec.discard_to(depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
             }
             renderer.record(rec, view, &RenderTargets { color, depth, clear })
         })?;
@@ -133,8 +133,8 @@ impl Offscreen {
     pub fn capture(&self, ctx: &Context) -> Result<Capture> {
         self.ring.wait_all(ctx)?;
         let size = self.color.extent;
-        let rgba = ctx.read_image(&self.color, 0, 0, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, 4)?;
-        let raw = ctx.read_image(&self.depth, 0, 0, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, 4)?;
+        let rgba = ctx.read_image(&self.color, 0, 0, 4)?;
+        let raw = ctx.read_image(&self.depth, 0, 0, 4)?;
         Ok(Capture { size, rgba, depth: bytemuck::pod_collect_to_vec(&raw) })
     }
 }

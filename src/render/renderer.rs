@@ -1,8 +1,8 @@
 //! [`TerrainRenderer`]: owns the terrain (streaming, GPU quadtree) and the
 //! passes that turn it into pixels, and records one frame into a command
-//! buffer the caller provides. Per frame, each pass wrapped by the frame
-//! executor in a debug label and a timestamp pair:
-//! quadtree_update -> traverse -> lod_map -> sector_data (terrain.rs), then
+//! buffer the caller provides. The frame, in order, each pass wrapped by the
+//! frame executor in a debug label and a timestamp pair (see `record`):
+//! quadtree_update -> traverse (one dispatch) -> lod_map -> sector_data ->
 //! cull_patches -> terrain_geometry (one instanced indirect draw).
 //!
 //! Teardown: fields drop in declaration order; every Vulkan object is
@@ -12,10 +12,14 @@ use crate::error::{Error, Result};
 use crate::frame::{FrameExecutor, FrameTimings, QueueKind};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
 use crate::passes::cull_patches::{CullPatches, CullStages};
+use crate::passes::lod_map::LodMap;
+use crate::passes::quadtree_update::QuadtreeUpdatePass;
+use crate::passes::sector_data::SectorData;
 use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry, COLOR_FORMAT, DEPTH_FORMAT};
-use crate::quadtree::texture_extent;
+use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::render::view::{Lighting, TerrainViewGpu, View};
 use crate::shaders::structs;
+use crate::terrain::quadtree::texture_extent;
 use crate::terrain::{Terrain, TerrainOptions};
 use crate::world::{HeightSource, Hole, WorldDesc};
 use std::sync::Arc;
@@ -32,6 +36,10 @@ pub struct RendererOptions {
 
 pub struct TerrainRenderer {
     pub terrain: Terrain,
+    update: QuadtreeUpdatePass,
+    pub traverse: Traverse,
+    pub lod_map: LodMap,
+    pub sector_data: SectorData,
     pub cull: CullPatches,
     pub geometry: TerrainGeometry,
     view_buffer: Buffer,
@@ -55,7 +63,8 @@ impl TerrainRenderer {
         let ragged_edge = world.extent_m.iter().any(|e| e % root != 0.0);
         let geometry = TerrainGeometry::new(ctx, !holes.is_empty() || ragged_edge)?;
         let terrain = Terrain::new(ctx, world, source, holes, &options.terrain)?;
-        let cull = CullPatches::new(ctx, &terrain.traverse, geometry.index_count())?;
+        let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
+        let cull = CullPatches::new(ctx, &traverse, geometry.index_count())?;
         let view_buffer = Buffer::new(
             ctx,
             &BufferDesc {
@@ -67,7 +76,11 @@ impl TerrainRenderer {
         )?;
         let exec = FrameExecutor::new(ctx, options.terrain.frames_in_flight, PASSES_PER_FRAME)?;
         Ok(TerrainRenderer {
+            update: QuadtreeUpdatePass::new(ctx)?,
+            lod_map: LodMap::new(ctx, world)?,
+            sector_data: SectorData::new(ctx, world)?,
             terrain,
+            traverse,
             cull,
             geometry,
             view_buffer,
@@ -96,17 +109,27 @@ impl TerrainRenderer {
         }
         let world = self.terrain.world;
         let gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.lighting);
+        let params = view.traverse_params();
+        self.terrain.stream(&params);
         let mut frame = self.exec.begin(rec);
-        self.terrain.record(&mut frame, &view.traverse_params())?;
-        let (terrain, cull, stages, view_buffer) = (&self.terrain, &self.cull, self.stages, &self.view_buffer);
+        let (tree, update) = (&mut self.terrain.tree, &self.update);
+        frame.pass(QuadtreeUpdatePass::NAME, QueueKind::Compute, |r| update.record(r, tree))?;
+        self.terrain.note_uploads();
+        let tree = &self.terrain.tree;
+        let (traverse, lod_map, sector_data) = (&self.traverse, &self.lod_map, &self.sector_data);
+        frame.pass(Traverse::NAME, QueueKind::Compute, |r| {
+            traverse.record(r, tree, &params, TraverseMode::SingleDispatch)
+        });
+        frame.pass(LodMap::NAME, QueueKind::Compute, |r| lod_map.record(r, traverse));
+        frame.pass(SectorData::NAME, QueueKind::Compute, |r| sector_data.record(r, tree));
+        let (cull, stages, view_buffer) = (&self.cull, self.stages, &self.view_buffer);
         frame.pass(CullPatches::NAME, QueueKind::Compute, |r| {
             let view_bytes = bytemuck::bytes_of(&gpu);
-            cull.record(r, &terrain.traverse, &terrain.tree, &terrain.lod_map, view_buffer, view_bytes, stages);
+            cull.record(r, traverse, tree, lod_map, view_buffer, view_bytes, stages);
         });
         let geometry = &self.geometry;
-        frame.pass(TerrainGeometry::NAME, QueueKind::Graphics, |r| {
-            geometry.record(r, targets, view_buffer, cull, &terrain.tree)
-        });
+        frame
+            .pass(TerrainGeometry::NAME, QueueKind::Graphics, |r| geometry.record(r, targets, view_buffer, cull, tree));
         Ok(())
     }
 

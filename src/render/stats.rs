@@ -5,9 +5,9 @@
 use crate::error::Result;
 use crate::gpu::Context;
 use crate::passes::cull_patches::CullCounters;
+use crate::reference::wanted_finer_cpu;
 use crate::render::renderer::TerrainRenderer;
 use crate::render::view::View;
-use crate::traverse_cpu::wanted_finer_cpu;
 use crate::world::PATCH_QUADS;
 use serde::Serialize;
 
@@ -33,7 +33,7 @@ pub struct RenderStats {
 pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result<RenderStats> {
     let patches = renderer.cull.read_counters(ctx)?;
     let terrain = &renderer.terrain;
-    let (header, _) = terrain.traverse.read_result(ctx)?;
+    let (header, _) = renderer.traverse.read_result(ctx)?;
     let lods = terrain.world.lod_count as usize;
     let wanted = wanted_finer_cpu(&terrain.tree.shadow, &terrain.world, &view.traverse_params());
     Ok(RenderStats {

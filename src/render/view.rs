@@ -9,7 +9,7 @@
 //! `d` (metres along the forward axis) stores `near_m / d`.
 
 use crate::error::{Error, Result};
-use crate::traverse_cpu::{TraverseCamera, TraverseParams};
+use crate::terrain::selection::{TraverseCamera, TraverseParams};
 use crate::world::{HeightSource, WorldDesc};
 use glam::{DMat4, DVec3, DVec4};
 

@@ -34,3 +34,18 @@ impl Fnv64 {
         self.0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Fnv64;
+
+    #[test]
+    fn matches_the_published_fnv1a_64_test_vectors() {
+        // From the FNV reference test suite (Noll): "", "a", "foobar".
+        assert_eq!(Fnv64::new().finish(), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(Fnv64::new().bytes(b"a").finish(), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(Fnv64::new().bytes(b"foobar").finish(), 0x8594_4171_f739_67e8);
+        // Chained calls hash the concatenation.
+        assert_eq!(Fnv64::new().bytes(b"foo").bytes(b"bar").finish(), 0x8594_4171_f739_67e8);
+    }
+}

@@ -26,8 +26,9 @@ pub const PATCH_QUADS: u32 = NODE_QUADS / PATCHES_PER_NODE_SIDE;
 pub const PATCH_SAMPLES: usize = PATCH_QUADS as usize + 1;
 /// Splat map texels per node side: one per second sample keeps it small.
 pub const SPLAT_RES: usize = 65;
-/// Most LODs a world may have; keeps `NodeId::lod` and GPU bit fields small.
-pub const MAX_LOD_COUNT: u32 = 10;
+/// Most LODs a world may have; keeps `NodeId::lod` and GPU bit fields small
+/// (quadtree_update binds one storage image per LOD).
+pub const MAX_LOD_COUNT: u32 = crate::shaders::consts::MAX_NODE_LODS;
 /// Most sectors per world side: beyond this coordinates overflow GPU fields.
 pub const MAX_SECTORS_PER_SIDE: u64 = 1 << 20;
 /// Largest accepted source image side, checked before any pixel allocation.
@@ -267,8 +268,15 @@ mod tests {
         assert_eq!(w.node_at(0, f64::NAN, 1.0), None);
         let other = WorldDesc { spacing_m: 1.0, ..w };
         assert_ne!(w.hash(), other.hash());
-        // Stable across runs and compilers: FNV-1a, not SipHash.
-        assert_eq!(w.hash(), WorldDesc::default().hash());
+        // Stable across runs and compilers: FNV-1a 64 over the fields' little-
+        // endian bytes, recomputed here by a second, plain implementation.
+        let mut bytes = Vec::new();
+        for v in [w.extent_m[0], w.extent_m[1], 0.0, 1600.0, w.spacing_m] {
+            bytes.extend(v.to_bits().to_le_bytes());
+        }
+        bytes.extend(6u64.to_le_bytes());
+        let fnv = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+        assert_eq!(w.hash(), fnv);
         assert!(NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 1)));
         assert!(!NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 0)));
     }

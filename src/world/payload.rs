@@ -13,11 +13,11 @@ pub enum Material {
 }
 
 /// Patch hole summary: no sample of the patch is a hole.
-pub const PATCH_HOLE_NONE: u8 = 0;
+pub const PATCH_HOLE_NONE: u8 = crate::shaders::consts::PATCH_HOLE_NONE as u8;
 /// Some samples of the patch are holes: its vertices test the hole mask.
-pub const PATCH_HOLE_SOME: u8 = 1;
+pub const PATCH_HOLE_SOME: u8 = crate::shaders::consts::PATCH_HOLE_SOME as u8;
 /// Every sample is a hole: the cull pass removes the patch.
-pub const PATCH_HOLE_ALL: u8 = 2;
+pub const PATCH_HOLE_ALL: u8 = crate::shaders::consts::PATCH_HOLE_ALL as u8;
 
 /// Everything the GPU needs for one node. Grids are row-major with row 0 at
 /// the node's south edge (index `j * side + i`, x east, y north); patch

@@ -77,5 +77,7 @@ pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
         max_error_m: f32::from(tag) * 0.01,
     }
 }
+pub mod diamond_patch;
 pub mod smoke;
+pub mod smoke_triangle;
 pub mod terrain;

@@ -1,12 +1,12 @@
 //! The smoke frame (tests only): a prefix sum, a triangle and a holed
 //! diamond patch, through the frame executor so every pass is timed.
 
+use super::diamond_patch::DiamondPatch;
+use super::smoke_triangle::{SmokeTriangle, TARGET_FORMAT};
 use vista::error::Result;
 use vista::frame::{FrameExecutor, FrameTimings, QueueKind};
 use vista::gpu::{vk, Buffer, BufferDesc, Context, FrameRing, Image, ImageDesc, MemoryLocation};
-use vista::passes::diamond_patch::DiamondPatch;
 use vista::passes::prefix_sum::PrefixSum;
-use vista::passes::smoke_triangle::{SmokeTriangle, TARGET_FORMAT};
 
 pub struct SmokeOutput {
     /// Timings of every frame that came back, oldest first.
@@ -48,8 +48,8 @@ pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput>
     let corners = [[-0.8, -0.7, 0.0, 1.0], [0.9, -0.2, 0.0, 1.0], [-0.1, 0.85, 0.0, 1.0]];
     for _ in 0..frames {
         ring.record(ctx, |rec| {
-            rec.image_layout(&tri_target, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-            rec.image_layout(&patch_target, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+            rec.discard_to(&tri_target, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+            rec.discard_to(&patch_target, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
             let mut frame = exec.begin(rec);
             frame.pass(PrefixSum::NAME, QueueKind::Compute, |r| scan.record(r, &input, &output, n))?;
             frame.pass(SmokeTriangle::NAME, QueueKind::Graphics, |r| tri.record(r, &tri_target, corners));
@@ -66,6 +66,6 @@ pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput>
         }
     }
     ring.wait_all(ctx)?;
-    let image = ctx.read_image(&patch_target, 0, 0, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, 4)?;
+    let image = ctx.read_image(&patch_target, 0, 0, 4)?;
     Ok(SmokeOutput { frames: out, image, size })
 }

@@ -237,7 +237,7 @@ fn print_timings(timed: &[FrameTimings]) {
     }
     println!("{:<17} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
     let mut total = 0.0;
-    for s in vista::profiler::summarize(timed) {
+    for s in vista::frame::profiler::summarize(timed) {
         total += s.median_ms;
         println!(
             "{:<17} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
@@ -260,8 +260,8 @@ fn write_outputs(
     stats: &RenderStats,
 ) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    std::fs::write(dir.join("timings.json"), vista::profiler::to_json(frames))?;
-    std::fs::write(dir.join("trace.json"), vista::profiler::to_chrome_trace(frames))?;
+    std::fs::write(dir.join("timings.json"), vista::frame::profiler::to_json(frames))?;
+    std::fs::write(dir.join("trace.json"), vista::frame::profiler::to_chrome_trace(frames))?;
     std::fs::write(dir.join("stats.json"), serde_json::to_string_pretty(stats)?)?;
     let [w, h] = capture.size;
     image::save_buffer(dir.join("image.png"), &capture.rgba, w, h, image::ExtendedColorType::Rgba8)

@@ -2,13 +2,13 @@
 //! diamond index pattern; one vertex may be made NaN at run time to cut a
 //! hole (the terrain hole mechanism, tested in isolation).
 
-use crate::error::Result;
-use crate::gpu::{
+use super::smoke_triangle::TARGET_FORMAT;
+use vista::gpu::{
     vk, Buffer, BufferDesc, ColorTarget, Context, GraphicsPipelineDesc, Image, MemoryLocation, Pipeline, Recorder,
 };
-use crate::passes::smoke_triangle::TARGET_FORMAT;
-use crate::patch_grid::diamond_indices;
-use crate::shaders::{diamond_patch_frag, diamond_patch_vert};
+use vista::shaders::{diamond_patch_frag, diamond_patch_vert};
+use vista::terrain::patch_grid::diamond_indices;
+use vista::Result;
 
 /// Bits of a quiet NaN; passed as data so no compiler folds it.
 pub const QUIET_NAN_BITS: u32 = 0x7FC0_0000;
@@ -31,7 +31,7 @@ pub struct DiamondPatch {
 }
 
 impl DiamondPatch {
-    pub const NAME: &'static str = "diamond_patch";
+    pub const NAME: &'static str = diamond_patch_vert::PASS;
 
     pub fn new(ctx: &Context, quads_per_side: u32) -> Result<Self> {
         let desc = GraphicsPipelineDesc {

@@ -1,17 +1,23 @@
-//! The terrain as a whole: streaming residency on the CPU (lazy baking on
-//! loader threads, optional disk cache), payload upload and the GPU
-//! quadtree, and the per-frame passes. The caller owns the command buffer
-//! and the frame executor; nothing here waits for the GPU.
+//! The terrain's data on both sides of the bus: streaming residency on the
+//! CPU (lazy baking on loader threads, optional disk cache) feeding the GPU
+//! quadtree (node texture, descriptions, payload atlases) through queued
+//! uploads. [`Terrain`] is the facade; the passes that read it are recorded
+//! by `render::TerrainRenderer`. Nothing here waits for the GPU.
+//!
+//! - [`quadtree`]: the CPU shadow of the node texture and descriptions;
+//! - [`gpu_quadtree`]: the GPU resources and their upload queue;
+//! - [`selection`]: what LOD selection is asked for and returns;
+//! - [`patch_grid`]: the index pattern of one patch.
+
+pub mod gpu_quadtree;
+pub mod patch_grid;
+pub mod quadtree;
+pub mod selection;
 
 use crate::error::Result;
-use crate::frame::{Frame, QueueKind};
 use crate::gpu::Context;
-use crate::gpu_quadtree::GpuQuadtree;
-use crate::passes::lod_map::LodMap;
-use crate::passes::quadtree_update::QuadtreeUpdatePass;
-use crate::passes::sector_data::SectorData;
-use crate::passes::traverse::{Traverse, TraverseMode};
-use crate::traverse_cpu::TraverseParams;
+use crate::terrain::gpu_quadtree::GpuQuadtree;
+use crate::terrain::selection::TraverseParams;
 use crate::world::{
     bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency, ResidencyConfig,
     Streamer, WorldDesc,
@@ -61,10 +67,6 @@ pub struct Terrain {
     pub world: WorldDesc,
     streamer: Streamer,
     pub tree: GpuQuadtree,
-    update: QuadtreeUpdatePass,
-    pub traverse: Traverse,
-    pub lod_map: LodMap,
-    pub sector_data: SectorData,
     pub stats: TerrainStats,
     ring_prefetch: bool,
 }
@@ -94,18 +96,14 @@ impl Terrain {
             world: *world,
             streamer: Streamer::new(residency, loader),
             tree,
-            update: QuadtreeUpdatePass::new(ctx)?,
-            traverse: Traverse::new(ctx, world, options.slots)?,
-            lod_map: LodMap::new(ctx, world)?,
-            sector_data: SectorData::new(ctx, world)?,
             stats: TerrainStats::default(),
             ring_prefetch: options.ring_prefetch,
         })
     }
 
-    /// Streams around the first camera and records this frame's passes:
-    /// quadtree_update, traverse (one dispatch), lod_map, sector_data.
-    pub fn record(&mut self, frame: &mut Frame, params: &TraverseParams) -> Result<()> {
+    /// Streams around the first camera: evicted nodes leave the GPU
+    /// quadtree, arrived ones are queued for upload by `quadtree_update`.
+    pub fn stream(&mut self, params: &TraverseParams) {
         let cam = &params.cameras[0];
         // Load a family a little before the traversal would refine into it.
         let want = RefineWant {
@@ -126,19 +124,14 @@ impl Terrain {
             log::error!("node {id} failed to load: {e}");
         }
         self.stats.failed += s.failed.len();
-        let (tree, update) = (&mut self.tree, &self.update);
-        frame.pass(QuadtreeUpdatePass::NAME, QueueKind::Compute, |rec| update.record(rec, tree))?;
-        let tree = &self.tree;
-        frame.pass(Traverse::NAME, QueueKind::Compute, |rec| {
-            self.traverse.record(rec, tree, params, TraverseMode::SingleDispatch)
-        });
-        frame.pass(LodMap::NAME, QueueKind::Compute, |rec| self.lod_map.record(rec, &self.traverse));
-        frame.pass(SectorData::NAME, QueueKind::Compute, |rec| self.sector_data.record(rec, tree));
         let r = self.streamer.residency();
         self.stats.loading = r.pending_count();
         self.stats.resident = r.slots_used() - self.stats.loading;
+    }
+
+    /// Counts what `quadtree_update` left queued; call after recording it.
+    pub fn note_uploads(&mut self) {
         self.stats.waiting_upload = self.tree.waiting();
-        Ok(())
     }
 
     /// True once nothing is loading or waiting for upload.

@@ -1,9 +1,9 @@
 //! `smoke_triangle`: one triangle with push-constant corners into an RGBA8
 //! target: proves raster, dynamic rendering and readback.
 
-use crate::error::Result;
-use crate::gpu::{vk, ColorTarget, Context, GraphicsPipelineDesc, Image, Pipeline, Recorder};
-use crate::shaders::{smoke_triangle_frag, smoke_triangle_vert};
+use vista::gpu::{vk, ColorTarget, Context, GraphicsPipelineDesc, Image, Pipeline, Recorder};
+use vista::shaders::{smoke_triangle_frag, smoke_triangle_vert};
+use vista::Result;
 
 /// Colour format of the smoke targets.
 pub const TARGET_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
@@ -20,7 +20,7 @@ pub struct SmokeTriangle {
 }
 
 impl SmokeTriangle {
-    pub const NAME: &'static str = "smoke_triangle";
+    pub const NAME: &'static str = smoke_triangle_vert::PASS;
 
     pub fn new(ctx: &Context) -> Result<Self> {
         let desc = GraphicsPipelineDesc {

@@ -4,22 +4,35 @@
 //! into a coalesced list of writes for the `quadtree_update` pass.
 //! No Vulkan here.
 
+use crate::shaders::consts as k;
 use crate::world::{BakedNode, NodeId, WorldDesc};
 use std::collections::BTreeMap;
 
-/// Node texture value: nothing loaded for this node (quadtree_update.comp, traversal).
-pub const EMPTY: u16 = 0xFFFF;
+/// Node texture value: nothing loaded for this node.
+pub const EMPTY: u16 = k::NODE_EMPTY as u16;
 /// Node texture value: the node can never exist (outside the world).
-pub const INVALID: u16 = 0xFFFE;
-/// Slot 0 is never allocated: sector data uses 0 for "no node" (10 bits per LOD).
-pub const FIRST_SLOT: u32 = 1;
+pub const INVALID: u16 = k::NODE_INVALID as u16;
+/// Slot 0 is never allocated: sector data uses 0 for "no node".
+pub const FIRST_SLOT: u32 = k::FIRST_SLOT;
 /// Slots are 10-bit in sector data, so at most 1023 resident nodes.
-pub const MAX_SLOTS: u32 = 1023;
+pub const MAX_SLOTS: u32 = k::MAX_SLOTS;
 /// `QuadtreeUpdate::target` of a description write (else: the mip to write).
-pub const TARGET_DESC: u32 = 0xFF;
+pub const TARGET_DESC: u32 = k::UPDATE_TARGET_DESC;
 /// `QuadtreeUpdate::target` of a node-error write (f32 bits in word0): the
 /// LOD metric does not fit the 2 x u32 description.
-pub const TARGET_ERROR: u32 = 0xFE;
+pub const TARGET_ERROR: u32 = k::UPDATE_TARGET_ERROR;
+const _: () = assert!(EMPTY as u32 == k::NODE_EMPTY && MAX_SLOTS < 1 << k::SLOT_BITS);
+
+/// The packed node reference of the node lists (node_list.glsl `pack_node`).
+pub fn node_ref(id: NodeId) -> u32 {
+    u32::from(id.lod) << k::NODE_REF_LOD_SHIFT | id.y << k::NODE_REF_Y_SHIFT | id.x
+}
+
+/// Inverse of [`node_ref`].
+pub fn node_from_ref(n: u32) -> NodeId {
+    let coord = |shift: u32| (n >> shift) & k::NODE_REF_COORD_MASK;
+    NodeId::new((n >> k::NODE_REF_LOD_SHIFT) as u8, coord(0), coord(k::NODE_REF_Y_SHIFT))
+}
 
 /// One write of the `quadtree_update` pass (`QuadtreeUpdate` in the shader).
 #[repr(C)]
@@ -65,8 +78,10 @@ impl NodeDesc {
         assert!(slot <= MAX_SLOTS && self.lod < 16 && (-8..=7).contains(&self.lod_bias));
         let bias = (self.lod_bias as u32) & 0xF;
         [
-            u32::from(self.min_height) | u32::from(self.max_height) << 16,
-            slot | u32::from(self.lod) << 10 | bias << 14 | u32::from(self.has_holes) << 18,
+            u32::from(self.min_height) | u32::from(self.max_height) << k::HALF_BITS,
+            slot | u32::from(self.lod) << k::DESC_LOD_SHIFT
+                | bias << k::DESC_BIAS_SHIFT
+                | u32::from(self.has_holes) << k::DESC_HOLES_SHIFT,
         ]
     }
 }
@@ -131,6 +146,12 @@ impl QuadtreeShadow {
         texture_extent(&self.world)
     }
 
+    /// The node texture's texel for (lod, x, y): a slot, EMPTY or INVALID.
+    pub fn texel(&self, lod: u8, x: u32, y: u32) -> u16 {
+        let w = self.extent()[0] >> lod;
+        self.mips[lod as usize][(y * w + x) as usize]
+    }
+
     pub fn slot_capacity(&self) -> u32 {
         self.descs.len() as u32 - FIRST_SLOT
     }
@@ -149,7 +170,7 @@ impl QuadtreeShadow {
     fn set_texel(&mut self, id: NodeId, value: u16) {
         let i = self.texel_index(id);
         self.mips[id.lod as usize][i] = value;
-        self.texels.insert((u32::from(id.lod), id.x | id.y << 16), value);
+        self.texels.insert((u32::from(id.lod), id.x | id.y << k::HALF_BITS), value);
     }
 
     /// Frees `id`'s slot; returns it (None if the node was not resident).

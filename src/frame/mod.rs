@@ -2,6 +2,8 @@
 //! timestamps, and hands timings back as data once the GPU has finished the
 //! frame (one frame late or more; never by waiting).
 
+pub mod profiler;
+
 use crate::error::Result;
 use crate::gpu::{Context, Recorder, TimestampPool};
 use serde::Serialize;

@@ -8,7 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
-use crate::quadtree::{texture_extent, NodeDesc, QuadtreeShadow, QuadtreeUpdate, FIRST_SLOT, MAX_SLOTS};
+use crate::terrain::quadtree::{texture_extent, NodeDesc, QuadtreeShadow, QuadtreeUpdate, FIRST_SLOT, MAX_SLOTS};
 use crate::world::{BakedNode, NodeId, WorldDesc, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, SPLAT_RES};
 use std::collections::VecDeque;
 
@@ -194,16 +194,16 @@ impl GpuQuadtree {
         )?;
         staging.mapped_mut().expect("mapped").copy_from_slice(&texels);
         ctx.submit_and_wait(|rec| {
-            rec.image_layout(&node_texture, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+            rec.discard_to(&node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
             for a in &atlases {
-                rec.image_layout(a, vk::ImageLayout::UNDEFINED, ATLAS_LAYOUT);
+                rec.discard_to(a, ATLAS_LAYOUT);
             }
             let mut offset = 0;
             for (lod, m) in shadow.mips.iter().enumerate() {
                 rec.copy_buffer_to_image(&staging, offset, &node_texture, lod as u32, 0);
                 offset += (m.len() * 2) as u64;
             }
-            rec.image_layout(&node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::GENERAL);
+            rec.transition(&node_texture, vk::ImageLayout::GENERAL);
             rec.fill_buffer(&node_descs, 0);
             rec.fill_buffer(&node_errors, 0);
             Ok(())
@@ -269,7 +269,7 @@ impl GpuQuadtree {
         }
         if !uploaded.is_empty() {
             for img in &self.atlases {
-                rec.image_layout(img, ATLAS_LAYOUT, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+                rec.transition(img, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
             }
             for (i, (_, slot)) in uploaded.iter().enumerate() {
                 let mut off = (i * per_node) as u64;
@@ -279,7 +279,7 @@ impl GpuQuadtree {
                 }
             }
             for img in &self.atlases {
-                rec.image_layout(img, vk::ImageLayout::TRANSFER_DST_OPTIMAL, ATLAS_LAYOUT);
+                rec.transition(img, ATLAS_LAYOUT);
             }
         }
         let updates = self.shadow.take_updates();

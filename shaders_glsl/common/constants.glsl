@@ -1,0 +1,67 @@
+// Every constant shared by host and shader code: the single source. build.rs
+// parses this file (one `#define NAME VALUE` per line, VALUE an unsigned
+// literal with a `u` suffix) and exports each as `vista::shaders::consts::NAME`
+// (u32); host code uses those, never a copy. Any other line here is an error.
+#ifndef VISTA_CONSTANTS_GLSL
+#define VISTA_CONSTANTS_GLSL
+
+// Node texture (R16_UINT, one mip per LOD): a slot, or one of these.
+#define NODE_EMPTY 0xFFFFu
+#define NODE_INVALID 0xFFFEu
+// Slot 0 is never allocated: sector data uses 0 for "no node".
+#define FIRST_SLOT 1u
+// Slots are 10-bit in sector data and node descriptions.
+#define SLOT_BITS 10u
+#define MAX_SLOTS 1023u
+// Node description word 1: slot | lod << 10 | bias (4 bits, signed) << 14 | holes << 18.
+#define DESC_LOD_SHIFT 10u
+#define DESC_BIAS_SHIFT 14u
+#define DESC_BIAS_BITS 4u
+#define DESC_HOLES_SHIFT 18u
+// Node description word 0 and the node texture hold 16-bit values.
+#define HALF_BITS 16u
+// Packed node reference: lod (4 bits) << 28 | y (14 bits) << 14 | x (14 bits).
+#define NODE_REF_LOD_SHIFT 28u
+#define NODE_REF_Y_SHIFT 14u
+#define NODE_REF_COORD_MASK 0x3FFFu
+// Levels of the per-LOD arrays (lod_counts, traverse_level's level args).
+#define MAX_LEVELS 16u
+// Node texture mips the quadtree_update pass can write (world MAX_LOD_COUNT).
+#define MAX_NODE_LODS 10u
+// Up to this many cameras refine one node list.
+#define MAX_CAMERAS 4u
+// Entries of each shared-memory list of traverse.comp: every entry is a
+// distinct resident node, so the slot budget (<= MAX_SLOTS) bounds it.
+#define SHARED_LIST_CAPACITY 1024u
+// `current_lod` of traverse_level's finalize dispatch.
+#define LEVEL_FINALIZE 0xFFu
+// LODs whose slots sector data holds: 3 per u32 word, 10 bits each.
+#define SECTOR_DATA_LODS 6u
+#define SECTOR_LODS_PER_WORD 3u
+// quadtree_update targets beside a node-texture mip.
+#define UPDATE_TARGET_DESC 0xFFu
+#define UPDATE_TARGET_ERROR 0xFEu
+// LOD map value where no listed node covers a sector.
+#define NO_LOD 0xFFu
+// cull_patches stage switches.
+#define CULL_STAGE_FRUSTUM 1u
+#define CULL_STAGE_CONE 2u
+#define CULL_STAGE_HOLE 4u
+// Patch hole summary (one texel per patch).
+#define PATCH_HOLE_NONE 0u
+#define PATCH_HOLE_SOME 1u
+#define PATCH_HOLE_ALL 2u
+// Patch record word 1: slot | patch index (6 bits) << 10 | 4 LOD deltas (4 bits each) << 16.
+#define PATCH_INDEX_SHIFT 10u
+#define PATCH_INDEX_MASK 0x3Fu
+#define PATCH_DELTA_SHIFT 16u
+#define PATCH_DELTA_BITS 4u
+// Largest stitched LOD delta: a patch edge has 16 = 2^4 quads.
+#define MAX_LOD_DELTA 4u
+// Edge order of the patch deltas.
+#define EDGE_WEST 0u
+#define EDGE_EAST 1u
+#define EDGE_SOUTH 2u
+#define EDGE_NORTH 3u
+
+#endif

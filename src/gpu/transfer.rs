@@ -1,0 +1,138 @@
+//! Transfers (fills, inline updates, clears, copies), debug labels and
+//! timestamp queries of the [`Recorder`]; each checks the ranges and image
+//! layouts it relies on (see `commands.rs`).
+
+use super::commands::Recorder;
+use super::query::TimestampPool;
+use super::resources::{aspect_of, Buffer, Image};
+use ash::vk;
+use std::ffi::CString;
+
+impl Recorder<'_> {
+    pub fn fill_buffer(&mut self, buf: &Buffer, value: u32) {
+        self.outside_rendering("fill_buffer");
+        // SAFETY: live buffer, whole range, outside rendering (checked).
+        unsafe { self.d().cmd_fill_buffer(self.cmd, buf.raw, 0, vk::WHOLE_SIZE, value) };
+    }
+
+    /// Writes up to 64 KiB of `data` at `offset` inline in the command buffer.
+    pub fn update_buffer(&mut self, buf: &Buffer, offset: u64, data: &[u8]) {
+        self.outside_rendering("update_buffer");
+        assert!(
+            data.len() <= 65536 && data.len().is_multiple_of(4) && offset + data.len() as u64 <= buf.size,
+            "update of {}",
+            buf.name
+        );
+        // SAFETY: size, alignment and range checked above.
+        unsafe { self.d().cmd_update_buffer(self.cmd, buf.raw, offset, data) };
+    }
+
+    /// Clears every mip and layer of an integer colour image in GENERAL layout.
+    pub fn clear_color_u32(&mut self, img: &Image, value: u32) {
+        self.outside_rendering("clear_color_u32");
+        assert_eq!(img.layout(), vk::ImageLayout::GENERAL, "clear of {}", img.name);
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(vk::REMAINING_MIP_LEVELS)
+            .layer_count(vk::REMAINING_ARRAY_LAYERS);
+        let color = vk::ClearColorValue { uint32: [value; 4] };
+        // SAFETY: live image in GENERAL (checked; valid for clears).
+        unsafe { self.d().cmd_clear_color_image(self.cmd, img.raw, vk::ImageLayout::GENERAL, &color, &[range]) };
+    }
+
+    pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, size: u64) {
+        self.outside_rendering("copy_buffer");
+        assert!(size <= src.size && size <= dst.size, "copy of {size} bytes overruns {} or {}", src.name, dst.name);
+        // SAFETY: live buffers, size checked.
+        unsafe {
+            self.d().cmd_copy_buffer(
+                self.cmd,
+                src.raw,
+                dst.raw,
+                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }],
+            )
+        };
+    }
+
+    /// Copies one mip of one layer of `img` (in TRANSFER_SRC_OPTIMAL), tightly packed.
+    pub fn copy_image_to_buffer(&mut self, img: &Image, mip: u32, layer: u32, dst: &Buffer) {
+        self.outside_rendering("copy_image_to_buffer");
+        assert_eq!(img.layout(), vk::ImageLayout::TRANSFER_SRC_OPTIMAL, "copy from {}", img.name);
+        let region = packed_region(img, mip, layer, 0);
+        // SAFETY: live objects, layout checked; the layer validates sizes.
+        unsafe {
+            self.d().cmd_copy_image_to_buffer(
+                self.cmd,
+                img.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw,
+                &[region],
+            )
+        };
+    }
+
+    /// Copies tightly packed texels at `offset` of `src` into one mip of one
+    /// layer of `img`, which must be in TRANSFER_DST_OPTIMAL.
+    pub fn copy_buffer_to_image(&mut self, src: &Buffer, offset: u64, img: &Image, mip: u32, layer: u32) {
+        self.outside_rendering("copy_buffer_to_image");
+        assert_eq!(img.layout(), vk::ImageLayout::TRANSFER_DST_OPTIMAL, "copy into {}", img.name);
+        assert!(mip < img.mip_levels && layer < img.array_layers, "mip {mip} layer {layer} of {}", img.name);
+        let region = packed_region(img, mip, layer, offset);
+        // SAFETY: live objects, layout and subresource checked.
+        unsafe {
+            self.d().cmd_copy_buffer_to_image(
+                self.cmd,
+                src.raw,
+                img.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
+    /// Opens a debug-utils label (RenderDoc / Nsight show the pass by name).
+    pub fn begin_label(&mut self, name: &str) {
+        if let Some(dd) = &self.ctx.shared.debug_device {
+            let name = CString::new(name).unwrap_or_default();
+            // SAFETY: valid command buffer; debug utils loaded.
+            unsafe { dd.cmd_begin_debug_utils_label(self.cmd, &vk::DebugUtilsLabelEXT::default().label_name(&name)) };
+        }
+    }
+
+    pub fn end_label(&mut self) {
+        if let Some(dd) = &self.ctx.shared.debug_device {
+            // SAFETY: paired with begin_label.
+            unsafe { dd.cmd_end_debug_utils_label(self.cmd) };
+        }
+    }
+
+    pub fn reset_queries(&mut self, pool: &TimestampPool, first: u32, count: u32) {
+        self.outside_rendering("reset_queries");
+        assert!(first + count <= pool.capacity, "queries {first}+{count} outside pool of {}", pool.capacity);
+        // SAFETY: range checked, outside rendering.
+        unsafe { self.d().cmd_reset_query_pool(self.cmd, pool.raw, first, count) };
+    }
+
+    pub fn write_timestamp(&mut self, pool: &TimestampPool, index: u32) {
+        assert!(index < pool.capacity, "timestamp {index} outside pool of {}", pool.capacity);
+        // SAFETY: index checked; the query was reset this frame.
+        unsafe { self.d().cmd_write_timestamp2(self.cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool.raw, index) };
+    }
+}
+
+/// One whole mip of one layer, tightly packed at `offset` in the buffer.
+fn packed_region(img: &Image, mip: u32, layer: u32, offset: u64) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: aspect_of(img.format),
+            mip_level: mip,
+            base_array_layer: layer,
+            layer_count: 1,
+        })
+        .image_extent(vk::Extent3D {
+            width: (img.extent[0] >> mip).max(1),
+            height: (img.extent[1] >> mip).max(1),
+            depth: 1,
+        })
+}

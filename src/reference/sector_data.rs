@@ -1,0 +1,58 @@
+//! CPU reference of `sector_data` (the per-sector slot of every resident
+//! LOD) and of the height lookup `terrain_sample.glsl` makes through it.
+//! No Vulkan.
+
+use crate::shaders::consts::{SECTOR_DATA_LODS, SECTOR_LODS_PER_WORD, SLOT_BITS};
+use crate::terrain::quadtree::{QuadtreeShadow, EMPTY, INVALID};
+use crate::world::{WorldDesc, NODE_QUADS, NODE_SAMPLES};
+
+/// Sector data: per sector of the padded extent, 10 bits per LOD (0-2 in
+/// word 0, 3-5 in word 1) = the slot of the resident node covering it.
+pub fn sector_data_cpu(tree: &QuadtreeShadow, world: &WorldDesc) -> Vec<[u32; 2]> {
+    let [w, h] = tree.extent();
+    let lods = world.lod_count.min(SECTOR_DATA_LODS) as u8;
+    let mut out = vec![[0u32; 2]; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let e = &mut out[(y * w + x) as usize];
+            for k in 0..lods {
+                let v = tree.texel(k, x >> k, y >> k);
+                let slot = if v == EMPTY || v == INVALID { 0 } else { u32::from(v) };
+                let k = u32::from(k);
+                e[(k / SECTOR_LODS_PER_WORD) as usize] |= slot << (SLOT_BITS * (k % SECTOR_LODS_PER_WORD));
+            }
+        }
+    }
+    out
+}
+
+/// Height (m) at `p` from the finest resident node, bilinear over its R16
+/// samples (what terrain_sample.glsl computes), or None where nothing is
+/// resident. `heights(slot)` gives a resident node's 129x129 samples.
+pub fn sample_height_cpu<'a>(
+    tree: &QuadtreeShadow,
+    world: &WorldDesc,
+    heights: impl Fn(u32) -> &'a [u16],
+    p: [f64; 2],
+) -> Option<f32> {
+    let sector = world.sector_size_m();
+    let [w, h] = tree.extent();
+    let sx = ((p[0] / sector).floor().max(0.0) as u32).min(w - 1);
+    let sy = ((p[1] / sector).floor().max(0.0) as u32).min(h - 1);
+    let lods = world.lod_count.min(SECTOR_DATA_LODS) as u8;
+    let (k, slot) = (0..lods).find_map(|k| {
+        let v = tree.texel(k, sx >> k, sy >> k);
+        (v != EMPTY && v != INVALID).then_some((k, u32::from(v)))
+    })?;
+    let node = sector * f64::from(1u32 << k);
+    let spacing = sector / NODE_QUADS as f64 * f64::from(1u32 << k);
+    let local = [0, 1].map(|i| ((p[i] - (p[i] / node).floor() * node) / spacing).clamp(0.0, 128.0));
+    let i0 = local.map(|l| (l.floor() as usize).min(127));
+    let f = [local[0] - i0[0] as f64, local[1] - i0[1] as f64];
+    let hs = heights(slot);
+    let s = |x: usize, y: usize| f64::from(hs[y * NODE_SAMPLES + x]) / 65535.0;
+    let a = s(i0[0], i0[1]) * (1.0 - f[0]) + s(i0[0] + 1, i0[1]) * f[0];
+    let b = s(i0[0], i0[1] + 1) * (1.0 - f[0]) + s(i0[0] + 1, i0[1] + 1) * f[0];
+    let [lo, hi] = world.height_range_m;
+    Some((f64::from(lo) + (a * (1.0 - f[1]) + b * f[1]) * f64::from(hi - lo)) as f32)
+}
