@@ -275,6 +275,16 @@ impl Image {
         vk::ImageLayout::from_raw(self.layout.load(Ordering::Relaxed))
     }
 
+    /// Tells the tracker that commands recorded outside vista's recorder
+    /// (an engine's own barriers) leave the image in `layout`.
+    ///
+    /// # Safety
+    /// Once the commands recorded so far execute, every subresource of the
+    /// image must be in `layout`; vista's checks and barriers rely on it.
+    pub unsafe fn assume_layout(&self, layout: vk::ImageLayout) {
+        self.set_layout(layout);
+    }
+
     pub(crate) fn set_layout(&self, layout: vk::ImageLayout) {
         self.layout.store(layout.as_raw(), Ordering::Relaxed);
     }
