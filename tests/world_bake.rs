@@ -1,47 +1,10 @@
 //! World layout and node bakes checked against analytic surfaces.
 
 use std::sync::Arc;
+mod common;
 
+use common::terrain::Surface;
 use vista::world::*;
-
-/// Analytic test surfaces.
-#[derive(Clone, Copy)]
-enum Surface {
-    Plane(f64),
-    Tilted {
-        z0: f64,
-        gx: f64,
-        gy: f64,
-    },
-    Paraboloid {
-        a: f64,
-        c: [f64; 2],
-    },
-    /// A V-shaped gorge with near-vertical walls along x = c.
-    Gorge {
-        c: f64,
-        slope: f64,
-    },
-}
-
-impl HeightSource for Surface {
-    fn sample(&self, x: f64, y: f64) -> f32 {
-        (match *self {
-            Surface::Plane(z) => z,
-            Surface::Tilted { z0, gx, gy } => z0 + gx * x + gy * y,
-            Surface::Paraboloid { a, c } => a * ((x - c[0]).powi(2) + (y - c[1]).powi(2)),
-            Surface::Gorge { c, slope } => 500.0 + slope * (x - c).abs(),
-        }) as f32
-    }
-    fn id_hash(&self) -> u64 {
-        match *self {
-            Surface::Plane(z) => z.to_bits(),
-            Surface::Tilted { z0, gx, gy } => z0.to_bits() ^ gx.to_bits() ^ gy.to_bits() ^ 1,
-            Surface::Paraboloid { a, .. } => a.to_bits() ^ 2,
-            Surface::Gorge { slope, .. } => slope.to_bits() ^ 3,
-        }
-    }
-}
 
 /// 512 m square, 1 m spacing, 3 LODs: 4x4 sectors, one root.
 fn test_world() -> WorldDesc {
@@ -171,7 +134,7 @@ fn plane_and_tilted_plane() {
 fn paraboloid_error_matches_analytic_bound_and_brute_force() {
     let w = test_world();
     let a = 0.004;
-    let src = Surface::Paraboloid { a, c: [256.0, 256.0] };
+    let src = Surface::Paraboloid { z0: 0.0, a, c: [256.0, 256.0] };
     for id in all_nodes(&w) {
         let node = bake_node(&src, &w, &[], id);
         check_grids(&src, &w, &node);
@@ -300,7 +263,7 @@ fn layout_rules() {
 #[test]
 fn payload_roundtrip_and_memory_report() {
     let w = test_world();
-    let src = Surface::Paraboloid { a: 0.004, c: [100.0, 50.0] };
+    let src = Surface::Paraboloid { z0: 0.0, a: 0.004, c: [100.0, 50.0] };
     let node = bake_node(&src, &w, &[], NodeId::new(1, 1, 0));
     let bytes = node.to_bytes();
     assert_eq!(bytes.len(), BakedNode::SERIALIZED_BYTES);

@@ -114,7 +114,6 @@ impl TerrainRenderer {
         let mut frame = self.exec.begin(rec);
         let (tree, update) = (&mut self.terrain.tree, &self.update);
         frame.pass(QuadtreeUpdatePass::NAME, QueueKind::Compute, |r| update.record(r, tree))?;
-        self.terrain.note_uploads();
         let tree = &self.terrain.tree;
         let (traverse, lod_map, sector_data) = (&self.traverse, &self.lod_map, &self.sector_data);
         frame.pass(Traverse::NAME, QueueKind::Compute, |r| {

@@ -67,7 +67,7 @@ pub struct Terrain {
     pub world: WorldDesc,
     streamer: Streamer,
     pub tree: GpuQuadtree,
-    pub stats: TerrainStats,
+    stats: TerrainStats,
     ring_prefetch: bool,
 }
 
@@ -129,14 +129,15 @@ impl Terrain {
         self.stats.resident = r.slots_used() - self.stats.loading;
     }
 
-    /// Counts what `quadtree_update` left queued; call after recording it.
-    pub fn note_uploads(&mut self) {
-        self.stats.waiting_upload = self.tree.waiting();
+    /// Streaming counters; `waiting_upload` is what `quadtree_update` has
+    /// not uploaded yet.
+    pub fn stats(&self) -> TerrainStats {
+        TerrainStats { waiting_upload: self.tree.waiting(), ..self.stats.clone() }
     }
 
     /// True once nothing is loading or waiting for upload.
     pub fn settled(&self) -> bool {
-        self.stats.loading == 0 && self.stats.waiting_upload == 0
+        self.stats.loading == 0 && self.tree.waiting() == 0
     }
 
     /// Memory of the resident payloads, CPU and GPU side.

@@ -38,6 +38,11 @@ pub enum Surface {
     },
     /// Rolling hills with steep flanks (both ridge sides face the camera somewhere).
     Hills,
+    /// A V-shaped gorge with near-vertical walls along x = c.
+    Gorge {
+        c: f64,
+        slope: f64,
+    },
 }
 
 impl Surface {
@@ -48,6 +53,7 @@ impl Surface {
             Surface::Paraboloid { z0, a, c } => z0 + a * ((x - c[0]).powi(2) + (y - c[1]).powi(2)),
             Surface::Bump { z0, c, r, h } => z0 + h * (1.0 - (x - c[0]).hypot(y - c[1]) / r).max(0.0),
             Surface::Hills => 300.0 + 120.0 * (x / 97.0).sin() * (y / 131.0).cos() + 40.0 * (x / 23.0 + y / 31.0).sin(),
+            Surface::Gorge { c, slope } => 500.0 + slope * (x - c).abs(),
         }
     }
 

@@ -179,7 +179,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         view.fov_y_deg,
         view.target_error_px
     );
-    let st = &renderer.terrain.stats;
+    let st = renderer.terrain.stats();
     println!(
         "stream: {} resident of {} slots, {} loading, {} waiting upload, {} failed; {} after {} frames, {:.2} s (lazy bake)",
         st.resident,
