@@ -30,7 +30,7 @@ fn main() {
     for path in &files {
         println!("cargo:rerun-if-changed={}", path.display());
         match shader_compiler::compile_file(path, &include_dir) {
-            Ok(s) => shaders.push(s),
+            Ok(s) => shaders.extend(s),
             Err(e) => errors.push(e),
         }
     }

@@ -106,6 +106,33 @@ pub struct CompiledShader {
     pub structs: Vec<StructLayout>,
     /// Files pulled in through `#include`, for `rerun-if-changed`.
     pub includes: Vec<PathBuf>,
+    /// Variant defines switched on in this compilation (see [`variants_of`]).
+    pub defines: Vec<String>,
+    /// Bit mask of `defines` within the file's variant list.
+    pub variant_mask: u32,
+    /// The file's variant list (empty: one compilation).
+    pub variant_names: Vec<String>,
+}
+
+/// Most variant switches a file may declare (2^N compilations).
+const MAX_VARIANT_SWITCHES: usize = 3;
+
+/// A file declares variants with a comment line `// variants: A B` among its
+/// first lines: it is compiled once per subset of the names, each defined as
+/// 1 (`#ifdef A`). A feature an effect adds becomes a separate pipeline with
+/// only the bindings it uses, instead of dead code behind a constant.
+pub fn variants_of(text: &str, file: &str) -> Result<Vec<String>, String> {
+    let Some(line) = text.lines().take(20).find_map(|l| l.trim().strip_prefix("// variants:")) else {
+        return Ok(Vec::new());
+    };
+    let names: Vec<String> = line.split_whitespace().map(str::to_string).collect();
+    if names.is_empty() || names.len() > MAX_VARIANT_SWITCHES {
+        return Err(format!("{file}: `// variants:` needs 1..={MAX_VARIANT_SWITCHES} names, got {names:?}"));
+    }
+    if let Some(bad) = names.iter().find(|n| !n.chars().all(|c| c.is_ascii_uppercase() || c == '_')) {
+        return Err(format!("{file}: variant switch {bad:?} is not UPPER_SNAKE_CASE"));
+    }
+    Ok(names)
 }
 
 fn stage_of(path: &Path) -> Result<(glslang::ShaderStage, &'static str, naga::ShaderStage), String> {
@@ -147,11 +174,38 @@ fn rewrite_log(log: &str, file: &str) -> String {
         .join("\n")
 }
 
-/// Compiles one GLSL file; `include_dir` resolves `#include "x.glsl"`.
-pub fn compile_file(path: &Path, include_dir: &Path) -> Result<CompiledShader, String> {
+/// Compiles one GLSL file, once per variant (the full variant, every switch
+/// on, last); `include_dir` resolves `#include "x.glsl"`.
+pub fn compile_file(path: &Path, include_dir: &Path) -> Result<Vec<CompiledShader>, String> {
     let file = path.display().to_string();
-    let (gl_stage, stage_name, naga_stage) = stage_of(path)?;
     let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let names = variants_of(&text, &file)?;
+    let mut out = Vec::new();
+    for mask in 0..1u32 << names.len() {
+        let defines: Vec<String> =
+            names.iter().enumerate().filter(|(i, _)| mask & (1 << i) != 0).map(|(_, n)| n.clone()).collect();
+        let mut sh = compile_variant(path, &text, &defines, include_dir)?;
+        sh.variant_mask = mask;
+        sh.variant_names = names.clone();
+        out.push(sh);
+    }
+    let full = out.last().expect("at least one compilation");
+    for v in &out {
+        if let Some(b) = v.bindings.iter().find(|b| !full.bindings.contains(b)) {
+            return Err(format!("{file}: binding {} of variant {:?} differs from the full variant", b.name, v.defines));
+        }
+    }
+    Ok(out)
+}
+
+fn compile_variant(path: &Path, text: &str, defines: &[String], include_dir: &Path) -> Result<CompiledShader, String> {
+    let file = if defines.is_empty() {
+        path.display().to_string()
+    } else {
+        format!("{} [{}]", path.display(), defines.join(" "))
+    };
+    let (gl_stage, stage_name, naga_stage) = stage_of(path)?;
+    let text = text.to_string();
     let compiler = glslang::Compiler::acquire().ok_or("glslang failed to initialise")?;
     let source = glslang::ShaderSource::from(text);
     let options = glslang::CompilerOptions {
@@ -165,14 +219,9 @@ pub fn compile_file(path: &Path, include_dir: &Path) -> Result<CompiledShader, S
     };
     let mut includer = Includer { dir: include_dir.to_path_buf(), seen: Vec::new() };
     let words = {
-        let input = glslang::ShaderInput::new(
-            &source,
-            gl_stage,
-            &options,
-            None::<&[(&str, Option<&str>)]>,
-            Some(&mut includer),
-        )
-        .map_err(|e| format!("{file}: {e}"))?;
+        let macros: Vec<(&str, Option<&str>)> = defines.iter().map(|d| (d.as_str(), Some("1"))).collect();
+        let input = glslang::ShaderInput::new(&source, gl_stage, &options, Some(&macros[..]), Some(&mut includer))
+            .map_err(|e| format!("{file}: {e}"))?;
         let shader = compiler.create_shader(input).map_err(|e| match e {
             glslang::error::GlslangError::ParseError(log) | glslang::error::GlslangError::PreprocessError(log) => {
                 format!("{file}: GLSL error\n{}", rewrite_log(&log.log, &file))
@@ -192,6 +241,8 @@ pub fn compile_file(path: &Path, include_dir: &Path) -> Result<CompiledShader, S
     out.stage = stage_name;
     out.words = words;
     out.includes = includer.seen;
+    out.file = path.display().to_string();
+    out.defines = defines.to_vec();
     Ok(out)
 }
 
@@ -295,6 +346,9 @@ fn reflect(words: &[u32], file: &str, stage: naga::ShaderStage) -> Result<Compil
         spec_constants,
         structs,
         includes: Vec::new(),
+        defines: Vec::new(),
+        variant_mask: 0,
+        variant_names: Vec::new(),
     })
 }
 
@@ -326,7 +380,16 @@ pub fn generate_module(shaders: &[CompiledShader], constants: &[SharedConstant])
     let _ =
         writeln!(s, "    /// Every constant by name.\n    pub const ALL: &[(&str, u32)] = &[{}];\n}}", all.join(", "));
     let mut structs: BTreeMap<String, (StructLayout, String)> = BTreeMap::new();
-    for sh in shaders {
+    // Variants of one file are consecutive, the full one (every switch on) last.
+    let mut groups: Vec<&[CompiledShader]> = Vec::new();
+    let mut rest = shaders;
+    while let Some(first) = rest.first() {
+        let n = rest.iter().take_while(|v| v.module == first.module).count();
+        groups.push(&rest[..n]);
+        rest = &rest[n..];
+    }
+    for group in &groups {
+        let sh = group.last().expect("non-empty group");
         let _ = writeln!(s, "/// `{}`\npub mod {} {{\n    use crate::gpu::shader::*;", sh.file, sh.module);
         let pass = sh.module.trim_end_matches("_vert").trim_end_matches("_frag");
         let _ = writeln!(s, "    /// The pass (and timer label) this shader belongs to: its file stem.\n    pub const PASS: &str = {pass:?};");
@@ -344,20 +407,48 @@ pub fn generate_module(shaders: &[CompiledShader], constants: &[SharedConstant])
         for (name, id) in &sh.spec_constants {
             let _ = writeln!(s, "    pub const SPEC_{}: u32 = {id};", const_ident(name));
         }
-        let list: Vec<String> = sh.bindings.iter().map(|b| const_ident(&b.name)).collect();
-        let specs: Vec<String> = sh.spec_constants.iter().map(|(n, id)| format!("({n:?}, {id})")).collect();
         let _ = writeln!(s, "    pub const WORKGROUP_SIZE: [u32; 3] = {:?};", sh.workgroup_size);
         let _ = writeln!(s, "    pub const PUSH_CONSTANT_SIZE: u32 = {};", sh.push_constant_size);
-        let _ = writeln!(s, "    static SPIRV: [u32; {}] = {:?};", sh.words.len(), sh.words);
+        for (i, name) in sh.variant_names.iter().enumerate() {
+            let _ = writeln!(s, "    /// Variant switch `{name}` (a bit of [`variant`]'s mask).\n    pub const VARIANT_{name}: u32 = {};", 1u32 << i);
+        }
+        for v in group.iter() {
+            let list: Vec<String> = v.bindings.iter().map(|b| const_ident(&b.name)).collect();
+            let specs: Vec<String> = v.spec_constants.iter().map(|(n, id)| format!("({n:?}, {id})")).collect();
+            let full = std::ptr::eq(v, sh);
+            let ident = if full { "SHADER".to_string() } else { format!("SHADER_V{}", v.variant_mask) };
+            let _ = writeln!(s, "    static SPIRV_V{}: [u32; {}] = {:?};", v.variant_mask, v.words.len(), v.words);
+            let _ = writeln!(
+                s,
+                "    {}static {ident}: ShaderInfo = ShaderInfo {{ name: {:?}, file: {:?}, stage: ShaderStage::{}, defines: &{:?}, spirv: &SPIRV_V{}, workgroup_size: {:?}, bindings: &[{}], push_constant_size: {}, spec_constants: &[{}] }};",
+                if full { "pub " } else { "" },
+                v.module,
+                v.file,
+                v.stage,
+                v.defines,
+                v.variant_mask,
+                v.workgroup_size,
+                list.join(", "),
+                v.push_constant_size,
+                specs.join(", ")
+            );
+        }
+        let idents: Vec<String> = group
+            .iter()
+            .map(|v| if std::ptr::eq(v, sh) { "&SHADER".to_string() } else { format!("&SHADER_V{}", v.variant_mask) })
+            .collect();
         let _ = writeln!(
             s,
-            "    pub static SHADER: ShaderInfo = ShaderInfo {{ name: {:?}, file: {:?}, stage: ShaderStage::{}, spirv: &SPIRV, workgroup_size: WORKGROUP_SIZE, bindings: &[{}], push_constant_size: PUSH_CONSTANT_SIZE, spec_constants: &[{}] }};\n}}",
-            sh.module,
-            sh.file,
-            sh.stage,
-            list.join(", "),
-            specs.join(", ")
+            "    /// Every compilation of the file, indexed by variant mask.\n    pub static VARIANTS: [&ShaderInfo; {}] = [{}];",
+            group.len(),
+            idents.join(", ")
         );
+        if !sh.variant_names.is_empty() {
+            let _ = writeln!(s, "    /// The compilation with the switches of `mask` on.\n    pub fn variant(mask: u32) -> &'static ShaderInfo {{\n        VARIANTS[mask as usize]\n    }}");
+        }
+        s.push_str("}\n");
+    }
+    for sh in shaders {
         for st in &sh.structs {
             match structs.get(&st.name) {
                 Some((old, where_)) if old != st => {
@@ -380,9 +471,9 @@ pub fn generate_module(shaders: &[CompiledShader], constants: &[SharedConstant])
     for (name, (st, _)) in &structs {
         let _ = writeln!(s, "    pub const {}: &[(&str, usize, usize)] = &{:?};", const_ident(name), st.members);
     }
-    s.push_str("}\n/// Every shader of the crate.\npub static ALL: &[&crate::gpu::shader::ShaderInfo] = &[");
-    for sh in shaders {
-        let _ = write!(s, "&{}::SHADER, ", sh.module);
+    s.push_str("}\n/// Every shader of the crate (one per file: its full variant).\npub static ALL: &[&crate::gpu::shader::ShaderInfo] = &[");
+    for g in &groups {
+        let _ = write!(s, "&{}::SHADER, ", g[0].module);
     }
     s.push_str("];\n");
     Ok(s)

@@ -1,11 +1,15 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+// variants: CONE_CULL HOLE_CULL
 // Far Cry 5's patch culling: one workgroup per listed node (indirect, from
-// traverse), one thread per patch (8x8). Stages, each switchable: frustum
-// (patch box from the baked per-patch min/max), backface (the patch's normal
-// cone against the camera-to-corner vectors of all 8 box corners), all-hole
-// removal. Survivors get their 4 edge LOD deltas from the LOD map and are
-// appended to the patch list whose header is the indexed-indirect draw.
+// traverse), one thread per patch (8x8). Stages: frustum (patch box from the
+// baked per-patch min/max), backface (the patch's normal cone against the
+// camera-to-corner vectors of all 8 box corners; variant CONE_CULL), holes
+// (variant HOLE_CULL: all-hole patches removed, partly-holed ones sent to
+// the hole list drawn by terrain_holes, the only draw that tests holes).
+// Built stages can still be switched off per frame (push constant).
+// Survivors get their 4 edge LOD deltas from the LOD map and are appended
+// to a patch list whose header is an indexed-indirect draw.
 layout(local_size_x = 64) in;
 #include "node_list.glsl"
 #include "terrain_view.glsl"
@@ -22,8 +26,17 @@ layout(set = 0, binding = 0, std430) readonly buffer TraverseOutput {
 layout(set = 0, binding = 1, std430) readonly buffer View { TerrainView v; } view;
 layout(set = 0, binding = 2, r8ui) uniform readonly uimage2D lod_map;
 layout(set = 0, binding = 3) uniform utexture2DArray patch_min_max;
+#ifdef CONE_CULL
 layout(set = 0, binding = 4) uniform texture2DArray patch_cones;
+#endif
+#ifdef HOLE_CULL
 layout(set = 0, binding = 5) uniform utexture2DArray patch_holes;
+// Patches with some holes: drawn by terrain_holes (header: its draw args).
+layout(set = 0, binding = 8, std430) buffer HolePatchList {
+    PatchListHeader header;
+    uvec2 patches[];
+} hole_list;
+#endif
 layout(set = 0, binding = 6) uniform sampler nearest;
 layout(set = 0, binding = 7, std430) buffer PatchList {
     PatchListHeader header;
@@ -53,6 +66,7 @@ bool box_outside_frustum(vec3 lo, vec3 hi) {
     return false;
 }
 
+#ifdef CONE_CULL
 // Every triangle faces away iff every normal n in the cone has
 // dot(n, corner - camera) > 0 for every point of the box; the set of
 // such view vectors is a convex cone, so testing the 8 corners suffices:
@@ -69,6 +83,7 @@ bool cone_faces_away(vec4 cone, vec3 lo, vec3 hi) {
     }
     return true;
 }
+#endif
 
 // LOD delta toward a neighbour sector: how many LODs coarser it is, 0 for
 // finer, equal, unlisted or outside sectors, at most MAX_LOD_DELTA.
@@ -136,22 +151,39 @@ void main() {
     }
     // Stitched edges move vertices onto the coarser grid, making triangles
     // the baked cone does not bound: only unstitched patches are cone-tested.
+#ifdef CONE_CULL
     if (keep && (pc.stages & CULL_STAGE_CONE) != 0u && deltas == 0u) {
         vec4 cone = texelFetch(sampler2DArray(patch_cones, nearest), ivec3(pxy, int(slot)), 0);
         keep = !cone_faces_away(cone, lo, hi);
     }
+#endif
     if (keep) {
         atomicAdd(s_cone, 1u);
     }
+    bool holey = false;
+#ifdef HOLE_CULL
+    uint holes = texelFetch(usampler2DArray(patch_holes, nearest), ivec3(pxy, int(slot)), 0).r;
     if (keep && (pc.stages & CULL_STAGE_HOLE) != 0u) {
-        keep = texelFetch(usampler2DArray(patch_holes, nearest), ivec3(pxy, int(slot)), 0).r != PATCH_HOLE_ALL;
+        keep = holes != PATCH_HOLE_ALL;
     }
+    holey = holes != PATCH_HOLE_NONE;
+#endif
     if (keep) {
         atomicAdd(s_hole, 1u);
-        uint i = atomicAdd(patch_list.header.instance_count, 1u);
-        if (i < pc.capacity) {
-            uint index = uint(pxy.y) * per_side + uint(pxy.x);
-            patch_list.patches[i] = uvec2(n, pack_patch(slot, index, deltas));
+        uvec2 record = uvec2(n, pack_patch(slot, uint(pxy.y) * per_side + uint(pxy.x), deltas));
+#ifdef HOLE_CULL
+        if (holey) {
+            uint i = atomicAdd(hole_list.header.instance_count, 1u);
+            if (i < pc.capacity) {
+                hole_list.patches[i] = record;
+            }
+        }
+#endif
+        if (!holey) {
+            uint i = atomicAdd(patch_list.header.instance_count, 1u);
+            if (i < pc.capacity) {
+                patch_list.patches[i] = record;
+            }
         }
     }
     barrier();

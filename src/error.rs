@@ -15,6 +15,10 @@ pub enum Error {
     Unsupported(String),
     #[error("bad input: {0}")]
     BadInput(String),
+    /// A scene's `[effects]` table names an unknown effect, a wrong type or
+    /// a missing file; the message names the key.
+    #[error("{0}")]
+    Scene(String),
     #[error(transparent)]
     World(#[from] crate::world::WorldError),
     #[error("Vulkan call {call} failed: {result:?}")]

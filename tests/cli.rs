@@ -38,7 +38,9 @@ fn render_prints_pass_timings_and_writes_every_output() {
     let (ok, out, err) = vista(&args);
     assert!(ok, "{err}");
     // One table row per pass: name, queue, then a median in ms.
-    for pass in ["quadtree_update", "traverse", "lod_map", "sector_data", "cull_patches", "terrain_geometry"] {
+    // The default world: no queries (no sector_data), no holes (no
+    // terrain_holes), and settled streaming leaves quadtree_update idle.
+    for pass in ["traverse", "lod_map", "cull_patches", "terrain_geometry"] {
         let row = out.lines().find(|l| l.split_whitespace().next() == Some(pass));
         let fields: Vec<&str> =
             row.unwrap_or_else(|| panic!("no timing row for {pass}:\n{out}")).split_whitespace().collect();
@@ -50,6 +52,9 @@ fn render_prints_pass_timings_and_writes_every_output() {
     let n = |k: &str| p[k].as_u64().unwrap_or_else(|| panic!("stats.json lacks patches.{k}"));
     assert!(n("patches_in") >= n("after_frustum") && n("after_frustum") >= n("after_cone"));
     assert!(n("after_cone") >= n("after_hole") && n("after_hole") == n("drawn") && n("drawn") > 0, "{p}");
+    for absent in ["sector_data", "terrain_holes"] {
+        assert!(!out.lines().any(|l| l.split_whitespace().next() == Some(absent)), "{absent} ran:\n{out}");
+    }
     assert_eq!(stats["triangles_drawn"].as_u64(), Some(n("drawn") * 512));
     let img = image::open(dir.join("image.png")).unwrap();
     assert_eq!((img.width(), img.height()), (64, 48));
@@ -63,7 +68,7 @@ fn render_prints_pass_timings_and_writes_every_output() {
     // bottom row is ground a few hundred metres away, the top row sky.
     assert!(values[47 * 64..].iter().all(|&d| d > 50.0 && d < 5000.0), "bottom row depth");
     assert!(values[..64].iter().all(|&d| d == 0.0), "top row should be sky (0)");
-    for f in ["timings.json", "trace.json"] {
+    for f in ["timings.json", "trace.json", "report.json"] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -165,4 +170,63 @@ fn bench_cull_writes_a_row_per_view() {
         assert!(r["all"]["geometry_ms"].as_f64().unwrap() > 0.0, "{r}");
     }
     let _ = std::fs::remove_file(&json);
+}
+
+fn vista_code(args: &[&str]) -> (Option<i32>, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_vista")).args(args).output().expect("run vista");
+    (out.status.code(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+}
+
+/// A small procedural world (1 km, 3 LODs) with `effects` as its [effects] table.
+fn scene_file(name: &str, effects: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("vista-scenes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    let text =
+        format!("[world]\nextent = 1024\nheight_range = [0, 200]\nspacing = 1\nlods = 3\n\n[effects]\n{effects}\n");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn scene_effect_errors_are_one_line_with_exit_code_2() {
+    for (name, effects, needles) in [
+        ("unknown.toml", "holse = true", &["effects.holse", "unknown effect"][..]),
+        ("type.toml", "holes = 3", &["effects.holes", "true, false or a table", "an integer"][..]),
+        ("param.toml", "lighting = { sun_color = \"red\" }", &["effects.lighting.sun_color", "a string"][..]),
+        (
+            "missing.toml",
+            "splat = { materials = \"no-such-materials.toml\" }",
+            &["effects.splat.materials", "no-such-materials.toml", "does not exist"][..],
+        ),
+    ] {
+        let path = scene_file(name, effects);
+        let (code, _, err) = vista_code(&["render", "--scene", path.to_str().unwrap()]);
+        assert_eq!(code, Some(2), "{name}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(path.to_str().unwrap()), "{name}: the message names the file: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{name}: {n:?} missing in {err}");
+        }
+    }
+}
+
+#[test]
+fn an_effect_without_its_data_is_reported_off_with_the_reason() {
+    let path = scene_file("no-holes.toml", "holes = true\nqueries = true");
+    let out = std::env::temp_dir().join(format!("vista-report-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let args = ["--validation", "render", "--scene", path.to_str().unwrap(), "--size", "48x32", "--frames", "3"];
+    let (code, stdout, err) = vista_code(&[&args[..], &["--report", "--out", out.to_str().unwrap()]].concat());
+    assert_eq!(code, Some(0), "{err}");
+    let line = stdout.lines().find(|l| l.trim_start().starts_with("holes ")).unwrap_or_else(|| panic!("{stdout}"));
+    assert!(line.contains("off") && line.contains("no hole regions"), "{line}");
+    assert!(stdout.contains("terrain_holes") && stdout.contains("not built"), "{stdout}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let holes = report["effects"].as_array().unwrap().iter().find(|e| e["effect"] == "holes").unwrap();
+    assert_eq!(holes["on"], false);
+    assert_eq!(holes["requested"], true);
+    let sector = report["passes"].as_array().unwrap().iter().find(|p| p["name"] == "sector_data").unwrap();
+    assert_eq!(sector["state"], "ran", "queries asked for: sector data runs");
+    let _ = std::fs::remove_dir_all(&out);
 }

@@ -6,7 +6,7 @@ mod common;
 use common::{fake_node, gpu_test, Rng};
 use std::collections::BTreeSet;
 use vista::passes::quadtree_update::QuadtreeUpdatePass;
-use vista::terrain::gpu_quadtree::GpuQuadtree;
+use vista::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree};
 use vista::world::{NodeId, WorldDesc};
 
 /// 8 x 6 sectors of 128 m, 4 LODs: a 1x1 root grid, texture padded to 8x8,
@@ -24,7 +24,7 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
     gpu_test(|ctx| {
         let world = small_world();
         let slots = 20;
-        let mut tree = GpuQuadtree::new(ctx, &world, slots, 2).unwrap();
+        let mut tree = GpuQuadtree::new(ctx, &world, slots, 2, AtlasSet::ALL).unwrap();
         let pass = QuadtreeUpdatePass::new(ctx).unwrap();
         let candidates = all_valid(&world);
         let mut rng = Rng(0xC0FFEE);
@@ -47,7 +47,7 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
                     tree.add(fake_node(id, step), (rng.below(16) as i8) - 8);
                 }
             }
-            ctx.submit_and_wait(|rec| pass.record(rec, &mut tree)).unwrap();
+            ctx.submit_and_wait(|rec| pass.record(rec, &mut tree).map(drop)).unwrap();
             // Over budget, the rest waits; mirror what became resident.
             resident.retain(|id| tree.shadow.slot_of(*id).is_some());
             for (lod, expect) in tree.shadow.mips.iter().enumerate() {
@@ -69,21 +69,21 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
 fn payloads_land_in_the_atlas_layer_of_their_slot() {
     gpu_test(|ctx| {
         let world = small_world();
-        let mut tree = GpuQuadtree::new(ctx, &world, 8, 1).unwrap();
+        let mut tree = GpuQuadtree::new(ctx, &world, 8, 1, AtlasSet::ALL).unwrap();
         let pass = QuadtreeUpdatePass::new(ctx).unwrap();
         let nodes: Vec<NodeId> = all_valid(&world).into_iter().take(5).collect();
         for (i, id) in nodes.iter().enumerate() {
             tree.add(fake_node(*id, i as u16), 0);
         }
-        ctx.submit_and_wait(|rec| pass.record(rec, &mut tree)).unwrap();
+        ctx.submit_and_wait(|rec| pass.record(rec, &mut tree).map(drop)).unwrap();
         for (i, id) in nodes.iter().enumerate() {
             let slot = tree.shadow.slot_of(*id).expect("resident");
             let node = fake_node(*id, i as u16);
-            let h = ctx.read_image(&tree.atlases[0], 0, slot, 2).unwrap();
+            let h = ctx.read_image(tree.required_atlas(0), 0, slot, 2).unwrap();
             assert_eq!(bytemuck::cast_slice::<u8, u16>(&h), &node.heights[..], "heights of {id} in layer {slot}");
-            let a = ctx.read_image(&tree.atlases[2], 0, slot, 4).unwrap();
+            let a = ctx.read_image(tree.required_atlas(2), 0, slot, 4).unwrap();
             assert_eq!(a, bytemuck::cast_slice::<[u8; 4], u8>(&node.albedo), "albedo of {id}");
-            let c = ctx.read_image(&tree.atlases[5], 0, slot, 16).unwrap();
+            let c = ctx.read_image(tree.required_atlas(5), 0, slot, 16).unwrap();
             assert_eq!(c, bytemuck::cast_slice::<[f32; 4], u8>(&node.patch_cones), "cones of {id}");
         }
     });
@@ -92,6 +92,9 @@ fn payloads_land_in_the_atlas_layer_of_their_slot() {
 #[test]
 fn budget_over_the_slot_limit_is_an_error() {
     gpu_test(|ctx| {
-        assert!(matches!(GpuQuadtree::new(ctx, &small_world(), 1024, 1), Err(vista::Error::BadInput(_))));
+        assert!(matches!(
+            GpuQuadtree::new(ctx, &small_world(), 1024, 1, AtlasSet::ALL),
+            Err(vista::Error::BadInput(_))
+        ));
     });
 }

@@ -63,7 +63,7 @@ fn misuse_panics_before_reaching_vulkan() {
             let m = panics(|| rec.end_rendering());
             assert!(m.contains("without begin_rendering"), "{m}");
             // The target is still UNDEFINED: rendering into it is refused.
-            let m = panics(|| rec.begin_rendering(&[ColorTarget { image: &target, clear: [0.0; 4] }], None));
+            let m = panics(|| rec.begin_rendering(&[ColorTarget { image: &target, clear: Some([0.0; 4]) }], None));
             assert!(m.contains("is not in COLOR_ATTACHMENT_OPTIMAL"), "{m}");
             // Binding a storage image in a layout it is not in.
             rec.bind_pipeline(scan.pipeline());
@@ -84,7 +84,7 @@ fn misuse_panics_before_reaching_vulkan() {
             rec.discard_to(&target, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
             assert_eq!(target.layout(), vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
             tri.record(rec, &target, [[-1.0, -1.0, 0.0, 1.0], [3.0, -1.0, 0.0, 1.0], [-1.0, 3.0, 0.0, 1.0]]);
-            rec.begin_rendering(&[ColorTarget { image: &target, clear: [0.0; 4] }], None);
+            rec.begin_rendering(&[ColorTarget { image: &target, clear: Some([0.0; 4]) }], None);
             let m = panics(|| rec.transition(&target, vk::ImageLayout::GENERAL));
             assert!(m.contains("inside a rendering scope"), "{m}");
             rec.end_rendering();

@@ -82,7 +82,7 @@ fn rust_twins_match_reflected_layouts() {
     use vista::passes::prefix_sum::PrefixSumPush;
     use vista::passes::quadtree_update::QuadtreeUpdatePush;
     use vista::passes::sector_data::SectorDataPush;
-    use vista::passes::terrain_geometry::GeometryPush;
+    use vista::passes::terrain_holes::HolesPush;
     use vista::passes::terrain_query::{TerrainQueryPush, VistaTerrain};
     use vista::passes::traverse::{LevelArgs, TraverseHeader, TraversePush};
     use vista::render::TerrainViewGpu;
@@ -143,7 +143,7 @@ fn rust_twins_match_reflected_layouts() {
     );
     // The header leads with a VkDrawIndexedIndirectCommand.
     assert_eq!(offset_of!(PatchListHeader, first_instance) + 4, 20);
-    check_layout("GeometryPush", fields!(GeometryPush: nan_bits, pad), layouts::GEOMETRY_PUSH, structs::GEOMETRY_PUSH);
+    check_layout("HolesPush", fields!(HolesPush: nan_bits, pad), layouts::HOLES_PUSH, structs::HOLES_PUSH);
     check_layout(
         "TerrainViewGpu",
         fields!(TerrainViewGpu: view_proj, frustum, sun_dir, sun_color, sky_color, camera_sample, camera_frac,
@@ -155,7 +155,7 @@ fn rust_twins_match_reflected_layouts() {
     assert_eq!(size_of::<TraversePush>() as u32, shaders::traverse::PUSH_CONSTANT_SIZE);
     assert_eq!(shaders::traverse::PUSH_CONSTANT_SIZE, shaders::traverse_level::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<CullPush>() as u32, shaders::cull_patches::PUSH_CONSTANT_SIZE);
-    assert_eq!(size_of::<GeometryPush>() as u32, shaders::terrain_geometry_vert::PUSH_CONSTANT_SIZE);
+    assert_eq!(size_of::<HolesPush>() as u32, shaders::terrain_holes_vert::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<SectorDataPush>() as u32, shaders::sector_data::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<TerrainQueryPush>() as u32, shaders::terrain_query::PUSH_CONSTANT_SIZE);
 }
@@ -269,4 +269,26 @@ fn naga_rejection_stops_the_build_too() {
     std::fs::write(&file, "#version 460\nlayout(local_size_x = 1) in;\nlayout(set = 0, binding = 0) writeonly buffer B { uint v[]; } b;\nvoid main() { b.v[0] = 1u; }\n").unwrap();
     let err = shader_compiler::compile_file(&file, &dir.join("common")).expect_err("naga rejects write-only storage");
     assert!(err.contains("writeonly.comp") && err.contains("naga"), "{err}");
+}
+
+#[test]
+fn variants_leave_out_what_their_switches_add() {
+    use shaders::{cull_patches as cull, terrain_geometry_frag as frag};
+    let names = |s: &vista::gpu::ShaderInfo| s.bindings.iter().map(|b| b.name).collect::<Vec<_>>();
+    assert!(!names(frag::variant(0)).contains(&"normal_atlas"), "unlit: no normal atlas");
+    assert!(names(frag::variant(frag::VARIANT_LIGHTING)).contains(&"normal_atlas"));
+    assert!(std::ptr::eq(frag::variant(frag::VARIANT_LIGHTING), &frag::SHADER), "SHADER is the full variant");
+    let bare = names(cull::variant(0));
+    for gone in ["patch_cones", "patch_holes", "hole_list"] {
+        assert!(!bare.contains(&gone), "{gone} in the bare cull variant");
+    }
+    assert!(names(cull::variant(cull::VARIANT_CONE_CULL)).contains(&"patch_cones"));
+    assert!(!names(cull::variant(cull::VARIANT_CONE_CULL)).contains(&"patch_holes"));
+    assert_eq!(cull::variant(cull::VARIANT_HOLE_CULL).defines, &["HOLE_CULL"]);
+    assert_eq!(cull::VARIANTS.len(), 4);
+    // A file's switch list is checked.
+    assert!(shader_compiler::variants_of("// variants: lower_case\n", "f").is_err());
+    assert!(shader_compiler::variants_of("// variants: A B C D\n", "f").is_err());
+    assert_eq!(shader_compiler::variants_of("// variants: A B\n", "f").unwrap(), ["A", "B"]);
+    assert!(shader_compiler::variants_of("void main() {}\n", "f").unwrap().is_empty());
 }

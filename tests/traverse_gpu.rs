@@ -13,7 +13,7 @@ use vista::passes::sector_data::SectorData;
 use vista::passes::terrain_query::{TerrainQuery, VistaTerrain};
 use vista::passes::traverse::{Traverse, TraverseMode};
 use vista::reference::{lod_map_cpu, sample_height_cpu, sector_data_cpu, traverse_cpu};
-use vista::terrain::gpu_quadtree::GpuQuadtree;
+use vista::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree};
 use vista::terrain::selection::{TraverseCamera, TraverseParams, TraverseResult};
 use vista::world::{NodeId, WorldDesc};
 
@@ -36,7 +36,7 @@ struct Scene {
 impl Scene {
     fn new(ctx: &Context, seed: u64) -> Self {
         let mut s = Scene {
-            tree: GpuQuadtree::new(ctx, &world(), SLOTS, 1).unwrap(),
+            tree: GpuQuadtree::new(ctx, &world(), SLOTS, 1, AtlasSet::ALL).unwrap(),
             update: QuadtreeUpdatePass::new(ctx).unwrap(),
             resident: BTreeSet::new(),
             heights: std::collections::HashMap::new(),
@@ -89,7 +89,7 @@ impl Scene {
     /// Uploads until nothing waits (MAX_UPLOADS_PER_FRAME per frame).
     fn flush(&mut self, ctx: &Context) {
         loop {
-            ctx.submit_and_wait(|rec| self.update.record(rec, &mut self.tree)).unwrap();
+            ctx.submit_and_wait(|rec| self.update.record(rec, &mut self.tree).map(drop)).unwrap();
             if self.tree.waiting() == 0 {
                 break;
             }
@@ -142,7 +142,7 @@ fn assert_tiles_exactly_once(result: &TraverseResult, what: &str) {
 fn gpu_traversal_equals_cpu_reference_for_1000_random_cases() {
     gpu_test(|ctx| {
         let mut scene = Scene::new(ctx, 0xFACADE);
-        let traverse = Traverse::new(ctx, &world(), SLOTS).unwrap();
+        let traverse = Traverse::with_per_level(ctx, &world(), SLOTS).unwrap();
         let lod_map = LodMap::new(ctx, &world()).unwrap();
         let sectors = SectorData::new(ctx, &world()).unwrap();
         let mut deepest = 0;
@@ -201,7 +201,7 @@ fn overflow_keeps_coarser_nodes_and_is_counted() {
             cameras: vec![TraverseCamera::perspective([2000.0, 2000.0, 100.0], 60.0, 2000)],
             target_error_px: 0.1,
         };
-        let mut traverse = Traverse::new(ctx, &w, SLOTS).unwrap();
+        let mut traverse = Traverse::with_per_level(ctx, &w, SLOTS).unwrap();
         let ample = traverse_cpu(&scene.tree.shadow, &w, &params);
         traverse.set_list_capacity(12);
         for mode in [TraverseMode::SingleDispatch, TraverseMode::MultiDispatch] {

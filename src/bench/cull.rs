@@ -8,6 +8,7 @@ use crate::frame::profiler::summarize;
 use crate::gpu::Context;
 use crate::passes::cull_patches::{CullCounters, CullPatches, CullStages};
 use crate::passes::terrain_geometry::TerrainGeometry;
+use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::traverse::Traverse;
 use crate::render::offscreen::Offscreen;
 use crate::render::view::{Camera, View, DEFAULT_NEAR_M};
@@ -112,7 +113,9 @@ fn block(
     Ok(CullTiming {
         traverse_ms: ms(Traverse::NAME),
         cull_ms: ms(CullPatches::NAME),
-        geometry_ms: ms(TerrainGeometry::NAME),
+        // Both draws of the terrain (terrain_holes exists with holes only).
+        geometry_ms: ms(TerrainGeometry::NAME)
+            + s.iter().find(|p| p.name == TerrainHoles::NAME).map_or(0.0, |p| p.median_ms),
         counters: renderer.cull.read_counters(ctx)?,
     })
 }

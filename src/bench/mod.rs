@@ -4,7 +4,9 @@
 //! conditions.
 
 pub mod cull;
+pub mod effects;
 pub mod traverse;
 
 pub use cull::{bench_cull, cull_views, CullBenchConfig, CullBenchRow};
+pub use effects::{bench_effects, EffectsBenchConfig, EffectsBenchRow};
 pub use traverse::{bench_traverse, TraverseBenchConfig, TraverseBenchRow};

@@ -8,7 +8,7 @@ use crate::frame::{FrameExecutor, QueueKind};
 use crate::gpu::{Context, FrameRing};
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::traverse::{Traverse, TraverseMode};
-use crate::terrain::gpu_quadtree::GpuQuadtree;
+use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree};
 use crate::terrain::selection::{TraverseCamera, TraverseParams};
 use crate::world::{bake_node, HeightSource, NodeId, WorldDesc};
 use rayon::prelude::*;
@@ -71,19 +71,19 @@ pub fn bench_traverse(
 ) -> Result<Vec<TraverseBenchRow>> {
     let max = cfg.resident_sets.iter().copied().max().unwrap_or(64);
     let update = QuadtreeUpdatePass::new(ctx)?;
-    let traverse = Traverse::new(ctx, world, max)?;
+    let traverse = Traverse::with_per_level(ctx, world, max)?;
     let mut ring = FrameRing::new(ctx, 1)?;
     let mut rows = Vec::new();
     for &requested in &cfg.resident_sets {
         let ids = resident_set(world, cfg.camera_m, requested);
         log::info!("baking {} nodes for the {requested}-node resident set", ids.len());
         let nodes: Vec<_> = ids.par_iter().map(|id| bake_node(source, world, &[], *id)).collect();
-        let mut tree = GpuQuadtree::new(ctx, world, max, 1)?;
+        let mut tree = GpuQuadtree::new(ctx, world, max, 1, AtlasSet::CORE)?;
         for n in nodes {
             tree.add(n, 0);
         }
         while tree.waiting() > 0 {
-            ctx.submit_and_wait(|rec| update.record(rec, &mut tree))?;
+            ctx.submit_and_wait(|rec| update.record(rec, &mut tree).map(drop))?;
         }
         let resident = tree.shadow.resident_count();
         for &target in &cfg.targets_px {

@@ -83,6 +83,11 @@ impl FrameExecutor {
         self.latest.as_ref()
     }
 
+    /// Collects the timings of frames that finished (never waits).
+    pub fn poll(&mut self) {
+        self.harvest();
+    }
+
     fn harvest(&mut self) {
         for slot in &mut self.slots {
             let Some(pool) = slot.pool.as_ref().filter(|_| slot.pending) else {
@@ -140,6 +145,11 @@ pub struct Frame<'e, 'r> {
 }
 
 impl<'r> Frame<'_, 'r> {
+    /// This frame's number (counts from 1; `FrameTimings::frame`).
+    pub fn number(&self) -> u64 {
+        self.exec.slots[self.slot].frame
+    }
+
     /// Records one pass between a timestamp pair inside a debug label. The
     /// name is the pass's file, shader and timer label.
     pub fn pass<T>(&mut self, name: &'static str, queue: QueueKind, f: impl FnOnce(&mut Recorder<'r>) -> T) -> T {

@@ -16,6 +16,7 @@ use super::shader::{Binding, BindingKind};
 use ash::vk;
 
 /// A resource bound to a reflected binding.
+#[derive(Clone, Copy)]
 pub enum Resource<'a> {
     Buffer(&'a Buffer),
     /// (buffer, offset, size)
@@ -36,10 +37,18 @@ pub struct Recorder<'a> {
     graphics: Option<vk::Pipeline>,
 }
 
-/// A color attachment for `begin_rendering`, cleared to `clear`.
+/// A color attachment for `begin_rendering`: cleared to `clear`, or its
+/// contents kept when `None` (a later pass drawing over an earlier one).
 pub struct ColorTarget<'a> {
     pub image: &'a Image,
-    pub clear: [f32; 4],
+    pub clear: Option<[f32; 4]>,
+}
+
+/// The depth attachment for `begin_rendering`: cleared to `clear`
+/// (reversed-Z: 0 is far) or kept when `None`.
+pub struct DepthTarget<'a> {
+    pub image: &'a Image,
+    pub clear: Option<f32>,
 }
 
 impl<'a> Recorder<'a> {
@@ -238,10 +247,11 @@ impl<'a> Recorder<'a> {
         unsafe { self.d().cmd_dispatch_indirect(self.cmd, args.raw, offset) };
     }
 
-    /// Begins dynamic rendering into `colors` (+ optional depth cleared to
-    /// 0, reversed-Z), with a full-target viewport and scissor. The targets
-    /// must be in COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL.
-    pub fn begin_rendering(&mut self, colors: &[ColorTarget], depth: Option<&Image>) {
+    /// Begins dynamic rendering into `colors` (+ optional depth), with a
+    /// full-target viewport and scissor. The targets must be in
+    /// COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL.
+    pub fn begin_rendering(&mut self, colors: &[ColorTarget], depth_target: Option<DepthTarget>) {
+        let depth = depth_target.as_ref().map(|d| d.image);
         self.outside_rendering("begin_rendering");
         let extent =
             colors.first().map(|c| c.image.extent).or(depth.map(|d| d.extent)).expect("begin_rendering needs a target");
@@ -259,18 +269,20 @@ impl<'a> Recorder<'a> {
                 vk::RenderingAttachmentInfo::default()
                     .image_view(c.image.view())
                     .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .load_op(if c.clear.is_some() { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD })
                     .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: c.clear } })
+                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: c.clear.unwrap_or_default() } })
             })
             .collect();
-        let depth_att = depth.map(|d| {
+        let depth_att = depth_target.as_ref().map(|d| {
+            let load = if d.clear.is_some() { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
+            let depth = d.clear.unwrap_or_default();
             vk::RenderingAttachmentInfo::default()
-                .image_view(d.view())
+                .image_view(d.image.view())
                 .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .load_op(load)
                 .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } })
+                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth, stencil: 0 } })
         });
         let area = vk::Rect2D {
             offset: vk::Offset2D { x: 0, y: 0 },

@@ -12,7 +12,7 @@ mod transfer;
 pub mod validation;
 
 pub use ash::vk;
-pub use commands::{ColorTarget, Recorder, Resource};
+pub use commands::{ColorTarget, DepthTarget, Recorder, Resource};
 pub use context::{Context, ContextOptions, Queue, RawHandles};
 pub use device_info::{DeviceInfo, Limits, QueueFamilyInfo};
 pub use pipeline::{ComputePipelineDesc, GraphicsPipelineDesc, Pipeline};

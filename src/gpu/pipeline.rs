@@ -20,7 +20,21 @@ pub struct Pipeline {
     pub(crate) push_stages: vk::ShaderStageFlags,
     pub(crate) push_size: u32,
     pub name: String,
+    /// The name with the variant switches of its shaders, e.g.
+    /// `cull_patches[CONE_CULL HOLE_CULL]` (reports list pipelines by it).
+    pub label: String,
     shared: Arc<Shared>,
+}
+
+/// `name[SWITCH ...]` from the variant defines of `shaders`.
+fn label_of(name: &str, shaders: &[&ShaderInfo]) -> String {
+    let mut defines: Vec<&str> = shaders.iter().flat_map(|s| s.defines.iter().copied()).collect();
+    defines.dedup();
+    if defines.is_empty() {
+        name.to_string()
+    } else {
+        format!("{name}[{}]", defines.join(" "))
+    }
 }
 
 pub struct ComputePipelineDesc<'a> {
@@ -156,7 +170,8 @@ impl Pipeline {
             s.device.destroy_shader_module(m, None);
             r
         };
-        Self::finish(ctx, desc.name, raw.map(|p| p[0]).map_err(|(_, e)| e), l, vk::PipelineBindPoint::COMPUTE)
+        let label = label_of(desc.name, &[desc.shader]);
+        Self::finish(ctx, desc.name, label, raw.map(|p| p[0]).map_err(|(_, e)| e), l, vk::PipelineBindPoint::COMPUTE)
     }
 
     pub fn graphics(ctx: &Context, desc: &GraphicsPipelineDesc) -> Result<Pipeline> {
@@ -234,12 +249,14 @@ impl Pipeline {
             s.device.destroy_shader_module(fm, None);
             r
         };
-        Self::finish(ctx, desc.name, raw.map(|p| p[0]).map_err(|(_, e)| e), l, vk::PipelineBindPoint::GRAPHICS)
+        let label = label_of(desc.name, &[desc.vertex, desc.fragment]);
+        Self::finish(ctx, desc.name, label, raw.map(|p| p[0]).map_err(|(_, e)| e), l, vk::PipelineBindPoint::GRAPHICS)
     }
 
     fn finish(
         ctx: &Context,
         name: &str,
+        label: String,
         raw: Result<vk::Pipeline, vk::Result>,
         l: Layout,
         bind_point: vk::PipelineBindPoint,
@@ -268,6 +285,7 @@ impl Pipeline {
             push_stages: l.push_stages,
             push_size: l.push_size,
             name: name.to_string(),
+            label,
             shared: s.clone(),
         })
     }

@@ -206,6 +206,11 @@ impl Buffer {
     }
 
     /// The mapped bytes of a host-visible buffer.
+    /// Device memory bound to it (the allocation, alignment included).
+    pub fn memory_bytes(&self) -> u64 {
+        self.allocation.as_ref().map_or(0, |a| a.size())
+    }
+
     pub fn mapped(&self) -> Option<&[u8]> {
         self.allocation.as_ref()?.mapped_slice().map(|s| &s[..self.size as usize])
     }
@@ -374,6 +379,11 @@ impl Image {
             layout: AtomicI32::new(vk::ImageLayout::UNDEFINED.as_raw()),
             shared: s.clone(),
         })
+    }
+
+    /// Device memory bound to it (the allocation, alignment included).
+    pub fn memory_bytes(&self) -> u64 {
+        self.allocation.as_ref().map_or(0, |a| a.size())
     }
 
     pub fn raw(&self) -> vk::Image {

@@ -56,6 +56,8 @@ pub struct ShaderInfo {
     pub name: &'static str,
     pub file: &'static str,
     pub stage: ShaderStage,
+    /// Variant switches on in this compilation (`// variants:` in the file).
+    pub defines: &'static [&'static str],
     pub spirv: &'static [u32],
     pub workgroup_size: [u32; 3],
     pub bindings: &'static [Binding],

@@ -1,9 +1,11 @@
 //! `cull_patches`: splits every listed node into 8x8 patches (one thread
 //! each, one workgroup per node, dispatched indirectly by `traverse`),
-//! culls them (frustum, backface cone, all-hole; each stage switchable),
+//! culls them (frustum; backface cone and holes where those effects are
+//! built, as shader variants; each built stage switchable per frame),
 //! stitches LOD seams (4-bit delta per edge from the LOD map) and writes the
 //! visible patch list whose header is the indexed-indirect draw of
-//! `terrain_geometry`, with per-stage counters.
+//! `terrain_geometry`, with per-stage counters. With holes built, patches
+//! that have some holes go to a second list drawn by `terrain_holes`.
 
 use crate::error::Result;
 use crate::gpu::{
@@ -88,8 +90,10 @@ pub struct CullCounters {
     pub after_frustum: u32,
     pub after_cone: u32,
     pub after_hole: u32,
-    /// Instances of the draw.
+    /// Instances of both draws.
     pub drawn: u32,
+    /// Of those, patches with some holes (drawn by `terrain_holes`).
+    pub drawn_with_holes: u32,
 }
 
 /// A visible patch as the GPU wrote it.
@@ -121,11 +125,23 @@ impl PatchRecord {
     }
 }
 
+/// Which optional stages the pipeline is built with (effects `cone_cull`
+/// and `holes`); a stage not built has no code, binding or atlas.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CullBuild {
+    pub cone: bool,
+    pub holes: bool,
+}
+
 pub struct CullPatches {
     pipeline: Pipeline,
     sampler: Sampler,
     /// Header (indexed-indirect draw args + counters) then the patch list.
     pub list: Buffer,
+    /// Patches with some holes (header: the draw args of `terrain_holes`);
+    /// only when holes are built.
+    pub hole_list: Option<Buffer>,
+    pub build: CullBuild,
     capacity: u32,
     index_count: u32,
 }
@@ -135,21 +151,25 @@ impl CullPatches {
 
     /// Room for every patch of the traversal's largest final list;
     /// `index_count` is the patch mesh's, written into the draw args.
-    pub fn new(ctx: &Context, traverse: &Traverse, index_count: u32) -> Result<Self> {
+    pub fn new(ctx: &Context, traverse: &Traverse, index_count: u32, build: CullBuild) -> Result<Self> {
         assert_eq!(sh::WORKGROUP_SIZE[0] as usize, PATCHES_PER_NODE, "one thread per patch of a node");
         let capacity = traverse.final_capacity() * PATCHES_PER_NODE as u32;
-        let list = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "patch_list",
-                size: (structs::PATCH_LIST_HEADER + capacity as usize * 8) as u64,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::INDIRECT_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_DST
-                    | vk::BufferUsageFlags::TRANSFER_SRC,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
+        let list_buffer = |name| {
+            Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name,
+                    size: (structs::PATCH_LIST_HEADER + capacity as usize * 8) as u64,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::INDIRECT_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_DST
+                        | vk::BufferUsageFlags::TRANSFER_SRC,
+                    location: MemoryLocation::GpuOnly,
+                },
+            )
+        };
+        let list = list_buffer("patch_list")?;
+        let hole_list = if build.holes { Some(list_buffer("hole_patch_list")?) } else { None };
         let sampler = Sampler::new(
             ctx,
             &SamplerDesc {
@@ -159,8 +179,15 @@ impl CullPatches {
             },
         )?;
         let spec = [(sh::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)];
-        let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &spec };
-        Ok(CullPatches { pipeline: Pipeline::compute(ctx, &desc)?, sampler, list, capacity, index_count })
+        let bit = |on: bool, b: u32| if on { b } else { 0 };
+        let shader = sh::variant(bit(build.cone, sh::VARIANT_CONE_CULL) | bit(build.holes, sh::VARIANT_HOLE_CULL));
+        let desc = ComputePipelineDesc { name: Self::NAME, shader, specialization: &spec };
+        let pipeline = Pipeline::compute(ctx, &desc)?;
+        Ok(CullPatches { pipeline, sampler, list, hole_list, build, capacity, index_count })
+    }
+
+    pub fn pipeline_label(&self) -> &str {
+        &self.pipeline.label
     }
 
     /// Writes this frame's view (`view_bytes`, a TerrainView, into `view`)
@@ -181,21 +208,27 @@ impl CullPatches {
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         rec.update_buffer(view, 0, view_bytes);
         rec.update_buffer(&self.list, 0, bytemuck::bytes_of(&header));
+        if let Some(holes) = &self.hole_list {
+            rec.update_buffer(holes, 0, bytemuck::bytes_of(&header));
+        }
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         rec.bind_pipeline(&self.pipeline);
-        rec.push_descriptors(
-            &self.pipeline,
-            &[
-                (sh::TRAVERSE_OUT, Resource::Buffer(&traverse.output)),
-                (sh::VIEW, Resource::Buffer(view)),
-                (sh::LOD_MAP, Resource::Image(&lod_map.image, vk::ImageLayout::GENERAL)),
-                (sh::PATCH_MIN_MAX, Resource::Image(&tree.atlases[ATLAS_PATCH_MIN_MAX], ATLAS_LAYOUT)),
-                (sh::PATCH_CONES, Resource::Image(&tree.atlases[ATLAS_PATCH_CONES], ATLAS_LAYOUT)),
-                (sh::PATCH_HOLES, Resource::Image(&tree.atlases[ATLAS_PATCH_HOLES], ATLAS_LAYOUT)),
-                (sh::NEAREST, Resource::Sampler(self.sampler.raw())),
-                (sh::PATCH_LIST, Resource::Buffer(&self.list)),
-            ],
-        );
+        let mut bindings = vec![
+            (sh::TRAVERSE_OUT, Resource::Buffer(&traverse.output)),
+            (sh::VIEW, Resource::Buffer(view)),
+            (sh::LOD_MAP, Resource::Image(&lod_map.image, vk::ImageLayout::GENERAL)),
+            (sh::PATCH_MIN_MAX, Resource::Image(tree.required_atlas(ATLAS_PATCH_MIN_MAX), ATLAS_LAYOUT)),
+            (sh::NEAREST, Resource::Sampler(self.sampler.raw())),
+            (sh::PATCH_LIST, Resource::Buffer(&self.list)),
+        ];
+        if self.build.cone {
+            bindings.push((sh::PATCH_CONES, Resource::Image(tree.required_atlas(ATLAS_PATCH_CONES), ATLAS_LAYOUT)));
+        }
+        if let Some(holes) = &self.hole_list {
+            bindings.push((sh::PATCH_HOLES, Resource::Image(tree.required_atlas(ATLAS_PATCH_HOLES), ATLAS_LAYOUT)));
+            bindings.push((sh::HOLE_LIST, Resource::Buffer(holes)));
+        }
+        rec.push_descriptors(&self.pipeline, &bindings);
         rec.push_constants(&self.pipeline, &CullPush { stages: stages.bits(), capacity: self.capacity, pad: [0; 2] });
         rec.dispatch_indirect(&traverse.output, 0);
         rec.barrier(
@@ -206,30 +239,38 @@ impl CullPatches {
 
     /// The last frame's counters (tests, CLI after the frames): waits.
     pub fn read_counters(&self, ctx: &Context) -> Result<CullCounters> {
-        let h = self.read_header(ctx)?;
+        let h = read_header(ctx, &self.list)?;
+        let holes = match &self.hole_list {
+            Some(b) => read_header(ctx, b)?.instance_count.min(self.capacity),
+            None => 0,
+        };
+        let solid = h.instance_count.min(self.capacity);
         Ok(CullCounters {
             patches_in: h.patches_in,
             after_frustum: h.after_frustum,
             after_cone: h.after_cone,
             after_hole: h.after_hole,
-            drawn: h.instance_count.min(self.capacity),
+            drawn: solid + holes,
+            drawn_with_holes: holes,
         })
     }
 
-    fn read_header(&self, ctx: &Context) -> Result<PatchListHeader> {
-        let bytes = ctx.read_buffer(&self.list)?;
-        Ok(bytemuck::pod_read_unaligned(&bytes[..structs::PATCH_LIST_HEADER]))
-    }
-
-    /// The last frame's visible patches, sorted (tests): waits.
+    /// The last frame's visible patches of both lists, sorted (tests): waits.
     pub fn read_patches(&self, ctx: &Context) -> Result<Vec<PatchRecord>> {
-        let bytes = ctx.read_buffer(&self.list)?;
-        let h: PatchListHeader = bytemuck::pod_read_unaligned(&bytes[..structs::PATCH_LIST_HEADER]);
-        let n = h.instance_count.min(self.capacity) as usize;
-        let raw = &bytes[structs::PATCH_LIST_HEADER..structs::PATCH_LIST_HEADER + n * 8];
-        let mut out: Vec<PatchRecord> =
-            raw.chunks_exact(8).map(|c| PatchRecord::unpack(bytemuck::pod_read_unaligned(c))).collect();
+        let mut out = Vec::new();
+        for list in std::iter::once(&self.list).chain(&self.hole_list) {
+            let bytes = ctx.read_buffer(list)?;
+            let h: PatchListHeader = bytemuck::pod_read_unaligned(&bytes[..structs::PATCH_LIST_HEADER]);
+            let n = h.instance_count.min(self.capacity) as usize;
+            let raw = &bytes[structs::PATCH_LIST_HEADER..structs::PATCH_LIST_HEADER + n * 8];
+            out.extend(raw.chunks_exact(8).map(|c| PatchRecord::unpack(bytemuck::pod_read_unaligned(c))));
+        }
         out.sort();
         Ok(out)
     }
+}
+
+fn read_header(ctx: &Context, list: &Buffer) -> Result<PatchListHeader> {
+    let bytes = ctx.read_buffer(list)?;
+    Ok(bytemuck::pod_read_unaligned(&bytes[..structs::PATCH_LIST_HEADER]))
 }

@@ -45,6 +45,10 @@ impl LodMap {
         Ok(LodMap { pipeline: Pipeline::compute(ctx, &desc)?, image })
     }
 
+    pub fn pipeline_label(&self) -> &str {
+        &self.pipeline.label
+    }
+
     /// Clears, then fills from `traverse`'s output (indirect: one workgroup per node).
     pub fn record(&self, rec: &mut Recorder, traverse: &Traverse) {
         rec.clear_color_u32(&self.image, u32::from(NO_LOD));

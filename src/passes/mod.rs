@@ -6,5 +6,6 @@ pub mod prefix_sum;
 pub mod quadtree_update;
 pub mod sector_data;
 pub mod terrain_geometry;
+pub mod terrain_holes;
 pub mod terrain_query;
 pub mod traverse;

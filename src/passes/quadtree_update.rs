@@ -39,9 +39,13 @@ impl QuadtreeUpdatePass {
         Ok(QuadtreeUpdatePass { pipeline: Pipeline::compute(ctx, &desc)? })
     }
 
+    pub fn pipeline_label(&self) -> &str {
+        &self.pipeline.label
+    }
+
     /// Uploads the frame's payloads and applies its changes; the results are
-    /// visible to every later command.
-    pub fn record(&self, rec: &mut Recorder, tree: &mut GpuQuadtree) -> Result<()> {
+    /// visible to every later command. Returns the number of writes.
+    pub fn record(&self, rec: &mut Recorder, tree: &mut GpuQuadtree) -> Result<u32> {
         let count = tree.prepare_frame(rec)?;
         let updates = tree.current_updates();
         if count > 0 {
@@ -63,6 +67,6 @@ impl QuadtreeUpdatePass {
             rec.dispatch(count.div_ceil(sh::WORKGROUP_SIZE[0]), 1, 1);
         }
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_COMMANDS);
-        Ok(())
+        Ok(count)
     }
 }

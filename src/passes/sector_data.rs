@@ -66,6 +66,16 @@ impl SectorData {
         })
     }
 
+    pub fn pipeline_label(&self) -> &str {
+        &self.pipeline.label
+    }
+
+    /// Workgroups of one dispatch.
+    pub fn groups(&self) -> u64 {
+        let [wx, wy, _] = sh::WORKGROUP_SIZE;
+        u64::from(self.extent[0].div_ceil(wx)) * u64::from(self.extent[1].div_ceil(wy))
+    }
+
     pub fn record(&self, rec: &mut Recorder, tree: &GpuQuadtree) {
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(

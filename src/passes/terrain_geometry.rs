@@ -1,13 +1,15 @@
-//! `terrain_geometry`: every visible patch in ONE instanced indexed-indirect
-//! draw of a 16x16-quad grid (the draw args are the patch list's header).
-//! The vertex shader stitches LOD seams and turns hole vertices into NaN;
-//! until the G-buffer tile passes exist the fragment shader writes a lit
-//! colour. Depth is reversed-Z D32_SFLOAT (cleared to 0, GREATER passes).
+//! `terrain_geometry`: every visible patch without holes in ONE instanced
+//! indexed-indirect draw of a 16x16-quad grid (the draw args are the patch
+//! list's header). The vertex shader stitches LOD seams; patches with holes
+//! are drawn by `terrain_holes`, whose vertex shader alone tests holes.
+//! Until the G-buffer tile passes exist the fragment shader writes a lit
+//! colour (variant LIGHTING, the `lighting` effect) or unlit albedo. Depth
+//! is reversed-Z D32_SFLOAT (cleared to 0, GREATER passes).
 
 use crate::error::Result;
 use crate::gpu::{
-    vk, Buffer, BufferDesc, ColorTarget, Context, GraphicsPipelineDesc, Image, MemoryLocation, Pipeline, Recorder,
-    Resource, Sampler, SamplerDesc,
+    vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, MemoryLocation,
+    Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo,
 };
 use crate::passes::cull_patches::CullPatches;
 use crate::shaders::{terrain_geometry_frag as fs, terrain_geometry_vert as vs};
@@ -19,15 +21,6 @@ use crate::world::{PATCHES_PER_NODE_SIDE, PATCH_QUADS};
 pub const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// Reversed-Z depth, infinite far plane.
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
-/// Bits of a quiet NaN, passed as data so no compiler folds it.
-pub const QUIET_NAN_BITS: u32 = 0x7FC0_0000;
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GeometryPush {
-    pub nan_bits: u32,
-    pub pad: [u32; 3],
-}
 
 /// The patch's index list: the diamond pattern (every odd/odd vertex the
 /// centre of 8 triangles), triangles reordered for the post-transform
@@ -48,37 +41,44 @@ pub struct RenderTargets<'a> {
     pub clear: [f32; 4],
 }
 
+/// The terrain pipeline of pass `name` with vertex shader `vertex`; the
+/// fragment shader lit (effect `lighting`) or not.
+pub(crate) fn terrain_pipeline(
+    ctx: &Context,
+    name: &str,
+    vertex: &'static ShaderInfo,
+    lighting: bool,
+) -> Result<Pipeline> {
+    let spec = [(vs::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (vs::SPEC_PATCH_QUADS, PATCH_QUADS)];
+    let desc = GraphicsPipelineDesc {
+        name,
+        vertex,
+        fragment: fs::variant(if lighting { fs::VARIANT_LIGHTING } else { 0 }),
+        specialization: &spec,
+        color_formats: &[COLOR_FORMAT],
+        depth_format: Some(DEPTH_FORMAT),
+        depth_compare: vk::CompareOp::GREATER,
+        cull_mode: vk::CullModeFlags::BACK,
+        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+    };
+    Pipeline::graphics(ctx, &desc)
+}
+
 pub struct TerrainGeometry {
     pipeline: Pipeline,
     indices: Buffer,
     nearest: Sampler,
     linear: Sampler,
     index_count: u32,
+    lighting: bool,
 }
 
 impl TerrainGeometry {
     pub const NAME: &'static str = vs::PASS;
 
-    /// `holes`: whether hole vertices are tested at all (a world without
-    /// holes compiles the test out through a specialization constant).
-    pub fn new(ctx: &Context, holes: bool) -> Result<Self> {
-        let spec = [
-            (vs::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE),
-            (vs::SPEC_PATCH_QUADS, PATCH_QUADS),
-            (vs::SPEC_HOLES, u32::from(holes)),
-        ];
-        let desc = GraphicsPipelineDesc {
-            name: Self::NAME,
-            vertex: &vs::SHADER,
-            fragment: &fs::SHADER,
-            specialization: &spec,
-            color_formats: &[COLOR_FORMAT],
-            depth_format: Some(DEPTH_FORMAT),
-            depth_compare: vk::CompareOp::GREATER,
-            cull_mode: vk::CullModeFlags::BACK,
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-        };
-        let pipeline = Pipeline::graphics(ctx, &desc)?;
+    /// `lighting`: the lit fragment variant (reads the normal atlas).
+    pub fn new(ctx: &Context, lighting: bool) -> Result<Self> {
+        let pipeline = terrain_pipeline(ctx, Self::NAME, &vs::SHADER, lighting)?;
         let idx = patch_indices();
         let indices = Buffer::new(
             ctx,
@@ -99,12 +99,49 @@ impl TerrainGeometry {
             nearest: sampler("terrain_geometry_nearest", vk::Filter::NEAREST)?,
             linear: sampler("terrain_geometry_linear", vk::Filter::LINEAR)?,
             index_count: idx.len() as u32,
+            lighting,
         })
     }
 
     /// Indices of one patch instance.
     pub fn index_count(&self) -> u32 {
         self.index_count
+    }
+
+    pub fn pipeline_label(&self) -> &str {
+        &self.pipeline.label
+    }
+
+    /// The patch index buffer, shared with `terrain_holes`.
+    pub fn indices(&self) -> &Buffer {
+        &self.indices
+    }
+
+    /// Binds `pipeline` (this pass's or `terrain_holes`') with the patch
+    /// list `list`; `extra` adds the bindings only that pipeline has.
+    pub(crate) fn bind(
+        &self,
+        rec: &mut Recorder,
+        pipeline: &Pipeline,
+        view: &Buffer,
+        list: &Buffer,
+        tree: &GpuQuadtree,
+        extra: &[(Binding, Resource)],
+    ) {
+        rec.bind_pipeline(pipeline);
+        let mut bindings = vec![
+            (vs::VIEW, Resource::Buffer(view)),
+            (vs::PATCH_LIST, Resource::Buffer(list)),
+            (vs::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
+            (fs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),
+            (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
+            (fs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
+        ];
+        if self.lighting {
+            bindings.push((fs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)));
+        }
+        bindings.extend(extra.iter().map(|(b, r)| (*b, *r)));
+        rec.push_descriptors(pipeline, &bindings);
     }
 
     /// Clears the targets and draws `cull`'s patch list.
@@ -116,21 +153,11 @@ impl TerrainGeometry {
         cull: &CullPatches,
         tree: &GpuQuadtree,
     ) {
-        rec.begin_rendering(&[ColorTarget { image: targets.color, clear: targets.clear }], Some(targets.depth));
-        rec.bind_pipeline(&self.pipeline);
-        rec.push_descriptors(
-            &self.pipeline,
-            &[
-                (vs::VIEW, Resource::Buffer(view)),
-                (vs::PATCH_LIST, Resource::Buffer(&cull.list)),
-                (vs::HEIGHT_ATLAS, Resource::Image(&tree.atlases[ATLAS_HEIGHT], ATLAS_LAYOUT)),
-                (vs::ALBEDO_ATLAS, Resource::Image(&tree.atlases[ATLAS_ALBEDO], ATLAS_LAYOUT)),
-                (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
-                (fs::NORMAL_ATLAS, Resource::Image(&tree.atlases[ATLAS_NORMAL], ATLAS_LAYOUT)),
-                (fs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
-            ],
+        rec.begin_rendering(
+            &[ColorTarget { image: targets.color, clear: Some(targets.clear) }],
+            Some(DepthTarget { image: targets.depth, clear: Some(0.0) }),
         );
-        rec.push_constants(&self.pipeline, &GeometryPush { nan_bits: QUIET_NAN_BITS, pad: [0; 3] });
+        self.bind(rec, &self.pipeline, view, &cull.list, tree, &[]);
         rec.draw_indexed_indirect(&self.indices, &cull.list, 0);
         rec.end_rendering();
     }

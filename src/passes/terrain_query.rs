@@ -8,7 +8,7 @@ use crate::gpu::{
 };
 use crate::passes::sector_data::{SectorData, SECTOR_DATA_LODS};
 use crate::shaders::terrain_query as sh;
-use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_LAYOUT};
+use crate::terrain::gpu_quadtree::{atlas_name, GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT};
 use crate::world::{WorldDesc, NODE_QUADS};
 
 /// Host twin of `VistaTerrain` (terrain_sample.glsl).
@@ -118,6 +118,12 @@ impl TerrainQuery {
         if points.len() > self.capacity as usize {
             return Err(Error::BadInput(format!("{} query points, capacity {}", points.len(), self.capacity)));
         }
+        if let Some(a) = [ATLAS_HEIGHT, ATLAS_NORMAL, ATLAS_SPLAT].into_iter().find(|a| tree.atlas(*a).is_none()) {
+            return Err(Error::BadInput(format!(
+                "terrain_query reads {}, which this terrain does not keep (the effect using it is off)",
+                atlas_name(a)
+            )));
+        }
         let bytes = bytemuck::cast_slice(points);
         self.points.mapped_mut().expect("mapped")[..bytes.len()].copy_from_slice(bytes);
         rec.bind_pipeline(&self.pipeline);
@@ -125,9 +131,9 @@ impl TerrainQuery {
             &self.pipeline,
             &[
                 (sh::SECTOR_DATA, Resource::Buffer(&sectors.buffer)),
-                (sh::HEIGHT_ATLAS, Resource::Image(&tree.atlases[0], ATLAS_LAYOUT)),
-                (sh::NORMAL_ATLAS, Resource::Image(&tree.atlases[1], ATLAS_LAYOUT)),
-                (sh::SPLAT_ATLAS, Resource::Image(&tree.atlases[3], ATLAS_LAYOUT)),
+                (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
+                (sh::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
+                (sh::SPLAT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_SPLAT), ATLAS_LAYOUT)),
                 (sh::ATLAS_SAMPLER, Resource::Sampler(self.sampler.raw())),
                 (sh::QUERY_POINTS, Resource::Buffer(&self.points)),
                 (sh::QUERY_RESULTS, Resource::Buffer(&self.results)),

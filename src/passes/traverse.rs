@@ -76,11 +76,12 @@ pub enum TraverseMode {
 
 pub struct Traverse {
     single: Pipeline,
-    multi: Pipeline,
+    /// The per-level mode (benchmarks, tests): built on request only.
+    multi: Option<Pipeline>,
     sampler: Sampler,
     /// Header + final node list; also the indirect args of patch culling.
     pub output: Buffer,
-    levels: Buffer,
+    levels: Option<Buffer>,
     world: WorldDesc,
     list_capacity: u32,
     final_capacity: u32,
@@ -97,6 +98,28 @@ impl Traverse {
 
     /// Checks the fixed bounds against the device and the slot budget.
     pub fn new(ctx: &Context, world: &WorldDesc, slots: u32) -> Result<Self> {
+        Self::build(ctx, world, slots, false)
+    }
+
+    /// Also builds the per-level mode (`TraverseMode::MultiDispatch`).
+    pub fn with_per_level(ctx: &Context, world: &WorldDesc, slots: u32) -> Result<Self> {
+        Self::build(ctx, world, slots, true)
+    }
+
+    pub fn pipeline_label(&self) -> &str {
+        &self.single.label
+    }
+
+    fn level_args(&self) -> &Buffer {
+        self.levels.as_ref().expect("per-level mode needs Traverse::with_per_level")
+    }
+
+    /// Device memory: (name, bytes) of each buffer.
+    pub fn memory(&self) -> Vec<(String, u64)> {
+        std::iter::once(&self.output).chain(&self.levels).map(|b| (b.name.clone(), b.memory_bytes())).collect()
+    }
+
+    fn build(ctx: &Context, world: &WorldDesc, slots: u32, per_level: bool) -> Result<Self> {
         let limit = ctx.info().limits.max_compute_shared_memory_bytes;
         if SHARED_BYTES > limit {
             return Err(Error::Unsupported(format!(
@@ -118,7 +141,7 @@ impl Traverse {
         let header = std::mem::size_of::<TraverseHeader>() as u64;
         Ok(Traverse {
             single: compute(Self::NAME, &single::SHADER)?,
-            multi: compute(Self::LEVEL_NAME, &multi::SHADER)?,
+            multi: if per_level { Some(compute(Self::LEVEL_NAME, &multi::SHADER)?) } else { None },
             sampler: Sampler::new(
                 ctx,
                 &SamplerDesc {
@@ -136,15 +159,20 @@ impl Traverse {
                     location: MemoryLocation::GpuOnly,
                 },
             )?,
-            levels: Buffer::new(
-                ctx,
-                &BufferDesc {
-                    name: "traverse_levels",
-                    size: MAX_LEVELS as u64 * LEVEL_ARGS_BYTES + u64::from(world.lod_count * SHARED_LIST_CAPACITY) * 4,
-                    usage: storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-                    location: MemoryLocation::GpuOnly,
-                },
-            )?,
+            levels: if per_level {
+                Some(Buffer::new(
+                    ctx,
+                    &BufferDesc {
+                        name: "traverse_levels",
+                        size: MAX_LEVELS as u64 * LEVEL_ARGS_BYTES
+                            + u64::from(world.lod_count * SHARED_LIST_CAPACITY) * 4,
+                        usage: storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                        location: MemoryLocation::GpuOnly,
+                    },
+                )?)
+            } else {
+                None
+            },
             world: *world,
             list_capacity: SHARED_LIST_CAPACITY,
             final_capacity,
@@ -183,7 +211,7 @@ impl Traverse {
         rec.update_buffer(&self.output, 0, &vec![0u8; header]);
         let p = match mode {
             TraverseMode::SingleDispatch => &self.single,
-            TraverseMode::MultiDispatch => &self.multi,
+            TraverseMode::MultiDispatch => self.multi.as_ref().expect("per-level mode needs Traverse::with_per_level"),
         };
         let mut bindings: Vec<(Binding, Resource)> = vec![
             (single::NODE_TEXTURE, Resource::Image(&tree.node_texture, vk::ImageLayout::GENERAL)),
@@ -194,8 +222,8 @@ impl Traverse {
         ];
         if mode == TraverseMode::MultiDispatch {
             let init = [LevelArgs { x: 0, y: 1, z: 1, count: 0 }; MAX_LEVELS];
-            rec.update_buffer(&self.levels, 0, bytemuck::cast_slice(&init));
-            bindings.push((multi::TRAVERSE_LEVELS, Resource::Buffer(&self.levels)));
+            rec.update_buffer(self.level_args(), 0, bytemuck::cast_slice(&init));
+            bindings.push((multi::TRAVERSE_LEVELS, Resource::Buffer(self.level_args())));
         }
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::COMPUTE_SHADER);
         rec.bind_pipeline(p);
@@ -213,7 +241,7 @@ impl Traverse {
                     if lod == root {
                         rec.dispatch((gx * gy).div_ceil(multi::WORKGROUP_SIZE[0]), 1, 1);
                     } else {
-                        rec.dispatch_indirect(&self.levels, u64::from(lod) * LEVEL_ARGS_BYTES);
+                        rec.dispatch_indirect(self.level_args(), u64::from(lod) * LEVEL_ARGS_BYTES);
                     }
                     rec.barrier(
                         vk::PipelineStageFlags2::COMPUTE_SHADER,

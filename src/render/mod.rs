@@ -1,13 +1,19 @@
 //! The renderer an engine records into: [`TerrainRenderer`] owns the
-//! terrain passes and records one frame into the caller's command buffer
-//! from a [`View`]; [`offscreen`] is the headless frame loop of the tools
-//! and tests.
+//! terrain passes, built from the scene's [`effects`] into a pass
+//! [`graph`], and records one frame into the caller's command buffer from a
+//! [`View`]; [`report`] says what was built and what ran; [`offscreen`] is
+//! the headless frame loop of the tools and tests.
 
+pub mod effects;
+pub mod graph;
 pub mod offscreen;
 pub mod renderer;
+pub mod report;
 pub mod stats;
 pub mod view;
 
 pub use crate::passes::terrain_geometry::RenderTargets;
+pub use effects::{Effect, EffectDecision, Effects};
 pub use renderer::{RendererOptions, TerrainRenderer};
+pub use report::{frame_report, FrameReport, PassState};
 pub use view::{linear_depth, overview_camera, Camera, Lighting, TerrainViewGpu, View, DEFAULT_NEAR_M};

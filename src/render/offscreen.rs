@@ -80,9 +80,9 @@ impl Offscreen {
         Ok(())
     }
 
-    /// Renders until nothing is loading or waiting for upload (at least one
-    /// frame, then one more so the traversal sees the last arrivals), or
-    /// until `timeout`.
+    /// Renders until streaming is at rest (nothing loading or waiting for
+    /// upload after two frames in a row: the second shows that the first's
+    /// arrivals asked for nothing more), or until `timeout`.
     pub fn settle(
         &mut self,
         ctx: &Context,
@@ -91,19 +91,21 @@ impl Offscreen {
         timeout: Duration,
     ) -> Result<Settle> {
         let start = Instant::now();
-        let mut frames = 0;
+        let (mut frames, mut calm) = (0, 0);
         loop {
             self.frame(ctx, renderer, view)?;
             frames += 1;
-            if frames > 1 && renderer.terrain.settled() {
-                self.frame(ctx, renderer, view)?;
-                return Ok(Settle { frames: frames + 1, seconds: start.elapsed().as_secs_f64(), settled: true });
+            calm = if renderer.terrain.settled() { calm + 1 } else { 0 };
+            if calm >= 2 {
+                return Ok(Settle { frames, seconds: start.elapsed().as_secs_f64(), settled: true });
             }
             if start.elapsed() >= timeout {
                 return Ok(Settle { frames, seconds: start.elapsed().as_secs_f64(), settled: false });
             }
             // Give the loader threads the cores while nodes are baking.
-            std::thread::sleep(Duration::from_millis(10));
+            if calm == 0 {
+                std::thread::sleep(Duration::from_millis(10));
+            }
         }
     }
 

@@ -54,6 +54,41 @@ pub const ATLAS_PATCH_MIN_MAX: usize = 4;
 pub const ATLAS_PATCH_CONES: usize = 5;
 pub const ATLAS_PATCH_HOLES: usize = 6;
 
+/// Which payload atlases live on the GPU: one bit per `ATLAS_*` index. An
+/// effect that is off keeps none of the atlases only it reads (no image, no
+/// upload bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AtlasSet(u8);
+
+impl AtlasSet {
+    pub const ALL: AtlasSet = AtlasSet((1 << ATLAS_COUNT) - 1);
+    /// What drawing needs in any case: heights, albedo, patch bounds.
+    pub const CORE: AtlasSet = AtlasSet((1 << ATLAS_HEIGHT) | (1 << ATLAS_ALBEDO) | (1 << ATLAS_PATCH_MIN_MAX));
+
+    pub fn with(self, atlas: usize) -> AtlasSet {
+        assert!(atlas < ATLAS_COUNT);
+        AtlasSet(self.0 | (1 << atlas))
+    }
+
+    pub fn contains(self, atlas: usize) -> bool {
+        atlas < ATLAS_COUNT && self.0 & (1 << atlas) != 0
+    }
+}
+
+impl Default for AtlasSet {
+    fn default() -> Self {
+        AtlasSet::ALL
+    }
+}
+
+/// Number of payload kinds (atlases).
+pub const ATLAS_COUNT: usize = ATLASES.len();
+
+/// Debug name of atlas `i` (`ATLAS_*`).
+pub fn atlas_name(i: usize) -> &'static str {
+    ATLASES[i].name
+}
+
 fn payload_bytes(n: &BakedNode) -> [&[u8]; 7] {
     [
         bytemuck::cast_slice(&n.heights),
@@ -73,8 +108,8 @@ fn aligned_size(a: &AtlasKind) -> u64 {
     u64::from(a.side * a.side * a.texel_bytes).next_multiple_of(UPLOAD_ALIGN)
 }
 
-fn node_upload_bytes() -> u64 {
-    ATLASES.iter().map(aligned_size).sum()
+fn node_upload_bytes(set: AtlasSet) -> u64 {
+    ATLASES.iter().enumerate().filter(|(i, _)| set.contains(*i)).map(|(_, a)| aligned_size(a)).sum()
 }
 
 /// Resting layout of the atlases.
@@ -91,7 +126,9 @@ pub struct GpuQuadtree {
     pub node_descs: Buffer,
     /// f32 LOD error (m) per slot, beside the descriptions.
     pub node_errors: Buffer,
-    pub atlases: Vec<Image>,
+    /// One per `ATLAS_*` index; `None` where the set leaves it out.
+    atlases: Vec<Option<Image>>,
+    set: AtlasSet,
     ring: Vec<RingSlot>,
     next: usize,
     current: usize,
@@ -101,8 +138,9 @@ pub struct GpuQuadtree {
 
 impl GpuQuadtree {
     /// `slots` resident nodes at most; `frames_in_flight` upload buffers (the
-    /// caller must not record more frames ahead than that).
-    pub fn new(ctx: &Context, world: &WorldDesc, slots: u32, frames_in_flight: usize) -> Result<Self> {
+    /// caller must not record more frames ahead than that); the atlases of
+    /// `set` only.
+    pub fn new(ctx: &Context, world: &WorldDesc, slots: u32, frames_in_flight: usize, set: AtlasSet) -> Result<Self> {
         if !(1..=MAX_SLOTS).contains(&slots) {
             return Err(Error::BadInput(format!("slot budget {slots} outside 1..={MAX_SLOTS} (slots are 10-bit)")));
         }
@@ -143,8 +181,12 @@ impl GpuQuadtree {
             },
         )?;
         let mut atlases = Vec::new();
-        for a in &ATLASES {
-            atlases.push(Image::new(
+        for (i, a) in ATLASES.iter().enumerate() {
+            if !set.contains(i) {
+                atlases.push(None);
+                continue;
+            }
+            atlases.push(Some(Image::new(
                 ctx,
                 &ImageDesc {
                     name: a.name,
@@ -156,7 +198,7 @@ impl GpuQuadtree {
                         | vk::ImageUsageFlags::TRANSFER_DST
                         | vk::ImageUsageFlags::TRANSFER_SRC,
                 },
-            )?);
+            )?));
         }
         // Worst case per frame: every slot freed and refilled (texel, desc, error each).
         let update_capacity = 6 * layers;
@@ -177,7 +219,7 @@ impl GpuQuadtree {
                 updates: host(&format!("quadtree_updates[{i}]"), u64::from(update_capacity) * 16)?,
                 payloads: host(
                     &format!("node_payload_uploads[{i}]"),
-                    node_upload_bytes() * MAX_UPLOADS_PER_FRAME as u64,
+                    node_upload_bytes(set) * MAX_UPLOADS_PER_FRAME as u64,
                 )?,
             });
         }
@@ -195,7 +237,7 @@ impl GpuQuadtree {
         staging.mapped_mut().expect("mapped").copy_from_slice(&texels);
         ctx.submit_and_wait(|rec| {
             rec.discard_to(&node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
-            for a in &atlases {
+            for a in atlases.iter().flatten() {
                 rec.discard_to(a, ATLAS_LAYOUT);
             }
             let mut offset = 0;
@@ -214,12 +256,34 @@ impl GpuQuadtree {
             node_descs,
             node_errors,
             atlases,
+            set,
             ring,
             next: 0,
             current: 0,
             waiting: VecDeque::new(),
             update_capacity,
         })
+    }
+
+    /// Atlas `i` (`ATLAS_*`), if the set keeps it.
+    pub fn atlas(&self, i: usize) -> Option<&Image> {
+        self.atlases[i].as_ref()
+    }
+
+    /// Atlas `i`, which the caller's pass needs: asking for one the set left
+    /// out is a programmer error (the pass should not have been built).
+    pub fn required_atlas(&self, i: usize) -> &Image {
+        self.atlases[i].as_ref().unwrap_or_else(|| panic!("{} is not kept: its effect is off", ATLASES[i].name))
+    }
+
+    /// The atlases kept on the GPU.
+    pub fn atlas_set(&self) -> AtlasSet {
+        self.set
+    }
+
+    /// The atlases kept, with their names.
+    pub fn kept_atlases(&self) -> impl Iterator<Item = (usize, &Image)> {
+        self.atlases.iter().enumerate().filter_map(|(i, a)| a.as_ref().map(|a| (i, a)))
     }
 
     /// Removes a resident (or still waiting) node; its slot is free at once.
@@ -232,6 +296,35 @@ impl GpuQuadtree {
     /// uploaded by `record_updates` (at most MAX_UPLOADS_PER_FRAME a frame).
     pub fn add(&mut self, node: BakedNode, lod_bias: i8) {
         self.waiting.push_back((node, lod_bias));
+    }
+
+    /// Whether the next `prepare_frame` has anything to upload or write
+    /// (the CPU knows without asking the GPU).
+    pub fn has_work(&self) -> bool {
+        !self.waiting.is_empty() || self.shadow.has_updates()
+    }
+
+    /// Device memory of every resource: (name, bytes, the atlas it holds or
+    /// its share of the upload ring is for, if any).
+    pub fn memory(&self) -> Vec<(String, u64, Option<usize>)> {
+        let mut out = vec![
+            (self.node_texture.name.clone(), self.node_texture.memory_bytes(), None),
+            (self.node_descs.name.clone(), self.node_descs.memory_bytes(), None),
+            (self.node_errors.name.clone(), self.node_errors.memory_bytes(), None),
+        ];
+        for (i, a) in self.kept_atlases() {
+            out.push((a.name.clone(), a.memory_bytes(), Some(i)));
+        }
+        let ring_payload: u64 = self.ring.iter().map(|r| r.payloads.memory_bytes()).sum();
+        let per_node = node_upload_bytes(self.set).max(1);
+        for (i, _) in self.kept_atlases() {
+            // The payload ring holds each kept kind's bytes side by side.
+            let share = ring_payload * aligned_size(&ATLASES[i]) / per_node;
+            out.push((format!("node_payload_uploads ({})", ATLASES[i].name), share, Some(i)));
+        }
+        let updates: u64 = self.ring.iter().map(|r| r.updates.memory_bytes()).sum();
+        out.push(("quadtree_updates".to_string(), updates, None));
+        out
     }
 
     /// Nodes queued but not uploaded yet.
@@ -259,26 +352,31 @@ impl GpuQuadtree {
         }
         let ring = &mut self.ring[slot_index];
         let mapped = ring.payloads.mapped_mut().expect("mapped");
-        let per_node = node_upload_bytes() as usize;
+        let per_node = node_upload_bytes(self.set) as usize;
+        let kept = |i: &usize| self.set.contains(*i);
         for (i, (node, _)) in uploaded.iter().enumerate() {
             let mut off = i * per_node;
-            for (bytes, a) in payload_bytes(node).into_iter().zip(&ATLASES) {
-                mapped[off..off + bytes.len()].copy_from_slice(bytes);
-                off += aligned_size(a) as usize;
+            for (k, (bytes, a)) in payload_bytes(node).into_iter().zip(&ATLASES).enumerate() {
+                if kept(&k) {
+                    mapped[off..off + bytes.len()].copy_from_slice(bytes);
+                    off += aligned_size(a) as usize;
+                }
             }
         }
         if !uploaded.is_empty() {
-            for img in &self.atlases {
+            for img in self.atlases.iter().flatten() {
                 rec.transition(img, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
             }
             for (i, (_, slot)) in uploaded.iter().enumerate() {
                 let mut off = (i * per_node) as u64;
                 for (a, img) in ATLASES.iter().zip(&self.atlases) {
-                    rec.copy_buffer_to_image(&ring.payloads, off, img, 0, *slot);
-                    off += aligned_size(a);
+                    if let Some(img) = img {
+                        rec.copy_buffer_to_image(&ring.payloads, off, img, 0, *slot);
+                        off += aligned_size(a);
+                    }
                 }
             }
-            for img in &self.atlases {
+            for img in self.atlases.iter().flatten() {
                 rec.transition(img, ATLAS_LAYOUT);
             }
         }

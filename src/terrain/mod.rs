@@ -16,7 +16,7 @@ pub mod selection;
 
 use crate::error::Result;
 use crate::gpu::Context;
-use crate::terrain::gpu_quadtree::GpuQuadtree;
+use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
 use crate::world::{
     bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency, ResidencyConfig,
@@ -38,6 +38,9 @@ pub struct TerrainOptions {
     /// Also keep the families right around the camera (for motion); off,
     /// only the LOD criterion decides what is resident (exact test sets).
     pub ring_prefetch: bool,
+    /// Payload atlases kept on the GPU (the renderer keeps only those its
+    /// effects read).
+    pub atlases: AtlasSet,
 }
 
 impl Default for TerrainOptions {
@@ -49,6 +52,7 @@ impl Default for TerrainOptions {
             loader_threads: threads,
             cache_dir: None,
             ring_prefetch: true,
+            atlases: AtlasSet::ALL,
         }
     }
 }
@@ -80,7 +84,7 @@ impl Terrain {
         options: &TerrainOptions,
     ) -> Result<Self> {
         world.validate()?;
-        let tree = GpuQuadtree::new(ctx, world, options.slots, options.frames_in_flight)?;
+        let tree = GpuQuadtree::new(ctx, world, options.slots, options.frames_in_flight, options.atlases)?;
         let config = ResidencyConfig { budget: options.slots as usize, ..ResidencyConfig::default() };
         let residency = Residency::new(world, config)?;
         let threads = options.loader_threads.max(1);
@@ -140,8 +144,18 @@ impl Terrain {
         self.stats.loading == 0 && self.tree.waiting() == 0
     }
 
-    /// Memory of the resident payloads, CPU and GPU side.
+    /// Memory of the resident payloads, CPU and GPU side; payload kinds no
+    /// effect reads are baked (CPU) but not kept on the GPU.
     pub fn memory_report(&self) -> MemoryReport {
-        MemoryReport::new(self.stats.resident)
+        let mut r = MemoryReport::new(self.stats.resident);
+        let set = self.tree.atlas_set();
+        // The report lists the atlas kinds first, in `ATLAS_*` order.
+        for (i, k) in r.kinds.iter_mut().enumerate().take(ATLAS_COUNT) {
+            if !set.contains(i) {
+                k.gpu_bytes = 0;
+                k.gpu_format = "not kept (effect off)";
+            }
+        }
+        r
     }
 }

@@ -198,6 +198,11 @@ impl QuadtreeShadow {
         Some(slot)
     }
 
+    /// Whether any write waits for `take_updates`.
+    pub fn has_updates(&self) -> bool {
+        !(self.texels.is_empty() && self.desc_writes.is_empty() && self.error_writes.is_empty())
+    }
+
     /// This frame's writes, order-independent (one per texel and per slot),
     /// so the GPU may apply them in parallel.
     pub fn take_updates(&mut self) -> Vec<QuadtreeUpdate> {

@@ -67,7 +67,7 @@ impl DiamondPatch {
 
     /// `target` must be in COLOR_ATTACHMENT_OPTIMAL; it is cleared first.
     pub fn record(&self, rec: &mut Recorder, target: &Image, hole_vertex: Option<u32>) {
-        rec.begin_rendering(&[ColorTarget { image: target, clear: [0.0; 4] }], None);
+        rec.begin_rendering(&[ColorTarget { image: target, clear: Some([0.0; 4]) }], None);
         rec.bind_pipeline(&self.pipeline);
         let push = DiamondPatchPush {
             quads_per_side: self.quads,

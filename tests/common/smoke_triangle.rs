@@ -39,7 +39,7 @@ impl SmokeTriangle {
 
     /// `target` must be in COLOR_ATTACHMENT_OPTIMAL; it is cleared first.
     pub fn record(&self, rec: &mut Recorder, target: &Image, corners: [[f32; 4]; 3]) {
-        rec.begin_rendering(&[ColorTarget { image: target, clear: [0.0; 4] }], None);
+        rec.begin_rendering(&[ColorTarget { image: target, clear: Some([0.0; 4]) }], None);
         rec.bind_pipeline(&self.pipeline);
         rec.push_constants(&self.pipeline, &SmokeTrianglePush { corners });
         rec.draw(3, 1);

@@ -138,6 +138,20 @@ impl Rig {
         size: [u32; 2],
         rings: bool,
     ) -> Rig {
+        Rig::with_options(ctx, world, surface, holes, size, rings, RendererOptions::default())
+    }
+
+    /// As `new`, with the effects (and test overrides) of `options`; its
+    /// terrain options are replaced by the rig's.
+    pub fn with_options(
+        ctx: &Context,
+        world: WorldDesc,
+        surface: Surface,
+        holes: Vec<Hole>,
+        size: [u32; 2],
+        rings: bool,
+        options: RendererOptions,
+    ) -> Rig {
         let options = RendererOptions {
             terrain: TerrainOptions {
                 slots: 400,
@@ -145,7 +159,7 @@ impl Rig {
                 ring_prefetch: rings,
                 ..TerrainOptions::default()
             },
-            ..RendererOptions::default()
+            ..options
         };
         let renderer = TerrainRenderer::new(ctx, &world, Arc::new(surface), holes, &options).expect("renderer");
         let off = Offscreen::new(ctx, size, 2, MAGENTA).expect("targets");

@@ -14,6 +14,9 @@ pub enum BenchKind {
     /// Patch culling per view: patches per stage, triangles vs the full mesh,
     /// (traverse + cull) vs geometry time, the cone stage's cost and saving.
     Cull,
+    /// GPU frame time and memory of the minimal scene, the full scene and
+    /// the full scene without each effect in turn.
+    Effects,
     Shade,
     Accuracy,
     All,
@@ -34,13 +37,13 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4,8")]
     targets: Vec<f32>,
     /// Measured frames per row (after warm-up); the median is reported
-    /// [default: 15 for traverse, 7 per stage block for cull].
+    /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects].
     #[arg(long)]
     frames: Option<u32>,
-    /// Target size of `bench cull`.
+    /// Target size of `bench cull` and `bench effects`.
     #[arg(long, default_value = "1280x720", value_parser = crate::render_cmd::parse_size)]
     size: [u32; 2],
-    /// Target projected error of `bench cull`, pixels.
+    /// Target projected error of `bench cull` and `bench effects`, pixels.
     #[arg(long, default_value_t = 1.0)]
     target_error: f32,
     /// Camera position (x,y,z metres); default: 60 m above the world's centre at mid height.
@@ -54,8 +57,16 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
     match args.kind {
         BenchKind::Traverse => traverse(ctx, args),
         BenchKind::Cull => crate::bench_cull_cmd::cull(ctx, &args.world, args.frames.unwrap_or(7), args.size, args.target_error, args.json.as_deref()),
+        BenchKind::Effects => crate::bench_effects_cmd::effects(
+            ctx,
+            &args.world,
+            args.frames.unwrap_or(2),
+            args.size,
+            args.target_error,
+            args.json.as_deref(),
+        ),
         other => bail!(
-            "bench {} needs passes that do not exist yet (tile shading, the accuracy reference); available: traverse, cull",
+            "bench {} needs passes that do not exist yet (tile shading, the accuracy reference); available: traverse, cull, effects",
             format!("{other:?}").to_lowercase()
         ),
     }

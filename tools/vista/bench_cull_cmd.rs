@@ -21,8 +21,8 @@ pub fn cull(
     }
     let world = world_args.load()?;
     let d = world.desc;
-    let mut renderer =
-        TerrainRenderer::new(ctx, &d, world.source.clone(), world.holes.clone(), &RendererOptions::default())?;
+    let options = RendererOptions { effects: world.effects.clone(), ..RendererOptions::default() };
+    let mut renderer = TerrainRenderer::new(ctx, &d, world.source.clone(), world.holes.clone(), &options)?;
     let views = cull_views(&d, &*world.source);
     let cfg =
         CullBenchConfig { size, target_error_px, warmup_frames: 2, frames, settle_timeout: Duration::from_secs(300) };

@@ -4,6 +4,7 @@
 mod bake;
 mod bench_cmd;
 mod bench_cull_cmd;
+mod bench_effects_cmd;
 mod render_cmd;
 mod scene;
 mod world_args;
@@ -54,9 +55,23 @@ fn main() {
     };
     if let Err(e) = run(cli) {
         eprintln!("error: {e:#}");
-        std::process::exit(1);
+        // Bad input (a scene, a height map, a view) is the caller's to fix:
+        // exit 2 like a usage error; 1 is a failure while running.
+        std::process::exit(if e.chain().any(|c| c.is::<InputError>()) { 2 } else { 1 });
     }
 }
+
+/// An error in what the user gave (a scene, a world, a view): exit code 2.
+#[derive(Debug)]
+pub struct InputError(pub String);
+
+impl std::fmt::Display for InputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for InputError {}
 
 /// Help and version print as clap renders them; usage errors collapse to one
 /// line (clap's own spans several, with a usage excerpt).
@@ -84,7 +99,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => {
             // A bad world or view fails before the (slow) Vulkan start.
             let world = args.world.load()?;
-            let view = render_cmd::view_of(&args, &world)?;
+            let view = render_cmd::view_of(&args, &world).map_err(|e| InputError(format!("{e:#}")))?;
             with_gpu(&options, |ctx| render_cmd::render(ctx, &world, &view, &args))
         }
         // Baking and accounting are CPU-only: no Vulkan needed.

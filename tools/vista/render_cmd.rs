@@ -28,9 +28,15 @@ pub struct RenderArgs {
     /// Measured frames after streaming settled (the first 2 are warm-up).
     #[arg(long, default_value_t = 12)]
     pub frames: u32,
-    /// Write image.png, depth.exr, timings.json, trace.json and stats.json here.
+    /// Write image.png, depth.exr, timings.json, trace.json, stats.json and
+    /// report.json here.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Print the pass report: effects and why each is on or off, pipelines
+    /// built, per pass not built / idle / ran with GPU ms and work, GPU
+    /// memory per effect.
+    #[arg(long)]
+    pub report: bool,
     /// Camera X,Y,Z[,YAW,PITCH]: world metres (x east, y north, z up, origin
     /// at the south-west corner); YAW compass degrees (0 = +y, 90 = +x);
     /// PITCH degrees above the horizon (-90 = straight down). Default: above
@@ -157,6 +163,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let options = RendererOptions {
         terrain: TerrainOptions { slots: args.slots, cache_dir: args.cache.clone(), ..TerrainOptions::default() },
         stages: args.cull,
+        effects: world.effects.clone(),
         ..RendererOptions::default()
     };
     let d = &world.desc;
@@ -165,6 +172,9 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
     let frames = off.run(ctx, &mut renderer, view, args.frames)?;
     let capture = off.capture(ctx)?;
+    // The last frame's timings are back once capture waited for it.
+    let last = renderer.poll_timings().cloned();
+    let report = vista::render::frame_report(ctx, &renderer, last.as_ref())?;
     let timed = if frames.len() > WARMUP_FRAMES { &frames[WARMUP_FRAMES..] } else { &frames[..] };
     let c = &view.camera;
     println!("device: {}  ({} measured frames, {}x{})", ctx.info().name, args.frames, view.size[0], view.size[1]);
@@ -192,10 +202,19 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         settle.seconds
     );
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
-    print_stats(&stats, args.cull);
+    let built = CullStages {
+        frustum: args.cull.frustum,
+        cone: args.cull.cone && renderer.cull.build.cone,
+        hole: args.cull.hole && renderer.cull.build.holes,
+    };
+    print_stats(&stats, built);
     print_timings(timed);
+    if args.report {
+        print!("{}", report.to_text());
+    }
     if let Some(dir) = &args.out {
         write_outputs(dir, &frames, &capture, view, &stats)?;
+        std::fs::write(dir.join("report.json"), serde_json::to_string_pretty(&report)?)?;
     }
     print!("{}", renderer.terrain.memory_report());
     Ok(())
@@ -205,12 +224,13 @@ fn print_stats(s: &RenderStats, stages: CullStages) {
     let p = &s.patches;
     let stage = |on: bool, name: &str, n: u32| if on { format!("{n} after {name}") } else { format!("{name} off") };
     println!(
-        "patches: {} in, {}, {}, {}, {} drawn ({} triangles submitted)",
+        "patches: {} in, {}, {}, {}, {} drawn, {} of them with holes ({} triangles submitted)",
         p.patches_in,
         stage(stages.frustum, "frustum", p.after_frustum),
         stage(stages.cone, "cone", p.after_cone),
         stage(stages.hole, "hole", p.after_hole),
         p.drawn,
+        p.drawn_with_holes,
         s.triangles_drawn
     );
     let per_lod: Vec<String> = s
@@ -270,7 +290,7 @@ fn write_outputs(
     let exr_path = dir.join("depth.exr");
     write_depth_exr(&exr_path, [w as usize, h as usize], depth)
         .with_context(|| format!("writing {}", exr_path.display()))?;
-    println!("wrote {}/{{image.png, depth.exr, timings.json, trace.json, stats.json}}", dir.display());
+    println!("wrote {}/{{image.png, depth.exr, timings.json, trace.json, stats.json, report.json}}", dir.display());
     Ok(())
 }
 

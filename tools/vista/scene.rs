@@ -1,4 +1,5 @@
-//! Scene files (TOML): which terrain, its geometry, holes and effect switches.
+//! Scene files (TOML): which terrain, its geometry, holes and the effects
+//! the scene calls for (`vista::render::effects` documents each).
 //!
 //! ```toml
 //! [world]
@@ -14,24 +15,23 @@
 //! [[holes]]
 //! polygon = [[0, 0], [10, 0], [5, 8]]
 //!
-//! [effects]
+//! [effects]                    # each: true / false, or a table of parameters
 //! holes = true
-//! cliffs = true
+//! lighting = { sun_elevation_deg = 25 }
 //! ```
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
 use serde::Deserialize;
+use vista::render::Effects;
 use vista::world::Hole;
 
 #[derive(Debug, Default)]
 pub struct Scene {
     pub world: SceneWorld,
     holes: Vec<SceneHole>,
-    /// Kept verbatim: each renderer feature reads its own switch.
-    pub effects: BTreeMap<String, bool>,
+    pub effects: Effects,
     /// For error messages.
     path: PathBuf,
 }
@@ -45,7 +45,7 @@ struct RawScene {
     #[serde(default)]
     holes: Vec<SceneHole>,
     #[serde(default)]
-    effects: BTreeMap<String, bool>,
+    effects: toml::Table,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -116,7 +116,10 @@ impl Scene {
                 world.source = SceneSource::Path(dir.join(p));
             }
         }
-        Ok(Scene { world, holes: raw.holes, effects: raw.effects, path: path.to_path_buf() })
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let effects =
+            Effects::from_toml(&raw.effects, dir).map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
+        Ok(Scene { world, holes: raw.holes, effects, path: path.to_path_buf() })
     }
 
     /// The holes, each checked: exactly one shape, finite numbers, a
@@ -168,12 +171,12 @@ mod tests {
         assert!(matches!(&s.world.source, SceneSource::Path(p) if p.is_absolute() && p.ends_with("hm.png")));
         assert_eq!(s.world.extent.unwrap().xy(), [100.0, 50.0]);
         assert_eq!(s.holes().unwrap().len(), 2);
-        assert_eq!(s.effects.get("cliffs"), Some(&true));
+        assert!(s.effects.is_on(vista::render::Effect::Cliffs));
     }
 
     #[test]
     fn errors_are_one_line() {
-        for bad in ["[world\n", "[world]\nextents = 5\n", "[[holes]]\ncircle = [1, 2]\n"] {
+        for bad in ["[world\n", "[world]\nextents = 5\n", "[[holes]]\ncircle = [1, 2]\n", "[effects]\nholse = true\n"] {
             let e = format!("{:#}", parse(bad).err().unwrap());
             assert!(!e.contains('\n') && e.contains("scene file"), "{e}");
         }

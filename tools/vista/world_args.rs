@@ -1,13 +1,13 @@
 //! World selection shared by every command that needs terrain: a scene file,
 //! a height map, or (nothing given) the default procedural world.
 
-use std::collections::BTreeMap;
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
+use vista::render::Effects;
 use vista::world::{ExrSource, HeightSource, Hole, Png16Source, ProceduralSource, WorldDesc};
 
 use crate::scene::{Scene, SceneSource};
@@ -57,17 +57,21 @@ pub struct LoadedWorld {
     pub desc: WorldDesc,
     pub source: Arc<dyn HeightSource>,
     pub holes: Vec<Hole>,
-    /// Scene `[effects]` switches; nothing consumes them yet.
-    #[allow(dead_code)]
-    pub effects: BTreeMap<String, bool>,
+    /// The scene's `[effects]` (defaults without a scene).
+    pub effects: Effects,
     /// What the terrain comes from, for reports.
     pub label: String,
 }
 
 impl WorldArgs {
     /// Resolves the arguments (and the scene file, if any) into a validated
-    /// world. Every failure is a one-line message naming the culprit.
+    /// world. Every failure is a one-line message naming the culprit, marked
+    /// as the user's input (exit code 2).
     pub fn load(&self) -> Result<LoadedWorld> {
+        self.load_inner().map_err(|e| anyhow::Error::new(crate::InputError(format!("{e:#}"))))
+    }
+
+    fn load_inner(&self) -> Result<LoadedWorld> {
         if let (Some(s), Some(h)) = (&self.scene, &self.heightmap) {
             bail!("--scene {} and --heightmap {} both choose the world; give one", s.display(), h.display());
         }

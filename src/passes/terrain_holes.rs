@@ -1,0 +1,62 @@
+//! `terrain_holes`: the patches that have some holes (the hole list of
+//! `cull_patches`) in one instanced indexed-indirect draw over the image
+//! `terrain_geometry` drew. Only this vertex shader tests holes: a hole
+//! vertex becomes NaN (made at run time from bits passed in) and the
+//! rasterizer drops its triangles. Built only with the `holes` effect; a
+//! frame with no such patch in view runs it with zero instances.
+
+use crate::error::Result;
+use crate::gpu::{ColorTarget, Context, DepthTarget, Pipeline, Recorder, Resource};
+use crate::passes::cull_patches::CullPatches;
+use crate::passes::terrain_geometry::{terrain_pipeline, RenderTargets, TerrainGeometry};
+use crate::shaders::terrain_holes_vert as vs;
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_LAYOUT};
+
+/// Bits of a quiet NaN, passed as data so no compiler folds it.
+pub const QUIET_NAN_BITS: u32 = 0x7FC0_0000;
+
+/// Host twin of `HolesPush` (terrain_vertex.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HolesPush {
+    pub nan_bits: u32,
+    pub pad: [u32; 3],
+}
+
+pub struct TerrainHoles {
+    pipeline: Pipeline,
+}
+
+impl TerrainHoles {
+    pub const NAME: &'static str = vs::PASS;
+
+    pub fn new(ctx: &Context, lighting: bool) -> Result<Self> {
+        Ok(TerrainHoles { pipeline: terrain_pipeline(ctx, Self::NAME, &vs::SHADER, lighting)? })
+    }
+
+    pub fn pipeline_label(&self) -> &str {
+        &self.pipeline.label
+    }
+
+    /// Draws `cull`'s hole list over the targets (kept, not cleared).
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        targets: &RenderTargets,
+        view: &crate::gpu::Buffer,
+        cull: &CullPatches,
+        geometry: &TerrainGeometry,
+        tree: &GpuQuadtree,
+    ) {
+        let list = cull.hole_list.as_ref().expect("terrain_holes is built only with the hole list");
+        rec.begin_rendering(
+            &[ColorTarget { image: targets.color, clear: None }],
+            Some(DepthTarget { image: targets.depth, clear: None }),
+        );
+        let albedo = (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT));
+        geometry.bind(rec, &self.pipeline, view, list, tree, &[albedo]);
+        rec.push_constants(&self.pipeline, &HolesPush { nan_bits: QUIET_NAN_BITS, pad: [0; 3] });
+        rec.draw_indexed_indirect(geometry.indices(), list, 0);
+        rec.end_rendering();
+    }
+}

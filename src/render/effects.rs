@@ -1,0 +1,366 @@
+//! Scene effects: what a scene asks the renderer to simulate. Each effect is
+//! on or off with its parameters; the renderer builds pipelines, resources
+//! and passes only for effects that are on (static gating), and a world
+//! lacking an effect's data switches it off with a reason instead of paying
+//! for an idle path. Scene files name them in an `[effects]` table:
+//!
+//! ```toml
+//! [effects]
+//! holes = true                          # a bool ...
+//! lighting = { sun_elevation_deg = 25 } # ... or a table (enabled = true implied)
+//! [effects.splat]
+//! enabled = false
+//! materials = "materials.toml"          # files are relative to the scene file
+//! ```
+
+use crate::error::{Error, Result};
+use crate::render::view::Lighting;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// Every effect a scene can name, in report order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Effect {
+    /// Hole regions and the trimmed world edge: the hole stage of
+    /// `cull_patches`, its hole list and the `terrain_holes` draw.
+    Holes,
+    /// Backface-cone stage of `cull_patches` and the per-patch cone atlas.
+    ConeCull,
+    /// Two-phase Hi-Z occlusion culling.
+    Occlusion,
+    /// Tri-planar cliff shading.
+    Cliffs,
+    /// Detail materials from the splat map.
+    Splat,
+    VirtualTexture,
+    /// Sun and sky lighting of the output (the normal atlas); off, the
+    /// output is unlit albedo.
+    Lighting,
+    /// Sector data each frame, for `TerrainQuery` (height, normal and
+    /// material at any point, on the GPU).
+    Queries,
+    Decals,
+    Grass,
+    Shadows,
+}
+
+impl Effect {
+    pub const ALL: [Effect; 11] = [
+        Effect::Holes,
+        Effect::ConeCull,
+        Effect::Occlusion,
+        Effect::Cliffs,
+        Effect::Splat,
+        Effect::VirtualTexture,
+        Effect::Lighting,
+        Effect::Queries,
+        Effect::Decals,
+        Effect::Grass,
+        Effect::Shadows,
+    ];
+
+    /// The scene-file key.
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::Holes => "holes",
+            Effect::ConeCull => "cone_cull",
+            Effect::Occlusion => "occlusion",
+            Effect::Cliffs => "cliffs",
+            Effect::Splat => "splat",
+            Effect::VirtualTexture => "virtual_texture",
+            Effect::Lighting => "lighting",
+            Effect::Queries => "queries",
+            Effect::Decals => "decals",
+            Effect::Grass => "grass",
+            Effect::Shadows => "shadows",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Effect> {
+        Effect::ALL.into_iter().find(|e| e.name() == name)
+    }
+
+    /// On when a scene does not name it.
+    pub fn default_on(self) -> bool {
+        matches!(self, Effect::Holes | Effect::ConeCull | Effect::Lighting)
+    }
+
+    /// Why this version cannot run it, for effects not implemented yet: a
+    /// scene may ask for them (and is checked), the report says they are off.
+    pub fn unavailable(self) -> Option<&'static str> {
+        match self {
+            Effect::Occlusion => Some("not implemented in this version (two-phase Hi-Z occlusion is issue [E])"),
+            Effect::Cliffs | Effect::Splat | Effect::VirtualTexture => {
+                Some("not implemented in this version (G-buffer tile shading is issue [G])")
+            }
+            Effect::Decals | Effect::Grass | Effect::Shadows => Some("not implemented in this version"),
+            Effect::Holes | Effect::ConeCull | Effect::Lighting | Effect::Queries => None,
+        }
+    }
+
+    /// Parameter names a table may give besides `enabled`.
+    fn parameters(self) -> &'static [&'static str] {
+        match self {
+            Effect::Lighting => &["sun_azimuth_deg", "sun_elevation_deg", "sun_color", "sky_color"],
+            Effect::Cliffs => &["slope_deg"],
+            Effect::Splat => &["materials"],
+            Effect::VirtualTexture => &["cache_mb"],
+            Effect::Decals => &["file"],
+            _ => &[],
+        }
+    }
+}
+
+/// The effects a scene asks for, with their parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Effects {
+    on: [bool; Effect::ALL.len()],
+    /// Set explicitly (scene or code) rather than left at the default.
+    named: [bool; Effect::ALL.len()],
+    pub lighting: Lighting,
+    /// Slope above which a tile counts as cliff, degrees.
+    pub cliff_slope_deg: f64,
+    /// Material set of the splat map (a file that must exist).
+    pub splat_materials: Option<PathBuf>,
+    pub virtual_texture_cache_mb: u32,
+    pub decals_file: Option<PathBuf>,
+}
+
+impl Default for Effects {
+    /// Every effect at its default (see [`Effect::default_on`]).
+    fn default() -> Self {
+        Effects {
+            on: Effect::ALL.map(Effect::default_on),
+            named: [false; Effect::ALL.len()],
+            lighting: Lighting::default(),
+            cliff_slope_deg: 40.0,
+            splat_materials: None,
+            virtual_texture_cache_mb: 256,
+            decals_file: None,
+        }
+    }
+}
+
+impl Effects {
+    /// Every effect requested (those not implemented are reported off).
+    pub fn all() -> Effects {
+        Effects { on: [true; Effect::ALL.len()], named: [true; Effect::ALL.len()], ..Effects::default() }
+    }
+
+    /// Geometry and lighting only.
+    pub fn minimal() -> Effects {
+        Effects::default().with(Effect::Holes, false).with(Effect::ConeCull, false)
+    }
+
+    pub fn is_on(&self, e: Effect) -> bool {
+        self.on[e as usize]
+    }
+
+    pub fn set(&mut self, e: Effect, on: bool) {
+        self.on[e as usize] = on;
+        self.named[e as usize] = true;
+    }
+
+    /// Whether `e` was set explicitly rather than left at its default.
+    pub fn is_named(&self, e: Effect) -> bool {
+        self.named[e as usize]
+    }
+
+    pub fn with(mut self, e: Effect, on: bool) -> Effects {
+        self.set(e, on);
+        self
+    }
+
+    /// Reads a scene's `[effects]` table; files it names are resolved
+    /// against `base` (the scene file's folder) and must exist. Errors are
+    /// one line naming the key (`effects.lighting.sun_color: ...`).
+    pub fn from_toml(table: &toml::Table, base: &Path) -> Result<Effects> {
+        let mut fx = Effects::default();
+        for (key, value) in table {
+            let Some(effect) = Effect::from_name(key) else {
+                let known: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
+                return Err(bad(format!("unknown effect effects.{key} (known: {})", known.join(", "))));
+            };
+            match value {
+                toml::Value::Boolean(on) => fx.set(effect, *on),
+                toml::Value::Table(t) => fx.read_table(effect, t, base)?,
+                other => {
+                    return Err(bad(format!(
+                        "effects.{key} must be true, false or a table of parameters, not {}",
+                        type_name(other)
+                    )))
+                }
+            }
+        }
+        Ok(fx)
+    }
+
+    fn read_table(&mut self, effect: Effect, t: &toml::Table, base: &Path) -> Result<()> {
+        let name = effect.name();
+        let mut on = true;
+        for (k, v) in t {
+            let key = format!("effects.{name}.{k}");
+            if k != "enabled" && !effect.parameters().contains(&k.as_str()) {
+                let mut known = vec!["enabled"];
+                known.extend(effect.parameters());
+                return Err(bad(format!("unknown parameter {key} (known: {})", known.join(", "))));
+            }
+            match k.as_str() {
+                "enabled" => on = v.as_bool().ok_or_else(|| wrong(&key, "true or false", v))?,
+                "sun_azimuth_deg" => self.lighting.sun_azimuth_deg = number(&key, v, -360.0, 360.0)?,
+                "sun_elevation_deg" => self.lighting.sun_elevation_deg = number(&key, v, -90.0, 90.0)?,
+                "sun_color" => self.lighting.sun_color = colour(&key, v)?,
+                "sky_color" => self.lighting.sky_color = colour(&key, v)?,
+                "slope_deg" => self.cliff_slope_deg = number(&key, v, 0.0, 90.0)?,
+                "cache_mb" => {
+                    let mb = v.as_integer().filter(|m| (1..=65536).contains(m));
+                    self.virtual_texture_cache_mb =
+                        mb.ok_or_else(|| wrong(&key, "a whole number 1..=65536", v))? as u32;
+                }
+                "materials" => self.splat_materials = Some(file(&key, v, base)?),
+                "file" => self.decals_file = Some(file(&key, v, base)?),
+                _ => unreachable!("{key} is in the parameter list but not read"),
+            }
+        }
+        self.set(effect, on);
+        Ok(())
+    }
+}
+
+fn bad(msg: String) -> Error {
+    Error::Scene(msg)
+}
+
+fn type_name(v: &toml::Value) -> &'static str {
+    match v {
+        toml::Value::String(_) => "a string",
+        toml::Value::Integer(_) => "an integer",
+        toml::Value::Float(_) => "a float",
+        toml::Value::Boolean(_) => "a boolean",
+        toml::Value::Datetime(_) => "a date",
+        toml::Value::Array(_) => "an array",
+        toml::Value::Table(_) => "a table",
+    }
+}
+
+fn wrong(key: &str, want: &str, v: &toml::Value) -> Error {
+    bad(format!("{key} must be {want}, not {}", type_name(v)))
+}
+
+fn number(key: &str, v: &toml::Value, lo: f64, hi: f64) -> Result<f64> {
+    let x = v.as_float().or(v.as_integer().map(|i| i as f64));
+    match x {
+        Some(x) if x.is_finite() && (lo..=hi).contains(&x) => Ok(x),
+        Some(x) => Err(bad(format!("{key} = {x} is outside {lo}..={hi}"))),
+        None => Err(wrong(key, "a number", v)),
+    }
+}
+
+fn colour(key: &str, v: &toml::Value) -> Result<[f32; 3]> {
+    let want = "an array of 3 non-negative numbers (linear RGB)";
+    let arr = v.as_array().filter(|a| a.len() == 3).ok_or_else(|| wrong(key, want, v))?;
+    let mut out = [0.0f32; 3];
+    for (o, x) in out.iter_mut().zip(arr) {
+        let x = x.as_float().or(x.as_integer().map(|i| i as f64)).filter(|x| x.is_finite() && *x >= 0.0);
+        *o = x.ok_or_else(|| wrong(key, want, v))? as f32;
+    }
+    Ok(out)
+}
+
+fn file(key: &str, v: &toml::Value, base: &Path) -> Result<PathBuf> {
+    let s = v.as_str().ok_or_else(|| wrong(key, "a file path (string)", v))?;
+    let path = base.join(s);
+    if !path.is_file() {
+        return Err(bad(format!("{key}: file {} does not exist", path.display())));
+    }
+    Ok(path)
+}
+
+/// What became of one effect: requested or not, on or off, and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EffectDecision {
+    pub effect: Effect,
+    pub requested: bool,
+    pub on: bool,
+    pub reason: String,
+}
+
+/// What the world holds that effects need; `None` when it has the data,
+/// else why not.
+#[derive(Debug, Clone, Default)]
+pub struct WorldContent {
+    pub holes_missing: Option<String>,
+    pub holes_present: String,
+}
+
+/// Decides every effect: requested and implemented and backed by the
+/// world's data means on. `force` (tests only) keeps an effect on although
+/// the world lacks its data, to show its path changes nothing there.
+pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDecision> {
+    Effect::ALL
+        .into_iter()
+        .map(|effect| {
+            let requested = fx.is_on(effect);
+            let how = if fx.is_named(effect) { "" } else { " (default)" };
+            let (on, reason) = if !requested {
+                (false, format!("not requested{how}"))
+            } else if let Some(why) = effect.unavailable() {
+                (false, format!("requested, but {why}"))
+            } else {
+                match (effect, &content.holes_missing) {
+                    (Effect::Holes, Some(why)) if force => (true, format!("forced on (test override) although {why}")),
+                    (Effect::Holes, Some(why)) => (false, format!("requested, but {why}")),
+                    (Effect::Holes, None) => (true, format!("requested{how}: {}", content.holes_present)),
+                    _ => (true, format!("requested{how}")),
+                }
+            };
+            EffectDecision { effect, requested, on, reason }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Effects> {
+        let t: toml::Table = toml::from_str(text).unwrap();
+        Effects::from_toml(&t, Path::new("."))
+    }
+
+    #[test]
+    fn names_round_trip_and_defaults() {
+        for e in Effect::ALL {
+            assert_eq!(Effect::from_name(e.name()), Some(e));
+        }
+        let d = Effects::default();
+        assert!(d.is_on(Effect::Holes) && d.is_on(Effect::Lighting) && !d.is_on(Effect::Queries));
+    }
+
+    #[test]
+    fn bools_tables_and_parameters() {
+        let fx = parse("holes = false\nlighting = { sun_elevation_deg = 25, sky_color = [0.1, 0.2, 0.3] }\n").unwrap();
+        assert!(!fx.is_on(Effect::Holes));
+        assert!(fx.is_on(Effect::Lighting));
+        assert_eq!(fx.lighting.sun_elevation_deg, 25.0);
+        assert_eq!(fx.lighting.sky_color, [0.1, 0.2, 0.3]);
+        assert!(!parse("[lighting]\nenabled = false\n").unwrap().is_on(Effect::Lighting));
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        for (text, key) in [
+            ("holse = true", "effects.holse"),
+            ("holes = 1", "effects.holes must be true, false or a table"),
+            ("lighting = { sun_color = \"red\" }", "effects.lighting.sun_color must be an array"),
+            ("lighting = { sun = 1 }", "unknown parameter effects.lighting.sun"),
+            ("cliffs = { materials = \"x\" }", "unknown parameter effects.cliffs.materials"),
+            ("splat = { materials = \"no/such/file.toml\" }", "effects.splat.materials: file"),
+            ("lighting = { sun_elevation_deg = 95 }", "outside"),
+        ] {
+            let e = parse(text).unwrap_err().to_string();
+            assert!(e.contains(key) && !e.contains('\n'), "{text}: {e}");
+        }
+    }
+}

@@ -1,0 +1,176 @@
+//! The frame's pass graph, built from the effect decisions: every pass the
+//! renderer knows, in frame order, with the effect it exists for. It is a
+//! chain: each pass reads what the passes before it wrote, and the passes
+//! end in full barriers, so order is the only edge. A pass whose effect is
+//! off is not built; each frame logs which built passes were recorded and
+//! which were skipped because the CPU knew they had nothing to do.
+
+use crate::frame::QueueKind;
+use crate::passes::{
+    cull_patches::CullPatches, lod_map::LodMap, quadtree_update::QuadtreeUpdatePass, sector_data::SectorData,
+    terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
+};
+use crate::render::effects::{Effect, EffectDecision};
+use serde::Serialize;
+
+/// Every pass of a frame, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum FramePass {
+    QuadtreeUpdate,
+    Traverse,
+    LodMap,
+    SectorData,
+    CullPatches,
+    TerrainGeometry,
+    TerrainHoles,
+}
+
+impl FramePass {
+    pub const ALL: [FramePass; 7] = [
+        FramePass::QuadtreeUpdate,
+        FramePass::Traverse,
+        FramePass::LodMap,
+        FramePass::SectorData,
+        FramePass::CullPatches,
+        FramePass::TerrainGeometry,
+        FramePass::TerrainHoles,
+    ];
+
+    /// Pass, shader and timer label (from the shader bank).
+    pub fn name(self) -> &'static str {
+        match self {
+            FramePass::QuadtreeUpdate => QuadtreeUpdatePass::NAME,
+            FramePass::Traverse => Traverse::NAME,
+            FramePass::LodMap => LodMap::NAME,
+            FramePass::SectorData => SectorData::NAME,
+            FramePass::CullPatches => CullPatches::NAME,
+            FramePass::TerrainGeometry => TerrainGeometry::NAME,
+            FramePass::TerrainHoles => TerrainHoles::NAME,
+        }
+    }
+
+    pub fn queue(self) -> QueueKind {
+        match self {
+            FramePass::TerrainGeometry | FramePass::TerrainHoles => QueueKind::Graphics,
+            _ => QueueKind::Compute,
+        }
+    }
+
+    /// The effect the pass exists for (`None`: every scene needs it).
+    pub fn effect(self) -> Option<Effect> {
+        match self {
+            FramePass::SectorData => Some(Effect::Queries),
+            FramePass::TerrainHoles => Some(Effect::Holes),
+            _ => None,
+        }
+    }
+}
+
+/// Why a built pass was not recorded this frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Skip {
+    NothingToUpload,
+}
+
+impl Skip {
+    pub fn reason(self) -> &'static str {
+        match self {
+            Skip::NothingToUpload => "no node arrived or left this frame (known on the CPU)",
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PassNode {
+    pub pass: FramePass,
+    pub built: bool,
+    /// Why not built, when not.
+    pub why_not: Option<String>,
+}
+
+/// One frame's fate of each built pass.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Recorded; `cpu_work` is what the CPU knew of its size (e.g. writes).
+    Recorded {
+        cpu_work: Option<u64>,
+    },
+    Skipped(Skip),
+}
+
+#[derive(Debug, Clone)]
+pub struct FrameLog {
+    /// The frame executor's frame number.
+    pub frame: u64,
+    pub entries: Vec<(FramePass, Outcome)>,
+}
+
+impl FrameLog {
+    pub fn ran(&mut self, pass: FramePass, cpu_work: Option<u64>) {
+        self.entries.push((pass, Outcome::Recorded { cpu_work }));
+    }
+
+    pub fn skipped(&mut self, pass: FramePass, why: Skip) {
+        self.entries.push((pass, Outcome::Skipped(why)));
+    }
+
+    pub fn outcome(&self, pass: FramePass) -> Option<&Outcome> {
+        self.entries.iter().find(|(p, _)| *p == pass).map(|(_, o)| o)
+    }
+}
+
+pub struct PassGraph {
+    nodes: Vec<PassNode>,
+    last: Option<FrameLog>,
+}
+
+impl PassGraph {
+    pub fn new(decisions: &[EffectDecision]) -> PassGraph {
+        let nodes = FramePass::ALL
+            .into_iter()
+            .map(|pass| {
+                let decision = pass.effect().and_then(|e| decisions.iter().find(|d| d.effect == e));
+                match decision {
+                    Some(d) if !d.on => PassNode {
+                        pass,
+                        built: false,
+                        why_not: Some(format!("effect {} is off: {}", d.effect.name(), d.reason)),
+                    },
+                    _ => PassNode { pass, built: true, why_not: None },
+                }
+            })
+            .collect();
+        PassGraph { nodes, last: None }
+    }
+
+    pub fn nodes(&self) -> &[PassNode] {
+        &self.nodes
+    }
+
+    pub fn is_built(&self, pass: FramePass) -> bool {
+        self.nodes.iter().any(|n| n.pass == pass && n.built)
+    }
+
+    /// Most passes one frame records (sizes the timestamp pools).
+    pub fn max_recorded(&self) -> u32 {
+        self.nodes.iter().filter(|n| n.built).count() as u32
+    }
+
+    pub fn begin_frame(&self, frame: u64) -> FrameLog {
+        FrameLog { frame, entries: Vec::new() }
+    }
+
+    /// Keeps the log; every built pass must have been accounted for, in
+    /// graph order, and no other (a programmer error otherwise).
+    pub fn end_frame(&mut self, log: FrameLog) {
+        let built: Vec<FramePass> = self.nodes.iter().filter(|n| n.built).map(|n| n.pass).collect();
+        let logged: Vec<FramePass> = log.entries.iter().map(|(p, _)| *p).collect();
+        assert_eq!(logged, built, "frame {} did not follow the pass graph", log.frame);
+        self.last = Some(log);
+    }
+
+    /// The log of the last recorded frame.
+    pub fn last_frame(&self) -> Option<&FrameLog> {
+        self.last.as_ref()
+    }
+}

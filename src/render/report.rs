@@ -1,0 +1,237 @@
+//! The pass report: which effects are on and why, the pipelines built, and
+//! per pass of the last recorded frame whether it was not built, built but
+//! idle, or ran, with its GPU time and the work it did; GPU memory per
+//! effect. `vista render --report` prints it and writes report.json.
+//!
+//! Building it reads the frame's GPU counters back and so waits for the
+//! GPU: it is for tools and tests, not for an engine's frame loop.
+
+use crate::error::Result;
+use crate::frame::{FrameTimings, QueueKind};
+use crate::gpu::Context;
+use crate::render::effects::{Effect, EffectDecision};
+use crate::render::graph::{FramePass, Outcome};
+use crate::render::renderer::TerrainRenderer;
+use crate::render::stats::TRIANGLES_PER_PATCH;
+use crate::shaders::quadtree_update as update_sh;
+use serde::Serialize;
+use std::fmt::Write as _;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PassState {
+    /// Its effect is off: no pipeline, no resource, never recorded.
+    NotBuilt,
+    /// Built, but nothing to do this frame: skipped on the CPU, or recorded
+    /// with zero indirect work decided on the GPU.
+    Idle,
+    Ran,
+}
+
+/// What a pass did; a field is absent where it does not apply.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct PassWork {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dispatch_groups: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub instances: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub triangles: Option<u64>,
+    /// Quadtree texel/description writes (quadtree_update).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub writes: Option<u64>,
+    /// Patches tested (cull_patches).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub patches_tested: Option<u64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PassReport {
+    pub name: &'static str,
+    pub queue: QueueKind,
+    /// The effect the pass exists for; `None`: every scene needs it.
+    pub effect: Option<Effect>,
+    pub state: PassState,
+    /// Whether it carries timestamps this frame.
+    pub recorded: bool,
+    pub reason: String,
+    pub gpu_ms: Option<f64>,
+    pub work: PassWork,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ResourceMemory {
+    pub name: String,
+    pub bytes: u64,
+    /// Effects it exists for; empty: every scene needs it.
+    pub effects: Vec<Effect>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct FrameReport {
+    /// The frame executor's number of the frame reported.
+    pub frame: u64,
+    pub effects: Vec<EffectDecision>,
+    pub pipelines: Vec<String>,
+    pub passes: Vec<PassReport>,
+    pub memory: Vec<ResourceMemory>,
+}
+
+impl FrameReport {
+    /// Bytes of resources that exist for `effect` alone.
+    pub fn memory_of(&self, effect: Effect) -> u64 {
+        self.memory.iter().filter(|m| m.effects == [effect]).map(|m| m.bytes).sum()
+    }
+
+    /// Bytes every scene needs.
+    pub fn core_memory(&self) -> u64 {
+        self.memory.iter().filter(|m| m.effects.is_empty()).map(|m| m.bytes).sum()
+    }
+
+    pub fn total_memory(&self) -> u64 {
+        self.memory.iter().map(|m| m.bytes).sum()
+    }
+
+    /// Names of the passes recorded (with timestamps) this frame, in order.
+    pub fn recorded_passes(&self) -> Vec<&'static str> {
+        self.passes.iter().filter(|p| p.recorded).map(|p| p.name).collect()
+    }
+
+    pub fn pass(&self, name: &str) -> Option<&PassReport> {
+        self.passes.iter().find(|p| p.name == name)
+    }
+
+    /// The report as text, one line per effect, pipeline group and pass.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "effects:");
+        for d in &self.effects {
+            let _ = writeln!(s, "  {:<16} {:<4} {}", d.effect.name(), if d.on { "on" } else { "off" }, d.reason);
+        }
+        let _ = writeln!(s, "pipelines ({}): {}", self.pipelines.len(), self.pipelines.join(", "));
+        let _ = writeln!(s, "passes of frame {}:", self.frame);
+        for p in &self.passes {
+            let state = match p.state {
+                PassState::NotBuilt => "not built",
+                PassState::Idle => "idle",
+                PassState::Ran => "ran",
+            };
+            let ms = p.gpu_ms.map(|m| format!("{m:.3} ms")).unwrap_or_else(|| "-".into());
+            let text = [work_text(&p.work), p.reason.clone()].into_iter().filter(|t| !t.is_empty()).collect::<Vec<_>>();
+            let _ = writeln!(s, "  {:<17} {:<9} {:>10}  {}", p.name, state, ms, text.join("; "));
+        }
+        let mb = |b: u64| b as f64 / (1024.0 * 1024.0);
+        let _ =
+            write!(s, "GPU memory: {:.2} MiB in all; core {:.2} MiB", mb(self.total_memory()), mb(self.core_memory()));
+        for d in self.effects.iter().filter(|d| d.on) {
+            let _ = write!(s, ", {} {:.2} MiB", d.effect.name(), mb(self.memory_of(d.effect)));
+            let shared: Vec<&ResourceMemory> =
+                self.memory.iter().filter(|m| m.effects.len() > 1 && m.effects.contains(&d.effect)).collect();
+            if !shared.is_empty() {
+                let bytes: u64 = shared.iter().map(|m| m.bytes).sum();
+                let _ = write!(s, " (+{:.2} MiB shared with another effect)", mb(bytes));
+            }
+        }
+        s.push('\n');
+        s
+    }
+}
+
+fn work_text(w: &PassWork) -> String {
+    let mut parts = Vec::new();
+    let mut add = |v: Option<u64>, what: &str| {
+        if let Some(v) = v {
+            parts.push(format!("{v} {what}"));
+        }
+    };
+    add(w.writes, "writes");
+    add(w.dispatch_groups, "groups");
+    add(w.patches_tested, "patches tested");
+    add(w.instances, "instances");
+    add(w.triangles, "triangles");
+    parts.join(", ")
+}
+
+/// The report of the last recorded frame; `timings` should be that frame's
+/// (their GPU times are attached where the frame numbers match). Waits for
+/// the GPU to read the frame's counters.
+pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTimings>) -> Result<FrameReport> {
+    let log = r.graph.last_frame().expect("frame_report needs a recorded frame");
+    let timings = timings.filter(|t| t.frame == log.frame);
+    let (header, _) = r.traverse.read_result(ctx)?;
+    let cull = r.cull.read_counters(ctx)?;
+    let nodes = u64::from(header.node_count);
+    let solid = u64::from(cull.drawn - cull.drawn_with_holes);
+    let holey = u64::from(cull.drawn_with_holes);
+    let mut passes = Vec::new();
+    for node in r.graph.nodes() {
+        let pass = node.pass;
+        let mut report = PassReport {
+            name: pass.name(),
+            queue: pass.queue(),
+            effect: pass.effect(),
+            state: PassState::NotBuilt,
+            recorded: false,
+            reason: node.why_not.clone().unwrap_or_default(),
+            gpu_ms: None,
+            work: PassWork::default(),
+        };
+        match log.outcome(pass) {
+            None => {}
+            Some(Outcome::Skipped(why)) => {
+                report.state = PassState::Idle;
+                report.reason = format!("not recorded: {}", why.reason());
+            }
+            Some(Outcome::Recorded { cpu_work }) => {
+                report.recorded = true;
+                report.gpu_ms = timings.and_then(|t| t.passes.iter().find(|p| p.name == pass.name())).map(|p| p.gpu_ms);
+                let (work, idle) = work_of(r, pass, *cpu_work, nodes, solid, holey, cull.patches_in);
+                report.state = if idle.is_some() { PassState::Idle } else { PassState::Ran };
+                report.reason = idle.map(|i| format!("recorded with nothing to do: {i}")).unwrap_or_default();
+                report.work = work;
+            }
+        }
+        passes.push(report);
+    }
+    let memory = r.memory().into_iter().map(|(name, bytes, effects)| ResourceMemory { name, bytes, effects }).collect();
+    Ok(FrameReport { frame: log.frame, effects: r.effects().to_vec(), pipelines: r.pipelines(), passes, memory })
+}
+
+/// A recorded pass's work, and why it was idle if it had none.
+fn work_of(
+    r: &TerrainRenderer,
+    pass: FramePass,
+    cpu_work: Option<u64>,
+    nodes: u64,
+    solid: u64,
+    holey: u64,
+    tested: u32,
+) -> (PassWork, Option<&'static str>) {
+    let groups = |g: u64| PassWork { dispatch_groups: Some(g), ..PassWork::default() };
+    let draw = |n: u64| PassWork {
+        dispatch_groups: None,
+        instances: Some(n),
+        triangles: Some(n * TRIANGLES_PER_PATCH),
+        ..PassWork::default()
+    };
+    let no_nodes = (nodes == 0).then_some("the traversal listed no node (0 groups, indirect)");
+    match pass {
+        FramePass::QuadtreeUpdate => {
+            let writes = cpu_work.unwrap_or(0);
+            let work = PassWork {
+                writes: Some(writes),
+                dispatch_groups: Some(writes.div_ceil(u64::from(update_sh::WORKGROUP_SIZE[0]))),
+                ..PassWork::default()
+            };
+            (work, (writes == 0).then_some("payload copies only, no quadtree write"))
+        }
+        FramePass::Traverse => (groups(1), None),
+        FramePass::LodMap => (groups(nodes), no_nodes),
+        FramePass::SectorData => (groups(r.sector_data.as_ref().map_or(0, |s| s.groups())), None),
+        FramePass::CullPatches => (PassWork { patches_tested: Some(u64::from(tested)), ..groups(nodes) }, no_nodes),
+        FramePass::TerrainGeometry => {
+            (draw(solid), (solid == 0).then_some("no visible patch without holes (0 instances)"))
+        }
+        FramePass::TerrainHoles => (draw(holey), (holey == 0).then_some("no visible patch has holes (0 instances)")),
+    }
+}
