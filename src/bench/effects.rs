@@ -50,6 +50,9 @@ pub struct EffectsBenchRow {
     pub frame_ms: f64,
     pub passes: Vec<PassMedian>,
     pub gpu_memory_bytes: u64,
+    /// Triangles submitted in the last frame (both terrain draws): resident
+    /// sets can differ between variants when the slot budget is tight.
+    pub triangles: u64,
     /// Frames measured (medians are over these).
     pub samples: usize,
     /// Full frame time minus this one: what the missing effect costs.
@@ -112,6 +115,7 @@ pub fn bench_effects(
             frame_ms: passes.iter().map(|p| p.median_ms).sum(),
             passes,
             gpu_memory_bytes: report.total_memory(),
+            triangles: report.passes.iter().filter_map(|p| p.work.triangles).sum(),
             samples: timings.len(),
             cost_ms: 0.0,
             cost_bytes: 0,

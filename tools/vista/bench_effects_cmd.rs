@@ -58,16 +58,17 @@ pub fn effects(
         frames
     );
     println!(
-        "{:<22} {:>9} {:>11} {:>10} {:>11} {:>9}  effects on",
-        "variant", "pipelines", "frame ms", "cost ms", "GPU MiB", "cost MiB"
+        "{:<22} {:>9} {:>10} {:>11} {:>10} {:>11} {:>9}  effects on",
+        "variant", "pipelines", "triangles", "frame ms", "cost ms", "GPU MiB", "cost MiB"
     );
     let mib = |b: f64| b / (1024.0 * 1024.0);
     for r in &rows {
         let on: Vec<&str> = r.effects_on.iter().map(|e| e.name()).collect();
         println!(
-            "{:<22} {:>9} {:>11.3} {:>10.3} {:>11.2} {:>9.2}  {}",
+            "{:<22} {:>9} {:>10} {:>11.3} {:>10.3} {:>11.2} {:>9.2}  {}",
             r.variant,
             r.pipelines,
+            r.triangles,
             r.frame_ms,
             r.cost_ms,
             mib(r.gpu_memory_bytes as f64),
