@@ -147,10 +147,6 @@ impl PassGraph {
         &self.nodes
     }
 
-    pub fn is_built(&self, pass: FramePass) -> bool {
-        self.nodes.iter().any(|n| n.pass == pass && n.built)
-    }
-
     /// Most passes one frame records (sizes the timestamp pools).
     pub fn max_recorded(&self) -> u32 {
         self.nodes.iter().filter(|n| n.built).count() as u32

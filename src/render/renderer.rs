@@ -66,6 +66,15 @@ pub struct TerrainRenderer {
     decisions: Vec<EffectDecision>,
 }
 
+/// The payload atlases each effect reads (the normal atlas serves two).
+const EFFECT_ATLASES: [(Effect, usize); 5] = [
+    (Effect::Lighting, ATLAS_NORMAL),
+    (Effect::ConeCull, ATLAS_PATCH_CONES),
+    (Effect::Holes, ATLAS_PATCH_HOLES),
+    (Effect::Queries, ATLAS_NORMAL),
+    (Effect::Queries, ATLAS_SPLAT),
+];
+
 /// Whether the world has anything for the hole path to cut.
 fn world_content(world: &WorldDesc, holes: &[Hole]) -> WorldContent {
     let root = world.node_size_m(world.root_lod());
@@ -103,13 +112,7 @@ impl TerrainRenderer {
         let decisions = decide(&options.effects, &world_content(world, &holes), options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         let mut atlases = AtlasSet::CORE;
-        for (effect, atlas) in [
-            (Effect::Lighting, ATLAS_NORMAL),
-            (Effect::ConeCull, ATLAS_PATCH_CONES),
-            (Effect::Holes, ATLAS_PATCH_HOLES),
-            (Effect::Queries, ATLAS_NORMAL),
-            (Effect::Queries, ATLAS_SPLAT),
-        ] {
+        for (effect, atlas) in EFFECT_ATLASES {
             if on(effect) {
                 atlases = atlases.with(atlas);
             }
@@ -265,19 +268,7 @@ impl TerrainRenderer {
     /// it exists for (empty: needed by any scene).
     pub fn memory(&self) -> Vec<(String, u64, Vec<Effect>)> {
         let atlas_users = |i: usize| -> Vec<Effect> {
-            let mut users = Vec::new();
-            for (e, a) in [
-                (Effect::Lighting, ATLAS_NORMAL),
-                (Effect::ConeCull, ATLAS_PATCH_CONES),
-                (Effect::Holes, ATLAS_PATCH_HOLES),
-                (Effect::Queries, ATLAS_NORMAL),
-                (Effect::Queries, ATLAS_SPLAT),
-            ] {
-                if a == i && self.effect_on(e) {
-                    users.push(e);
-                }
-            }
-            users
+            EFFECT_ATLASES.iter().filter(|(e, a)| *a == i && self.effect_on(*e)).map(|(e, _)| *e).collect()
         };
         let mut out: Vec<(String, u64, Vec<Effect>)> = self
             .terrain
