@@ -3,6 +3,10 @@
 // 0xFFFF empty) and node descriptions. The host coalesces the list so no two
 // threads write the same texel or slot: the order of threads does not matter.
 #extension GL_GOOGLE_include_directive : require
+// variants: OCCLUSION
+// With OCCLUSION, a slot whose description changes (a node arrived or
+// left) also has its patches' visibility bits cleared: a reused slot must
+// not inherit the last node's (phase 2 of occlusion culling re-tests them).
 layout(local_size_x = 64) in;
 #include "constants.glsl"
 
@@ -16,6 +20,9 @@ struct QuadtreeUpdate {
 layout(set = 0, binding = 0, std430) readonly buffer Updates { QuadtreeUpdate items[]; } updates;
 layout(set = 0, binding = 1, std430) buffer NodeDescs { uvec2 descs[]; } node_descs;
 layout(set = 0, binding = 12, std430) buffer NodeErrors { float errors[]; } node_errors;
+#ifdef OCCLUSION
+layout(set = 0, binding = 13, std430) buffer Visibility { uint words[]; } visibility;
+#endif
 // One binding per LOD (a storage image view addresses a single mip); the
 // host binds mip 0 again for LODs past the world's count.
 layout(set = 0, binding = 2, r16ui) uniform writeonly uimage2D node_lod0;
@@ -43,6 +50,11 @@ void main() {
     uint word0 = updates.items[i].word0;
     if (target == UPDATE_TARGET_DESC) {
         node_descs.descs[coords] = uvec2(word0, updates.items[i].word1);
+#ifdef OCCLUSION
+        for (uint w = 0u; w < VISIBILITY_WORDS_PER_SLOT; ++w) {
+            visibility.words[coords * VISIBILITY_WORDS_PER_SLOT + w] = 0u;
+        }
+#endif
         return;
     }
     if (target == UPDATE_TARGET_ERROR) {

@@ -2,8 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // The whole quadtree walk in ONE dispatch of ONE workgroup (Far Cry 5): the
 // per-level node lists ping-pong in shared memory; nodes that stop refining
-// go to the final list. Overflow keeps the coarser node (coverage is never
-// lost) and is counted.
+// go to the final list. Overflow keeps the coarser node, roots included
+// (coverage is never lost), and is counted.
 layout(local_size_x = 256) in;
 #include "traverse_common.glsl"
 
@@ -47,7 +47,9 @@ void main() {
             if (reserve(0u, 1u, at)) {
                 lists[0][at] = pack_node(root_lod, x, y);
             } else {
+                // Dropping a root would leave its whole area undrawn.
                 atomicAdd(traverse_out.header.overflow, 1u);
+                emit_final(pack_node(root_lod, x, y), v);
             }
         }
     }
@@ -80,8 +82,11 @@ void main() {
         barrier();
         src = dst;
     }
+    // barrier() orders only shared memory: other threads' node_count atomics could still be unseen.
+    memoryBarrierBuffer();
+    barrier();
     if (t == 0u) {
-        uint n = min(traverse_out.header.node_count, pc.final_capacity);
+        uint n = min(atomicAdd(traverse_out.header.node_count, 0u), pc.final_capacity);
         traverse_out.header.dispatch_x = n;
         traverse_out.header.dispatch_y = 1u;
         traverse_out.header.dispatch_z = 1u;

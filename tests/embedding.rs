@@ -96,7 +96,10 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
             let depth = image(
                 "engine_depth",
                 DEPTH_FORMAT,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+                // Sampled: occlusion culling (on by default) reads it.
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                    | vk::ImageUsageFlags::TRANSFER_SRC
+                    | vk::ImageUsageFlags::SAMPLED,
             );
             let v = view([256.0, 30.0, 200.0], 0.0, -30.0, size, 1.0);
             // The engine's own pool, command buffer and fence.

@@ -73,9 +73,9 @@ fn a_large_pass_times_longer_than_a_tiny_one_and_after_it() {
             ring.record(ctx, |rec| {
                 rec.discard_to(&small, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
                 rec.discard_to(&large, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                let mut frame = exec.begin(rec);
-                frame.pass("tiny", QueueKind::Graphics, |r| tri.record(r, &small, corners));
-                frame.pass("large", QueueKind::Graphics, |r| patch.record(r, &large, None));
+                let mut frame = exec.begin(vista::gpu::FrameCommands::One(rec), vista::gpu::QueueMode::Single);
+                frame.pass("tiny", false, QueueKind::Graphics, |r| tri.record(r, &small, corners));
+                frame.pass("large", false, QueueKind::Graphics, |r| patch.record(r, &large, None));
                 Ok(())
             })
             .unwrap();

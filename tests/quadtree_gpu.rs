@@ -25,11 +25,15 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
         let world = small_world();
         let slots = 20;
         let mut tree = GpuQuadtree::new(ctx, &world, slots, 2, AtlasSet::ALL).unwrap();
-        let pass = QuadtreeUpdatePass::new(ctx).unwrap();
+        let pass = QuadtreeUpdatePass::new(ctx, false).unwrap();
+        // Each step waits for the GPU, so a freed slot may be reused at once:
+        // same-frame reuse is the hardest case for the GPU mirror.
+        tree.shadow.set_reuse_delay(0);
         let candidates = all_valid(&world);
         let mut rng = Rng(0xC0FFEE);
         let mut resident: BTreeSet<NodeId> = BTreeSet::new();
         for step in 0..24u16 {
+            tree.begin_frame(u64::from(step) + 1);
             for _ in 0..rng.below(5) {
                 if let Some(&id) = resident.iter().nth(rng.below(resident.len().max(1) as u32) as usize) {
                     tree.remove(id);
@@ -47,7 +51,7 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
                     tree.add(fake_node(id, step), (rng.below(16) as i8) - 8);
                 }
             }
-            ctx.submit_and_wait(|rec| pass.record(rec, &mut tree).map(drop)).unwrap();
+            ctx.submit_and_wait(|rec| pass.record(rec, &mut tree, None).map(drop)).unwrap();
             // Over budget, the rest waits; mirror what became resident.
             resident.retain(|id| tree.shadow.slot_of(*id).is_some());
             for (lod, expect) in tree.shadow.mips.iter().enumerate() {
@@ -70,12 +74,12 @@ fn payloads_land_in_the_atlas_layer_of_their_slot() {
     gpu_test(|ctx| {
         let world = small_world();
         let mut tree = GpuQuadtree::new(ctx, &world, 8, 1, AtlasSet::ALL).unwrap();
-        let pass = QuadtreeUpdatePass::new(ctx).unwrap();
+        let pass = QuadtreeUpdatePass::new(ctx, false).unwrap();
         let nodes: Vec<NodeId> = all_valid(&world).into_iter().take(5).collect();
         for (i, id) in nodes.iter().enumerate() {
             tree.add(fake_node(*id, i as u16), 0);
         }
-        ctx.submit_and_wait(|rec| pass.record(rec, &mut tree).map(drop)).unwrap();
+        ctx.submit_and_wait(|rec| pass.record(rec, &mut tree, None).map(drop)).unwrap();
         for (i, id) in nodes.iter().enumerate() {
             let slot = tree.shadow.slot_of(*id).expect("resident");
             let node = fake_node(*id, i as u16);

@@ -79,6 +79,7 @@ fn check_layout(what: &str, rust: (usize, Vec<(&str, usize, usize)>), glsl: &[(&
 #[test]
 fn rust_twins_match_reflected_layouts() {
     use vista::passes::cull_patches::{CullPush, PatchListHeader};
+    use vista::passes::hiz_build::HizPush;
     use vista::passes::prefix_sum::PrefixSumPush;
     use vista::passes::quadtree_update::QuadtreeUpdatePush;
     use vista::passes::sector_data::SectorDataPush;
@@ -133,17 +134,23 @@ fn rust_twins_match_reflected_layouts() {
         layouts::TERRAIN_QUERY_PUSH,
         structs::TERRAIN_QUERY_PUSH,
     );
-    check_layout("CullPush", fields!(CullPush: stages, capacity, pad), layouts::CULL_PUSH, structs::CULL_PUSH);
+    check_layout(
+        "CullPush",
+        fields!(CullPush: stages, capacity, depth_w, depth_h),
+        layouts::CULL_PUSH,
+        structs::CULL_PUSH,
+    );
     check_layout(
         "PatchListHeader",
         fields!(PatchListHeader: index_count, instance_count, first_index, vertex_offset, first_instance, patches_in,
-            after_frustum, after_cone, after_hole, pad),
+            after_frustum, after_cone, after_hole, after_occlusion, pad),
         layouts::PATCH_LIST_HEADER,
         structs::PATCH_LIST_HEADER,
     );
     // The header leads with a VkDrawIndexedIndirectCommand.
     assert_eq!(offset_of!(PatchListHeader, first_instance) + 4, 20);
     check_layout("HolesPush", fields!(HolesPush: nan_bits, pad), layouts::HOLES_PUSH, structs::HOLES_PUSH);
+    check_layout("HizPush", fields!(HizPush: src_size, dst_size, level, pad), layouts::HIZ_PUSH, structs::HIZ_PUSH);
     check_layout(
         "TerrainViewGpu",
         fields!(TerrainViewGpu: view_proj, frustum, sun_dir, sun_color, sky_color, camera_sample, camera_frac,
@@ -285,7 +292,8 @@ fn variants_leave_out_what_their_switches_add() {
     assert!(names(cull::variant(cull::VARIANT_CONE_CULL)).contains(&"patch_cones"));
     assert!(!names(cull::variant(cull::VARIANT_CONE_CULL)).contains(&"patch_holes"));
     assert_eq!(cull::variant(cull::VARIANT_HOLE_CULL).defines, &["HOLE_CULL"]);
-    assert_eq!(cull::VARIANTS.len(), 4);
+    assert_eq!(cull::VARIANTS.len(), 8);
+    assert!(!bare.contains(&"visibility") && names(cull::variant(cull::VARIANT_OCCLUSION)).contains(&"visibility"));
     // A file's switch list is checked.
     assert!(shader_compiler::variants_of("// variants: lower_case\n", "f").is_err());
     assert!(shader_compiler::variants_of("// variants: A B C D\n", "f").is_err());

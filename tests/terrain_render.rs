@@ -57,7 +57,7 @@ fn seams_are_watertight_for_every_lod_delta() {
         }
         for (i, v) in views.iter().enumerate() {
             let c = rig.shot(ctx, v, CullStages::ALL);
-            for p in rig.renderer.cull.read_patches(ctx).unwrap() {
+            for p in rig.renderer.read_patches(ctx).unwrap() {
                 deltas_seen.extend(p.deltas);
             }
             let mut holes = 0;
@@ -146,7 +146,7 @@ fn depth_matches_closed_form_ray_casts() {
 /// Spacing (m) of the coarsest node drawn: holes and edges are exact to
 /// the vertex resolution of the node that draws them.
 fn coarsest_spacing(rig: &Rig, ctx: &vista::gpu::Context) -> f64 {
-    let patches = rig.renderer.cull.read_patches(ctx).unwrap();
+    let patches = rig.renderer.read_patches(ctx).unwrap();
     let lod = patches.iter().map(|p| p.lod).max().expect("something drawn");
     rig.world.node_spacing_m(lod)
 }
@@ -193,9 +193,9 @@ fn holes_show_background_exactly_where_the_holes_are() {
         }
         assert!(bg > 200 && fg > 5000, "too few pixels decided: {bg} hole, {fg} solid");
         // All-hole patches are culled before the draw, and never drawn.
-        let counters = rig.renderer.cull.read_counters(ctx).unwrap();
+        let counters = rig.renderer.read_counters(ctx).unwrap().cull;
         assert!(counters.after_hole < counters.after_cone, "no all-hole patch was removed: {counters:?}");
-        for p in rig.renderer.cull.read_patches(ctx).unwrap() {
+        for p in rig.renderer.read_patches(ctx).unwrap() {
             let node = bake_node(&surface, &world, &holes, NodeId::new(p.lod, p.node_x, p.node_y));
             assert_ne!(node.patch_holes[p.patch as usize], PATCH_HOLE_ALL, "{p:?} is all hole but drawn");
         }
@@ -203,7 +203,7 @@ fn holes_show_background_exactly_where_the_holes_are() {
         // the picture is identical, only more patches are drawn.
         let no_hole_stage = rig.again(ctx, &v, CullStages { hole: false, ..CullStages::ALL });
         assert_eq!(no_hole_stage.rgba, c.rgba);
-        assert!(rig.renderer.cull.read_counters(ctx).unwrap().drawn > counters.drawn);
+        assert!(rig.renderer.read_counters(ctx).unwrap().cull.drawn > counters.drawn);
     });
 }
 
@@ -271,11 +271,11 @@ fn culling_never_changes_a_pixel() {
         let (mut frustum_culled, mut cone_culled) = (0, 0);
         for (i, v) in hill_poses(100, size).iter().enumerate() {
             let on = rig.shot(ctx, v, CullStages::ALL);
-            let k = rig.renderer.cull.read_counters(ctx).unwrap();
+            let k = rig.renderer.read_counters(ctx).unwrap().cull;
             frustum_culled += k.patches_in - k.after_frustum;
             cone_culled += k.after_frustum - k.after_cone;
             let off = rig.again(ctx, v, CullStages::NONE);
-            let k_off = rig.renderer.cull.read_counters(ctx).unwrap();
+            let k_off = rig.renderer.read_counters(ctx).unwrap().cull;
             assert_eq!(k_off.drawn, k.patches_in, "culling off draws every patch");
             assert!(on.rgba == off.rgba, "pose {i} {v:?}: colour differs with culling on");
             let bits = |c: &Capture| c.depth.iter().map(|d| d.to_bits()).collect::<Vec<u32>>();
@@ -320,9 +320,9 @@ fn cone_culling_removes_only_patches_whose_every_triangle_faces_away() {
         let mut culled_total = 0;
         for v in hill_poses(12, size) {
             rig.shot(ctx, &v, CullStages::NONE);
-            let all: BTreeSet<PatchRecord> = rig.renderer.cull.read_patches(ctx).unwrap().into_iter().collect();
-            rig.again(ctx, &v, CullStages { frustum: false, cone: true, hole: false });
-            let kept: BTreeSet<PatchRecord> = rig.renderer.cull.read_patches(ctx).unwrap().into_iter().collect();
+            let all: BTreeSet<PatchRecord> = rig.renderer.read_patches(ctx).unwrap().into_iter().collect();
+            rig.again(ctx, &v, CullStages { frustum: false, cone: true, hole: false, occlusion: false });
+            let kept: BTreeSet<PatchRecord> = rig.renderer.read_patches(ctx).unwrap().into_iter().collect();
             assert!(kept.is_subset(&all));
             let cam = DVec3::from(v.camera.position_m);
             for p in all.difference(&kept) {

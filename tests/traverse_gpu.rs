@@ -1,6 +1,7 @@
 //! The GPU traversal (both variants) equals the CPU reference as a set for
 //! random resident sets and cameras, tiles the world exactly once, and keeps
-//! coarser nodes (counting overflow) when its lists are too small.
+//! coarser nodes (counting overflow, never dropping roots) when its lists are
+//! too small.
 
 mod common;
 
@@ -37,7 +38,7 @@ impl Scene {
     fn new(ctx: &Context, seed: u64) -> Self {
         let mut s = Scene {
             tree: GpuQuadtree::new(ctx, &world(), SLOTS, 1, AtlasSet::ALL).unwrap(),
-            update: QuadtreeUpdatePass::new(ctx).unwrap(),
+            update: QuadtreeUpdatePass::new(ctx, false).unwrap(),
             resident: BTreeSet::new(),
             heights: std::collections::HashMap::new(),
             rng: Rng(seed),
@@ -89,7 +90,7 @@ impl Scene {
     /// Uploads until nothing waits (MAX_UPLOADS_PER_FRAME per frame).
     fn flush(&mut self, ctx: &Context) {
         loop {
-            ctx.submit_and_wait(|rec| self.update.record(rec, &mut self.tree).map(drop)).unwrap();
+            ctx.submit_and_wait(|rec| self.update.record(rec, &mut self.tree, None).map(drop)).unwrap();
             if self.tree.waiting() == 0 {
                 break;
             }
@@ -215,6 +216,36 @@ fn overflow_keeps_coarser_nodes_and_is_counted() {
             assert!(got.nodes.len() < ample.nodes.len(), "{mode:?}: overflow keeps coarser (fewer) nodes");
             assert_tiles_exactly_once(&got, &format!("{mode:?} with overflow"));
         }
+    });
+}
+
+#[test]
+fn roots_that_overflow_the_first_list_are_still_drawn() {
+    gpu_test(|ctx| {
+        // 32 x 31 sectors, 2^4 sectors per root side: 2 x 2 roots, all resident.
+        const ROOTS: u32 = 4;
+        const CAPACITY: u32 = 1;
+        let mut scene = Scene::new(ctx, 11);
+        scene.flush(ctx);
+        assert_eq!(scene.resident.len(), ROOTS as usize);
+        let params = TraverseParams {
+            cameras: vec![TraverseCamera::perspective([2000.0, 2000.0, 100.0], 60.0, 2000)],
+            target_error_px: 1.0,
+        };
+        let mut traverse = Traverse::new(ctx, &world(), SLOTS).unwrap();
+        traverse.set_list_capacity(CAPACITY);
+        ctx.submit_and_wait(|rec| {
+            traverse.record(rec, &scene.tree, &params, TraverseMode::SingleDispatch);
+            Ok(())
+        })
+        .unwrap();
+        let (header, got) = traverse.read_result(ctx).unwrap();
+        assert_eq!(got.missing_roots, 0);
+        assert_tiles_exactly_once(&got, "roots past a 1-entry list");
+        // Only roots are resident, so nothing refines: every root is listed as itself.
+        assert_eq!(got.nodes.len(), ROOTS as usize);
+        assert_eq!(got.overflow, ROOTS - CAPACITY, "each root past the list is counted once");
+        assert_eq!(header.dispatch, [ROOTS, 1, 1]);
     });
 }
 

@@ -47,6 +47,7 @@
 #define CULL_STAGE_FRUSTUM 1u
 #define CULL_STAGE_CONE 2u
 #define CULL_STAGE_HOLE 4u
+#define CULL_STAGE_OCCLUSION 8u
 // Patch hole summary (one texel per patch).
 #define PATCH_HOLE_NONE 0u
 #define PATCH_HOLE_SOME 1u
@@ -63,5 +64,7 @@
 #define EDGE_EAST 1u
 #define EDGE_SOUTH 2u
 #define EDGE_NORTH 3u
+// Occlusion: visibility bits per slot (one bit per patch, 64 patches).
+#define VISIBILITY_WORDS_PER_SLOT 2u
 
 #endif

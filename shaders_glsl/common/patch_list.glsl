@@ -14,7 +14,7 @@ struct PatchListHeader {
     uint after_frustum;
     uint after_cone;
     uint after_hole;
-    uint pad0;
+    uint after_occlusion; // cull_occluded: patches the pyramid left visible
     uint pad1;
     uint pad2;
 };

@@ -2,11 +2,16 @@
 //! view (ground level, low flight, high flight, facing a ridge). Each view
 //! renders in blocks with every culling stage on, with the cone stage off
 //! and with culling off, in one run; per-pass GPU medians after warm-up.
+//! With occlusion built, a fourth block switches it off: the pyramid and
+//! phase 2 cost against the geometry time they save, and the patches drawn
+//! in each phase.
 
 use crate::error::Result;
 use crate::frame::profiler::summarize;
 use crate::gpu::Context;
+use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullCounters, CullPatches, CullStages};
+use crate::passes::hiz_build::HizBuild;
 use crate::passes::terrain_geometry::TerrainGeometry;
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::traverse::Traverse;
@@ -32,7 +37,10 @@ pub struct CullBenchConfig {
 pub struct CullTiming {
     pub traverse_ms: f64,
     pub cull_ms: f64,
+    /// Both draws (terrain_geometry, terrain_holes), both phases.
     pub geometry_ms: f64,
+    /// hiz_build + cull_occluded (0 without occlusion).
+    pub occlusion_ms: f64,
     pub counters: CullCounters,
 }
 
@@ -43,6 +51,12 @@ pub struct CullBenchRow {
     pub all: CullTiming,
     pub no_cone: CullTiming,
     pub none: CullTiming,
+    /// Every stage but occlusion (where occlusion is built).
+    pub no_occlusion: Option<CullTiming>,
+    /// Geometry time occlusion saves (no occlusion - all) and what its
+    /// passes cost (hiz_build + cull_occluded).
+    pub occlusion_saves_ms: Option<f64>,
+    pub occlusion_cost_ms: Option<f64>,
     pub nodes: u32,
     pub triangles_drawn: u64,
     /// Triangles of the whole world at LOD 0 (2 per quad).
@@ -110,13 +124,14 @@ fn block(
     let measured: Vec<_> = frames.into_iter().skip(cfg.warmup_frames as usize + 1).collect();
     let s = summarize(&measured);
     let ms = |name: &str| s.iter().find(|p| p.name == name).map_or(f64::NAN, |p| p.median_ms);
+    // Passes that may be absent (not built or off): 0; drawing passes in both phases.
+    let sum = |name: &str| s.iter().filter(|p| p.name == name).map(|p| p.median_ms).sum::<f64>();
     Ok(CullTiming {
         traverse_ms: ms(Traverse::NAME),
         cull_ms: ms(CullPatches::NAME),
-        // Both draws of the terrain (terrain_holes exists with holes only).
-        geometry_ms: ms(TerrainGeometry::NAME)
-            + s.iter().find(|p| p.name == TerrainHoles::NAME).map_or(0.0, |p| p.median_ms),
-        counters: renderer.cull.read_counters(ctx)?,
+        geometry_ms: sum(TerrainGeometry::NAME) + sum(TerrainHoles::NAME),
+        occlusion_ms: sum(HizBuild::NAME) + sum(CullOccluded::NAME),
+        counters: renderer.read_counters(ctx)?.cull,
     })
 }
 
@@ -146,6 +161,11 @@ pub fn bench_cull(
         let all = block(ctx, renderer, &mut off, &view, CullStages::ALL, cfg)?;
         let no_cone = block(ctx, renderer, &mut off, &view, CullStages { cone: false, ..CullStages::ALL }, cfg)?;
         let none = block(ctx, renderer, &mut off, &view, CullStages::NONE, cfg)?;
+        let no_occlusion = if renderer.occlusion.is_some() {
+            Some(block(ctx, renderer, &mut off, &view, CullStages { occlusion: false, ..CullStages::ALL }, cfg)?)
+        } else {
+            None
+        };
         let stats = crate::render::stats::collect(ctx, renderer, &view)?;
         let tri = u64::from(all.counters.drawn) * crate::render::stats::TRIANGLES_PER_PATCH;
         let p = camera.position_m;
@@ -161,6 +181,9 @@ pub fn bench_cull(
             cone_cost_ms: all.cull_ms - no_cone.cull_ms,
             cone_saves_ms: no_cone.geometry_ms - all.geometry_ms,
             geometry_off_vs_on: none.geometry_ms / all.geometry_ms,
+            occlusion_saves_ms: no_occlusion.as_ref().map(|n| n.geometry_ms - all.geometry_ms),
+            occlusion_cost_ms: no_occlusion.as_ref().map(|_| all.occlusion_ms),
+            no_occlusion,
             all,
             no_cone,
             none,

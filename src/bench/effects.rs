@@ -34,7 +34,8 @@ pub struct EffectsBenchConfig {
 
 #[derive(Debug, Clone, Serialize)]
 pub struct PassMedian {
-    pub name: &'static str,
+    /// The pass label (marked in phase 2 of occlusion culling).
+    pub name: String,
     pub median_ms: f64,
 }
 
@@ -105,8 +106,10 @@ pub fn bench_effects(
     let mut rows = Vec::new();
     for (variant, without, r, timings) in &runs {
         let report = frame_report(ctx, r, None)?;
-        let passes: Vec<PassMedian> =
-            summarize(timings).iter().map(|s| PassMedian { name: s.name, median_ms: s.median_ms }).collect();
+        let passes: Vec<PassMedian> = summarize(timings)
+            .iter()
+            .map(|s| PassMedian { name: crate::frame::pass_label(s.name, s.late), median_ms: s.median_ms })
+            .collect();
         rows.push(EffectsBenchRow {
             variant: variant.clone(),
             without: *without,
@@ -142,7 +145,7 @@ fn block(
     let first = r.frames_recorded() + 1;
     let mut out: Vec<FrameTimings> = off.run(ctx, r, view, cfg.frames)?;
     off.capture(ctx)?;
-    out.extend(r.poll_timings().cloned());
+    out.extend(r.poll_timings(ctx).cloned());
     out.retain(|t| t.frame >= first);
     out.dedup_by_key(|t| t.frame);
     Ok(out)

@@ -70,7 +70,7 @@ pub fn bench_traverse(
     cfg: &TraverseBenchConfig,
 ) -> Result<Vec<TraverseBenchRow>> {
     let max = cfg.resident_sets.iter().copied().max().unwrap_or(64);
-    let update = QuadtreeUpdatePass::new(ctx)?;
+    let update = QuadtreeUpdatePass::new(ctx, false)?;
     let traverse = Traverse::with_per_level(ctx, world, max)?;
     let mut ring = FrameRing::new(ctx, 1)?;
     let mut rows = Vec::new();
@@ -83,7 +83,7 @@ pub fn bench_traverse(
             tree.add(n, 0);
         }
         while tree.waiting() > 0 {
-            ctx.submit_and_wait(|rec| update.record(rec, &mut tree).map(drop))?;
+            ctx.submit_and_wait(|rec| update.record(rec, &mut tree, None).map(drop))?;
         }
         let resident = tree.shadow.resident_count();
         for &target in &cfg.targets_px {
@@ -95,11 +95,11 @@ pub fn bench_traverse(
             let mut frames = Vec::new();
             for _ in 0..cfg.warmup_frames + cfg.frames + 1 {
                 ring.record(ctx, |rec| {
-                    let mut frame = exec.begin(rec);
-                    frame.pass(Traverse::NAME, QueueKind::Compute, |r| {
+                    let mut frame = exec.begin(crate::gpu::FrameCommands::One(rec), crate::gpu::QueueMode::Single);
+                    frame.pass(Traverse::NAME, false, QueueKind::Compute, |r| {
                         traverse.record(r, &tree, &params, TraverseMode::SingleDispatch)
                     });
-                    frame.pass(Traverse::LEVEL_NAME, QueueKind::Compute, |r| {
+                    frame.pass(Traverse::LEVEL_NAME, false, QueueKind::Compute, |r| {
                         traverse.record(r, &tree, &params, TraverseMode::MultiDispatch)
                     });
                     Ok(())

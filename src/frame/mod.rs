@@ -5,21 +5,26 @@
 pub mod profiler;
 
 use crate::error::Result;
-use crate::gpu::{Context, Recorder, TimestampPool};
+use crate::gpu::{Context, FrameCommands, QueueMode, Recorder, TimestampPool};
 use serde::Serialize;
 
+/// A queue kind: where a pass belongs when compute is split off
+/// ([`FramePass::queue`](crate::render::graph::FramePass::queue)), or where
+/// it actually ran ([`PassTiming::queue`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum QueueKind {
     Graphics,
-    /// Async compute when the device has a compute-only family; otherwise
-    /// recorded on the graphics queue and still reported as compute work.
+    /// The queue of a compute-only family (async compute).
     Compute,
 }
 
 #[derive(Debug, Clone, Serialize)]
 pub struct PassTiming {
     pub name: &'static str,
+    /// Phase 2 of occlusion culling (a second run of a drawing pass).
+    pub late: bool,
+    /// The queue it ran on.
     pub queue: QueueKind,
     /// Start relative to the frame's first pass.
     pub start_ms: f64,
@@ -32,17 +37,34 @@ pub struct FrameTimings {
     pub frame: u64,
     /// Absolute GPU time of the first pass, in nanoseconds.
     pub start_ns: f64,
+    /// How the frame was submitted.
+    pub mode: QueueMode,
+    /// Passes with timestamps; a pass on a queue without timestamp support
+    /// is missing.
     pub passes: Vec<PassTiming>,
+}
+
+/// Timer label of a pass: its name, marked in phase 2.
+pub fn pass_label(name: &str, late: bool) -> String {
+    if late {
+        format!("{name} (phase 2)")
+    } else {
+        name.to_string()
+    }
 }
 
 struct Slot {
     pool: Option<TimestampPool>,
-    passes: Vec<(&'static str, QueueKind)>,
+    /// (name, late, queue) of each pass with a timestamp pair, in query order.
+    passes: Vec<(&'static str, bool, QueueKind)>,
+    mode: QueueMode,
     frame: u64,
     pending: bool,
 }
 
 pub struct FrameExecutor {
+    /// The compute family's queue can write timestamps.
+    compute_timestamps: bool,
     slots: Vec<Slot>,
     next: usize,
     frame: u64,
@@ -66,9 +88,14 @@ impl FrameExecutor {
             } else {
                 None
             };
-            slots.push(Slot { pool, passes: Vec::new(), frame: 0, pending: false });
+            slots.push(Slot { pool, passes: Vec::new(), mode: QueueMode::Single, frame: 0, pending: false });
         }
+        let compute_timestamps =
+            ctx.info().queue_families.iter().any(|f| {
+                f.index == ctx.info().compute_family && f.timestamp_valid_bits > 0 && limits.timestamps_supported
+            });
         Ok(FrameExecutor {
+            compute_timestamps,
             slots,
             next: 0,
             frame: 0,
@@ -106,19 +133,22 @@ impl FrameExecutor {
                 .passes
                 .iter()
                 .enumerate()
-                .map(|(i, (name, queue))| PassTiming {
+                .map(|(i, (name, late, queue))| PassTiming {
                     name,
+                    late: *late,
                     queue: *queue,
                     start_ms: (ns(ticks[2 * i]) - t0) / 1e6,
                     gpu_ms: (ns(ticks[2 * i + 1]) - ns(ticks[2 * i])) / 1e6,
                 })
                 .collect();
-            self.latest = Some(FrameTimings { frame: slot.frame, start_ns: t0, passes });
+            self.latest = Some(FrameTimings { frame: slot.frame, start_ns: t0, mode: slot.mode, passes });
         }
     }
 
-    /// Starts recording a frame into `rec`; collects any finished timings first.
-    pub fn begin<'e, 'r>(&'e mut self, rec: &'e mut Recorder<'r>) -> Frame<'e, 'r> {
+    /// Starts recording a frame into `cmds` (`mode` says how they are
+    /// submitted); collects any finished timings first.
+    pub fn begin<'e, 'r>(&'e mut self, mut cmds: FrameCommands<'e, 'r>, mode: QueueMode) -> Frame<'e, 'r> {
+        assert_eq!(mode.is_split(), matches!(cmds, FrameCommands::Split { .. }), "{mode:?} with the wrong buffers");
         self.harvest();
         self.frame += 1;
         let slot_index = self.next;
@@ -129,18 +159,25 @@ impl FrameExecutor {
         }
         slot.passes.clear();
         slot.frame = self.frame;
+        slot.mode = mode;
         slot.pending = false;
         if let Some(pool) = &slot.pool {
-            rec.reset_queries(pool, 0, pool.capacity);
+            // In the buffer submitted first: the other one runs after it.
+            let first = match &mut cmds {
+                FrameCommands::One(r) => &mut **r,
+                FrameCommands::Split { compute, .. } => &mut **compute,
+            };
+            first.reset_queries(pool, 0, pool.capacity);
         }
-        Frame { exec: self, rec, slot: slot_index }
+        Frame { exec: self, cmds, mode, slot: slot_index }
     }
 }
 
 /// One frame being recorded; `pass` wraps each pass.
 pub struct Frame<'e, 'r> {
     exec: &'e mut FrameExecutor,
-    rec: &'e mut Recorder<'r>,
+    cmds: FrameCommands<'e, 'r>,
+    mode: QueueMode,
     slot: usize,
 }
 
@@ -150,24 +187,54 @@ impl<'r> Frame<'_, 'r> {
         self.exec.slots[self.slot].frame
     }
 
-    /// Records one pass between a timestamp pair inside a debug label. The
-    /// name is the pass's file, shader and timer label.
-    pub fn pass<T>(&mut self, name: &'static str, queue: QueueKind, f: impl FnOnce(&mut Recorder<'r>) -> T) -> T {
+    /// Records one pass between a timestamp pair inside a debug label, into
+    /// the command buffer of `queue` (the one buffer when not split). The
+    /// name is the pass's file, shader and timer label; `late` marks phase 2.
+    pub fn pass<T>(
+        &mut self,
+        name: &'static str,
+        late: bool,
+        queue: QueueKind,
+        f: impl FnOnce(&mut Recorder<'r>) -> T,
+    ) -> T {
+        let (rec, ran_on) = match (&mut self.cmds, queue) {
+            (FrameCommands::One(r), _) => (&mut **r, QueueKind::Graphics),
+            (FrameCommands::Split { compute, .. }, QueueKind::Compute) => {
+                let on = if self.mode == QueueMode::AsyncCompute { QueueKind::Compute } else { QueueKind::Graphics };
+                (&mut **compute, on)
+            }
+            (FrameCommands::Split { graphics, .. }, QueueKind::Graphics) => (&mut **graphics, QueueKind::Graphics),
+        };
+        let timed = ran_on == QueueKind::Graphics || self.exec.compute_timestamps;
         let slot = &mut self.exec.slots[self.slot];
         let i = slot.passes.len() as u32;
         assert!(i < self.exec.max_passes, "more than {} passes in one frame", self.exec.max_passes);
-        slot.passes.push((name, queue));
-        self.rec.begin_label(name);
-        if let Some(pool) = &slot.pool {
-            self.rec.write_timestamp(pool, 2 * i);
+        let pool = slot.pool.as_ref().filter(|_| timed);
+        if pool.is_some() {
+            slot.passes.push((name, late, ran_on));
         }
-        let out = f(self.rec);
-        let slot = &self.exec.slots[self.slot];
-        if let Some(pool) = &slot.pool {
-            self.rec.write_timestamp(pool, 2 * i + 1);
+        rec.begin_label(&pass_label(name, late));
+        if let Some(pool) = pool {
+            rec.write_timestamp(pool, 2 * i);
         }
-        self.rec.end_label();
+        let out = f(rec);
+        if let Some(pool) = pool {
+            rec.write_timestamp(pool, 2 * i + 1);
+        }
+        rec.end_label();
         out
+    }
+}
+
+impl<'r> Frame<'_, 'r> {
+    /// Records work that is no pass (e.g. the telemetry copies) into the
+    /// command buffer of `queue`, without timestamps.
+    pub fn untimed<T>(&mut self, queue: QueueKind, f: impl FnOnce(&mut Recorder<'r>) -> T) -> T {
+        match (&mut self.cmds, queue) {
+            (FrameCommands::One(r), _) => f(r),
+            (FrameCommands::Split { compute, .. }, QueueKind::Compute) => f(compute),
+            (FrameCommands::Split { graphics, .. }, QueueKind::Graphics) => f(graphics),
+        }
     }
 }
 

@@ -77,6 +77,8 @@ pub(crate) struct Shared {
     pub garbage: Mutex<Vec<(u64, Garbage)>>,
     pub frames_submitted: AtomicU64,
     pub frames_completed: AtomicU64,
+    /// Highest frame number whose recording has begun (`frame_recording`).
+    pub frames_recording: AtomicU64,
     pub validation_log: Arc<ValidationLog>,
     pub info: DeviceInfo,
 }
@@ -281,6 +283,7 @@ impl Context {
             garbage: Mutex::new(Vec::new()),
             frames_submitted: AtomicU64::new(0),
             frames_completed: AtomicU64::new(0),
+            frames_recording: AtomicU64::new(0),
             validation_log: log,
             info,
         };
@@ -323,6 +326,15 @@ impl Context {
         self.shared.live.snapshot()
     }
 
+    /// Marks the start of recording the next frame and returns the number
+    /// `frame_submitted` will give it. Resources dropped from now on wait
+    /// for that frame too: they may be in the commands being recorded.
+    pub fn frame_recording(&self) -> u64 {
+        let next = self.shared.frames_submitted.load(Ordering::Acquire) + 1;
+        self.shared.frames_recording.fetch_max(next, Ordering::AcqRel);
+        next
+    }
+
     /// Call once per frame after its commands are submitted; returns its number.
     pub fn frame_submitted(&self) -> u64 {
         self.shared.frames_submitted.fetch_add(1, Ordering::AcqRel) + 1
@@ -335,7 +347,13 @@ impl Context {
         self.shared.collect_garbage();
     }
 
-    /// Waits for all GPU work, then destroys every deferred resource.
+    /// The newest frame reported complete (`frame_completed`).
+    pub fn frames_completed(&self) -> u64 {
+        self.shared.frames_completed.load(Ordering::Acquire)
+    }
+
+    /// Waits for all GPU work, then destroys every deferred resource (but
+    /// those dropped while a frame was being recorded and not submitted).
     pub fn wait_idle(&self) -> Result<()> {
         // SAFETY: valid device; the queue lock keeps submissions out meanwhile.
         let _q = self.shared.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
@@ -372,8 +390,19 @@ impl Context {
 }
 
 impl Shared {
+    /// Buffers and images shared by the graphics and compute families when
+    /// terrain compute can run on its own queue family (see `gpu` docs).
+    pub(crate) fn concurrent_families(&self) -> Option<[u32; 2]> {
+        let (g, c) = (self.info.graphics_family, self.info.compute_family);
+        (g != c).then_some([g, c])
+    }
+
+    /// Tags `g` with the newest frame that may use it: the last submitted,
+    /// or the one being recorded (a resource dropped mid-recording may be
+    /// in its commands), and destroys it once that frame completed.
     pub(crate) fn retire(&self, g: Garbage) {
-        let frame = self.frames_submitted.load(Ordering::Acquire);
+        let submitted = self.frames_submitted.load(Ordering::Acquire);
+        let frame = submitted.max(self.frames_recording.load(Ordering::Acquire));
         let mut list = self.garbage.lock().unwrap_or_else(|e| e.into_inner());
         list.push((frame, g));
         drop(list);

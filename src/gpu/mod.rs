@@ -1,4 +1,11 @@
 //! The only place with unsafe Vulkan calls. Everything above it is safe Rust.
+//!
+//! Queues: where the device has a compute-only family (async compute),
+//! every buffer and image is created with CONCURRENT sharing between it and
+//! the graphics family, so terrain compute and graphics command buffers use
+//! the same resources without queue-family ownership transfers; ordering
+//! comes from the timeline semaphore the submitter signals and waits on
+//! ([`FrameRing`]). With one family, sharing is EXCLUSIVE.
 
 pub mod commands;
 pub mod context;
@@ -19,5 +26,5 @@ pub use pipeline::{ComputePipelineDesc, GraphicsPipelineDesc, Pipeline};
 pub use query::TimestampPool;
 pub use resources::{Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation, Sampler, SamplerDesc};
 pub use shader::{Binding, BindingKind, ShaderInfo, ShaderStage};
-pub use submit::FrameRing;
+pub use submit::{FrameCommands, FrameRing, QueueMode};
 pub use validation::{Severity, ValidationLog, ValidationMessage};

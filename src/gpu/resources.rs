@@ -74,6 +74,7 @@ pub(crate) enum Garbage {
     Sampler(vk::Sampler),
     CommandPool(vk::CommandPool),
     Fence(vk::Fence),
+    Semaphore(vk::Semaphore),
 }
 
 impl Garbage {
@@ -120,6 +121,10 @@ impl Garbage {
                 }
                 Garbage::Fence(f) => {
                     d.destroy_fence(f, None);
+                    dec(&s.live.sync_objects);
+                }
+                Garbage::Semaphore(x) => {
+                    d.destroy_semaphore(x, None);
                     dec(&s.live.sync_objects);
                 }
             }
@@ -172,8 +177,12 @@ impl Buffer {
             return Err(Error::BadInput(format!("buffer {:?} has size 0", desc.name)));
         }
         let s = &ctx.shared;
-        let info =
-            vk::BufferCreateInfo::default().size(desc.size).usage(desc.usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let families = s.concurrent_families();
+        let info = vk::BufferCreateInfo::default().size(desc.size).usage(desc.usage);
+        let info = match &families {
+            Some(f) => info.sharing_mode(vk::SharingMode::CONCURRENT).queue_family_indices(f),
+            None => info.sharing_mode(vk::SharingMode::EXCLUSIVE),
+        };
         // SAFETY: valid device and create info.
         let raw = unsafe { s.device.create_buffer(&info, None) }.map_err(vk_err("vkCreateBuffer"))?;
         // SAFETY: raw is a live buffer of this device.
@@ -253,6 +262,7 @@ pub struct Image {
     pub extent: [u32; 2],
     pub mip_levels: u32,
     pub array_layers: u32,
+    pub usage: vk::ImageUsageFlags,
     pub name: String,
     /// Layout of every subresource after the last command recorded for it
     /// (see [`Image::layout`]).
@@ -314,6 +324,11 @@ impl Image {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(desc.usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        let families = s.concurrent_families();
+        let info = match &families {
+            Some(f) => info.sharing_mode(vk::SharingMode::CONCURRENT).queue_family_indices(f),
+            None => info.sharing_mode(vk::SharingMode::EXCLUSIVE),
+        };
         // SAFETY: valid device and create info.
         let raw = unsafe { s.device.create_image(&info, None) }.map_err(vk_err("vkCreateImage"))?;
         // SAFETY: raw is a live image of this device.
@@ -375,6 +390,7 @@ impl Image {
             extent: desc.extent,
             mip_levels: desc.mip_levels,
             array_layers: desc.array_layers,
+            usage: desc.usage,
             name: desc.name.to_string(),
             layout: AtomicI32::new(vk::ImageLayout::UNDEFINED.as_raw()),
             shared: s.clone(),

@@ -1,15 +1,92 @@
 //! Submission for tools and tests (an engine submits its own command
-//! buffers): a ring of per-frame command buffers with fences, one-shot
-//! submit-and-wait, and buffer/image upload and readback built on it.
+//! buffers): a ring of per-frame command buffers with fences (one per
+//! frame, or a compute and a graphics one joined by a timeline semaphore),
+//! one-shot submit-and-wait, and buffer/image upload and readback.
 
 use super::commands::Recorder;
 use super::context::{Context, Shared};
+use super::device_info::DeviceInfo;
 use super::resources::{inc, Buffer, BufferDesc, Garbage, Image, MemoryLocation};
 use crate::error::{vk_err, Error, Result};
 use ash::vk;
+use serde::Serialize;
 use std::sync::Arc;
 
-/// A command pool with one primary command buffer and its fence.
+/// How a frame's terrain work reaches the GPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QueueMode {
+    /// One command buffer on the graphics queue.
+    Single,
+    /// The compute passes in a command buffer of their own, submitted first
+    /// to the graphics queue; the graphics command buffer waits for it on a
+    /// timeline semaphore. The async scheme on a device with one queue.
+    SplitOneQueue,
+    /// As `SplitOneQueue`, with the compute command buffer submitted to
+    /// the queue of a compute-only family, running beside graphics work.
+    AsyncCompute,
+}
+
+impl QueueMode {
+    /// Async compute where the device has a compute-only family, else one
+    /// command buffer.
+    pub fn auto(info: &DeviceInfo) -> QueueMode {
+        if info.async_compute {
+            QueueMode::AsyncCompute
+        } else {
+            QueueMode::Single
+        }
+    }
+
+    /// Two command buffers per frame.
+    pub fn is_split(self) -> bool {
+        self != QueueMode::Single
+    }
+
+    /// Whether the device can run this mode.
+    pub fn check(self, info: &DeviceInfo) -> Result<()> {
+        if self == QueueMode::AsyncCompute && !info.async_compute {
+            return Err(Error::Unsupported(format!(
+                "{} has no compute-only queue family: async compute cannot run (use single or split)",
+                info.name
+            )));
+        }
+        Ok(())
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            QueueMode::Single => "single",
+            QueueMode::SplitOneQueue => "split",
+            QueueMode::AsyncCompute => "async",
+        }
+    }
+
+    /// What ran, in words, for tools' output.
+    pub fn describe(self, info: &DeviceInfo) -> String {
+        match self {
+            QueueMode::Single => {
+                format!(
+                    "single: every pass in one command buffer on the graphics queue (family {})",
+                    info.graphics_family
+                )
+            }
+            QueueMode::SplitOneQueue => format!(
+                "split: compute passes in their own command buffer on the graphics queue (family {}), \
+                 graphics waits on a timeline semaphore",
+                info.graphics_family
+            ),
+            QueueMode::AsyncCompute => format!(
+                "async: compute passes on the compute queue (family {}), graphics (family {}) waits on a \
+                 timeline semaphore",
+                info.compute_family, info.graphics_family
+            ),
+        }
+    }
+}
+
+/// A command pool with one primary command buffer and its fence (signalled
+/// when the slot's last submission completed).
 struct Slot {
     pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
@@ -19,10 +96,13 @@ struct Slot {
 }
 
 fn create_slot(ctx: &Context, name: &str) -> Result<Slot> {
+    create_slot_on(ctx, name, ctx.shared.graphics.family)
+}
+
+fn create_slot_on(ctx: &Context, name: &str, family: u32) -> Result<Slot> {
     let s = &ctx.shared;
-    let info = vk::CommandPoolCreateInfo::default()
-        .queue_family_index(s.graphics.family)
-        .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+    let info =
+        vk::CommandPoolCreateInfo::default().queue_family_index(family).flags(vk::CommandPoolCreateFlags::TRANSIENT);
     // SAFETY: valid device and create infos; each created object is counted
     // and owned by the returned slot.
     unsafe {
@@ -74,16 +154,42 @@ fn begin(s: &Shared, slot: &Slot) -> Result<()> {
 }
 
 fn end_and_submit(s: &Shared, slot: &Slot) -> Result<()> {
+    end_and_submit_with(s, slot, s.graphics.raw, &[], &[])
+}
+
+/// Ends `slot`'s buffer and submits it to `queue` with the given timeline
+/// waits and signals; the slot's fence signals on completion.
+fn end_and_submit_with(
+    s: &Shared,
+    slot: &Slot,
+    queue: vk::Queue,
+    waits: &[vk::SemaphoreSubmitInfo],
+    signals: &[vk::SemaphoreSubmitInfo],
+) -> Result<()> {
     let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(slot.cmd)];
-    let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
+    let submit = vk::SubmitInfo2::default()
+        .command_buffer_infos(&cmds)
+        .wait_semaphore_infos(waits)
+        .signal_semaphore_infos(signals);
     let _q = s.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
     // SAFETY: the buffer is in the recording state; the fence is signalled
-    // and unused; the queue is externally synchronized by `queue_lock`.
+    // and unused; the queue is externally synchronized by `queue_lock` (one
+    // lock for both queues); the semaphores are live timeline semaphores.
     unsafe {
         s.device.end_command_buffer(slot.cmd).map_err(vk_err("vkEndCommandBuffer"))?;
         s.device.reset_fences(&[slot.fence]).map_err(vk_err("vkResetFences"))?;
-        s.device.queue_submit2(s.graphics.raw, &[submit], slot.fence).map_err(vk_err("vkQueueSubmit2"))
+        s.device.queue_submit2(queue, &[submit], slot.fence).map_err(vk_err("vkQueueSubmit2"))
     }
+}
+
+fn create_timeline(ctx: &Context, name: &str) -> Result<vk::Semaphore> {
+    let mut ty = vk::SemaphoreTypeCreateInfo::default().semaphore_type(vk::SemaphoreType::TIMELINE).initial_value(0);
+    let info = vk::SemaphoreCreateInfo::default().push_next(&mut ty);
+    // SAFETY: valid device; timeline semaphores are a required feature.
+    let sem = unsafe { ctx.shared.device.create_semaphore(&info, None) }.map_err(vk_err("vkCreateSemaphore"))?;
+    inc(&ctx.shared.live.sync_objects);
+    ctx.set_name(sem, name);
+    Ok(sem)
 }
 
 fn destroy_slot(s: &Shared, slot: &Slot) {
@@ -92,48 +198,133 @@ fn destroy_slot(s: &Shared, slot: &Slot) {
 }
 
 /// Per-frame command buffers for tools and tests, `depth` frames in flight.
+/// In a split mode each frame has a compute and a graphics command buffer:
+/// frame k's compute submission waits for timeline value 2k - 2 (frame
+/// k - 1's graphics work, which still reads what compute rewrites) and
+/// signals 2k - 1; its graphics submission waits for 2k - 1 and signals 2k.
 pub struct FrameRing {
     slots: Vec<Slot>,
+    /// Compute command buffers of a split mode, one per slot.
+    compute: Vec<Slot>,
+    timeline: Option<vk::Semaphore>,
+    mode: QueueMode,
+    /// Frames recorded through this ring (timeline values derive from it).
+    frames: u64,
     next: usize,
     shared: Arc<Shared>,
 }
 
+/// The command buffers of one frame: one, or compute and graphics.
+pub enum FrameCommands<'r, 'c> {
+    One(&'r mut Recorder<'c>),
+    Split { compute: &'r mut Recorder<'c>, graphics: &'r mut Recorder<'c> },
+}
+
 impl FrameRing {
     pub fn new(ctx: &Context, depth: usize) -> Result<Self> {
-        assert!(depth >= 1);
-        let mut slots = Vec::new();
-        for i in 0..depth {
-            match create_slot(ctx, &format!("frame_ring[{i}]")) {
-                Ok(s) => slots.push(s),
-                Err(e) => {
-                    slots.iter().for_each(|s| destroy_slot(&ctx.shared, s));
-                    return Err(e);
-                }
-            }
-        }
-        Ok(FrameRing { slots, next: 0, shared: ctx.shared.clone() })
+        Self::with_mode(ctx, depth, QueueMode::Single)
     }
 
-    /// Waits for the slot's previous frame, then records the next frame.
+    /// A ring submitting in `mode` (checked against the device).
+    pub fn with_mode(ctx: &Context, depth: usize, mode: QueueMode) -> Result<Self> {
+        assert!(depth >= 1);
+        mode.check(ctx.info())?;
+        let mut ring = FrameRing {
+            slots: Vec::new(),
+            compute: Vec::new(),
+            timeline: None,
+            mode,
+            frames: 0,
+            next: 0,
+            shared: ctx.shared.clone(),
+        };
+        // On error, Drop frees whatever was created.
+        for i in 0..depth {
+            ring.slots.push(create_slot(ctx, &format!("frame_ring[{i}]"))?);
+            if mode.is_split() {
+                let family = if mode == QueueMode::AsyncCompute {
+                    ctx.shared.compute.family
+                } else {
+                    ctx.shared.graphics.family
+                };
+                ring.compute.push(create_slot_on(ctx, &format!("frame_ring_compute[{i}]"), family)?);
+            }
+        }
+        if mode.is_split() {
+            ring.timeline = Some(create_timeline(ctx, "frame_ring_timeline")?);
+        }
+        Ok(ring)
+    }
+
+    pub fn mode(&self) -> QueueMode {
+        self.mode
+    }
+
+    /// Waits for the slot's previous frame, then records the next frame into
+    /// one command buffer (a ring in `Single` mode).
     pub fn record<'c>(&mut self, ctx: &'c Context, f: impl FnOnce(&mut Recorder<'c>) -> Result<()>) -> Result<u64> {
+        assert_eq!(self.mode, QueueMode::Single, "a split ring records with record_frame");
+        self.record_frame(ctx, |cmds| match cmds {
+            FrameCommands::One(rec) => f(rec),
+            FrameCommands::Split { .. } => unreachable!(),
+        })
+    }
+
+    /// Waits for the slot's previous frame, then records the next frame into
+    /// the command buffers of the ring's mode and submits them.
+    pub fn record_frame<'c>(
+        &mut self,
+        ctx: &'c Context,
+        f: impl FnOnce(FrameCommands<'_, 'c>) -> Result<()>,
+    ) -> Result<u64> {
         let s = &ctx.shared;
-        let slot = &mut self.slots[self.next];
-        wait_fence(s, slot.fence)?;
-        ctx.frame_completed(slot.frame);
-        begin(s, slot)?;
+        let i = self.next;
+        wait_fence(s, self.slots[i].fence)?;
+        if let Some(c) = self.compute.get(i) {
+            wait_fence(s, c.fence)?;
+        }
+        ctx.frame_completed(self.slots[i].frame);
+        // Resources dropped while recording wait for this frame too.
+        ctx.frame_recording();
+        begin(s, &self.slots[i])?;
         // SAFETY: the slot's buffer was just begun and is used by nobody else.
-        let mut rec = unsafe { Recorder::from_raw(ctx, slot.cmd) };
-        f(&mut rec)?;
-        end_and_submit(s, slot)?;
-        slot.frame = ctx.frame_submitted();
-        let frame = slot.frame;
+        let mut graphics = unsafe { Recorder::from_raw(ctx, self.slots[i].cmd) };
+        match self.compute.get(i) {
+            None => f(FrameCommands::One(&mut graphics))?,
+            Some(c) => {
+                begin(s, c)?;
+                // SAFETY: as above, for the slot's compute buffer.
+                let mut compute = unsafe { Recorder::from_raw(ctx, c.cmd) };
+                f(FrameCommands::Split { compute: &mut compute, graphics: &mut graphics })?;
+            }
+        }
+        self.frames += 1;
+        let k = self.frames;
+        if let (Some(c), Some(timeline)) = (self.compute.get(i), self.timeline) {
+            let info = |value| {
+                vk::SemaphoreSubmitInfo::default()
+                    .semaphore(timeline)
+                    .value(value)
+                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            };
+            let queue = if self.mode == QueueMode::AsyncCompute { s.compute.raw } else { s.graphics.raw };
+            end_and_submit_with(s, c, queue, &[info(2 * k - 2)], &[info(2 * k - 1)])?;
+            end_and_submit_with(s, &self.slots[i], s.graphics.raw, &[info(2 * k - 1)], &[info(2 * k)])?;
+        } else {
+            end_and_submit(s, &self.slots[i])?;
+        }
+        let frame = ctx.frame_submitted();
+        self.slots[i].frame = frame;
+        if let Some(c) = self.compute.get_mut(i) {
+            c.frame = frame;
+        }
         self.next = (self.next + 1) % self.slots.len();
         Ok(frame)
     }
 
     /// Waits for every frame of the ring.
     pub fn wait_all(&self, ctx: &Context) -> Result<()> {
-        for slot in &self.slots {
+        for slot in self.slots.iter().chain(&self.compute) {
             wait_fence(&ctx.shared, slot.fence)?;
             ctx.frame_completed(slot.frame);
         }
@@ -144,9 +335,12 @@ impl FrameRing {
 impl Drop for FrameRing {
     fn drop(&mut self) {
         // Pending frames must finish before their buffers' pools go.
-        for slot in &self.slots {
+        for slot in self.slots.iter().chain(&self.compute) {
             let _ = wait_fence(&self.shared, slot.fence);
             destroy_slot(&self.shared, slot);
+        }
+        if let Some(t) = self.timeline {
+            self.shared.retire(Garbage::Semaphore(t));
         }
     }
 }

@@ -54,6 +54,35 @@ impl Recorder<'_> {
         };
     }
 
+    /// Copies `size` bytes from `src` at `src_offset` to `dst` at `dst_offset`.
+    pub fn copy_buffer_region(&mut self, src: &Buffer, src_offset: u64, dst: &Buffer, dst_offset: u64, size: u64) {
+        self.outside_rendering("copy_buffer_region");
+        assert!(
+            src_offset + size <= src.size && dst_offset + size <= dst.size,
+            "copy of {size} bytes overruns {} or {}",
+            src.name,
+            dst.name
+        );
+        // SAFETY: live buffers, ranges checked.
+        unsafe {
+            self.d().cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[vk::BufferCopy { src_offset, dst_offset, size }])
+        };
+    }
+
+    /// Makes earlier transfer writes visible to host reads once the
+    /// submission has completed (readback rings).
+    pub fn transfer_to_host_barrier(&mut self) {
+        self.outside_rendering("transfer_to_host_barrier");
+        let mb = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+            .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+        let dep = vk::DependencyInfo::default().memory_barriers(&mb);
+        // SAFETY: recording state by construction; outside rendering (checked).
+        unsafe { self.d().cmd_pipeline_barrier2(self.cmd, &dep) };
+    }
+
     /// Copies one mip of one layer of `img` (in TRANSFER_SRC_OPTIMAL), tightly packed.
     pub fn copy_image_to_buffer(&mut self, img: &Image, mip: u32, layer: u32, dst: &Buffer) {
         self.outside_rendering("copy_image_to_buffer");

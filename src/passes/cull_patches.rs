@@ -5,12 +5,14 @@
 //! stitches LOD seams (4-bit delta per edge from the LOD map) and writes the
 //! visible patch list whose header is the indexed-indirect draw of
 //! `terrain_geometry`, with per-stage counters. With holes built, patches
-//! that have some holes go to a second list drawn by `terrain_holes`.
+//! that have some holes go to a second list drawn by `terrain_holes`. With
+//! occlusion built (variant OCCLUSION) this is phase 1: only patches
+//! visible last frame are listed; `cull_occluded` handles the rest.
 
 use crate::error::Result;
 use crate::gpu::{
-    vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
-    SamplerDesc,
+    vk, Binding, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource,
+    Sampler, SamplerDesc,
 };
 use crate::passes::lod_map::LodMap;
 use crate::passes::traverse::Traverse;
@@ -35,18 +37,22 @@ pub struct CullStages {
     pub frustum: bool,
     pub cone: bool,
     pub hole: bool,
+    /// Two-phase occlusion (where built); off, phase 1 draws every survivor
+    /// and the occlusion passes are skipped.
+    pub occlusion: bool,
 }
 
 impl CullStages {
-    pub const ALL: CullStages = CullStages { frustum: true, cone: true, hole: true };
-    pub const NONE: CullStages = CullStages { frustum: false, cone: false, hole: false };
+    pub const ALL: CullStages = CullStages { frustum: true, cone: true, hole: true, occlusion: true };
+    pub const NONE: CullStages = CullStages { frustum: false, cone: false, hole: false, occlusion: false };
 
     /// Bits of `CullPush::stages`.
-    fn bits(self) -> u32 {
+    pub(crate) fn bits(self) -> u32 {
         let bit = |on: bool, b: u32| if on { b } else { 0 };
         bit(self.frustum, k::CULL_STAGE_FRUSTUM)
             | bit(self.cone, k::CULL_STAGE_CONE)
             | bit(self.hole, k::CULL_STAGE_HOLE)
+            | bit(self.occlusion, k::CULL_STAGE_OCCLUSION)
     }
 }
 
@@ -69,7 +75,9 @@ pub struct PatchListHeader {
     pub after_frustum: u32,
     pub after_cone: u32,
     pub after_hole: u32,
-    pub pad: [u32; 3],
+    /// Phase 2 only: patches the depth pyramid left visible.
+    pub after_occlusion: u32,
+    pub pad: [u32; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<PatchListHeader>() == structs::PATCH_LIST_HEADER);
@@ -79,7 +87,9 @@ const _: () = assert!(std::mem::size_of::<PatchListHeader>() == structs::PATCH_L
 pub struct CullPush {
     pub stages: u32,
     pub capacity: u32,
-    pub pad: [u32; 2],
+    /// Phase 2: the depth target's size.
+    pub depth_w: u32,
+    pub depth_h: u32,
 }
 
 /// Patch counts after each stage of one frame.
@@ -90,10 +100,112 @@ pub struct CullCounters {
     pub after_frustum: u32,
     pub after_cone: u32,
     pub after_hole: u32,
-    /// Instances of both draws.
+    /// Instances of every draw (both lists, both phases).
     pub drawn: u32,
     /// Of those, patches with some holes (drawn by `terrain_holes`).
     pub drawn_with_holes: u32,
+    /// Occlusion (0 without it): patches drawn in phase 1 (visible last
+    /// frame), tested against the depth pyramid in phase 2 (the rest of
+    /// the survivors) and drawn in phase 2 (those it left visible).
+    pub drawn_phase1: u32,
+    pub occlusion_tested: u32,
+    pub drawn_phase2: u32,
+}
+
+impl CullCounters {
+    /// Counters from the list headers: phase 1's (solid, holes) and, with
+    /// occlusion, phase 2's; instance counts past `capacity` were not listed.
+    pub fn from_headers(
+        early: [Option<PatchListHeader>; 2],
+        late: Option<[Option<PatchListHeader>; 2]>,
+        capacity: u32,
+    ) -> CullCounters {
+        let drawn = |h: &Option<PatchListHeader>| h.map_or(0, |h| h.instance_count.min(capacity));
+        let e = early[0].unwrap_or_default();
+        let mut c = CullCounters {
+            patches_in: e.patches_in,
+            after_frustum: e.after_frustum,
+            after_cone: e.after_cone,
+            after_hole: e.after_hole,
+            drawn: drawn(&early[0]) + drawn(&early[1]),
+            drawn_with_holes: drawn(&early[1]),
+            ..CullCounters::default()
+        };
+        if let Some(late) = late {
+            c.drawn_phase1 = c.drawn;
+            c.drawn_phase2 = drawn(&late[0]) + drawn(&late[1]);
+            c.occlusion_tested = late[0].map_or(0, |h| h.after_hole);
+            c.drawn += c.drawn_phase2;
+            c.drawn_with_holes += drawn(&late[1]);
+        }
+        c
+    }
+}
+
+/// A patch list and, with holes, the list of patches with some holes; each
+/// a header (indexed-indirect draw args + counters) then the records.
+pub struct PatchLists {
+    pub list: Buffer,
+    pub hole_list: Option<Buffer>,
+    pub capacity: u32,
+    index_count: u32,
+}
+
+impl PatchLists {
+    pub(crate) fn new(ctx: &Context, names: [&str; 2], capacity: u32, holes: bool, index_count: u32) -> Result<Self> {
+        let list_buffer = |name| {
+            Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name,
+                    size: (structs::PATCH_LIST_HEADER + capacity as usize * 8) as u64,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::INDIRECT_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_DST
+                        | vk::BufferUsageFlags::TRANSFER_SRC,
+                    location: MemoryLocation::GpuOnly,
+                },
+            )
+        };
+        let list = list_buffer(names[0])?;
+        let hole_list = if holes { Some(list_buffer(names[1])?) } else { None };
+        Ok(PatchLists { list, hole_list, capacity, index_count })
+    }
+
+    /// Resets both headers (draw args with zero instances, counters zero).
+    pub(crate) fn reset(&self, rec: &mut Recorder) {
+        let header = PatchListHeader { index_count: self.index_count, ..PatchListHeader::default() };
+        rec.update_buffer(&self.list, 0, bytemuck::bytes_of(&header));
+        if let Some(holes) = &self.hole_list {
+            rec.update_buffer(holes, 0, bytemuck::bytes_of(&header));
+        }
+    }
+
+    /// Both headers of the last frame (tests, CLI): waits.
+    pub fn read_headers(&self, ctx: &Context) -> Result<[Option<PatchListHeader>; 2]> {
+        let holes = match &self.hole_list {
+            Some(b) => Some(read_header(ctx, b)?),
+            None => None,
+        };
+        Ok([Some(read_header(ctx, &self.list)?), holes])
+    }
+
+    /// The last frame's patches of both lists (tests): waits.
+    pub fn read_patches(&self, ctx: &Context) -> Result<Vec<PatchRecord>> {
+        let mut out = Vec::new();
+        for list in std::iter::once(&self.list).chain(&self.hole_list) {
+            let bytes = ctx.read_buffer(list)?;
+            let h: PatchListHeader = bytemuck::pod_read_unaligned(&bytes[..structs::PATCH_LIST_HEADER]);
+            let n = h.instance_count.min(self.capacity) as usize;
+            let raw = &bytes[structs::PATCH_LIST_HEADER..structs::PATCH_LIST_HEADER + n * 8];
+            out.extend(raw.chunks_exact(8).map(|c| PatchRecord::unpack(bytemuck::pod_read_unaligned(c))));
+        }
+        Ok(out)
+    }
+
+    pub fn memory(&self) -> impl Iterator<Item = &Buffer> {
+        std::iter::once(&self.list).chain(&self.hole_list)
+    }
 }
 
 /// A visible patch as the GPU wrote it.
@@ -110,7 +222,7 @@ pub struct PatchRecord {
 }
 
 impl PatchRecord {
-    fn unpack([n, w]: [u32; 2]) -> Self {
+    pub(crate) fn unpack([n, w]: [u32; 2]) -> Self {
         let node = node_from_ref(n);
         let field = |shift: u32, bits: u32| (w >> shift) & ((1 << bits) - 1);
         let delta = |edge: u32| field(k::PATCH_DELTA_SHIFT + k::PATCH_DELTA_BITS * edge, k::PATCH_DELTA_BITS) as u8;
@@ -125,25 +237,71 @@ impl PatchRecord {
     }
 }
 
-/// Which optional stages the pipeline is built with (effects `cone_cull`
-/// and `holes`); a stage not built has no code, binding or atlas.
+/// Which optional stages the pipeline is built with (effects `cone_cull`,
+/// `holes` and `occlusion`); a stage not built has no code, binding or atlas.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CullBuild {
     pub cone: bool,
     pub holes: bool,
+    /// Phase 1 of two-phase occlusion: list only patches visible last frame.
+    pub occlusion: bool,
+}
+
+/// The inputs both culling phases bind, in the order of `CULL_INPUTS`.
+pub(crate) struct CullInputs<'a> {
+    pub traverse: &'a Traverse,
+    pub tree: &'a GpuQuadtree,
+    pub lod_map: &'a LodMap,
+    pub view: &'a Buffer,
+}
+
+impl<'a> CullInputs<'a> {
+    /// Bindings of patch_cull.glsl, given each shader's own reflected
+    /// bindings [traverse_out, view, lod_map, patch_min_max, nearest,
+    /// patch_list, patch_cones, patch_holes, hole_list].
+    pub(crate) fn bindings(
+        &self,
+        b: [Binding; 9],
+        build: CullBuild,
+        sampler: &Sampler,
+        lists: &'a PatchLists,
+    ) -> Vec<(Binding, Resource<'a>)> {
+        let mut out = vec![
+            (b[0], Resource::Buffer(&self.traverse.output)),
+            (b[1], Resource::Buffer(self.view)),
+            (b[2], Resource::Image(&self.lod_map.image, vk::ImageLayout::GENERAL)),
+            (b[3], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_MIN_MAX), ATLAS_LAYOUT)),
+            (b[4], Resource::Sampler(sampler.raw())),
+            (b[5], Resource::Buffer(&lists.list)),
+        ];
+        if build.cone {
+            out.push((b[6], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_CONES), ATLAS_LAYOUT)));
+        }
+        if let Some(holes) = &lists.hole_list {
+            out.push((b[7], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_HOLES), ATLAS_LAYOUT)));
+            out.push((b[8], Resource::Buffer(holes)));
+        }
+        out
+    }
+}
+
+pub(crate) fn nearest_sampler(ctx: &Context, name: &str) -> Result<Sampler> {
+    Sampler::new(
+        ctx,
+        &SamplerDesc { name, filter: vk::Filter::NEAREST, address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE },
+    )
+}
+
+pub(crate) fn spec_constants() -> [(u32, u32); 2] {
+    [(sh::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)]
 }
 
 pub struct CullPatches {
     pipeline: Pipeline,
     sampler: Sampler,
-    /// Header (indexed-indirect draw args + counters) then the patch list.
-    pub list: Buffer,
-    /// Patches with some holes (header: the draw args of `terrain_holes`);
-    /// only when holes are built.
-    pub hole_list: Option<Buffer>,
+    /// Phase 1's lists (all visible patches without occlusion).
+    pub lists: PatchLists,
     pub build: CullBuild,
-    capacity: u32,
-    index_count: u32,
 }
 
 impl CullPatches {
@@ -154,36 +312,17 @@ impl CullPatches {
     pub fn new(ctx: &Context, traverse: &Traverse, index_count: u32, build: CullBuild) -> Result<Self> {
         assert_eq!(sh::WORKGROUP_SIZE[0] as usize, PATCHES_PER_NODE, "one thread per patch of a node");
         let capacity = traverse.final_capacity() * PATCHES_PER_NODE as u32;
-        let list_buffer = |name| {
-            Buffer::new(
-                ctx,
-                &BufferDesc {
-                    name,
-                    size: (structs::PATCH_LIST_HEADER + capacity as usize * 8) as u64,
-                    usage: vk::BufferUsageFlags::STORAGE_BUFFER
-                        | vk::BufferUsageFlags::INDIRECT_BUFFER
-                        | vk::BufferUsageFlags::TRANSFER_DST
-                        | vk::BufferUsageFlags::TRANSFER_SRC,
-                    location: MemoryLocation::GpuOnly,
-                },
-            )
-        };
-        let list = list_buffer("patch_list")?;
-        let hole_list = if build.holes { Some(list_buffer("hole_patch_list")?) } else { None };
-        let sampler = Sampler::new(
-            ctx,
-            &SamplerDesc {
-                name: "cull_patches_sampler",
-                filter: vk::Filter::NEAREST,
-                address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
-            },
-        )?;
-        let spec = [(sh::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)];
+        let lists = PatchLists::new(ctx, ["patch_list", "hole_patch_list"], capacity, build.holes, index_count)?;
+        let sampler = nearest_sampler(ctx, "cull_patches_sampler")?;
         let bit = |on: bool, b: u32| if on { b } else { 0 };
-        let shader = sh::variant(bit(build.cone, sh::VARIANT_CONE_CULL) | bit(build.holes, sh::VARIANT_HOLE_CULL));
-        let desc = ComputePipelineDesc { name: Self::NAME, shader, specialization: &spec };
+        let shader = sh::variant(
+            bit(build.cone, sh::VARIANT_CONE_CULL)
+                | bit(build.holes, sh::VARIANT_HOLE_CULL)
+                | bit(build.occlusion, sh::VARIANT_OCCLUSION),
+        );
+        let desc = ComputePipelineDesc { name: Self::NAME, shader, specialization: &spec_constants() };
         let pipeline = Pipeline::compute(ctx, &desc)?;
-        Ok(CullPatches { pipeline, sampler, list, hole_list, build, capacity, index_count })
+        Ok(CullPatches { pipeline, sampler, lists, build })
     }
 
     pub fn pipeline_label(&self) -> &str {
@@ -192,7 +331,8 @@ impl CullPatches {
 
     /// Writes this frame's view (`view_bytes`, a TerrainView, into `view`)
     /// and resets the draw args and counters behind one barrier, then culls
-    /// the patches of every node in `traverse`'s list.
+    /// the patches of every node in `traverse`'s list. `visibility`: last
+    /// frame's bits, with occlusion built.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -203,70 +343,38 @@ impl CullPatches {
         view: &Buffer,
         view_bytes: &[u8],
         stages: CullStages,
+        visibility: Option<&Buffer>,
     ) {
-        let header = PatchListHeader { index_count: self.index_count, ..PatchListHeader::default() };
+        assert_eq!(visibility.is_some(), self.build.occlusion, "visibility bits exactly with occlusion");
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         rec.update_buffer(view, 0, view_bytes);
-        rec.update_buffer(&self.list, 0, bytemuck::bytes_of(&header));
-        if let Some(holes) = &self.hole_list {
-            rec.update_buffer(holes, 0, bytemuck::bytes_of(&header));
-        }
+        self.lists.reset(rec);
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         rec.bind_pipeline(&self.pipeline);
-        let mut bindings = vec![
-            (sh::TRAVERSE_OUT, Resource::Buffer(&traverse.output)),
-            (sh::VIEW, Resource::Buffer(view)),
-            (sh::LOD_MAP, Resource::Image(&lod_map.image, vk::ImageLayout::GENERAL)),
-            (sh::PATCH_MIN_MAX, Resource::Image(tree.required_atlas(ATLAS_PATCH_MIN_MAX), ATLAS_LAYOUT)),
-            (sh::NEAREST, Resource::Sampler(self.sampler.raw())),
-            (sh::PATCH_LIST, Resource::Buffer(&self.list)),
+        let inputs = CullInputs { traverse, tree, lod_map, view };
+        let b = [
+            sh::TRAVERSE_OUT,
+            sh::VIEW,
+            sh::LOD_MAP,
+            sh::PATCH_MIN_MAX,
+            sh::NEAREST,
+            sh::PATCH_LIST,
+            sh::PATCH_CONES,
+            sh::PATCH_HOLES,
+            sh::HOLE_LIST,
         ];
-        if self.build.cone {
-            bindings.push((sh::PATCH_CONES, Resource::Image(tree.required_atlas(ATLAS_PATCH_CONES), ATLAS_LAYOUT)));
-        }
-        if let Some(holes) = &self.hole_list {
-            bindings.push((sh::PATCH_HOLES, Resource::Image(tree.required_atlas(ATLAS_PATCH_HOLES), ATLAS_LAYOUT)));
-            bindings.push((sh::HOLE_LIST, Resource::Buffer(holes)));
+        let mut bindings = inputs.bindings(b, self.build, &self.sampler, &self.lists);
+        if let Some(v) = visibility {
+            bindings.push((sh::VISIBILITY, Resource::Buffer(v)));
         }
         rec.push_descriptors(&self.pipeline, &bindings);
-        rec.push_constants(&self.pipeline, &CullPush { stages: stages.bits(), capacity: self.capacity, pad: [0; 2] });
+        let push = CullPush { stages: stages.bits(), capacity: self.lists.capacity, depth_w: 0, depth_h: 0 };
+        rec.push_constants(&self.pipeline, &push);
         rec.dispatch_indirect(&traverse.output, 0);
         rec.barrier(
             vk::PipelineStageFlags2::COMPUTE_SHADER,
             vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::ALL_COMMANDS,
         );
-    }
-
-    /// The last frame's counters (tests, CLI after the frames): waits.
-    pub fn read_counters(&self, ctx: &Context) -> Result<CullCounters> {
-        let h = read_header(ctx, &self.list)?;
-        let holes = match &self.hole_list {
-            Some(b) => read_header(ctx, b)?.instance_count.min(self.capacity),
-            None => 0,
-        };
-        let solid = h.instance_count.min(self.capacity);
-        Ok(CullCounters {
-            patches_in: h.patches_in,
-            after_frustum: h.after_frustum,
-            after_cone: h.after_cone,
-            after_hole: h.after_hole,
-            drawn: solid + holes,
-            drawn_with_holes: holes,
-        })
-    }
-
-    /// The last frame's visible patches of both lists, sorted (tests): waits.
-    pub fn read_patches(&self, ctx: &Context) -> Result<Vec<PatchRecord>> {
-        let mut out = Vec::new();
-        for list in std::iter::once(&self.list).chain(&self.hole_list) {
-            let bytes = ctx.read_buffer(list)?;
-            let h: PatchListHeader = bytemuck::pod_read_unaligned(&bytes[..structs::PATCH_LIST_HEADER]);
-            let n = h.instance_count.min(self.capacity) as usize;
-            let raw = &bytes[structs::PATCH_LIST_HEADER..structs::PATCH_LIST_HEADER + n * 8];
-            out.extend(raw.chunks_exact(8).map(|c| PatchRecord::unpack(bytemuck::pod_read_unaligned(c))));
-        }
-        out.sort();
-        Ok(out)
     }
 }
 

@@ -1,6 +1,8 @@
 //! One pass per file; the pass, its shader and its timer label share a name.
 
+pub mod cull_occluded;
 pub mod cull_patches;
+pub mod hiz_build;
 pub mod lod_map;
 pub mod prefix_sum;
 pub mod quadtree_update;

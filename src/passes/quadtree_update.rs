@@ -3,7 +3,7 @@
 //! dispatch per frame adds and removes nodes).
 
 use crate::error::Result;
-use crate::gpu::{vk, Binding, ComputePipelineDesc, Context, Pipeline, Recorder, Resource};
+use crate::gpu::{vk, Binding, Buffer, ComputePipelineDesc, Context, Pipeline, Recorder, Resource};
 use crate::shaders::quadtree_update as sh;
 use crate::terrain::gpu_quadtree::GpuQuadtree;
 
@@ -29,14 +29,18 @@ const NODE_LODS: [Binding; 10] = [
 
 pub struct QuadtreeUpdatePass {
     pipeline: Pipeline,
+    occlusion: bool,
 }
 
 impl QuadtreeUpdatePass {
     pub const NAME: &'static str = sh::PASS;
 
-    pub fn new(ctx: &Context) -> Result<Self> {
-        let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &[] };
-        Ok(QuadtreeUpdatePass { pipeline: Pipeline::compute(ctx, &desc)? })
+    /// `occlusion`: variant OCCLUSION, which clears a changed slot's
+    /// visibility bits.
+    pub fn new(ctx: &Context, occlusion: bool) -> Result<Self> {
+        let shader = sh::variant(if occlusion { sh::VARIANT_OCCLUSION } else { 0 });
+        let desc = ComputePipelineDesc { name: Self::NAME, shader, specialization: &[] };
+        Ok(QuadtreeUpdatePass { pipeline: Pipeline::compute(ctx, &desc)?, occlusion })
     }
 
     pub fn pipeline_label(&self) -> &str {
@@ -45,7 +49,9 @@ impl QuadtreeUpdatePass {
 
     /// Uploads the frame's payloads and applies its changes; the results are
     /// visible to every later command. Returns the number of writes.
-    pub fn record(&self, rec: &mut Recorder, tree: &mut GpuQuadtree) -> Result<u32> {
+    /// `visibility`: occlusion's bits, exactly when built with occlusion.
+    pub fn record(&self, rec: &mut Recorder, tree: &mut GpuQuadtree, visibility: Option<&Buffer>) -> Result<u32> {
+        assert_eq!(visibility.is_some(), self.occlusion, "visibility bits exactly with occlusion");
         let count = tree.prepare_frame(rec)?;
         let updates = tree.current_updates();
         if count > 0 {
@@ -59,6 +65,9 @@ impl QuadtreeUpdatePass {
                 // LODs past the world's count are never written: bind mip 0.
                 let mip = if (lod as u32) < mips { lod as u32 } else { 0 };
                 bindings.push((*b, Resource::ImageMip(&tree.node_texture, mip, vk::ImageLayout::GENERAL)));
+            }
+            if let Some(v) = visibility {
+                bindings.push((sh::VISIBILITY, Resource::Buffer(v)));
             }
             rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::COMPUTE_SHADER);
             rec.bind_pipeline(&self.pipeline);

@@ -11,7 +11,6 @@ use crate::gpu::{
     vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, MemoryLocation,
     Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo,
 };
-use crate::passes::cull_patches::CullPatches;
 use crate::shaders::{terrain_geometry_frag as fs, terrain_geometry_vert as vs};
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
 use crate::terrain::patch_grid::diamond_indices;
@@ -144,21 +143,23 @@ impl TerrainGeometry {
         rec.push_descriptors(pipeline, &bindings);
     }
 
-    /// Clears the targets and draws `cull`'s patch list.
+    /// Draws patch list `list` (phase 1's, after clearing the targets, or
+    /// phase 2's over them).
     pub fn record(
         &self,
         rec: &mut Recorder,
         targets: &RenderTargets,
         view: &Buffer,
-        cull: &CullPatches,
+        list: &Buffer,
         tree: &GpuQuadtree,
+        clear: bool,
     ) {
         rec.begin_rendering(
-            &[ColorTarget { image: targets.color, clear: Some(targets.clear) }],
-            Some(DepthTarget { image: targets.depth, clear: Some(0.0) }),
+            &[ColorTarget { image: targets.color, clear: clear.then_some(targets.clear) }],
+            Some(DepthTarget { image: targets.depth, clear: clear.then_some(0.0) }),
         );
-        self.bind(rec, &self.pipeline, view, &cull.list, tree, &[]);
-        rec.draw_indexed_indirect(&self.indices, &cull.list, 0);
+        self.bind(rec, &self.pipeline, view, list, tree, &[]);
+        rec.draw_indexed_indirect(&self.indices, list, 0);
         rec.end_rendering();
     }
 }

@@ -7,7 +7,7 @@
 
 use crate::error::Result;
 use crate::gpu::{ColorTarget, Context, DepthTarget, Pipeline, Recorder, Resource};
-use crate::passes::cull_patches::CullPatches;
+use crate::passes::cull_patches::PatchLists;
 use crate::passes::terrain_geometry::{terrain_pipeline, RenderTargets, TerrainGeometry};
 use crate::shaders::terrain_holes_vert as vs;
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_LAYOUT};
@@ -38,17 +38,18 @@ impl TerrainHoles {
         &self.pipeline.label
     }
 
-    /// Draws `cull`'s hole list over the targets (kept, not cleared).
+    /// Draws a hole list (phase 1's or phase 2's) over the targets (kept,
+    /// not cleared).
     pub fn record(
         &self,
         rec: &mut Recorder,
         targets: &RenderTargets,
         view: &crate::gpu::Buffer,
-        cull: &CullPatches,
+        lists: &PatchLists,
         geometry: &TerrainGeometry,
         tree: &GpuQuadtree,
     ) {
-        let list = cull.hole_list.as_ref().expect("terrain_holes is built only with the hole list");
+        let list = lists.hole_list.as_ref().expect("terrain_holes is built only with the hole list");
         rec.begin_rendering(
             &[ColorTarget { image: targets.color, clear: None }],
             Some(DepthTarget { image: targets.depth, clear: None }),

@@ -48,6 +48,8 @@ pub struct TraversePush {
 pub struct TraverseHeader {
     pub dispatch: [u32; 3],
     pub node_count: u32,
+    /// Nodes kept unrefined (roots included, never dropped) because a level
+    /// list was full.
     pub overflow: u32,
     pub missing_roots: u32,
     pub pad: [u32; 2],

@@ -2,6 +2,7 @@
 //! its inputs: tests and benches compare each pass against its twin here.
 
 pub mod lod_map;
+pub mod occlusion;
 pub mod sector_data;
 pub mod traverse;
 

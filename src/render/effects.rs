@@ -27,7 +27,8 @@ pub enum Effect {
     Holes,
     /// Backface-cone stage of `cull_patches` and the per-patch cone atlas.
     ConeCull,
-    /// Two-phase Hi-Z occlusion culling.
+    /// Two-phase Hi-Z occlusion culling: `hiz_build`, `cull_occluded`, the
+    /// phase 2 draws, the visibility bits and the depth pyramid.
     Occlusion,
     /// Tri-planar cliff shading.
     Cliffs,
@@ -83,19 +84,18 @@ impl Effect {
 
     /// On when a scene does not name it.
     pub fn default_on(self) -> bool {
-        matches!(self, Effect::Holes | Effect::ConeCull | Effect::Lighting)
+        matches!(self, Effect::Holes | Effect::ConeCull | Effect::Occlusion | Effect::Lighting)
     }
 
     /// Why this version cannot run it, for effects not implemented yet: a
     /// scene may ask for them (and is checked), the report says they are off.
     pub fn unavailable(self) -> Option<&'static str> {
         match self {
-            Effect::Occlusion => Some("not implemented in this version (two-phase Hi-Z occlusion is issue [E])"),
             Effect::Cliffs | Effect::Splat | Effect::VirtualTexture => {
                 Some("not implemented in this version (G-buffer tile shading is issue [G])")
             }
             Effect::Decals | Effect::Grass | Effect::Shadows => Some("not implemented in this version"),
-            Effect::Holes | Effect::ConeCull | Effect::Lighting | Effect::Queries => None,
+            Effect::Holes | Effect::ConeCull | Effect::Occlusion | Effect::Lighting | Effect::Queries => None,
         }
     }
 

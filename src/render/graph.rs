@@ -1,14 +1,19 @@
 //! The frame's pass graph, built from the effect decisions: every pass the
-//! renderer knows, in frame order, with the effect it exists for. It is a
-//! chain: each pass reads what the passes before it wrote, and the passes
-//! end in full barriers, so order is the only edge. A pass whose effect is
-//! off is not built; each frame logs which built passes were recorded and
-//! which were skipped because the CPU knew they had nothing to do.
+//! renderer knows, in frame order, with the effects it exists for and the
+//! queue it belongs to. It is a chain: each pass reads what the passes
+//! before it wrote, and the passes end in full barriers, so order is the
+//! only edge; where compute is split off, the compute passes come first and
+//! the graphics command buffer waits for them (a timeline semaphore). A pass
+//! whose effect is off is not built; each frame logs which built passes
+//! were recorded and which were skipped because the CPU knew they had
+//! nothing to do. Occlusion culling draws twice: the drawing passes appear
+//! again as phase 2 after `hiz_build` and `cull_occluded`.
 
 use crate::frame::QueueKind;
 use crate::passes::{
-    cull_patches::CullPatches, lod_map::LodMap, quadtree_update::QuadtreeUpdatePass, sector_data::SectorData,
-    terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
+    cull_occluded::CullOccluded, cull_patches::CullPatches, hiz_build::HizBuild, lod_map::LodMap,
+    quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, terrain_geometry::TerrainGeometry,
+    terrain_holes::TerrainHoles, traverse::Traverse,
 };
 use crate::render::effects::{Effect, EffectDecision};
 use serde::Serialize;
@@ -23,10 +28,15 @@ pub enum FramePass {
     CullPatches,
     TerrainGeometry,
     TerrainHoles,
+    HizBuild,
+    CullOccluded,
+    /// Phase 2 of occlusion culling: the patches the pyramid left visible.
+    TerrainGeometryLate,
+    TerrainHolesLate,
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 7] = [
+    pub const ALL: [FramePass; 11] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -34,6 +44,10 @@ impl FramePass {
         FramePass::CullPatches,
         FramePass::TerrainGeometry,
         FramePass::TerrainHoles,
+        FramePass::HizBuild,
+        FramePass::CullOccluded,
+        FramePass::TerrainGeometryLate,
+        FramePass::TerrainHolesLate,
     ];
 
     /// Pass, shader and timer label (from the shader bank).
@@ -44,24 +58,45 @@ impl FramePass {
             FramePass::LodMap => LodMap::NAME,
             FramePass::SectorData => SectorData::NAME,
             FramePass::CullPatches => CullPatches::NAME,
-            FramePass::TerrainGeometry => TerrainGeometry::NAME,
-            FramePass::TerrainHoles => TerrainHoles::NAME,
+            FramePass::TerrainGeometry | FramePass::TerrainGeometryLate => TerrainGeometry::NAME,
+            FramePass::TerrainHoles | FramePass::TerrainHolesLate => TerrainHoles::NAME,
+            FramePass::HizBuild => HizBuild::NAME,
+            FramePass::CullOccluded => CullOccluded::NAME,
         }
     }
 
+    /// Phase 2 of a drawing pass.
+    pub fn late(self) -> bool {
+        matches!(self, FramePass::TerrainGeometryLate | FramePass::TerrainHolesLate)
+    }
+
+    /// Timer and debug label: the name, marked in phase 2.
+    pub fn label(self) -> String {
+        crate::frame::pass_label(self.name(), self.late())
+    }
+
+    /// The queue the pass belongs to when compute is split off: phase 2
+    /// reads phase 1's depth, so the pyramid and its culling stay with the
+    /// graphics work.
     pub fn queue(self) -> QueueKind {
         match self {
-            FramePass::TerrainGeometry | FramePass::TerrainHoles => QueueKind::Graphics,
-            _ => QueueKind::Compute,
+            FramePass::QuadtreeUpdate
+            | FramePass::Traverse
+            | FramePass::LodMap
+            | FramePass::SectorData
+            | FramePass::CullPatches => QueueKind::Compute,
+            _ => QueueKind::Graphics,
         }
     }
 
-    /// The effect the pass exists for (`None`: every scene needs it).
-    pub fn effect(self) -> Option<Effect> {
+    /// The effects the pass exists for, all needed (empty: every scene).
+    pub fn effects(self) -> &'static [Effect] {
         match self {
-            FramePass::SectorData => Some(Effect::Queries),
-            FramePass::TerrainHoles => Some(Effect::Holes),
-            _ => None,
+            FramePass::SectorData => &[Effect::Queries],
+            FramePass::TerrainHoles => &[Effect::Holes],
+            FramePass::HizBuild | FramePass::CullOccluded | FramePass::TerrainGeometryLate => &[Effect::Occlusion],
+            FramePass::TerrainHolesLate => &[Effect::Holes, Effect::Occlusion],
+            _ => &[],
         }
     }
 }
@@ -70,12 +105,15 @@ impl FramePass {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum Skip {
     NothingToUpload,
+    /// Occlusion is built but switched off this frame (`CullStages`).
+    OcclusionOff,
 }
 
 impl Skip {
     pub fn reason(self) -> &'static str {
         match self {
             Skip::NothingToUpload => "no node arrived or left this frame (known on the CPU)",
+            Skip::OcclusionOff => "occlusion switched off this frame (culling stages)",
         }
     }
 }
@@ -129,7 +167,8 @@ impl PassGraph {
         let nodes = FramePass::ALL
             .into_iter()
             .map(|pass| {
-                let decision = pass.effect().and_then(|e| decisions.iter().find(|d| d.effect == e));
+                let decision =
+                    pass.effects().iter().filter_map(|e| decisions.iter().find(|d| d.effect == *e)).find(|d| !d.on);
                 match decision {
                     Some(d) if !d.on => PassNode {
                         pass,

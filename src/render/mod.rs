@@ -10,6 +10,7 @@ pub mod offscreen;
 pub mod renderer;
 pub mod report;
 pub mod stats;
+pub mod telemetry;
 pub mod view;
 
 pub use crate::passes::terrain_geometry::RenderTargets;

@@ -5,7 +5,7 @@
 
 use crate::error::Result;
 use crate::frame::FrameTimings;
-use crate::gpu::{vk, Context, FrameRing, Image, ImageDesc};
+use crate::gpu::{vk, Context, FrameCommands, FrameRing, Image, ImageDesc, QueueMode};
 use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::renderer::TerrainRenderer;
 use crate::render::view::{linear_depth, View};
@@ -50,6 +50,18 @@ pub struct Offscreen {
 
 impl Offscreen {
     pub fn new(ctx: &Context, size: [u32; 2], frames_in_flight: usize, clear: [f32; 4]) -> Result<Self> {
+        Self::with_mode(ctx, size, frames_in_flight, clear, QueueMode::Single)
+    }
+
+    /// Submitting in `mode` (split modes: a compute and a graphics command
+    /// buffer per frame, joined by the ring's timeline semaphore).
+    pub fn with_mode(
+        ctx: &Context,
+        size: [u32; 2],
+        frames_in_flight: usize,
+        clear: [f32; 4],
+        mode: QueueMode,
+    ) -> Result<Self> {
         let image = |name, format, usage| {
             Image::new(ctx, &ImageDesc { name, format, extent: size, mip_levels: 1, array_layers: 1, usage })
         };
@@ -61,20 +73,33 @@ impl Offscreen {
         let depth = image(
             "offscreen_depth",
             DEPTH_FORMAT,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            // Sampled: occlusion culling reduces it into a depth pyramid.
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::SAMPLED,
         )?;
-        Ok(Offscreen { color, depth, ring: FrameRing::new(ctx, frames_in_flight)?, initialised: false, clear })
+        let ring = FrameRing::with_mode(ctx, frames_in_flight, mode)?;
+        Ok(Offscreen { color, depth, ring, initialised: false, clear })
+    }
+
+    pub fn mode(&self) -> QueueMode {
+        self.ring.mode()
     }
 
     /// Records and submits one frame (waits only for the ring slot's fence).
     pub fn frame(&mut self, ctx: &Context, renderer: &mut TerrainRenderer, view: &View) -> Result<()> {
         let (color, depth, clear, init) = (&self.color, &self.depth, self.clear, !self.initialised);
-        self.ring.record(ctx, |rec| {
+        let mode = self.ring.mode();
+        self.ring.record_frame(ctx, |mut cmds| {
             if init {
-                rec.discard_to(color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                rec.discard_to(depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+                let graphics = match &mut cmds {
+                    FrameCommands::One(r) => &mut **r,
+                    FrameCommands::Split { graphics, .. } => &mut **graphics,
+                };
+                graphics.discard_to(color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+                graphics.discard_to(depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
             }
-            renderer.record(rec, view, &RenderTargets { color, depth, clear })
+            renderer.record_frame(cmds, mode, view, &RenderTargets { color, depth, clear })
         })?;
         self.initialised = true;
         Ok(())

@@ -14,8 +14,10 @@
 
 use crate::error::{Error, Result};
 use crate::frame::{FrameExecutor, FrameTimings, QueueKind};
-use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
+use crate::gpu::{vk, Buffer, BufferDesc, Context, FrameCommands, MemoryLocation, QueueMode, Recorder};
+use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
+use crate::passes::hiz_build::HizBuild;
 use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
@@ -24,6 +26,8 @@ use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::render::effects::{decide, Effect, EffectDecision, Effects, WorldContent};
 use crate::render::graph::{FramePass, PassGraph, Skip};
+use crate::render::stats::TRIANGLES_PER_PATCH;
+use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
 use crate::shaders::structs;
 use crate::terrain::gpu_quadtree::{AtlasSet, ATLAS_NORMAL, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_SPLAT};
@@ -54,17 +58,32 @@ pub struct TerrainRenderer {
     /// Effect `queries` (sector data for `TerrainQuery`).
     pub sector_data: Option<SectorData>,
     pub cull: CullPatches,
+    /// Effect `occlusion`: the depth pyramid and phase 2's culling.
+    pub occlusion: Option<Occlusion>,
     pub geometry: TerrainGeometry,
     /// Effect `holes`.
     pub holes: Option<TerrainHoles>,
     view_buffer: Buffer,
+    telemetry: Telemetry,
     exec: FrameExecutor,
     pub(crate) graph: PassGraph,
     /// Culling stages of the next recorded frame (of those built).
     pub stages: CullStages,
     pub effects: Effects,
     decisions: Vec<EffectDecision>,
+    /// How the last frame was recorded.
+    mode: Option<QueueMode>,
 }
+
+/// The passes of effect `occlusion` (phase 2).
+pub struct Occlusion {
+    pub hiz: HizBuild,
+    pub cull: CullOccluded,
+}
+
+/// The stage a graphics submission must wait at for the compute
+/// submission's timeline value (see [`TerrainRenderer::record_split`]).
+pub const GRAPHICS_WAIT_STAGE: vk::PipelineStageFlags2 = vk::PipelineStageFlags2::ALL_COMMANDS;
 
 /// The payload atlases each effect reads (the normal atlas serves two).
 const EFFECT_ATLASES: [(Effect, usize); 5] = [
@@ -122,8 +141,15 @@ impl TerrainRenderer {
         let geometry = TerrainGeometry::new(ctx, lighting)?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
         let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
-        let build = CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes) };
+        let build =
+            CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes), occlusion: on(Effect::Occlusion) };
         let cull = CullPatches::new(ctx, &traverse, geometry.index_count(), build)?;
+        let occlusion = if build.occlusion {
+            let occluded = CullOccluded::new(ctx, &traverse, geometry.index_count(), build, options.terrain.slots)?;
+            Some(Occlusion { hiz: HizBuild::new(ctx)?, cull: occluded })
+        } else {
+            None
+        };
         let holes_pass = if build.holes { Some(TerrainHoles::new(ctx, lighting)?) } else { None };
         let sector_data = if on(Effect::Queries) { Some(SectorData::new(ctx, world)?) } else { None };
         let view_buffer = Buffer::new(
@@ -137,21 +163,31 @@ impl TerrainRenderer {
         )?;
         let graph = PassGraph::new(&decisions);
         let exec = FrameExecutor::new(ctx, options.terrain.frames_in_flight, graph.max_recorded())?;
+        let layout = CounterLayout {
+            holes: build.holes,
+            occlusion: build.occlusion,
+            lod_count: world.lod_count,
+            list_capacity: cull.lists.capacity,
+            triangles_per_patch: TRIANGLES_PER_PATCH,
+        };
         Ok(TerrainRenderer {
-            update: QuadtreeUpdatePass::new(ctx)?,
+            update: QuadtreeUpdatePass::new(ctx, build.occlusion)?,
             lod_map: LodMap::new(ctx, world)?,
             sector_data,
             terrain,
             traverse,
             cull,
+            occlusion,
             geometry,
             holes: holes_pass,
             view_buffer,
+            telemetry: Telemetry::new(ctx, options.terrain.frames_in_flight, layout)?,
             exec,
             graph,
             stages: options.stages,
             effects: options.effects.clone(),
             decisions,
+            mode: None,
         })
     }
 
@@ -170,9 +206,45 @@ impl TerrainRenderer {
     }
 
     /// Records one frame of `view` into `rec` (the caller submits it, at most
-    /// `frames_in_flight` frames ahead of the GPU). `targets` must match the
-    /// view's size and the formats of [`COLOR_FORMAT`] / [`DEPTH_FORMAT`].
+    /// `frames_in_flight` frames ahead of the GPU, and reports its completion
+    /// with `Context::frame_completed`). `targets` must match the view's
+    /// size and the formats of [`COLOR_FORMAT`] / [`DEPTH_FORMAT`]; with
+    /// occlusion the depth target needs SAMPLED usage.
     pub fn record(&mut self, rec: &mut Recorder, view: &View, targets: &RenderTargets) -> Result<()> {
+        self.record_frame(FrameCommands::One(rec), QueueMode::Single, view, targets)
+    }
+
+    /// Records one frame split in two command buffers: `compute` (streaming
+    /// uploads, traversal, LOD map, sector data, phase 1 culling) and
+    /// `graphics` (the draws, the depth pyramid and phase 2). The caller
+    /// submits `compute` first, to a queue of the compute family
+    /// (`async_queue`) or the graphics queue, signalling a timeline
+    /// semaphore value that the `graphics` submission waits for at
+    /// [`GRAPHICS_WAIT_STAGE`]; `compute` must also wait for the previous
+    /// frame's `graphics` submission, which still reads what it rewrites
+    /// (see `FrameRing` for the scheme on its own semaphore). Resources that
+    /// cross the queues are created with concurrent sharing (`gpu` docs).
+    pub fn record_split<'c>(
+        &mut self,
+        compute: &mut Recorder<'c>,
+        graphics: &mut Recorder<'c>,
+        async_queue: bool,
+        view: &View,
+        targets: &RenderTargets,
+    ) -> Result<()> {
+        let mode = if async_queue { QueueMode::AsyncCompute } else { QueueMode::SplitOneQueue };
+        mode.check(compute.context().info())?;
+        self.record_frame(FrameCommands::Split { compute, graphics }, mode, view, targets)
+    }
+
+    /// Records one frame into the command buffers of `mode`.
+    pub fn record_frame(
+        &mut self,
+        mut cmds: FrameCommands,
+        mode: QueueMode,
+        view: &View,
+        targets: &RenderTargets,
+    ) -> Result<()> {
         view.validate()?;
         for (what, image, format) in [("colour", targets.color, COLOR_FORMAT), ("depth", targets.depth, DEPTH_FORMAT)] {
             if image.extent != view.size || image.format != format {
@@ -182,50 +254,143 @@ impl TerrainRenderer {
                 )));
             }
         }
+        let ctx = match &mut cmds {
+            FrameCommands::One(r) => r.context(),
+            FrameCommands::Split { graphics, .. } => graphics.context(),
+        };
+        if let Some(o) = &mut self.occlusion {
+            HizBuild::check_target(targets.depth)?;
+            o.hiz.prepare(ctx, targets.depth.extent)?;
+        }
+        let ctx_frame = ctx.frame_recording();
+        self.telemetry.harvest(ctx);
         let world = self.terrain.world;
         let gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting);
         let params = view.traverse_params();
         self.terrain.stream(&params);
-        let mut frame = self.exec.begin(rec);
-        let mut log = self.graph.begin_frame(frame.number());
+        let mut frame = self.exec.begin(cmds, mode);
+        let number = frame.number();
+        self.terrain.tree.begin_frame(number);
+        let mut log = self.graph.begin_frame(number);
+        let visibility = self.occlusion.as_ref().map(|o| &o.cull.visibility);
 
         if self.terrain.tree.has_work() {
             let (tree, update) = (&mut self.terrain.tree, &self.update);
-            let writes = frame.pass(QuadtreeUpdatePass::NAME, QueueKind::Compute, |r| update.record(r, tree))?;
+            let writes = frame
+                .pass(QuadtreeUpdatePass::NAME, false, QueueKind::Compute, |r| update.record(r, tree, visibility))?;
             log.ran(FramePass::QuadtreeUpdate, Some(u64::from(writes)));
         } else {
             log.skipped(FramePass::QuadtreeUpdate, Skip::NothingToUpload);
         }
         let tree = &self.terrain.tree;
         let (traverse, lod_map) = (&self.traverse, &self.lod_map);
-        frame.pass(Traverse::NAME, QueueKind::Compute, |r| {
-            traverse.record(r, tree, &params, TraverseMode::SingleDispatch)
-        });
-        log.ran(FramePass::Traverse, None);
-        frame.pass(LodMap::NAME, QueueKind::Compute, |r| lod_map.record(r, traverse));
-        log.ran(FramePass::LodMap, None);
+        let mut pass = |p: FramePass, f: &mut dyn FnMut(&mut Recorder)| {
+            frame.pass(p.name(), p.late(), p.queue(), |r| f(r));
+            log.ran(p, None);
+        };
+        pass(FramePass::Traverse, &mut |r| traverse.record(r, tree, &params, TraverseMode::SingleDispatch));
+        pass(FramePass::LodMap, &mut |r| lod_map.record(r, traverse));
         if let Some(sector_data) = &self.sector_data {
-            frame.pass(SectorData::NAME, QueueKind::Compute, |r| sector_data.record(r, tree));
-            log.ran(FramePass::SectorData, None);
+            pass(FramePass::SectorData, &mut |r| sector_data.record(r, tree));
         }
         let (cull, stages, view_buffer) = (&self.cull, self.stages, &self.view_buffer);
-        frame.pass(CullPatches::NAME, QueueKind::Compute, |r| {
+        pass(FramePass::CullPatches, &mut |r| {
             let view_bytes = bytemuck::bytes_of(&gpu);
-            cull.record(r, traverse, tree, lod_map, view_buffer, view_bytes, stages);
+            cull.record(r, traverse, tree, lod_map, view_buffer, view_bytes, stages, visibility);
         });
-        log.ran(FramePass::CullPatches, None);
         let geometry = &self.geometry;
-        frame
-            .pass(TerrainGeometry::NAME, QueueKind::Graphics, |r| geometry.record(r, targets, view_buffer, cull, tree));
-        log.ran(FramePass::TerrainGeometry, None);
+        pass(FramePass::TerrainGeometry, &mut |r| {
+            geometry.record(r, targets, view_buffer, &cull.lists.list, tree, true)
+        });
         if let Some(holes) = &self.holes {
-            frame.pass(TerrainHoles::NAME, QueueKind::Graphics, |r| {
-                holes.record(r, targets, view_buffer, cull, geometry, tree)
-            });
-            log.ran(FramePass::TerrainHoles, None);
+            pass(FramePass::TerrainHoles, &mut |r| holes.record(r, targets, view_buffer, &cull.lists, geometry, tree));
         }
+        let occlusion = self.occlusion.as_ref().filter(|_| stages.occlusion);
+        if let Some(o) = occlusion {
+            pass(FramePass::HizBuild, &mut |r| o.hiz.record(r, targets.depth));
+            pass(FramePass::CullOccluded, &mut |r| {
+                o.cull.record(r, traverse, tree, lod_map, view_buffer, stages, &o.hiz, targets.depth)
+            });
+            let late = &o.cull.lists;
+            pass(FramePass::TerrainGeometryLate, &mut |r| {
+                geometry.record(r, targets, view_buffer, &late.list, tree, false)
+            });
+            if let Some(holes) = &self.holes {
+                pass(FramePass::TerrainHolesLate, &mut |r| holes.record(r, targets, view_buffer, late, geometry, tree));
+            }
+        }
+        if let (Some(o), None) = (&self.occlusion, occlusion) {
+            // Built but off this frame: nothing drawn in phase 2.
+            let passes = [FramePass::HizBuild, FramePass::CullOccluded, FramePass::TerrainGeometryLate];
+            for p in passes.into_iter().chain(self.holes.as_ref().map(|_| FramePass::TerrainHolesLate)) {
+                log.skipped(p, Skip::OcclusionOff);
+            }
+            frame.untimed(QueueKind::Graphics, |r| {
+                o.cull.lists.reset(r);
+                r.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
+            });
+        }
+        let late = self.occlusion.as_ref().map(|o| &o.cull.lists);
+        let sources = CounterSources {
+            traverse: &traverse.output,
+            lists: [
+                Some(&cull.lists.list),
+                cull.lists.hole_list.as_ref(),
+                late.map(|l| &l.list),
+                late.and_then(|l| l.hole_list.as_ref()),
+            ],
+        };
+        let telemetry = &mut self.telemetry;
+        frame.untimed(QueueKind::Graphics, |r| telemetry.record(r, number, ctx_frame, &sources));
+        drop(frame);
         self.graph.end_frame(log);
+        self.mode = Some(mode);
         Ok(())
+    }
+
+    /// GPU counters of the newest frame that came back (frames late; never
+    /// waits). Call after `record` or `poll_timings`.
+    pub fn latest_counters(&self) -> Option<&FrameCounters> {
+        self.telemetry.latest()
+    }
+
+    /// Reads the last recorded frame's counters back, waiting for the GPU
+    /// (tests and tools; the frame path uses `latest_counters`).
+    pub fn read_counters(&self, ctx: &Context) -> Result<FrameCounters> {
+        let mut bytes = ctx.read_buffer(&self.traverse.output)?;
+        bytes.truncate(std::mem::size_of::<crate::passes::traverse::TraverseHeader>());
+        let late = self.occlusion.as_ref().map(|o| &o.cull.lists);
+        let lists = [
+            Some(&self.cull.lists.list),
+            self.cull.lists.hole_list.as_ref(),
+            late.map(|l| &l.list),
+            late.and_then(|l| l.hole_list.as_ref()),
+        ];
+        for list in lists {
+            let header = match list {
+                Some(b) => ctx.read_buffer(b)?[..structs::PATCH_LIST_HEADER].to_vec(),
+                None => vec![0; structs::PATCH_LIST_HEADER],
+            };
+            bytes.extend(header);
+        }
+        let frame = self.graph.last_frame().map_or(0, |l| l.frame);
+        Ok(self.telemetry.layout().parse(frame, &bytes))
+    }
+
+    /// Visible patches of every list of the last frame, both phases,
+    /// sorted (tests): waits.
+    pub fn read_patches(&self, ctx: &Context) -> Result<Vec<crate::passes::cull_patches::PatchRecord>> {
+        let mut out = self.cull.lists.read_patches(ctx)?;
+        if let Some(o) = &self.occlusion {
+            out.extend(o.cull.lists.read_patches(ctx)?);
+        }
+        out.sort();
+        Ok(out)
+    }
+
+    /// How the last frame was submitted (None before the first).
+    pub fn queue_mode(&self) -> Option<QueueMode> {
+        self.mode
     }
 
     /// Pass timings of the newest frame the GPU has finished (one or more
@@ -234,9 +399,10 @@ impl TerrainRenderer {
         self.exec.latest()
     }
 
-    /// Collects timings of frames that finished since the last `record`
-    /// (never waits) and returns the newest.
-    pub fn poll_timings(&mut self) -> Option<&FrameTimings> {
+    /// Collects timings and counters of frames that finished since the
+    /// last `record` (never waits) and returns the newest timings.
+    pub fn poll_timings(&mut self, ctx: &Context) -> Option<&FrameTimings> {
+        self.telemetry.harvest(ctx);
         self.exec.poll();
         self.exec.latest()
     }
@@ -261,6 +427,10 @@ impl TerrainRenderer {
         if let Some(h) = &self.holes {
             out.push(h.pipeline_label().to_string());
         }
+        if let Some(o) = &self.occlusion {
+            out.push(o.hiz.pipeline_label().to_string());
+            out.push(o.cull.pipeline_label().to_string());
+        }
         out
     }
 
@@ -282,13 +452,26 @@ impl TerrainRenderer {
         }
         let core = [
             (&self.lod_map.image.name, self.lod_map.image.memory_bytes()),
-            (&self.cull.list.name, self.cull.list.memory_bytes()),
+            (&self.cull.lists.list.name, self.cull.lists.list.memory_bytes()),
             (&self.view_buffer.name, self.view_buffer.memory_bytes()),
             (&self.geometry.indices().name, self.geometry.indices().memory_bytes()),
         ];
         out.extend(core.into_iter().map(|(n, b)| (n.clone(), b, Vec::new())));
-        if let Some(h) = &self.cull.hole_list {
+        let (name, bytes) = self.telemetry.memory();
+        out.push((name, bytes, Vec::new()));
+        if let Some(h) = &self.cull.lists.hole_list {
             out.push((h.name.clone(), h.memory_bytes(), vec![Effect::Holes]));
+        }
+        if let Some(o) = &self.occlusion {
+            out.push((o.cull.lists.list.name.clone(), o.cull.lists.list.memory_bytes(), vec![Effect::Occlusion]));
+            if let Some(h) = &o.cull.lists.hole_list {
+                out.push((h.name.clone(), h.memory_bytes(), vec![Effect::Holes, Effect::Occlusion]));
+            }
+            let v = &o.cull.visibility;
+            out.push((v.name.clone(), v.memory_bytes(), vec![Effect::Occlusion]));
+            if let Some(p) = o.hiz.pyramid() {
+                out.push((p.name.clone(), p.memory_bytes(), vec![Effect::Occlusion]));
+            }
         }
         if let Some(s) = &self.sector_data {
             out.push((s.buffer.name.clone(), s.buffer.memory_bytes(), vec![Effect::Queries]));

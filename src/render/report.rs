@@ -4,15 +4,17 @@
 //! effect. `vista render --report` prints it and writes report.json.
 //!
 //! Building it reads the frame's GPU counters back and so waits for the
-//! GPU: it is for tools and tests, not for an engine's frame loop.
+//! GPU: it is for tools and tests. An engine's frame loop reads the same
+//! counters frames late with `TerrainRenderer::latest_counters`.
 
 use crate::error::Result;
 use crate::frame::{FrameTimings, QueueKind};
-use crate::gpu::Context;
+use crate::gpu::{Context, QueueMode};
 use crate::render::effects::{Effect, EffectDecision};
 use crate::render::graph::{FramePass, Outcome};
 use crate::render::renderer::TerrainRenderer;
 use crate::render::stats::TRIANGLES_PER_PATCH;
+use crate::render::telemetry::FrameCounters;
 use crate::shaders::quadtree_update as update_sh;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -40,7 +42,8 @@ pub struct PassWork {
     /// Quadtree texel/description writes (quadtree_update).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub writes: Option<u64>,
-    /// Patches tested (cull_patches).
+    /// Patches tested (cull_patches; cull_occluded: against the pyramid,
+    /// those phase 1 did not draw).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub patches_tested: Option<u64>,
 }
@@ -48,9 +51,12 @@ pub struct PassWork {
 #[derive(Debug, Clone, Serialize)]
 pub struct PassReport {
     pub name: &'static str,
+    /// Phase 2 of occlusion culling (a drawing pass's second run).
+    pub late: bool,
+    /// The queue it ran on (graphics unless compute ran on its own queue).
     pub queue: QueueKind,
-    /// The effect the pass exists for; `None`: every scene needs it.
-    pub effect: Option<Effect>,
+    /// The effects the pass exists for; empty: every scene needs it.
+    pub effects: Vec<Effect>,
     pub state: PassState,
     /// Whether it carries timestamps this frame.
     pub recorded: bool,
@@ -71,6 +77,8 @@ pub struct ResourceMemory {
 pub struct FrameReport {
     /// The frame executor's number of the frame reported.
     pub frame: u64,
+    /// How the frame was submitted.
+    pub queue_mode: QueueMode,
     pub effects: Vec<EffectDecision>,
     pub pipelines: Vec<String>,
     pub passes: Vec<PassReport>,
@@ -92,13 +100,19 @@ impl FrameReport {
         self.memory.iter().map(|m| m.bytes).sum()
     }
 
-    /// Names of the passes recorded (with timestamps) this frame, in order.
-    pub fn recorded_passes(&self) -> Vec<&'static str> {
-        self.passes.iter().filter(|p| p.recorded).map(|p| p.name).collect()
+    /// Labels of the passes recorded this frame, in order.
+    pub fn recorded_passes(&self) -> Vec<String> {
+        self.passes.iter().filter(|p| p.recorded).map(|p| crate::frame::pass_label(p.name, p.late)).collect()
     }
 
+    /// The pass named `name` (phase 1 where it runs twice).
     pub fn pass(&self, name: &str) -> Option<&PassReport> {
-        self.passes.iter().find(|p| p.name == name)
+        self.passes.iter().find(|p| p.name == name && !p.late)
+    }
+
+    /// Phase 2 of the drawing pass `name`.
+    pub fn late_pass(&self, name: &str) -> Option<&PassReport> {
+        self.passes.iter().find(|p| p.name == name && p.late)
     }
 
     /// The report as text, one line per effect, pipeline group and pass.
@@ -109,7 +123,7 @@ impl FrameReport {
             let _ = writeln!(s, "  {:<16} {:<4} {}", d.effect.name(), if d.on { "on" } else { "off" }, d.reason);
         }
         let _ = writeln!(s, "pipelines ({}): {}", self.pipelines.len(), self.pipelines.join(", "));
-        let _ = writeln!(s, "passes of frame {}:", self.frame);
+        let _ = writeln!(s, "passes of frame {} (queues: {}):", self.frame, self.queue_mode.name());
         for p in &self.passes {
             let state = match p.state {
                 PassState::NotBuilt => "not built",
@@ -118,7 +132,12 @@ impl FrameReport {
             };
             let ms = p.gpu_ms.map(|m| format!("{m:.3} ms")).unwrap_or_else(|| "-".into());
             let text = [work_text(&p.work), p.reason.clone()].into_iter().filter(|t| !t.is_empty()).collect::<Vec<_>>();
-            let _ = writeln!(s, "  {:<17} {:<9} {:>10}  {}", p.name, state, ms, text.join("; "));
+            let label = crate::frame::pass_label(p.name, p.late);
+            let queue = match p.queue {
+                QueueKind::Graphics => "",
+                QueueKind::Compute => " [compute queue]",
+            };
+            let _ = writeln!(s, "  {label:<28} {state:<9} {ms:>10}  {}{queue}", text.join("; "));
         }
         let mb = |b: u64| b as f64 / (1024.0 * 1024.0);
         let _ =
@@ -158,18 +177,20 @@ fn work_text(w: &PassWork) -> String {
 pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTimings>) -> Result<FrameReport> {
     let log = r.graph.last_frame().expect("frame_report needs a recorded frame");
     let timings = timings.filter(|t| t.frame == log.frame);
-    let (header, _) = r.traverse.read_result(ctx)?;
-    let cull = r.cull.read_counters(ctx)?;
-    let nodes = u64::from(header.node_count);
-    let solid = u64::from(cull.drawn - cull.drawn_with_holes);
-    let holey = u64::from(cull.drawn_with_holes);
+    let counters = r.read_counters(ctx)?;
+    let mode = r.queue_mode().unwrap_or(QueueMode::Single);
     let mut passes = Vec::new();
     for node in r.graph.nodes() {
         let pass = node.pass;
+        let ran_on = match (mode, pass.queue()) {
+            (QueueMode::AsyncCompute, QueueKind::Compute) => QueueKind::Compute,
+            _ => QueueKind::Graphics,
+        };
         let mut report = PassReport {
             name: pass.name(),
-            queue: pass.queue(),
-            effect: pass.effect(),
+            late: pass.late(),
+            queue: ran_on,
+            effects: pass.effects().to_vec(),
             state: PassState::NotBuilt,
             recorded: false,
             reason: node.why_not.clone().unwrap_or_default(),
@@ -184,8 +205,10 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
             }
             Some(Outcome::Recorded { cpu_work }) => {
                 report.recorded = true;
-                report.gpu_ms = timings.and_then(|t| t.passes.iter().find(|p| p.name == pass.name())).map(|p| p.gpu_ms);
-                let (work, idle) = work_of(r, pass, *cpu_work, nodes, solid, holey, cull.patches_in);
+                report.gpu_ms = timings
+                    .and_then(|t| t.passes.iter().find(|p| p.name == pass.name() && p.late == pass.late()))
+                    .map(|p| p.gpu_ms);
+                let (work, idle) = work_of(r, pass, *cpu_work, &counters);
                 report.state = if idle.is_some() { PassState::Idle } else { PassState::Ran };
                 report.reason = idle.map(|i| format!("recorded with nothing to do: {i}")).unwrap_or_default();
                 report.work = work;
@@ -194,7 +217,14 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
         passes.push(report);
     }
     let memory = r.memory().into_iter().map(|(name, bytes, effects)| ResourceMemory { name, bytes, effects }).collect();
-    Ok(FrameReport { frame: log.frame, effects: r.effects().to_vec(), pipelines: r.pipelines(), passes, memory })
+    Ok(FrameReport {
+        frame: log.frame,
+        queue_mode: mode,
+        effects: r.effects().to_vec(),
+        pipelines: r.pipelines(),
+        passes,
+        memory,
+    })
 }
 
 /// A recorded pass's work, and why it was idle if it had none.
@@ -202,18 +232,17 @@ fn work_of(
     r: &TerrainRenderer,
     pass: FramePass,
     cpu_work: Option<u64>,
-    nodes: u64,
-    solid: u64,
-    holey: u64,
-    tested: u32,
+    c: &FrameCounters,
 ) -> (PassWork, Option<&'static str>) {
+    let nodes = u64::from(c.traverse.nodes);
     let groups = |g: u64| PassWork { dispatch_groups: Some(g), ..PassWork::default() };
-    let draw = |n: u64| PassWork {
+    let draw = |n: u32| PassWork {
         dispatch_groups: None,
-        instances: Some(n),
-        triangles: Some(n * TRIANGLES_PER_PATCH),
+        instances: Some(u64::from(n)),
+        triangles: Some(u64::from(n) * TRIANGLES_PER_PATCH),
         ..PassWork::default()
     };
+    let [solid, holey, late_solid, late_holey] = c.instances;
     let no_nodes = (nodes == 0).then_some("the traversal listed no node (0 groups, indirect)");
     match pass {
         FramePass::QuadtreeUpdate => {
@@ -228,10 +257,26 @@ fn work_of(
         FramePass::Traverse => (groups(1), None),
         FramePass::LodMap => (groups(nodes), no_nodes),
         FramePass::SectorData => (groups(r.sector_data.as_ref().map_or(0, |s| s.groups())), None),
-        FramePass::CullPatches => (PassWork { patches_tested: Some(u64::from(tested)), ..groups(nodes) }, no_nodes),
+        FramePass::CullPatches => {
+            (PassWork { patches_tested: Some(u64::from(c.cull.patches_in)), ..groups(nodes) }, no_nodes)
+        }
         FramePass::TerrainGeometry => {
             (draw(solid), (solid == 0).then_some("no visible patch without holes (0 instances)"))
         }
         FramePass::TerrainHoles => (draw(holey), (holey == 0).then_some("no visible patch has holes (0 instances)")),
+        FramePass::HizBuild => {
+            let levels = r.occlusion.as_ref().and_then(|o| o.hiz.pyramid()).map_or(0, |p| p.mip_levels);
+            (groups(u64::from(levels)), None)
+        }
+        FramePass::CullOccluded => {
+            let tested = u64::from(c.cull.occlusion_tested);
+            (PassWork { patches_tested: Some(tested), ..groups(nodes) }, no_nodes)
+        }
+        FramePass::TerrainGeometryLate => {
+            (draw(late_solid), (late_solid == 0).then_some("the pyramid left no new patch visible (0 instances)"))
+        }
+        FramePass::TerrainHolesLate => {
+            (draw(late_holey), (late_holey == 0).then_some("the pyramid left no new patch with holes (0 instances)"))
+        }
     }
 }

@@ -31,18 +31,17 @@ pub struct RenderStats {
 
 /// The last recorded frame's numbers; waits for the GPU.
 pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result<RenderStats> {
-    let patches = renderer.cull.read_counters(ctx)?;
+    let c = renderer.read_counters(ctx)?;
     let terrain = &renderer.terrain;
-    let (header, _) = renderer.traverse.read_result(ctx)?;
     let lods = terrain.world.lod_count as usize;
     let wanted = wanted_finer_cpu(&terrain.tree.shadow, &terrain.world, &view.traverse_params());
     Ok(RenderStats {
-        patches,
-        triangles_drawn: u64::from(patches.drawn) * TRIANGLES_PER_PATCH,
-        node_count: header.node_count,
-        nodes_per_lod: header.lod_counts[..lods].to_vec(),
+        patches: c.cull,
+        triangles_drawn: c.triangles,
+        node_count: c.traverse.nodes,
+        nodes_per_lod: c.traverse.nodes_per_lod,
         wanted_finer_per_lod: wanted[..lods].to_vec(),
-        overflow: header.overflow,
-        missing_roots: header.missing_roots,
+        overflow: c.traverse.overflow,
+        missing_roots: c.traverse.missing_roots,
     })
 }

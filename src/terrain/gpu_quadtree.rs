@@ -130,7 +130,9 @@ pub struct GpuQuadtree {
     atlases: Vec<Option<Image>>,
     set: AtlasSet,
     ring: Vec<RingSlot>,
-    next: usize,
+    /// The frame being recorded (`begin_frame`): picks the ring slot, so
+    /// the ring advances with the frames, not with the uploads.
+    frame: u64,
     current: usize,
     waiting: VecDeque<(BakedNode, i8)>,
     update_capacity: u32,
@@ -144,7 +146,9 @@ impl GpuQuadtree {
         if !(1..=MAX_SLOTS).contains(&slots) {
             return Err(Error::BadInput(format!("slot budget {slots} outside 1..={MAX_SLOTS} (slots are 10-bit)")));
         }
-        let shadow = QuadtreeShadow::new(world, slots);
+        let mut shadow = QuadtreeShadow::new(world, slots);
+        // A freed slot waits until the frames that drew its last node are done.
+        shadow.set_reuse_delay(frames_in_flight.max(1) as u64);
         let extent = texture_extent(world);
         let node_texture = Image::new(
             ctx,
@@ -258,7 +262,7 @@ impl GpuQuadtree {
             atlases,
             set,
             ring,
-            next: 0,
+            frame: 0,
             current: 0,
             waiting: VecDeque::new(),
             update_capacity,
@@ -332,12 +336,26 @@ impl GpuQuadtree {
         self.waiting.len()
     }
 
+    /// Starts frame `frame` (numbers grow by one per recorded frame, from
+    /// 1): its uploads use ring slot `frame % ring`, which the caller's
+    /// frames-in-flight bound keeps free of older in-flight frames even
+    /// when frames without uploads come between.
+    pub fn begin_frame(&mut self, frame: u64) {
+        assert!(frame > self.frame, "frame {frame} after {}", self.frame);
+        self.frame = frame;
+        self.shadow.begin_frame(frame);
+    }
+
+    /// The ring slot the current frame's uploads use.
+    pub fn upload_slot(&self) -> usize {
+        (self.frame % self.ring.len() as u64) as usize
+    }
+
     /// Uploads this frame's payloads and writes the frame's coalesced
     /// changes into `current_updates()`; returns how many there are.
     pub fn prepare_frame(&mut self, rec: &mut Recorder) -> Result<u32> {
-        self.current = self.next;
-        let slot_index = self.next;
-        self.next = (self.next + 1) % self.ring.len();
+        let slot_index = self.upload_slot();
+        self.current = slot_index;
         let mut uploaded = Vec::new();
         while uploaded.len() < MAX_UPLOADS_PER_FRAME {
             let Some((node, bias)) = self.waiting.pop_front() else { break };

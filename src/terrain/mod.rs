@@ -73,6 +73,7 @@ pub struct Terrain {
     pub tree: GpuQuadtree,
     stats: TerrainStats,
     ring_prefetch: bool,
+    paused: bool,
 }
 
 impl Terrain {
@@ -102,12 +103,30 @@ impl Terrain {
             tree,
             stats: TerrainStats::default(),
             ring_prefetch: options.ring_prefetch,
+            paused: false,
         })
+    }
+
+    /// The resident nodes (loaded, possibly still waiting for upload), sorted.
+    pub fn resident_nodes(&self) -> Vec<crate::world::NodeId> {
+        let r = self.streamer.residency();
+        let mut v: Vec<_> = r.resident().filter(|id| !r.is_pending(*id)).collect();
+        v.sort();
+        v
+    }
+
+    /// Stops (or resumes) streaming: the resident set stays as it is while
+    /// the camera moves. Tests use it to compare renderers over one set.
+    pub fn pause_streaming(&mut self, paused: bool) {
+        self.paused = paused;
     }
 
     /// Streams around the first camera: evicted nodes leave the GPU
     /// quadtree, arrived ones are queued for upload by `quadtree_update`.
     pub fn stream(&mut self, params: &TraverseParams) {
+        if self.paused {
+            return;
+        }
         let cam = &params.cameras[0];
         // Load a family a little before the traversal would refine into it.
         let want = RefineWant {

@@ -6,7 +6,7 @@
 
 use crate::shaders::consts as k;
 use crate::world::{BakedNode, NodeId, WorldDesc};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 
 /// Node texture value: nothing loaded for this node.
 pub const EMPTY: u16 = k::NODE_EMPTY as u16;
@@ -104,6 +104,11 @@ pub struct QuadtreeShadow {
     /// LOD error (m) by slot.
     pub errors: Vec<f32>,
     free: Vec<u32>,
+    /// Freed slots and the frame they may be reused from: frames still in
+    /// flight (and per-slot state such as visibility bits) name the old node.
+    cooling: VecDeque<(u64, u32)>,
+    reuse_delay: u64,
+    frame: u64,
     /// Pending writes of this frame, coalesced: the last write wins.
     texels: BTreeMap<(u32, u32), u16>,
     desc_writes: BTreeMap<u32, [u32; 2]>,
@@ -136,6 +141,9 @@ impl QuadtreeShadow {
             descs: vec![[0, 0]; (slots + FIRST_SLOT) as usize],
             errors: vec![0.0; (slots + FIRST_SLOT) as usize],
             free: (FIRST_SLOT..slots + FIRST_SLOT).rev().collect(),
+            cooling: VecDeque::new(),
+            reuse_delay: 0,
+            frame: 0,
             texels: BTreeMap::new(),
             desc_writes: BTreeMap::new(),
             error_writes: BTreeMap::new(),
@@ -179,8 +187,34 @@ impl QuadtreeShadow {
         self.set_texel(id, EMPTY);
         self.descs[slot as usize] = [0, 0];
         self.desc_writes.insert(slot, [0, 0]);
-        self.free.push(slot);
+        if self.reuse_delay == 0 {
+            self.free.push(slot);
+        } else {
+            self.cooling.push_back((self.frame + self.reuse_delay, slot));
+        }
         Some(slot)
+    }
+
+    /// Frames a freed slot waits before `add` may hand it out again (0, the
+    /// default: at once). Slots already waiting keep their release frame.
+    pub fn set_reuse_delay(&mut self, frames: u64) {
+        self.reuse_delay = frames;
+    }
+
+    /// Starts frame `frame` (one more per recorded frame, called every frame):
+    /// a slot freed in frame f is released at frame f + delay.
+    pub fn begin_frame(&mut self, frame: u64) {
+        assert!(frame >= self.frame, "frame {frame} after frame {}", self.frame);
+        self.frame = frame;
+        // In freeing order, whatever the delay was, so handout stays deterministic.
+        let (ready, waiting): (VecDeque<_>, VecDeque<_>) = self.cooling.drain(..).partition(|&(at, _)| at <= frame);
+        self.free.extend(ready.into_iter().map(|(_, slot)| slot));
+        self.cooling = waiting;
+    }
+
+    /// Freed slots still waiting out the reuse delay (neither free nor resident).
+    pub fn cooling_count(&self) -> usize {
+        self.cooling.len()
     }
 
     /// Allocates a slot for `id`; None when the budget is full (or the node is
@@ -229,7 +263,7 @@ impl QuadtreeShadow {
 
     /// Resident nodes on the GPU side.
     pub fn resident_count(&self) -> u32 {
-        self.slot_capacity() - self.free.len() as u32
+        self.slot_capacity() - (self.free.len() + self.cooling.len()) as u32
     }
 }
 
@@ -253,6 +287,72 @@ mod tests {
         assert_eq!((w1 >> 10) & 0xF, 5);
         assert_eq!((((w1 >> 14) & 0xF) as i8) << 4 >> 4, -2);
         assert_eq!((w1 >> 18) & 1, 1);
+    }
+
+    fn small_tree(slots: u32) -> (QuadtreeShadow, Vec<NodeId>) {
+        let world =
+            WorldDesc { extent_m: [2048.0, 2048.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 2 };
+        (QuadtreeShadow::new(&world, slots), world.nodes_at(0))
+    }
+
+    fn desc() -> NodeDesc {
+        NodeDesc { min_height: 0, max_height: 1, lod: 0, lod_bias: 0, has_holes: false, max_error_m: 1.0 }
+    }
+
+    #[test]
+    fn delayed_slot_is_reused_only_after_the_delay() {
+        let (mut t, n) = small_tree(3);
+        t.set_reuse_delay(2);
+        t.begin_frame(5);
+        let a = t.add(n[0], desc()).unwrap();
+        let b = t.add(n[1], desc()).unwrap();
+        assert_eq!(t.remove(n[0]), Some(a));
+        assert_eq!((t.resident_count(), t.cooling_count()), (1, 1));
+        let c = t.add(n[2], desc()).unwrap();
+        assert!(c != a && c != b, "frame 5 must take the one free slot, not the cooling one");
+        assert_eq!(t.add(n[3], desc()), None, "frame 5: 2 resident + 1 cooling fill the budget of 3");
+        t.begin_frame(6);
+        assert_eq!(t.add(n[3], desc()), None, "frame 6: still cooling");
+        assert_eq!((t.resident_count(), t.cooling_count()), (2, 1));
+        t.begin_frame(7);
+        assert_eq!(t.cooling_count(), 0);
+        assert_eq!(t.add(n[3], desc()), Some(a), "frame 7 = 5 + 2: released");
+        assert_eq!(t.resident_count(), 3);
+        assert_eq!(t.add(n[4], desc()), None);
+    }
+
+    #[test]
+    fn delayed_slots_released_late_are_all_freed() {
+        let (mut t, n) = small_tree(2);
+        t.set_reuse_delay(1);
+        t.begin_frame(0);
+        t.add(n[0], desc()).unwrap();
+        t.add(n[1], desc()).unwrap();
+        t.remove(n[0]).unwrap();
+        t.begin_frame(0);
+        t.remove(n[1]).unwrap();
+        assert_eq!((t.resident_count(), t.cooling_count()), (0, 2));
+        t.begin_frame(9);
+        assert_eq!((t.resident_count(), t.cooling_count()), (0, 0));
+        assert!(t.add(n[2], desc()).is_some() && t.add(n[3], desc()).is_some());
+        assert_eq!(t.add(n[4], desc()), None);
+    }
+
+    #[test]
+    fn zero_delay_reuses_a_freed_slot_at_once() {
+        for explicit in [false, true] {
+            let (mut t, n) = small_tree(2);
+            if explicit {
+                t.set_reuse_delay(0);
+                t.begin_frame(3);
+            }
+            t.add(n[0], desc()).unwrap();
+            let b = t.add(n[1], desc()).unwrap();
+            assert_eq!(t.remove(n[1]), Some(b));
+            assert_eq!((t.resident_count(), t.cooling_count()), (1, 0));
+            assert_eq!(t.add(n[2], desc()), Some(b), "explicit {explicit}: same frame, same slot");
+            assert_eq!(t.resident_count(), 2);
+        }
     }
 
     #[test]

@@ -50,10 +50,10 @@ pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput>
         ring.record(ctx, |rec| {
             rec.discard_to(&tri_target, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
             rec.discard_to(&patch_target, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-            let mut frame = exec.begin(rec);
-            frame.pass(PrefixSum::NAME, QueueKind::Compute, |r| scan.record(r, &input, &output, n))?;
-            frame.pass(SmokeTriangle::NAME, QueueKind::Graphics, |r| tri.record(r, &tri_target, corners));
-            frame.pass(DiamondPatch::NAME, QueueKind::Graphics, |r| {
+            let mut frame = exec.begin(vista::gpu::FrameCommands::One(rec), vista::gpu::QueueMode::Single);
+            frame.pass(PrefixSum::NAME, false, QueueKind::Compute, |r| scan.record(r, &input, &output, n))?;
+            frame.pass(SmokeTriangle::NAME, false, QueueKind::Graphics, |r| tri.record(r, &tri_target, corners));
+            frame.pass(DiamondPatch::NAME, false, QueueKind::Graphics, |r| {
                 patch.record(r, &patch_target, Some(patch.vertex(5, 7)))
             });
             Ok(())

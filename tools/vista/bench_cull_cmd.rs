@@ -71,6 +71,27 @@ pub fn cull(
             r.geometry_off_vs_on
         );
     }
+    if rows.iter().any(|r| r.no_occlusion.is_some()) {
+        println!(
+            "{:<13} {:>8} {:>8} {:>8} {:>12} {:>14} {:>12} {:>10}",
+            "occlusion", "phase 1", "tested", "phase 2", "culled", "cost (hiz+p2)", "geom saves", "net"
+        );
+        for r in &rows {
+            let (Some(cost), Some(saves)) = (r.occlusion_cost_ms, r.occlusion_saves_ms) else { continue };
+            let c = &r.all.counters;
+            println!(
+                "{:<13} {:>8} {:>8} {:>8} {:>12} {:>11.3} ms {:>9.3} ms {:>7.3} ms",
+                r.view,
+                c.drawn_phase1,
+                c.occlusion_tested,
+                c.drawn_phase2,
+                c.occlusion_tested - c.drawn_phase2,
+                cost,
+                saves,
+                saves - cost
+            );
+        }
+    }
     println!("per-pass medians (ms), all stages / no cone / culling off:");
     for r in &rows {
         let t =

@@ -141,13 +141,20 @@ fn info(ctx: &Context, json: bool) -> Result<()> {
             .collect();
         println!("  [{}] {} x{} (timestamp bits {})", f.index, caps.join("+"), f.queue_count, f.timestamp_valid_bits);
     }
+    // What `vista render --queues auto` will do on this device, not a claim
+    // that anything ran.
     if i.async_compute {
         println!(
-            "culling:       async compute queue (family {}), synchronised by timeline semaphores",
+            "async compute: available (compute-only family {}); `vista render` submits streaming, traversal and \
+             culling there by default (--queues auto), the graphics queue waiting on a timeline semaphore",
             i.compute_family
         );
     } else {
-        println!("culling:       single-queue fallback: traversal and culling run on the graphics queue (family {}), same semaphores", i.graphics_family);
+        println!(
+            "async compute: not available (no compute-only family); `vista render` records one command buffer on \
+             family {} (--queues split: two command buffers on the one queue, joined by a timeline semaphore)",
+            i.graphics_family
+        );
     }
     let l = &i.limits;
     println!("limits:");

@@ -8,7 +8,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use vista::frame::FrameTimings;
-use vista::gpu::Context;
+use vista::gpu::{Context, QueueMode};
 use vista::passes::cull_patches::CullStages;
 use vista::render::offscreen::{Capture, Offscreen};
 use vista::render::stats::RenderStats;
@@ -49,8 +49,14 @@ pub struct RenderArgs {
     /// Largest accepted projected vertical error in pixels (the accuracy knob).
     #[arg(long, default_value_t = 1.0)]
     pub target_error: f32,
-    /// Culling stages to run: any of frustum,cone,hole, or none.
-    #[arg(long, default_value = "frustum,cone,hole", value_parser = parse_stages)]
+    /// How frames are submitted: auto (async where the device has a
+    /// compute-only queue family, else single), single (one command buffer),
+    /// split (compute and graphics command buffers on the graphics queue,
+    /// joined by a timeline semaphore) or async.
+    #[arg(long, default_value = "auto", value_parser = parse_queues)]
+    pub queues: QueuesArg,
+    /// Culling stages to run: any of frustum,cone,hole,occlusion, or none.
+    #[arg(long, default_value = "frustum,cone,hole,occlusion", value_parser = parse_stages)]
     pub cull: CullStages,
     /// Resident node slots (at most 1023: slots are 10-bit).
     #[arg(long, default_value_t = 512)]
@@ -64,6 +70,22 @@ pub struct RenderArgs {
     /// The world to render (default: the procedural world, baked lazily).
     #[command(flatten)]
     pub world: WorldArgs,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum QueuesArg {
+    Auto,
+    Mode(QueueMode),
+}
+
+fn parse_queues(s: &str) -> Result<QueuesArg, String> {
+    match s {
+        "auto" => Ok(QueuesArg::Auto),
+        "single" => Ok(QueuesArg::Mode(QueueMode::Single)),
+        "split" => Ok(QueuesArg::Mode(QueueMode::SplitOneQueue)),
+        "async" => Ok(QueuesArg::Mode(QueueMode::AsyncCompute)),
+        _ => Err(format!("unknown queue mode {s:?}: use auto, single, split or async")),
+    }
 }
 
 /// `--camera` as given: a position, and a heading and pitch if given.
@@ -125,7 +147,8 @@ pub(crate) fn parse_stages(s: &str) -> Result<CullStages, String> {
             "frustum" => st.frustum = true,
             "cone" => st.cone = true,
             "hole" => st.hole = true,
-            other => return Err(format!("culling stage {other:?} is not one of frustum, cone, hole, none")),
+            "occlusion" => st.occlusion = true,
+            other => return Err(format!("culling stage {other:?} is not one of frustum, cone, hole, occlusion, none")),
         }
     }
     Ok(st)
@@ -168,12 +191,16 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     };
     let d = &world.desc;
     let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)?;
-    let mut off = Offscreen::new(ctx, view.size, options.terrain.frames_in_flight, SKY_CLEAR)?;
+    let mode = match args.queues {
+        QueuesArg::Auto => QueueMode::auto(ctx.info()),
+        QueuesArg::Mode(m) => m,
+    };
+    let mut off = Offscreen::with_mode(ctx, view.size, options.terrain.frames_in_flight, SKY_CLEAR, mode)?;
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
     let frames = off.run(ctx, &mut renderer, view, args.frames)?;
     let capture = off.capture(ctx)?;
     // The last frame's timings are back once capture waited for it.
-    let last = renderer.poll_timings().cloned();
+    let last = renderer.poll_timings(ctx).cloned();
     let report = vista::render::frame_report(ctx, &renderer, last.as_ref())?;
     let timed = if frames.len() > WARMUP_FRAMES { &frames[WARMUP_FRAMES..] } else { &frames[..] };
     let c = &view.camera;
@@ -201,13 +228,17 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         settle.frames,
         settle.seconds
     );
+    if let Some(ran) = renderer.queue_mode() {
+        println!("queues: {}", ran.describe(ctx.info()));
+    }
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
     let built = CullStages {
         frustum: args.cull.frustum,
         cone: args.cull.cone && renderer.cull.build.cone,
         hole: args.cull.hole && renderer.cull.build.holes,
+        occlusion: args.cull.occlusion && renderer.cull.build.occlusion,
     };
-    print_stats(&stats, built);
+    print_stats(&stats, built, built.occlusion);
     print_timings(timed);
     if args.report {
         print!("{}", report.to_text());
@@ -220,7 +251,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     Ok(())
 }
 
-fn print_stats(s: &RenderStats, stages: CullStages) {
+fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
     let p = &s.patches;
     let stage = |on: bool, name: &str, n: u32| if on { format!("{n} after {name}") } else { format!("{name} off") };
     println!(
@@ -233,6 +264,16 @@ fn print_stats(s: &RenderStats, stages: CullStages) {
         p.drawn_with_holes,
         s.triangles_drawn
     );
+    if occlusion {
+        println!(
+            "occlusion: {} drawn in phase 1 (visible last frame); {} tested against the depth pyramid, {} of them \
+             drawn in phase 2, {} culled",
+            p.drawn_phase1,
+            p.occlusion_tested,
+            p.drawn_phase2,
+            p.occlusion_tested - p.drawn_phase2
+        );
+    }
     let per_lod: Vec<String> = s
         .nodes_per_lod
         .iter()
@@ -255,13 +296,13 @@ fn print_timings(timed: &[FrameTimings]) {
         println!("no pass timings (timestamps unsupported or no frame finished)");
         return;
     }
-    println!("{:<17} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
+    println!("{:<28} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
     let mut total = 0.0;
     for s in vista::frame::profiler::summarize(timed) {
         total += s.median_ms;
         println!(
-            "{:<17} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
-            s.name,
+            "{:<28} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
+            vista::frame::pass_label(s.name, s.late),
             format!("{:?}", s.queue).to_lowercase(),
             s.median_ms,
             s.min_ms,
@@ -269,7 +310,7 @@ fn print_timings(timed: &[FrameTimings]) {
             s.samples
         );
     }
-    println!("{:<17} {:<9} {:>10.4}", "sum of medians", "", total);
+    println!("{:<28} {:<9} {:>10.4}", "sum of medians", "", total);
 }
 
 fn write_outputs(

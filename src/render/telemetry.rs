@@ -1,0 +1,179 @@
+//! Telemetry that never stalls: at the end of every frame the GPU copies its
+//! counters (traversal, culling per stage and phase, draws) into one slot of
+//! a host-visible ring; the renderer reads a slot once the context reports
+//! its frame complete (`Context::frame_completed`, which the submitter calls
+//! after waiting the frame's fence before reusing its command buffer), so
+//! counters come back frames-in-flight + 1 frames late at most, as data,
+//! and nothing in the frame path waits for the GPU.
+
+use crate::error::Result;
+use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
+use crate::passes::cull_patches::{CullCounters, PatchListHeader};
+use crate::passes::traverse::TraverseHeader;
+use crate::shaders::structs;
+use serde::Serialize;
+
+/// The traversal's counters of one frame.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct TraverseCounters {
+    pub nodes: u32,
+    /// Nodes kept coarser because a list was full.
+    pub overflow: u32,
+    /// Valid roots not resident yet.
+    pub missing_roots: u32,
+    /// Final nodes per LOD, LOD 0 first.
+    pub nodes_per_lod: Vec<u32>,
+}
+
+/// Every GPU counter of one frame.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct FrameCounters {
+    /// The renderer's frame number (as `FrameTimings::frame`).
+    pub frame: u64,
+    pub traverse: TraverseCounters,
+    pub cull: CullCounters,
+    /// Instances of each draw: phase 1 solid, phase 1 with holes, phase 2
+    /// solid, phase 2 with holes (0 where the list does not exist).
+    pub instances: [u32; 4],
+    /// Triangles submitted by every draw.
+    pub triangles: u64,
+}
+
+/// Which lists a renderer has: phase 1's hole list, phase 2's lists.
+#[derive(Debug, Clone, Copy)]
+pub struct CounterLayout {
+    pub holes: bool,
+    pub occlusion: bool,
+    pub lod_count: u32,
+    pub list_capacity: u32,
+    pub triangles_per_patch: u64,
+}
+
+const TRAVERSE_BYTES: u64 = std::mem::size_of::<TraverseHeader>() as u64;
+const HEADER_BYTES: u64 = structs::PATCH_LIST_HEADER as u64;
+/// Readback bytes: the traversal header, then 4 list headers (phase 1
+/// solid, holes; phase 2 solid, holes), absent ones left zero.
+const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES;
+
+impl CounterLayout {
+    /// Parses a slot's bytes (also used on a waiting readback in tests).
+    pub fn parse(&self, frame: u64, bytes: &[u8]) -> FrameCounters {
+        let t: TraverseHeader = bytemuck::pod_read_unaligned(&bytes[..TRAVERSE_BYTES as usize]);
+        let header = |i: u64| -> PatchListHeader {
+            let at = (TRAVERSE_BYTES + i * HEADER_BYTES) as usize;
+            bytemuck::pod_read_unaligned(&bytes[at..at + HEADER_BYTES as usize])
+        };
+        let holes = |i| self.holes.then(|| header(i));
+        let late = self.occlusion.then(|| [Some(header(2)), holes(3)]);
+        let cull = CullCounters::from_headers([Some(header(0)), holes(1)], late, self.list_capacity);
+        let instances = [0, 1, 2, 3].map(|i| header(i).instance_count.min(self.list_capacity));
+        FrameCounters {
+            instances,
+            frame,
+            traverse: TraverseCounters {
+                nodes: t.node_count,
+                overflow: t.overflow,
+                missing_roots: t.missing_roots,
+                nodes_per_lod: t.lod_counts[..self.lod_count as usize].to_vec(),
+            },
+            triangles: u64::from(cull.drawn) * self.triangles_per_patch,
+            cull,
+        }
+    }
+}
+
+/// The buffers a frame's counters are copied from.
+pub struct CounterSources<'a> {
+    pub traverse: &'a Buffer,
+    /// Phase 1's (solid, holes) then phase 2's.
+    pub lists: [Option<&'a Buffer>; 4],
+}
+
+struct Slot {
+    buffer: Buffer,
+    /// Renderer frame and context frame (`Context::frame_recording`).
+    frame: u64,
+    ctx_frame: u64,
+    pending: bool,
+}
+
+pub struct Telemetry {
+    slots: Vec<Slot>,
+    next: usize,
+    layout: CounterLayout,
+    latest: Option<FrameCounters>,
+}
+
+impl Telemetry {
+    /// A ring of `frames_in_flight + 1` slots.
+    pub fn new(ctx: &Context, frames_in_flight: usize, layout: CounterLayout) -> Result<Self> {
+        let mut slots = Vec::new();
+        for i in 0..frames_in_flight.max(1) + 1 {
+            let buffer = Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name: &format!("gpu_counters[{i}]"),
+                    size: SLOT_BYTES,
+                    usage: vk::BufferUsageFlags::TRANSFER_DST,
+                    location: MemoryLocation::GpuToCpu,
+                },
+            )?;
+            slots.push(Slot { buffer, frame: 0, ctx_frame: 0, pending: false });
+        }
+        Ok(Telemetry { slots, next: 0, layout, latest: None })
+    }
+
+    pub fn layout(&self) -> &CounterLayout {
+        &self.layout
+    }
+
+    /// Reads every slot whose frame completed (never waits).
+    pub fn harvest(&mut self, ctx: &Context) {
+        let done = ctx.frames_completed();
+        for slot in &mut self.slots {
+            if !slot.pending || slot.ctx_frame > done {
+                continue;
+            }
+            slot.pending = false;
+            if self.latest.as_ref().is_some_and(|l| l.frame > slot.frame) {
+                continue;
+            }
+            let bytes = slot.buffer.mapped().expect("GpuToCpu buffers are mapped");
+            self.latest = Some(self.layout.parse(slot.frame, bytes));
+        }
+    }
+
+    /// The newest frame's counters that came back.
+    pub fn latest(&self) -> Option<&FrameCounters> {
+        self.latest.as_ref()
+    }
+
+    /// Records the copies of frame `frame` (context frame `ctx_frame`) at
+    /// the end of its last command buffer.
+    pub fn record(&mut self, rec: &mut Recorder, frame: u64, ctx_frame: u64, src: &CounterSources) {
+        let i = self.next;
+        self.next = (self.next + 1) % self.slots.len();
+        let slot = &mut self.slots[i];
+        if slot.pending {
+            log::debug!("counters of frame {} were not back in time and are dropped", slot.frame);
+        }
+        slot.frame = frame;
+        slot.ctx_frame = ctx_frame;
+        slot.pending = true;
+        rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
+        rec.fill_buffer(&slot.buffer, 0);
+        rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_TRANSFER);
+        rec.copy_buffer_region(src.traverse, 0, &slot.buffer, 0, TRAVERSE_BYTES);
+        for (i, list) in src.lists.iter().enumerate() {
+            if let Some(list) = list {
+                rec.copy_buffer_region(list, 0, &slot.buffer, TRAVERSE_BYTES + i as u64 * HEADER_BYTES, HEADER_BYTES);
+            }
+        }
+        rec.transfer_to_host_barrier();
+    }
+
+    /// Device memory of the ring.
+    pub fn memory(&self) -> (String, u64) {
+        ("gpu_counters".to_string(), self.slots.iter().map(|s| s.buffer.memory_bytes()).sum())
+    }
+}
