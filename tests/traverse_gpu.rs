@@ -43,6 +43,9 @@ impl Scene {
             heights: std::collections::HashMap::new(),
             rng: Rng(seed),
         };
+        // Every update waits for the GPU (submit_and_wait) and no frame
+        // count advances: no frame in flight needs a freed slot kept.
+        s.tree.shadow.set_reuse_delay(0);
         for r in world().roots() {
             s.add(r);
         }
