@@ -8,7 +8,7 @@
 
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource};
-use crate::gpu::{Image, Sampler};
+use crate::gpu::{Binding, Image, Sampler};
 use crate::passes::cull_patches::{
     nearest_sampler, spec_constants, CullBuild, CullInputs, CullPush, CullStages, PatchLists,
 };
@@ -19,6 +19,19 @@ use crate::shaders::{consts as k, cull_occluded as sh};
 use crate::terrain::gpu_quadtree::GpuQuadtree;
 use crate::terrain::quadtree::FIRST_SLOT;
 use crate::world::PATCHES_PER_NODE;
+
+/// This shader's bindings in the order of `CullInputs::bindings`.
+const CULL_BINDINGS: [Binding; 9] = [
+    sh::TRAVERSE_OUT,
+    sh::VIEW,
+    sh::LOD_MAP,
+    sh::PATCH_MIN_MAX,
+    sh::NEAREST,
+    sh::PATCH_LIST,
+    sh::PATCH_CONES,
+    sh::PATCH_HOLES,
+    sh::HOLE_LIST,
+];
 
 pub struct CullOccluded {
     pipeline: Pipeline,
@@ -84,32 +97,13 @@ impl CullOccluded {
     ) {
         let pyramid = hiz.pyramid().expect("hiz_build ran before cull_occluded");
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
-        self.lists.reset(rec);
-        rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
-        rec.bind_pipeline(&self.pipeline);
-        let inputs = CullInputs { traverse, tree, lod_map, view };
-        let b = [
-            sh::TRAVERSE_OUT,
-            sh::VIEW,
-            sh::LOD_MAP,
-            sh::PATCH_MIN_MAX,
-            sh::NEAREST,
-            sh::PATCH_LIST,
-            sh::PATCH_CONES,
-            sh::PATCH_HOLES,
-            sh::HOLE_LIST,
+        let extra = [
+            (sh::VISIBILITY, Resource::Buffer(&self.visibility)),
+            (sh::HIZ, Resource::Image(pyramid, vk::ImageLayout::GENERAL)),
         ];
-        let mut bindings = inputs.bindings(b, self.build, &self.sampler, &self.lists);
-        bindings.push((sh::VISIBILITY, Resource::Buffer(&self.visibility)));
-        bindings.push((sh::HIZ, Resource::Image(pyramid, vk::ImageLayout::GENERAL)));
-        rec.push_descriptors(&self.pipeline, &bindings);
         let [depth_w, depth_h] = depth.extent;
         let push = CullPush { stages: stages.bits(), capacity: self.lists.capacity, depth_w, depth_h };
-        rec.push_constants(&self.pipeline, &push);
-        rec.dispatch_indirect(&traverse.output, 0);
-        rec.barrier(
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
-            vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::ALL_COMMANDS,
-        );
+        let inputs = CullInputs { traverse, tree, lod_map, view };
+        inputs.dispatch(rec, &self.pipeline, CULL_BINDINGS, self.build, &self.sampler, &self.lists, &extra, &push);
     }
 }

@@ -256,10 +256,39 @@ pub(crate) struct CullInputs<'a> {
 }
 
 impl<'a> CullInputs<'a> {
+    /// Resets `lists`, then dispatches `pipeline` (one workgroup per listed
+    /// node) with the bindings of patch_cull.glsl plus `extra`; its writes
+    /// are visible to indirect draws and every later command.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn dispatch(
+        &self,
+        rec: &mut Recorder,
+        pipeline: &Pipeline,
+        b: [Binding; 9],
+        build: CullBuild,
+        sampler: &Sampler,
+        lists: &'a PatchLists,
+        extra: &[(Binding, Resource<'a>)],
+        push: &CullPush,
+    ) {
+        lists.reset(rec);
+        rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
+        rec.bind_pipeline(pipeline);
+        let mut bindings = self.bindings(b, build, sampler, lists);
+        bindings.extend_from_slice(extra);
+        rec.push_descriptors(pipeline, &bindings);
+        rec.push_constants(pipeline, push);
+        rec.dispatch_indirect(&self.traverse.output, 0);
+        rec.barrier(
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::ALL_COMMANDS,
+        );
+    }
+
     /// Bindings of patch_cull.glsl, given each shader's own reflected
     /// bindings [traverse_out, view, lod_map, patch_min_max, nearest,
     /// patch_list, patch_cones, patch_holes, hole_list].
-    pub(crate) fn bindings(
+    fn bindings(
         &self,
         b: [Binding; 9],
         build: CullBuild,
@@ -295,6 +324,19 @@ pub(crate) fn nearest_sampler(ctx: &Context, name: &str) -> Result<Sampler> {
 pub(crate) fn spec_constants() -> [(u32, u32); 2] {
     [(sh::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)]
 }
+
+/// This shader's bindings in the order of `CullInputs::bindings`.
+const CULL_BINDINGS: [Binding; 9] = [
+    sh::TRAVERSE_OUT,
+    sh::VIEW,
+    sh::LOD_MAP,
+    sh::PATCH_MIN_MAX,
+    sh::NEAREST,
+    sh::PATCH_LIST,
+    sh::PATCH_CONES,
+    sh::PATCH_HOLES,
+    sh::HOLE_LIST,
+];
 
 pub struct CullPatches {
     pipeline: Pipeline,
@@ -348,33 +390,10 @@ impl CullPatches {
         assert_eq!(visibility.is_some(), self.build.occlusion, "visibility bits exactly with occlusion");
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         rec.update_buffer(view, 0, view_bytes);
-        self.lists.reset(rec);
-        rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
-        rec.bind_pipeline(&self.pipeline);
-        let inputs = CullInputs { traverse, tree, lod_map, view };
-        let b = [
-            sh::TRAVERSE_OUT,
-            sh::VIEW,
-            sh::LOD_MAP,
-            sh::PATCH_MIN_MAX,
-            sh::NEAREST,
-            sh::PATCH_LIST,
-            sh::PATCH_CONES,
-            sh::PATCH_HOLES,
-            sh::HOLE_LIST,
-        ];
-        let mut bindings = inputs.bindings(b, self.build, &self.sampler, &self.lists);
-        if let Some(v) = visibility {
-            bindings.push((sh::VISIBILITY, Resource::Buffer(v)));
-        }
-        rec.push_descriptors(&self.pipeline, &bindings);
+        let extra: Vec<_> = visibility.map(|v| (sh::VISIBILITY, Resource::Buffer(v))).into_iter().collect();
         let push = CullPush { stages: stages.bits(), capacity: self.lists.capacity, depth_w: 0, depth_h: 0 };
-        rec.push_constants(&self.pipeline, &push);
-        rec.dispatch_indirect(&traverse.output, 0);
-        rec.barrier(
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
-            vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::ALL_COMMANDS,
-        );
+        let inputs = CullInputs { traverse, tree, lod_map, view };
+        inputs.dispatch(rec, &self.pipeline, CULL_BINDINGS, self.build, &self.sampler, &self.lists, &extra, &push);
     }
 }
 

@@ -94,6 +94,18 @@ const EFFECT_ATLASES: [(Effect, usize); 5] = [
     (Effect::Queries, ATLAS_SPLAT),
 ];
 
+/// The patch lists whose headers hold a frame's counters, in telemetry
+/// order: phase 1 solid, holes; phase 2 solid, holes.
+fn counter_lists<'a>(cull: &'a CullPatches, occlusion: &'a Option<Occlusion>) -> [Option<&'a Buffer>; 4] {
+    let late = occlusion.as_ref().map(|o| &o.cull.lists);
+    [
+        Some(&cull.lists.list),
+        cull.lists.hole_list.as_ref(),
+        late.map(|l| &l.list),
+        late.and_then(|l| l.hole_list.as_ref()),
+    ]
+}
+
 /// Whether the world has anything for the hole path to cut.
 fn world_content(world: &WorldDesc, holes: &[Hole]) -> WorldContent {
     let root = world.node_size_m(world.root_lod());
@@ -330,16 +342,7 @@ impl TerrainRenderer {
                 r.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
             });
         }
-        let late = self.occlusion.as_ref().map(|o| &o.cull.lists);
-        let sources = CounterSources {
-            traverse: &traverse.output,
-            lists: [
-                Some(&cull.lists.list),
-                cull.lists.hole_list.as_ref(),
-                late.map(|l| &l.list),
-                late.and_then(|l| l.hole_list.as_ref()),
-            ],
-        };
+        let sources = CounterSources { traverse: &traverse.output, lists: counter_lists(cull, &self.occlusion) };
         let telemetry = &mut self.telemetry;
         frame.untimed(QueueKind::Graphics, |r| telemetry.record(r, number, ctx_frame, &sources));
         drop(frame);
@@ -359,14 +362,7 @@ impl TerrainRenderer {
     pub fn read_counters(&self, ctx: &Context) -> Result<FrameCounters> {
         let mut bytes = ctx.read_buffer(&self.traverse.output)?;
         bytes.truncate(std::mem::size_of::<crate::passes::traverse::TraverseHeader>());
-        let late = self.occlusion.as_ref().map(|o| &o.cull.lists);
-        let lists = [
-            Some(&self.cull.lists.list),
-            self.cull.lists.hole_list.as_ref(),
-            late.map(|l| &l.list),
-            late.and_then(|l| l.hole_list.as_ref()),
-        ];
-        for list in lists {
+        for list in counter_lists(&self.cull, &self.occlusion) {
             let header = match list {
                 Some(b) => ctx.read_buffer(b)?[..structs::PATCH_LIST_HEADER].to_vec(),
                 None => vec![0; structs::PATCH_LIST_HEADER],
