@@ -39,9 +39,19 @@ fn render_prints_pass_timings_and_writes_every_output() {
     let (ok, out, err) = vista(&args);
     assert!(ok, "{err}");
     // One table row per pass: name, queue, then a median in ms.
-    // The default world: no queries (no sector_data), no holes (no
-    // terrain_holes), and settled streaming leaves quadtree_update idle.
-    for pass in ["traverse", "lod_map", "cull_patches", "terrain_geometry"] {
+    // The default world: no holes (no terrain_holes), no splat or cliffs
+    // (only the far atlas variant of gbuffer_tiles), and settled streaming
+    // leaves quadtree_update idle.
+    for pass in [
+        "traverse",
+        "lod_map",
+        "sector_data",
+        "cull_patches",
+        "terrain_geometry",
+        "classify_tiles",
+        "gbuffer_tiles[far_atlas]",
+        "lighting_resolve",
+    ] {
         let row = out.lines().find(|l| l.split_whitespace().next() == Some(pass));
         let fields: Vec<&str> =
             row.unwrap_or_else(|| panic!("no timing row for {pass}:\n{out}")).split_whitespace().collect();
@@ -56,7 +66,7 @@ fn render_prints_pass_timings_and_writes_every_output() {
     assert!(n("after_cone") >= n("after_hole") && n("after_hole") >= n("drawn") && n("drawn") > 0, "{p}");
     assert_eq!(n("drawn"), n("drawn_phase1") + n("drawn_phase2"), "{p}");
     assert!(out.contains("queues: single: every pass in one command buffer"), "{out}");
-    for absent in ["sector_data", "terrain_holes"] {
+    for absent in ["terrain_holes", "gbuffer_tiles[far_atlas+splat]", "gbuffer_tiles[near_cliff]"] {
         assert!(!out.lines().any(|l| l.split_whitespace().next() == Some(absent)), "{absent} ran:\n{out}");
     }
     assert_eq!(stats["triangles_drawn"].as_u64(), Some(n("drawn") * 512));
@@ -75,6 +85,15 @@ fn render_prints_pass_timings_and_writes_every_output() {
     for f in ["timings.json", "trace.json", "report.json"] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
+    // The lit image in HDR (R, G, B) and the classification view.
+    let lit = exr::prelude::read_first_flat_layer_from_file(dir.join("lit.exr")).unwrap();
+    let names: Vec<String> = lit.layer_data.channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    assert_eq!(names, ["B", "G", "R"], "lit.exr channels (sorted)");
+    let r: Vec<f32> = lit.layer_data.channel_data.list[2].sample_data.values_as_f32().collect();
+    assert!(r[47 * 64..].iter().all(|&v| v.is_finite() && v > 0.0), "lit ground row");
+    let class = image::open(dir.join("classification.png")).unwrap().to_rgb8();
+    assert_eq!(class.get_pixel(0, 0).0, [0, 0, 0], "sky: no flavour");
+    assert_ne!(class.get_pixel(0, 47).0, [0, 0, 0], "ground: a flavour");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

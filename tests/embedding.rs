@@ -70,7 +70,7 @@ fn from_raw_wraps_an_engines_device_without_owning_it() {
 fn terrain_renderer_records_into_the_engines_command_buffer() {
     use common::terrain::{view, Surface, MAGENTA, MAGENTA_RGBA};
     use vista::gpu::{Image, ImageDesc, Recorder};
-    use vista::passes::terrain_geometry::{COLOR_FORMAT, DEPTH_FORMAT};
+    use vista::passes::terrain_geometry::{COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT};
     use vista::render::{RenderTargets, RendererOptions, TerrainRenderer};
     use vista::world::WorldDesc;
 
@@ -131,7 +131,7 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
                 let mut rec = unsafe { Recorder::from_raw(&wrapped, cmd) };
                 if frame == 0 {
                     rec.discard_to(&color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                    rec.discard_to(&depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+                    rec.discard_to(&depth, DEPTH_LAYOUT);
                 }
                 renderer.record(&mut rec, &v, &RenderTargets { color: &color, depth: &depth, clear: MAGENTA }).unwrap();
                 // SAFETY: ends the recording begun above; submits to the

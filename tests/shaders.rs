@@ -154,7 +154,8 @@ fn rust_twins_match_reflected_layouts() {
     check_layout(
         "TerrainViewGpu",
         fields!(TerrainViewGpu: view_proj, frustum, sun_dir, sun_color, sky_color, camera_sample, camera_frac,
-            camera_z, spacing_m, height_lo, height_scale, height_range, lod_map_w, lod_map_h, pad),
+            camera_z, spacing_m, height_lo, height_scale, height_range, lod_map_w, lod_map_h, pad, inv_view_proj,
+            viewport, camera_world, shade_bands, shade_slope, shade_flags),
         layouts::TERRAIN_VIEW,
         structs::TERRAIN_VIEW,
     );
@@ -280,11 +281,13 @@ fn naga_rejection_stops_the_build_too() {
 
 #[test]
 fn variants_leave_out_what_their_switches_add() {
-    use shaders::{cull_patches as cull, terrain_geometry_frag as frag};
+    use shaders::{cull_patches as cull, gbuffer_tiles_frag as tiles};
     let names = |s: &vista::gpu::ShaderInfo| s.bindings.iter().map(|b| b.name).collect::<Vec<_>>();
-    assert!(!names(frag::variant(0)).contains(&"normal_atlas"), "unlit: no normal atlas");
-    assert!(names(frag::variant(frag::VARIANT_LIGHTING)).contains(&"normal_atlas"));
-    assert!(std::ptr::eq(frag::variant(frag::VARIANT_LIGHTING), &frag::SHADER), "SHADER is the full variant");
+    for material in ["splat_atlas", "materials", "detail_albedo", "detail_normal", "detail_height"] {
+        assert!(!names(tiles::variant(0)).contains(&material), "far atlas only: no {material}");
+        assert!(names(tiles::variant(tiles::VARIANT_MATERIALS)).contains(&material));
+    }
+    assert!(std::ptr::eq(tiles::variant(tiles::VARIANT_MATERIALS), &tiles::SHADER), "SHADER is the full variant");
     let bare = names(cull::variant(0));
     for gone in ["patch_cones", "patch_holes", "hole_list"] {
         assert!(!bare.contains(&gone), "{gone} in the bare cull variant");

@@ -66,5 +66,21 @@
 #define EDGE_NORTH 3u
 // Occlusion: visibility bits per slot (one bit per patch, 64 patches).
 #define VISIBILITY_WORDS_PER_SLOT 2u
+// G-buffer tile shading: one bit per shading flavour a pixel needs (the
+// classification target); a tile's OR of them is its shader variant.
+#define FLAVOUR_VIRTUAL_TEXTURE 1u
+#define FLAVOUR_FAR_ATLAS 2u
+#define FLAVOUR_NEAR_CLIFF 4u
+#define FLAVOUR_FAR_CLIFF 8u
+#define FLAVOUR_SPLAT 16u
+#define FLAVOUR_VARIANTS 32u
+// Screen tiles of classify_tiles (pixels per side).
+#define TILE_SIZE 8u
+// Stencil bit the terrain geometry writes and the tile passes test.
+#define TERRAIN_STENCIL 1u
+// Entries of the splat material table.
+#define MATERIAL_COUNT 256u
+// Splat map texels per node side (65x65: one per two height samples).
+#define SPLAT_TEXELS 65u
 
 #endif

@@ -81,7 +81,9 @@ vec3 vista_terrain_normal(vec2 p) {
     return vec3(xy, sqrt(max(1.0 - dot(xy, xy), 0.0)));
 }
 
-// Material id at the nearest splat texel (65x65 per node).
+#ifndef VISTA_NO_MATERIAL_QUERY
+// Material id at the nearest splat texel (65x65 per node). Define
+// VISTA_NO_MATERIAL_QUERY where no splat atlas is bound.
 uint vista_terrain_material(vec2 p) {
     VistaNodeHit h = vista_find_node(p);
     if (h.slot == 0u) {
@@ -90,5 +92,7 @@ uint vista_terrain_material(vec2 p) {
     ivec2 i = ivec2(round(h.local * 0.5));
     return texelFetch(usampler2DArray(VISTA_SPLAT_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(i, int(h.slot)), 0).r;
 }
+
+#endif
 
 #endif

@@ -36,6 +36,8 @@ layout(push_constant, std430) uniform HolesPush {
 
 layout(location = 0) out vec2 atlas_uv;
 layout(location = 1) flat out uint atlas_layer;
+// Camera-relative position: its screen derivatives give the triangle normal.
+layout(location = 2) out vec3 rel_pos;
 
 // Nearest point of the grid 2^delta coarser, ties toward the lower one.
 uint snap(uint i, uint delta) {
@@ -73,6 +75,7 @@ void main() {
     precise float z = view.v.height_lo + h * view.v.height_range - view.v.camera_z;
     vec3 rel = vec3(view_rel_xy(g, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m), z);
     gl_Position = view.v.view_proj * vec4(rel, 1.0);
+    rel_pos = rel;
 #ifdef TERRAIN_HOLES
     if (texelFetch(sampler2DArray(albedo_atlas, nearest), ivec3(local, int(slot)), 0).a < 0.5) {
         gl_Position = vec4(runtime_nan(pc.nan_bits));

@@ -23,6 +23,14 @@ struct TerrainView {
     uint lod_map_w;         // LOD map extent (sectors, padded)
     uint lod_map_h;
     uint pad;
+    // G-buffer tile shading (render/shading.rs).
+    mat4 inv_view_proj;     // clip -> camera-relative metres
+    vec4 viewport;          // width, height, 1 / width, 1 / height (pixels)
+    vec4 camera_world;      // xyz: camera position in world metres (lookups and texture tiling only); w: near plane (m)
+    vec4 shade_bands;       // view depth (m): far atlas from x to y; far cliff from z to w
+    vec4 shade_slope;       // x: normal z where cliff shading starts, y: where it is full;
+                            // z: far cliff's second tiling scale; w: hash scale (Wyman-McGuire g)
+    uvec4 shade_flags;      // x: flavours the scene can produce; y: hash seed; z: 1 = stochastic cliffs
 };
 
 // LOD-0 sample index -> camera-relative metres (x, y). Takes fields, not

@@ -11,7 +11,7 @@
 
 use super::context::Context;
 use super::pipeline::Pipeline;
-use super::resources::{aspect_of, Buffer, Image};
+use super::resources::{aspect_of, depth_layout, has_stencil, Buffer, Image};
 use super::shader::{Binding, BindingKind};
 use ash::vk;
 
@@ -45,10 +45,13 @@ pub struct ColorTarget<'a> {
 }
 
 /// The depth attachment for `begin_rendering`: cleared to `clear`
-/// (reversed-Z: 0 is far) or kept when `None`.
+/// (reversed-Z: 0 is far; stencil 0) or kept when `None`. A depth-stencil
+/// format is attached as both. `read_only`: in the read-only layout (no
+/// depth or stencil writes; the depth may be sampled meanwhile).
 pub struct DepthTarget<'a> {
     pub image: &'a Image,
     pub clear: Option<f32>,
+    pub read_only: bool,
 }
 
 impl<'a> Recorder<'a> {
@@ -171,7 +174,10 @@ impl<'a> Recorder<'a> {
                     assert!(offset + size <= buf.size, "{}: range {offset}+{size} overruns {}", b.name, buf.name);
                     buffer_infos.push(vk::DescriptorBufferInfo { buffer: buf.raw, offset: *offset, range: *size })
                 }
-                Resource::Image(img, layout) => image_infos.push(image_info(img, img.view(), *layout)),
+                Resource::Image(img, layout) => {
+                    let view = if b.kind == BindingKind::SampledImage { img.sample_view() } else { img.view() };
+                    image_infos.push(image_info(img, view, *layout))
+                }
                 Resource::ImageMip(img, mip, layout) => image_infos.push(image_info(img, img.mip_view(*mip), *layout)),
                 Resource::Sampler(s) => image_infos.push(vk::DescriptorImageInfo {
                     sampler: *s,
@@ -249,17 +255,16 @@ impl<'a> Recorder<'a> {
 
     /// Begins dynamic rendering into `colors` (+ optional depth), with a
     /// full-target viewport and scissor. The targets must be in
-    /// COLOR_ATTACHMENT_OPTIMAL / DEPTH_ATTACHMENT_OPTIMAL.
+    /// COLOR_ATTACHMENT_OPTIMAL / the [`depth_layout`] of their format.
     pub fn begin_rendering(&mut self, colors: &[ColorTarget], depth_target: Option<DepthTarget>) {
-        let depth = depth_target.as_ref().map(|d| d.image);
+        let depth = depth_target.as_ref().map(|d| (d.image, depth_layout(d.image.format, d.read_only)));
         self.outside_rendering("begin_rendering");
-        let extent =
-            colors.first().map(|c| c.image.extent).or(depth.map(|d| d.extent)).expect("begin_rendering needs a target");
-        for (img, layout) in colors
-            .iter()
-            .map(|c| (c.image, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL))
-            .chain(depth.map(|d| (d, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)))
-        {
+        let extent = colors
+            .first()
+            .map(|c| c.image.extent)
+            .or(depth.map(|d| d.0.extent))
+            .expect("begin_rendering needs a target");
+        for (img, layout) in colors.iter().map(|c| (c.image, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)).chain(depth) {
             assert_eq!(img.layout(), layout, "render target {} is not in {layout:?}", img.name);
             assert_eq!(img.extent, extent, "render target {} differs in size from the first", img.name);
         }
@@ -276,14 +281,16 @@ impl<'a> Recorder<'a> {
             .collect();
         let depth_att = depth_target.as_ref().map(|d| {
             let load = if d.clear.is_some() { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
+            let store = if d.read_only { vk::AttachmentStoreOp::NONE } else { vk::AttachmentStoreOp::STORE };
             let depth = d.clear.unwrap_or_default();
             vk::RenderingAttachmentInfo::default()
                 .image_view(d.image.view())
-                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .image_layout(depth_layout(d.image.format, d.read_only))
                 .load_op(load)
-                .store_op(vk::AttachmentStoreOp::STORE)
+                .store_op(store)
                 .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth, stencil: 0 } })
         });
+        let stencil_att = depth_att.filter(|_| depth_target.as_ref().is_some_and(|d| has_stencil(d.image.format)));
         let area = vk::Rect2D {
             offset: vk::Offset2D { x: 0, y: 0 },
             extent: vk::Extent2D { width: extent[0], height: extent[1] },
@@ -291,6 +298,9 @@ impl<'a> Recorder<'a> {
         let mut info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&color_atts);
         if let Some(d) = depth_att.as_ref() {
             info = info.depth_attachment(d);
+        }
+        if let Some(st) = stencil_att.as_ref() {
+            info = info.stencil_attachment(st);
         }
         let viewport = vk::Viewport {
             x: 0.0,
@@ -336,6 +346,15 @@ impl<'a> Recorder<'a> {
             self.d().cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
             self.d().cmd_draw_indexed(self.cmd, index_count, instances, 0, 0, 0);
         }
+    }
+
+    /// One `VkDrawIndirectCommand` at `offset` of `args` (written on the GPU).
+    pub fn draw_indirect(&mut self, args: &Buffer, offset: u64) {
+        self.drawable("draw_indirect");
+        let size = std::mem::size_of::<vk::DrawIndirectCommand>() as u64;
+        indirect_range(args, offset, size);
+        // SAFETY: rendering, pipeline bound, the command's range and usage checked.
+        unsafe { self.d().cmd_draw_indirect(self.cmd, args.raw, offset, 1, size as u32) };
     }
 
     /// One `VkDrawIndexedIndirectCommand` at `offset` of `args` (written on

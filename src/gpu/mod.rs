@@ -22,9 +22,11 @@ pub use ash::vk;
 pub use commands::{ColorTarget, DepthTarget, Recorder, Resource};
 pub use context::{Context, ContextOptions, Queue, RawHandles};
 pub use device_info::{DeviceInfo, Limits, QueueFamilyInfo};
-pub use pipeline::{ComputePipelineDesc, GraphicsPipelineDesc, Pipeline};
+pub use pipeline::{ComputePipelineDesc, GraphicsPipelineDesc, Pipeline, StencilDesc};
 pub use query::TimestampPool;
-pub use resources::{Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation, Sampler, SamplerDesc};
+pub use resources::{
+    depth_layout, has_stencil, Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation, Sampler, SamplerDesc,
+};
 pub use shader::{Binding, BindingKind, ShaderInfo, ShaderStage};
 pub use submit::{FrameCommands, FrameRing, QueueMode};
 pub use validation::{Severity, ValidationLog, ValidationMessage};

@@ -2,7 +2,7 @@
 //! push-descriptor set) and push-constant range come from reflection.
 
 use super::context::{Context, Shared};
-use super::resources::{inc, Garbage};
+use super::resources::{has_stencil, inc, Garbage};
 use super::shader::{Binding, ShaderInfo};
 use crate::error::{vk_err, Error, Result};
 use ash::vk;
@@ -50,9 +50,24 @@ pub struct GraphicsPipelineDesc<'a> {
     pub specialization: Specialization<'a>,
     pub color_formats: &'a [vk::Format],
     pub depth_format: Option<vk::Format>,
+    /// ALWAYS disables the depth test.
     pub depth_compare: vk::CompareOp,
+    pub depth_write: bool,
+    /// Stencil test and write of the depth target's stencil aspect.
+    pub stencil: Option<StencilDesc>,
     pub cull_mode: vk::CullModeFlags,
     pub topology: vk::PrimitiveTopology,
+}
+
+/// One stencil state for both faces: pass when `reference & compare_mask`
+/// relates to the stored value by `compare`; where depth and stencil pass,
+/// `write_mask` bits of the stored value become `reference`'s.
+#[derive(Debug, Clone, Copy)]
+pub struct StencilDesc {
+    pub compare: vk::CompareOp,
+    pub reference: u32,
+    pub compare_mask: u32,
+    pub write_mask: u32,
 }
 
 struct Layout {
@@ -215,10 +230,25 @@ impl Pipeline {
             .line_width(1.0);
         let multisample =
             vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let has_depth = desc.depth_format.is_some();
+        let stencil_op = desc.stencil.map(|st| {
+            let pass = if st.write_mask != 0 { vk::StencilOp::REPLACE } else { vk::StencilOp::KEEP };
+            vk::StencilOpState::default()
+                .fail_op(vk::StencilOp::KEEP)
+                .pass_op(pass)
+                .depth_fail_op(vk::StencilOp::KEEP)
+                .compare_op(st.compare)
+                .compare_mask(st.compare_mask)
+                .write_mask(st.write_mask)
+                .reference(st.reference)
+        });
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth_format.is_some())
-            .depth_write_enable(desc.depth_format.is_some())
-            .depth_compare_op(desc.depth_compare);
+            .depth_test_enable(has_depth && desc.depth_compare != vk::CompareOp::ALWAYS)
+            .depth_write_enable(has_depth && desc.depth_write)
+            .depth_compare_op(desc.depth_compare)
+            .stencil_test_enable(stencil_op.is_some())
+            .front(stencil_op.unwrap_or_default())
+            .back(stencil_op.unwrap_or_default());
         let attachments: Vec<_> = desc
             .color_formats
             .iter()
@@ -229,7 +259,8 @@ impl Pipeline {
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(desc.color_formats)
-            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED))
+            .stencil_attachment_format(desc.depth_format.filter(|f| has_stencil(*f)).unwrap_or(vk::Format::UNDEFINED));
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)

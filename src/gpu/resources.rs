@@ -255,7 +255,8 @@ pub struct ImageDesc<'a> {
 pub struct Image {
     pub(crate) raw: vk::Image,
     /// The whole image; then one view per mip when it has several (storage
-    /// writes address a single mip).
+    /// writes address a single mip); last, for depth-stencil formats, a
+    /// depth-only view (a sampled view may have one aspect only).
     pub(crate) views: Vec<vk::ImageView>,
     allocation: Option<Allocation>,
     pub format: vk::Format,
@@ -277,6 +278,22 @@ pub(crate) fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
             vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
         }
         _ => vk::ImageAspectFlags::COLOR,
+    }
+}
+
+/// Whether a depth format has a stencil aspect.
+pub fn has_stencil(format: vk::Format) -> bool {
+    aspect_of(format).contains(vk::ImageAspectFlags::STENCIL)
+}
+
+/// The attachment layout of a depth(-stencil) target: writable, or
+/// read-only (the depth then may also be sampled while attached).
+pub fn depth_layout(format: vk::Format, read_only: bool) -> vk::ImageLayout {
+    match (has_stencil(format), read_only) {
+        (true, false) => vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+        (true, true) => vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+        (false, false) => vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+        (false, true) => vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
     }
 }
 
@@ -343,18 +360,22 @@ impl Image {
         };
         let view_type =
             if desc.array_layers > 1 { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D };
-        let view_info = |base_mip: u32, mips: u32| {
+        let view_info = |base_mip: u32, mips: u32, aspect: vk::ImageAspectFlags| {
             vk::ImageViewCreateInfo::default().image(raw).view_type(view_type).format(desc.format).subresource_range(
                 vk::ImageSubresourceRange::default()
-                    .aspect_mask(aspect_of(desc.format))
+                    .aspect_mask(aspect)
                     .base_mip_level(base_mip)
                     .level_count(mips)
                     .layer_count(desc.array_layers),
             )
         };
-        let mut infos = vec![view_info(0, desc.mip_levels)];
+        let aspect = aspect_of(desc.format);
+        let mut infos = vec![view_info(0, desc.mip_levels, aspect)];
         if desc.mip_levels > 1 {
-            infos.extend((0..desc.mip_levels).map(|m| view_info(m, 1)));
+            infos.extend((0..desc.mip_levels).map(|m| view_info(m, 1, aspect)));
+        }
+        if has_stencil(desc.format) {
+            infos.push(view_info(0, desc.mip_levels, vk::ImageAspectFlags::DEPTH));
         }
         let mut views = Vec::with_capacity(infos.len());
         // SAFETY: binding a fresh allocation sized by the image's requirements,
@@ -411,6 +432,16 @@ impl Image {
         self.views[0]
     }
 
+    /// The view shaders sample: every mip and layer, the depth aspect only
+    /// for depth-stencil formats.
+    pub fn sample_view(&self) -> vk::ImageView {
+        if has_stencil(self.format) {
+            *self.views.last().expect("depth-stencil images have a depth view")
+        } else {
+            self.views[0]
+        }
+    }
+
     /// View of one mip (all layers).
     pub fn mip_view(&self, mip: u32) -> vk::ImageView {
         assert!(mip < self.mip_levels, "{}: mip {mip} of {}", self.name, self.mip_levels);
@@ -444,10 +475,19 @@ pub struct Sampler {
 
 impl Sampler {
     pub fn new(ctx: &Context, desc: &SamplerDesc) -> Result<Sampler> {
+        Self::create(ctx, desc, vk::SamplerMipmapMode::NEAREST)
+    }
+
+    /// Like `new`, filtering between mips too (trilinear with LINEAR).
+    pub fn mipmapped(ctx: &Context, desc: &SamplerDesc) -> Result<Sampler> {
+        Self::create(ctx, desc, vk::SamplerMipmapMode::LINEAR)
+    }
+
+    fn create(ctx: &Context, desc: &SamplerDesc, mipmap: vk::SamplerMipmapMode) -> Result<Sampler> {
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(desc.filter)
             .min_filter(desc.filter)
-            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .mipmap_mode(mipmap)
             .address_mode_u(desc.address_mode)
             .address_mode_v(desc.address_mode)
             .address_mode_w(desc.address_mode)

@@ -4,7 +4,7 @@
 
 use super::commands::Recorder;
 use super::query::TimestampPool;
-use super::resources::{aspect_of, Buffer, Image};
+use super::resources::{aspect_of, has_stencil, Buffer, Image};
 use ash::vk;
 use std::ffi::CString;
 
@@ -154,7 +154,8 @@ fn packed_region(img: &Image, mip: u32, layer: u32, offset: u64) -> vk::BufferIm
     vk::BufferImageCopy::default()
         .buffer_offset(offset)
         .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: aspect_of(img.format),
+            // Copies address one aspect: the depth of a depth-stencil image.
+            aspect_mask: if has_stencil(img.format) { vk::ImageAspectFlags::DEPTH } else { aspect_of(img.format) },
             mip_level: mip,
             base_array_layer: layer,
             layer_count: 1,

@@ -1,8 +1,11 @@
 //! One pass per file; the pass, its shader and its timer label share a name.
 
+pub mod classify_tiles;
 pub mod cull_occluded;
 pub mod cull_patches;
+pub mod gbuffer_tiles;
 pub mod hiz_build;
+pub mod lighting_resolve;
 pub mod lod_map;
 pub mod prefix_sum;
 pub mod quadtree_update;

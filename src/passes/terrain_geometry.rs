@@ -2,24 +2,29 @@
 //! indexed-indirect draw of a 16x16-quad grid (the draw args are the patch
 //! list's header). The vertex shader stitches LOD seams; patches with holes
 //! are drawn by `terrain_holes`, whose vertex shader alone tests holes.
-//! Until the G-buffer tile passes exist the fragment shader writes a lit
-//! colour (variant LIGHTING, the `lighting` effect) or unlit albedo. Depth
-//! is reversed-Z D32_SFLOAT (cleared to 0, GREATER passes).
+//! The fragment shader writes what the G-buffer tile passes shade from:
+//! the classification bits and two octahedral normals; the pipeline writes
+//! the terrain stencil bit. Depth is reversed-Z D32_SFLOAT_S8_UINT
+//! (cleared to 0, GREATER passes).
 
 use crate::error::Result;
 use crate::gpu::{
-    vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, MemoryLocation,
-    Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo,
+    depth_layout, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image,
+    MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo, StencilDesc,
 };
+use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT};
+use crate::shaders::consts::TERRAIN_STENCIL;
 use crate::shaders::{terrain_geometry_frag as fs, terrain_geometry_vert as vs};
-use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
 use crate::terrain::patch_grid::diamond_indices;
 use crate::world::{PATCHES_PER_NODE_SIDE, PATCH_QUADS};
 
 /// Colour target format of the lit output (gamma-encoded by the shader).
 pub const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-/// Reversed-Z depth, infinite far plane.
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// Reversed-Z depth, infinite far plane; the stencil holds the terrain bit.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT_S8_UINT;
+/// The depth target's layout on entry to and exit from a frame.
+pub const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
 
 /// The patch's index list: the diamond pattern (every odd/odd vertex the
 /// centre of 8 triangles), triangles reordered for the post-transform
@@ -32,31 +37,31 @@ pub fn patch_indices() -> Vec<u32> {
 }
 
 /// The colour and depth images a frame renders into, and the clear colour.
-/// Layouts on entry and exit: COLOR_ATTACHMENT_OPTIMAL and
-/// DEPTH_ATTACHMENT_OPTIMAL.
+/// Layouts on entry and exit: COLOR_ATTACHMENT_OPTIMAL and [`DEPTH_LAYOUT`].
 pub struct RenderTargets<'a> {
     pub color: &'a Image,
     pub depth: &'a Image,
     pub clear: [f32; 4],
 }
 
-/// The terrain pipeline of pass `name` with vertex shader `vertex`; the
-/// fragment shader lit (effect `lighting`) or not.
-pub(crate) fn terrain_pipeline(
-    ctx: &Context,
-    name: &str,
-    vertex: &'static ShaderInfo,
-    lighting: bool,
-) -> Result<Pipeline> {
+/// The terrain pipeline of pass `name` with vertex shader `vertex`.
+pub(crate) fn terrain_pipeline(ctx: &Context, name: &str, vertex: &'static ShaderInfo) -> Result<Pipeline> {
     let spec = [(vs::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (vs::SPEC_PATCH_QUADS, PATCH_QUADS)];
     let desc = GraphicsPipelineDesc {
         name,
         vertex,
-        fragment: fs::variant(if lighting { fs::VARIANT_LIGHTING } else { 0 }),
+        fragment: &fs::SHADER,
         specialization: &spec,
-        color_formats: &[COLOR_FORMAT],
+        color_formats: &[CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT],
         depth_format: Some(DEPTH_FORMAT),
         depth_compare: vk::CompareOp::GREATER,
+        depth_write: true,
+        stencil: Some(StencilDesc {
+            compare: vk::CompareOp::ALWAYS,
+            reference: TERRAIN_STENCIL,
+            compare_mask: 0,
+            write_mask: TERRAIN_STENCIL,
+        }),
         cull_mode: vk::CullModeFlags::BACK,
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
     };
@@ -69,15 +74,13 @@ pub struct TerrainGeometry {
     nearest: Sampler,
     linear: Sampler,
     index_count: u32,
-    lighting: bool,
 }
 
 impl TerrainGeometry {
     pub const NAME: &'static str = vs::PASS;
 
-    /// `lighting`: the lit fragment variant (reads the normal atlas).
-    pub fn new(ctx: &Context, lighting: bool) -> Result<Self> {
-        let pipeline = terrain_pipeline(ctx, Self::NAME, &vs::SHADER, lighting)?;
+    pub fn new(ctx: &Context) -> Result<Self> {
+        let pipeline = terrain_pipeline(ctx, Self::NAME, &vs::SHADER)?;
         let idx = patch_indices();
         let indices = Buffer::new(
             ctx,
@@ -98,7 +101,6 @@ impl TerrainGeometry {
             nearest: sampler("terrain_geometry_nearest", vk::Filter::NEAREST)?,
             linear: sampler("terrain_geometry_linear", vk::Filter::LINEAR)?,
             index_count: idx.len() as u32,
-            lighting,
         })
     }
 
@@ -132,36 +134,50 @@ impl TerrainGeometry {
             (vs::VIEW, Resource::Buffer(view)),
             (vs::PATCH_LIST, Resource::Buffer(list)),
             (vs::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
-            (fs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),
+            (fs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
             (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
             (fs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
         ];
-        if self.lighting {
-            bindings.push((fs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)));
-        }
         bindings.extend(extra.iter().map(|(b, r)| (*b, *r)));
         rec.push_descriptors(pipeline, &bindings);
     }
 
     /// Draws patch list `list` (phase 1's, after clearing the targets, or
     /// phase 2's over them).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder,
         targets: &RenderTargets,
+        gbuffer: &GBuffer,
         view: &Buffer,
         list: &Buffer,
         tree: &GpuQuadtree,
         clear: bool,
     ) {
-        rec.begin_rendering(
-            &[ColorTarget { image: targets.color, clear: clear.then_some(targets.clear) }],
-            Some(DepthTarget { image: targets.depth, clear: clear.then_some(0.0) }),
-        );
+        begin_geometry(rec, targets, gbuffer, clear);
         self.bind(rec, &self.pipeline, view, list, tree, &[]);
         rec.draw_indexed_indirect(&self.indices, list, 0);
         rec.end_rendering();
     }
+}
+
+/// Opens the geometry pass's rendering scope: classification (cleared to
+/// 0 = no terrain), geometry normals, depth and stencil (cleared to far, 0).
+pub(crate) fn begin_geometry(rec: &mut Recorder, targets: &RenderTargets, gbuffer: &GBuffer, clear: bool) {
+    let (class, normals) = (&gbuffer.classification, &gbuffer.geometry_normals);
+    if clear {
+        rec.discard_to(class, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+        rec.discard_to(normals, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+    }
+    debug_assert_eq!(depth_layout(DEPTH_FORMAT, false), DEPTH_LAYOUT);
+    rec.begin_rendering(
+        &[
+            ColorTarget { image: class, clear: clear.then_some([0.0; 4]) },
+            ColorTarget { image: normals, clear: clear.then_some([0.0; 4]) },
+        ],
+        Some(DepthTarget { image: targets.depth, clear: clear.then_some(0.0), read_only: false }),
+    );
 }
 
 #[cfg(test)]

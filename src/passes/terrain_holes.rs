@@ -6,9 +6,10 @@
 //! frame with no such patch in view runs it with zero instances.
 
 use crate::error::Result;
-use crate::gpu::{ColorTarget, Context, DepthTarget, Pipeline, Recorder, Resource};
+use crate::gpu::{Context, Pipeline, Recorder, Resource};
 use crate::passes::cull_patches::PatchLists;
-use crate::passes::terrain_geometry::{terrain_pipeline, RenderTargets, TerrainGeometry};
+use crate::passes::terrain_geometry::{begin_geometry, terrain_pipeline, RenderTargets, TerrainGeometry};
+use crate::render::gbuffer::GBuffer;
 use crate::shaders::terrain_holes_vert as vs;
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_LAYOUT};
 
@@ -30,8 +31,8 @@ pub struct TerrainHoles {
 impl TerrainHoles {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context, lighting: bool) -> Result<Self> {
-        Ok(TerrainHoles { pipeline: terrain_pipeline(ctx, Self::NAME, &vs::SHADER, lighting)? })
+    pub fn new(ctx: &Context) -> Result<Self> {
+        Ok(TerrainHoles { pipeline: terrain_pipeline(ctx, Self::NAME, &vs::SHADER)? })
     }
 
     pub fn pipeline_label(&self) -> &str {
@@ -40,20 +41,19 @@ impl TerrainHoles {
 
     /// Draws a hole list (phase 1's or phase 2's) over the targets (kept,
     /// not cleared).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder,
         targets: &RenderTargets,
+        gbuffer: &GBuffer,
         view: &crate::gpu::Buffer,
         lists: &PatchLists,
         geometry: &TerrainGeometry,
         tree: &GpuQuadtree,
     ) {
         let list = lists.hole_list.as_ref().expect("terrain_holes is built only with the hole list");
-        rec.begin_rendering(
-            &[ColorTarget { image: targets.color, clear: None }],
-            Some(DepthTarget { image: targets.depth, clear: None }),
-        );
+        begin_geometry(rec, targets, gbuffer, false);
         let albedo = (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT));
         geometry.bind(rec, &self.pipeline, view, list, tree, &[albedo]);
         rec.push_constants(&self.pipeline, &HolesPush { nan_bits: QUIET_NAN_BITS, pad: [0; 3] });

@@ -14,6 +14,7 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::render::shading::ShadeRules;
 use crate::render::view::Lighting;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -91,11 +92,17 @@ impl Effect {
     /// scene may ask for them (and is checked), the report says they are off.
     pub fn unavailable(self) -> Option<&'static str> {
         match self {
-            Effect::Cliffs | Effect::Splat | Effect::VirtualTexture => {
-                Some("not implemented in this version (G-buffer tile shading is issue [G])")
+            Effect::VirtualTexture => {
+                Some("not implemented in this version (its flavour bit exists; splat shading stands in for it)")
             }
             Effect::Decals | Effect::Grass | Effect::Shadows => Some("not implemented in this version"),
-            Effect::Holes | Effect::ConeCull | Effect::Occlusion | Effect::Lighting | Effect::Queries => None,
+            Effect::Holes
+            | Effect::ConeCull
+            | Effect::Occlusion
+            | Effect::Lighting
+            | Effect::Queries
+            | Effect::Cliffs
+            | Effect::Splat => None,
         }
     }
 
@@ -103,8 +110,8 @@ impl Effect {
     fn parameters(self) -> &'static [&'static str] {
         match self {
             Effect::Lighting => &["sun_azimuth_deg", "sun_elevation_deg", "sun_color", "sky_color"],
-            Effect::Cliffs => &["slope_deg"],
-            Effect::Splat => &["materials"],
+            Effect::Cliffs => &["slope_deg", "band_deg", "near_far_m", "stochastic", "hash_seed"],
+            Effect::Splat => &["materials", "far_start_m", "far_band_m"],
             Effect::VirtualTexture => &["cache_mb"],
             Effect::Decals => &["file"],
             _ => &[],
@@ -119,8 +126,9 @@ pub struct Effects {
     /// Set explicitly (scene or code) rather than left at the default.
     named: [bool; Effect::ALL.len()],
     pub lighting: Lighting,
-    /// Slope above which a tile counts as cliff, degrees.
-    pub cliff_slope_deg: f64,
+    /// Classification and cliff parameters (`allowed` is decided by the
+    /// renderer from the effects that are on).
+    pub shade: ShadeRules,
     /// Material set of the splat map (a file that must exist).
     pub splat_materials: Option<PathBuf>,
     pub virtual_texture_cache_mb: u32,
@@ -134,7 +142,7 @@ impl Default for Effects {
             on: Effect::ALL.map(Effect::default_on),
             named: [false; Effect::ALL.len()],
             lighting: Lighting::default(),
-            cliff_slope_deg: 40.0,
+            shade: ShadeRules::default(),
             splat_materials: None,
             virtual_texture_cache_mb: 256,
             decals_file: None,
@@ -212,7 +220,24 @@ impl Effects {
                 "sun_elevation_deg" => self.lighting.sun_elevation_deg = number(&key, v, -90.0, 90.0)?,
                 "sun_color" => self.lighting.sun_color = colour(&key, v)?,
                 "sky_color" => self.lighting.sky_color = colour(&key, v)?,
-                "slope_deg" => self.cliff_slope_deg = number(&key, v, 0.0, 90.0)?,
+                "slope_deg" => self.shade.cliff_slope_deg = number(&key, v, 0.0, 90.0)? as f32,
+                "band_deg" => self.shade.cliff_band_deg = number(&key, v, 0.0, 45.0)? as f32,
+                "near_far_m" => {
+                    let m = number(&key, v, 0.0, 1e6)? as f32;
+                    self.shade.cliff_split_start_m = m;
+                    self.shade.cliff_split_end_m = m * 5.0 / 3.0;
+                }
+                "stochastic" => self.shade.stochastic = v.as_bool().ok_or_else(|| wrong(&key, "true or false", v))?,
+                "hash_seed" => {
+                    let seed = v.as_integer().filter(|s| (0..=i64::from(u32::MAX)).contains(s));
+                    self.shade.hash_seed = seed.ok_or_else(|| wrong(&key, "a whole number 0..=4294967295", v))? as u32;
+                }
+                "far_start_m" => {
+                    let band = self.shade.far_end_m - self.shade.far_start_m;
+                    self.shade.far_start_m = number(&key, v, 0.0, 1e7)? as f32;
+                    self.shade.far_end_m = self.shade.far_start_m + band;
+                }
+                "far_band_m" => self.shade.far_end_m = self.shade.far_start_m + number(&key, v, 1.0, 1e7)? as f32,
                 "cache_mb" => {
                     let mb = v.as_integer().filter(|m| (1..=65536).contains(m));
                     self.virtual_texture_cache_mb =

@@ -7,13 +7,15 @@
 //! whose effect is off is not built; each frame logs which built passes
 //! were recorded and which were skipped because the CPU knew they had
 //! nothing to do. Occlusion culling draws twice: the drawing passes appear
-//! again as phase 2 after `hiz_build` and `cull_occluded`.
+//! again as phase 2 after `hiz_build` and `cull_occluded`. Shading follows:
+//! `classify_tiles`, `gbuffer_tiles` (one timed draw per variant built) and
+//! `lighting_resolve`.
 
 use crate::frame::QueueKind;
 use crate::passes::{
-    cull_occluded::CullOccluded, cull_patches::CullPatches, hiz_build::HizBuild, lod_map::LodMap,
-    quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, terrain_geometry::TerrainGeometry,
-    terrain_holes::TerrainHoles, traverse::Traverse,
+    classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches, gbuffer_tiles::GbufferTiles,
+    hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap, quadtree_update::QuadtreeUpdatePass,
+    sector_data::SectorData, terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
 };
 use crate::render::effects::{Effect, EffectDecision};
 use serde::Serialize;
@@ -33,10 +35,14 @@ pub enum FramePass {
     /// Phase 2 of occlusion culling: the patches the pyramid left visible.
     TerrainGeometryLate,
     TerrainHolesLate,
+    ClassifyTiles,
+    /// One draw per variant built, each timed on its own.
+    GbufferTiles,
+    LightingResolve,
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 11] = [
+    pub const ALL: [FramePass; 14] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -48,6 +54,9 @@ impl FramePass {
         FramePass::CullOccluded,
         FramePass::TerrainGeometryLate,
         FramePass::TerrainHolesLate,
+        FramePass::ClassifyTiles,
+        FramePass::GbufferTiles,
+        FramePass::LightingResolve,
     ];
 
     /// Pass, shader and timer label (from the shader bank).
@@ -62,6 +71,9 @@ impl FramePass {
             FramePass::TerrainHoles | FramePass::TerrainHolesLate => TerrainHoles::NAME,
             FramePass::HizBuild => HizBuild::NAME,
             FramePass::CullOccluded => CullOccluded::NAME,
+            FramePass::ClassifyTiles => ClassifyTiles::NAME,
+            FramePass::GbufferTiles => GbufferTiles::NAME,
+            FramePass::LightingResolve => LightingResolve::NAME,
         }
     }
 
@@ -92,7 +104,6 @@ impl FramePass {
     /// The effects the pass exists for, all needed (empty: every scene).
     pub fn effects(self) -> &'static [Effect] {
         match self {
-            FramePass::SectorData => &[Effect::Queries],
             FramePass::TerrainHoles => &[Effect::Holes],
             FramePass::HizBuild | FramePass::CullOccluded | FramePass::TerrainGeometryLate => &[Effect::Occlusion],
             FramePass::TerrainHolesLate => &[Effect::Holes, Effect::Occlusion],

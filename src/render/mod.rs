@@ -4,11 +4,16 @@
 //! [`View`]; [`report`] says what was built and what ran; [`offscreen`] is
 //! the headless frame loop of the tools and tests.
 
+pub mod detail_textures;
 pub mod effects;
+pub mod gbuffer;
 pub mod graph;
+pub mod materials;
+pub mod materials_gpu;
 pub mod offscreen;
 pub mod renderer;
 pub mod report;
+pub mod shading;
 pub mod stats;
 pub mod telemetry;
 pub mod view;

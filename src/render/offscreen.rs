@@ -6,7 +6,7 @@
 use crate::error::Result;
 use crate::frame::FrameTimings;
 use crate::gpu::{vk, Context, FrameCommands, FrameRing, Image, ImageDesc, QueueMode};
-use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT};
 use crate::render::renderer::TerrainRenderer;
 use crate::render::view::{linear_depth, View};
 use std::time::{Duration, Instant};
@@ -97,7 +97,7 @@ impl Offscreen {
                     FrameCommands::Split { graphics, .. } => &mut **graphics,
                 };
                 graphics.discard_to(color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                graphics.discard_to(depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+                graphics.discard_to(depth, DEPTH_LAYOUT);
             }
             renderer.record_frame(cmds, mode, view, &RenderTargets { color, depth, clear })
         })?;

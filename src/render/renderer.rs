@@ -3,7 +3,8 @@
 //! records one frame into a command buffer the caller provides. The frame
 //! is the pass graph of [`graph`](super::graph) (in order: quadtree_update,
 //! traverse, lod_map, sector_data, cull_patches, terrain_geometry,
-//! terrain_holes); a pass whose effect is off is not built (no pipeline, no
+//! terrain_holes, the occlusion passes, classify_tiles, gbuffer_tiles,
+//! lighting_resolve); a pass whose effect is off is not built (no pipeline, no
 //! resource) and never recorded, and one with nothing to do this frame is
 //! skipped (known on the CPU) or runs with zero indirect work (known only
 //! on the GPU). Each recorded pass is wrapped by the frame executor in a
@@ -15,17 +16,24 @@
 use crate::error::{Error, Result};
 use crate::frame::{FrameExecutor, FrameTimings, QueueKind};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, FrameCommands, MemoryLocation, QueueMode, Recorder};
+use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
+use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles};
 use crate::passes::hiz_build::HizBuild;
+use crate::passes::lighting_resolve::LightingResolve;
 use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
 use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::passes::terrain_holes::TerrainHoles;
+use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::render::effects::{decide, Effect, EffectDecision, Effects, WorldContent};
+use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FramePass, PassGraph, Skip};
+use crate::render::materials_gpu::MaterialResources;
+use crate::render::shading::ShadeRules;
 use crate::render::stats::TRIANGLES_PER_PATCH;
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
@@ -44,6 +52,10 @@ pub struct RendererOptions {
     /// and tests turn them off to show what each removes and costs).
     pub stages: CullStages,
     pub effects: Effects,
+    /// Shade every terrain tile with one pipeline that has every flavour the
+    /// scene allows, instead of one pipeline per tile variant (the reference
+    /// the tiled shading is compared with in tests and `vista bench shade`).
+    pub one_shader: bool,
     /// Tests only: keep an effect on although the world lacks its data, to
     /// show that its path changes nothing there.
     #[doc(hidden)]
@@ -55,14 +67,23 @@ pub struct TerrainRenderer {
     update: QuadtreeUpdatePass,
     pub traverse: Traverse,
     pub lod_map: LodMap,
-    /// Effect `queries` (sector data for `TerrainQuery`).
-    pub sector_data: Option<SectorData>,
+    /// Where any shader finds the terrain: the tile shading and `TerrainQuery`.
+    pub sector_data: SectorData,
     pub cull: CullPatches,
     /// Effect `occlusion`: the depth pyramid and phase 2's culling.
     pub occlusion: Option<Occlusion>,
     pub geometry: TerrainGeometry,
     /// Effect `holes`.
     pub holes: Option<TerrainHoles>,
+    pub classify: ClassifyTiles,
+    pub gbuffer_tiles: GbufferTiles,
+    pub resolve: LightingResolve,
+    /// Effects `splat` or `cliffs`: the material table and detail textures.
+    pub materials: Option<MaterialResources>,
+    /// Made for the view size on the first frame (remade when it changes).
+    pub gbuffer: Option<GBuffer>,
+    pub shade: ShadeRules,
+    one_shader: bool,
     view_buffer: Buffer,
     telemetry: Telemetry,
     exec: FrameExecutor,
@@ -85,13 +106,14 @@ pub struct Occlusion {
 /// submission's timeline value (see [`TerrainRenderer::record_split`]).
 pub const GRAPHICS_WAIT_STAGE: vk::PipelineStageFlags2 = vk::PipelineStageFlags2::ALL_COMMANDS;
 
-/// The payload atlases each effect reads (the normal atlas serves two).
+/// The payload atlases each effect reads beyond the core ones (the splat
+/// map serves three).
 const EFFECT_ATLASES: [(Effect, usize); 5] = [
-    (Effect::Lighting, ATLAS_NORMAL),
     (Effect::ConeCull, ATLAS_PATCH_CONES),
     (Effect::Holes, ATLAS_PATCH_HOLES),
-    (Effect::Queries, ATLAS_NORMAL),
     (Effect::Queries, ATLAS_SPLAT),
+    (Effect::Splat, ATLAS_SPLAT),
+    (Effect::Cliffs, ATLAS_SPLAT),
 ];
 
 /// The patch lists whose headers hold a frame's counters, in telemetry
@@ -142,15 +164,23 @@ impl TerrainRenderer {
     ) -> Result<Self> {
         let decisions = decide(&options.effects, &world_content(world, &holes), options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
-        let mut atlases = AtlasSet::CORE;
+        // The geometry pass classifies by the baked normal.
+        let mut atlases = AtlasSet::CORE.with(ATLAS_NORMAL);
         for (effect, atlas) in EFFECT_ATLASES {
             if on(effect) {
                 atlases = atlases.with(atlas);
             }
         }
         let terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
-        let lighting = on(Effect::Lighting);
-        let geometry = TerrainGeometry::new(ctx, lighting)?;
+        let geometry = TerrainGeometry::new(ctx)?;
+        let shade = ShadeRules::from_effects(&options.effects, on(Effect::Splat), on(Effect::Cliffs));
+        let materials = if on(Effect::Splat) || on(Effect::Cliffs) {
+            Some(MaterialResources::new(ctx, &options.effects)?)
+        } else {
+            None
+        };
+        let variants = if options.one_shader { vec![shade.allowed] } else { shade.variants() };
+        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, materials.is_some())?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
         let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
         let build =
@@ -162,8 +192,8 @@ impl TerrainRenderer {
         } else {
             None
         };
-        let holes_pass = if build.holes { Some(TerrainHoles::new(ctx, lighting)?) } else { None };
-        let sector_data = if on(Effect::Queries) { Some(SectorData::new(ctx, world)?) } else { None };
+        let holes_pass = if build.holes { Some(TerrainHoles::new(ctx)?) } else { None };
+        let sector_data = SectorData::new(ctx, world)?;
         let view_buffer = Buffer::new(
             ctx,
             &BufferDesc {
@@ -174,7 +204,9 @@ impl TerrainRenderer {
             },
         )?;
         let graph = PassGraph::new(&decisions);
-        let exec = FrameExecutor::new(ctx, options.terrain.frames_in_flight, graph.max_recorded())?;
+        // gbuffer_tiles records one timed draw per variant.
+        let max_passes = graph.max_recorded() + variants.len() as u32;
+        let exec = FrameExecutor::new(ctx, options.terrain.frames_in_flight, max_passes)?;
         let layout = CounterLayout {
             holes: build.holes,
             occlusion: build.occlusion,
@@ -192,6 +224,13 @@ impl TerrainRenderer {
             occlusion,
             geometry,
             holes: holes_pass,
+            classify: ClassifyTiles::new(ctx)?,
+            gbuffer_tiles,
+            resolve: LightingResolve::new(ctx, on(Effect::Lighting))?,
+            materials,
+            gbuffer: None,
+            shade,
+            one_shader: options.one_shader,
             view_buffer,
             telemetry: Telemetry::new(ctx, options.terrain.frames_in_flight, layout)?,
             exec,
@@ -274,10 +313,20 @@ impl TerrainRenderer {
             HizBuild::check_target(targets.depth)?;
             o.hiz.prepare(ctx, targets.depth.extent)?;
         }
+        if !targets.depth.usage.contains(vk::ImageUsageFlags::SAMPLED) {
+            return Err(Error::BadInput(format!(
+                "depth target {} lacks SAMPLED usage, which the G-buffer tile shading needs to read it",
+                targets.depth.name
+            )));
+        }
+        if self.gbuffer.as_ref().is_none_or(|g| g.size() != view.size) {
+            self.gbuffer = Some(GBuffer::new(ctx, view.size)?);
+        }
+        self.classify.prepare(ctx, view.size)?;
         let ctx_frame = ctx.frame_recording();
         self.telemetry.harvest(ctx);
         let world = self.terrain.world;
-        let gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting);
+        let gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting, &self.shade);
         let params = view.traverse_params();
         self.terrain.stream(&params);
         let mut frame = self.exec.begin(cmds, mode);
@@ -302,20 +351,21 @@ impl TerrainRenderer {
         };
         pass(FramePass::Traverse, &mut |r| traverse.record(r, tree, &params, TraverseMode::SingleDispatch));
         pass(FramePass::LodMap, &mut |r| lod_map.record(r, traverse));
-        if let Some(sector_data) = &self.sector_data {
-            pass(FramePass::SectorData, &mut |r| sector_data.record(r, tree));
-        }
+        let sector_data = &self.sector_data;
+        pass(FramePass::SectorData, &mut |r| sector_data.record(r, tree));
         let (cull, stages, view_buffer) = (&self.cull, self.stages, &self.view_buffer);
         pass(FramePass::CullPatches, &mut |r| {
             let view_bytes = bytemuck::bytes_of(&gpu);
             cull.record(r, traverse, tree, lod_map, view_buffer, view_bytes, stages, visibility);
         });
-        let geometry = &self.geometry;
+        let (geometry, gb) = (&self.geometry, self.gbuffer.as_ref().expect("made above"));
         pass(FramePass::TerrainGeometry, &mut |r| {
-            geometry.record(r, targets, view_buffer, &cull.lists.list, tree, true)
+            geometry.record(r, targets, gb, view_buffer, &cull.lists.list, tree, true)
         });
         if let Some(holes) = &self.holes {
-            pass(FramePass::TerrainHoles, &mut |r| holes.record(r, targets, view_buffer, &cull.lists, geometry, tree));
+            pass(FramePass::TerrainHoles, &mut |r| {
+                holes.record(r, targets, gb, view_buffer, &cull.lists, geometry, tree)
+            });
         }
         let occlusion = self.occlusion.as_ref().filter(|_| stages.occlusion);
         if let Some(o) = occlusion {
@@ -325,10 +375,12 @@ impl TerrainRenderer {
             });
             let late = &o.cull.lists;
             pass(FramePass::TerrainGeometryLate, &mut |r| {
-                geometry.record(r, targets, view_buffer, &late.list, tree, false)
+                geometry.record(r, targets, gb, view_buffer, &late.list, tree, false)
             });
             if let Some(holes) = &self.holes {
-                pass(FramePass::TerrainHolesLate, &mut |r| holes.record(r, targets, view_buffer, late, geometry, tree));
+                pass(FramePass::TerrainHolesLate, &mut |r| {
+                    holes.record(r, targets, gb, view_buffer, late, geometry, tree)
+                });
             }
         }
         if let (Some(o), None) = (&self.occlusion, occlusion) {
@@ -342,7 +394,44 @@ impl TerrainRenderer {
                 r.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
             });
         }
-        let sources = CounterSources { traverse: &traverse.output, lists: counter_lists(cull, &self.occlusion) };
+        let classify = &self.classify;
+        let force = if self.one_shader { self.shade.allowed } else { 0 };
+        frame.pass(FramePass::ClassifyTiles.name(), false, QueueKind::Graphics, |r| classify.record(r, gb, force));
+        log.ran(FramePass::ClassifyTiles, None);
+        let lists = classify.lists.as_ref().expect("prepared above");
+        let terrain = VistaTerrain::new(&world, sector_data);
+        let materials = self.materials.as_ref().map(|m| m.bindings());
+        frame.untimed(QueueKind::Graphics, |r| GbufferTiles::begin(r, targets, gb));
+        for (i, bits) in self.gbuffer_tiles.variants().into_iter().enumerate() {
+            let tiles = &self.gbuffer_tiles;
+            frame.pass(variant_label(bits), false, QueueKind::Graphics, |r| {
+                let m = materials.as_ref();
+                tiles.record_variant(
+                    r,
+                    bits,
+                    i == 0,
+                    targets,
+                    gb,
+                    view_buffer,
+                    lists,
+                    &sector_data.buffer,
+                    terrain,
+                    tree,
+                    m,
+                )
+            });
+        }
+        log.ran(FramePass::GbufferTiles, None);
+        let resolve = &self.resolve;
+        frame.pass(FramePass::LightingResolve.name(), false, QueueKind::Graphics, |r| {
+            resolve.record(r, targets, gb, view_buffer)
+        });
+        log.ran(FramePass::LightingResolve, None);
+        let sources = CounterSources {
+            traverse: &traverse.output,
+            lists: counter_lists(cull, &self.occlusion),
+            tiles: Some(&lists.buffer),
+        };
         let telemetry = &mut self.telemetry;
         frame.untimed(QueueKind::Graphics, |r| telemetry.record(r, number, ctx_frame, &sources));
         drop(frame);
@@ -368,6 +457,10 @@ impl TerrainRenderer {
                 None => vec![0; structs::PATCH_LIST_HEADER],
             };
             bytes.extend(header);
+        }
+        match self.classify.lists.as_ref() {
+            Some(l) => bytes.extend(&ctx.read_buffer(&l.buffer)?[..crate::passes::classify_tiles::ARGS_BYTES as usize]),
+            None => bytes.extend(vec![0; crate::passes::classify_tiles::ARGS_BYTES as usize]),
         }
         let frame = self.graph.last_frame().map_or(0, |l| l.frame);
         Ok(self.telemetry.layout().parse(frame, &bytes))
@@ -415,9 +508,7 @@ impl TerrainRenderer {
             self.traverse.pipeline_label().to_string(),
             self.lod_map.pipeline_label().to_string(),
         ];
-        if let Some(s) = &self.sector_data {
-            out.push(s.pipeline_label().to_string());
-        }
+        out.push(self.sector_data.pipeline_label().to_string());
         out.push(self.cull.pipeline_label().to_string());
         out.push(self.geometry.pipeline_label().to_string());
         if let Some(h) = &self.holes {
@@ -427,6 +518,9 @@ impl TerrainRenderer {
             out.push(o.hiz.pipeline_label().to_string());
             out.push(o.cull.pipeline_label().to_string());
         }
+        out.push(self.classify.pipeline_label().to_string());
+        out.extend(self.gbuffer_tiles.pipeline_labels());
+        out.push(self.resolve.pipeline_label().to_string());
         out
     }
 
@@ -451,6 +545,7 @@ impl TerrainRenderer {
             (&self.cull.lists.list.name, self.cull.lists.list.memory_bytes()),
             (&self.view_buffer.name, self.view_buffer.memory_bytes()),
             (&self.geometry.indices().name, self.geometry.indices().memory_bytes()),
+            (&self.sector_data.buffer.name, self.sector_data.buffer.memory_bytes()),
         ];
         out.extend(core.into_iter().map(|(n, b)| (n.clone(), b, Vec::new())));
         let (name, bytes) = self.telemetry.memory();
@@ -469,8 +564,16 @@ impl TerrainRenderer {
                 out.push((p.name.clone(), p.memory_bytes(), vec![Effect::Occlusion]));
             }
         }
-        if let Some(s) = &self.sector_data {
-            out.push((s.buffer.name.clone(), s.buffer.memory_bytes(), vec![Effect::Queries]));
+        for img in self.gbuffer.iter().flat_map(|g| g.images()) {
+            out.push((img.name.clone(), img.memory_bytes(), Vec::new()));
+        }
+        if let Some(l) = &self.classify.lists {
+            out.push((l.buffer.name.clone(), l.buffer.memory_bytes(), Vec::new()));
+        }
+        if let Some(m) = &self.materials {
+            let users: Vec<Effect> =
+                [Effect::Splat, Effect::Cliffs].into_iter().filter(|e| self.effect_on(*e)).collect();
+            out.push(("material_table + detail textures".into(), m.memory_bytes(), users));
         }
         out
     }

@@ -10,6 +10,7 @@
 use crate::error::Result;
 use crate::frame::{FrameTimings, QueueKind};
 use crate::gpu::{Context, QueueMode};
+use crate::passes::gbuffer_tiles::variant_label;
 use crate::render::effects::{Effect, EffectDecision};
 use crate::render::graph::{FramePass, Outcome};
 use crate::render::renderer::TerrainRenderer;
@@ -137,7 +138,7 @@ impl FrameReport {
                 QueueKind::Graphics => "",
                 QueueKind::Compute => " [compute queue]",
             };
-            let _ = writeln!(s, "  {label:<28} {state:<9} {ms:>10}  {}{queue}", text.join("; "));
+            let _ = writeln!(s, "  {label:<44} {state:<9} {ms:>10}  {}{queue}", text.join("; "));
         }
         let mb = |b: u64| b as f64 / (1024.0 * 1024.0);
         let _ =
@@ -197,6 +198,27 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
             gpu_ms: None,
             work: PassWork::default(),
         };
+        if pass == FramePass::GbufferTiles && log.outcome(pass).is_some() {
+            // One entry per variant draw, each timed on its own.
+            for bits in r.gbuffer_tiles.variants() {
+                let name = variant_label(bits);
+                let tiles = counters.tiles.get(bits as usize).copied().unwrap_or(0);
+                passes.push(PassReport {
+                    name,
+                    state: if tiles > 0 { PassState::Ran } else { PassState::Idle },
+                    recorded: true,
+                    reason: if tiles > 0 {
+                        String::new()
+                    } else {
+                        "recorded with nothing to do: no tile needs this variant (0 instances)".into()
+                    },
+                    gpu_ms: timings.and_then(|t| t.passes.iter().find(|p| p.name == name)).map(|p| p.gpu_ms),
+                    work: PassWork { instances: Some(u64::from(tiles)), ..PassWork::default() },
+                    ..report.clone()
+                });
+            }
+            continue;
+        }
         match log.outcome(pass) {
             None => {}
             Some(Outcome::Skipped(why)) => {
@@ -256,7 +278,7 @@ fn work_of(
         }
         FramePass::Traverse => (groups(1), None),
         FramePass::LodMap => (groups(nodes), no_nodes),
-        FramePass::SectorData => (groups(r.sector_data.as_ref().map_or(0, |s| s.groups())), None),
+        FramePass::SectorData => (groups(r.sector_data.groups()), None),
         FramePass::CullPatches => {
             (PassWork { patches_tested: Some(u64::from(c.cull.patches_in)), ..groups(nodes) }, no_nodes)
         }
@@ -278,5 +300,12 @@ fn work_of(
         FramePass::TerrainHolesLate => {
             (draw(late_holey), (late_holey == 0).then_some("the pyramid left no new patch with holes (0 instances)"))
         }
+        FramePass::ClassifyTiles => {
+            let tiles = r.classify.lists.as_ref().map_or(0, |l| u64::from(l.push.capacity));
+            (groups(tiles), None)
+        }
+        // Reported per variant by the caller.
+        FramePass::GbufferTiles => (PassWork::default(), None),
+        FramePass::LightingResolve => (PassWork::default(), None),
     }
 }

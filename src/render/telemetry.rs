@@ -8,6 +8,7 @@
 
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
+use crate::passes::classify_tiles::ARGS_BYTES;
 use crate::passes::cull_patches::{CullCounters, PatchListHeader};
 use crate::passes::traverse::TraverseHeader;
 use crate::shaders::structs;
@@ -37,6 +38,8 @@ pub struct FrameCounters {
     pub instances: [u32; 4],
     /// Triangles submitted by every draw.
     pub triangles: u64,
+    /// Tiles listed per shader variant (index = flavour bits).
+    pub tiles: Vec<u32>,
 }
 
 /// Which lists a renderer has: phase 1's hole list, phase 2's lists.
@@ -53,7 +56,9 @@ const TRAVERSE_BYTES: u64 = std::mem::size_of::<TraverseHeader>() as u64;
 const HEADER_BYTES: u64 = structs::PATCH_LIST_HEADER as u64;
 /// Readback bytes: the traversal header, then 4 list headers (phase 1
 /// solid, holes; phase 2 solid, holes), absent ones left zero.
-const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES;
+const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + ARGS_BYTES;
+/// Where the tile lists' draw arguments start in a slot.
+const TILES_AT: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES;
 
 impl CounterLayout {
     /// Parses a slot's bytes (also used on a waiting readback in tests).
@@ -67,7 +72,10 @@ impl CounterLayout {
         let late = self.occlusion.then(|| [Some(header(2)), holes(3)]);
         let cull = CullCounters::from_headers([Some(header(0)), holes(1)], late, self.list_capacity);
         let instances = [0, 1, 2, 3].map(|i| header(i).instance_count.min(self.list_capacity));
+        let args = &bytes[TILES_AT as usize..(TILES_AT + ARGS_BYTES) as usize];
+        let tiles = bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(args).iter().map(|a| a[1]).collect();
         FrameCounters {
+            tiles,
             instances,
             frame,
             traverse: TraverseCounters {
@@ -87,6 +95,8 @@ pub struct CounterSources<'a> {
     pub traverse: &'a Buffer,
     /// Phase 1's (solid, holes) then phase 2's.
     pub lists: [Option<&'a Buffer>; 4],
+    /// The tile lists (their draw arguments).
+    pub tiles: Option<&'a Buffer>,
 }
 
 struct Slot {
@@ -168,6 +178,9 @@ impl Telemetry {
             if let Some(list) = list {
                 rec.copy_buffer_region(list, 0, &slot.buffer, TRAVERSE_BYTES + i as u64 * HEADER_BYTES, HEADER_BYTES);
             }
+        }
+        if let Some(tiles) = src.tiles {
+            rec.copy_buffer_region(tiles, 0, &slot.buffer, TILES_AT, ARGS_BYTES);
         }
         rec.transfer_to_host_barrier();
     }

@@ -9,6 +9,7 @@
 //! `d` (metres along the forward axis) stores `near_m / d`.
 
 use crate::error::{Error, Result};
+use crate::render::shading::ShadeRules;
 use crate::terrain::selection::{TraverseCamera, TraverseParams};
 use crate::world::{HeightSource, WorldDesc};
 use glam::{DMat4, DVec3, DVec4};
@@ -140,13 +141,22 @@ impl View {
     }
 
     /// The GPU twin, made relative to the camera in f64.
-    pub fn gpu(&self, world: &WorldDesc, lod_map_extent: [u32; 2], light: &Lighting) -> TerrainViewGpu {
+    pub fn gpu(
+        &self,
+        world: &WorldDesc,
+        lod_map_extent: [u32; 2],
+        light: &Lighting,
+        shade: &ShadeRules,
+    ) -> TerrainViewGpu {
         let p = self.camera.position_m;
         let s = world.spacing_m;
         let anchor = [(p[0] / s).floor(), (p[1] / s).floor()];
         let [lo, hi] = world.height_range_m;
         let vp = self.view_proj().as_mat4();
+        let inv = self.view_proj().inverse().as_mat4();
         let f4 = |v: DVec4| v.as_vec4().to_array();
+        let [w, h] = self.size.map(f64::from);
+        let (bands, slope, flags) = shade.gpu();
         TerrainViewGpu {
             view_proj: vp.to_cols_array_2d(),
             frustum: self.frustum_planes().map(f4),
@@ -163,6 +173,12 @@ impl View {
             lod_map_w: lod_map_extent[0],
             lod_map_h: lod_map_extent[1],
             pad: 0,
+            inv_view_proj: inv.to_cols_array_2d(),
+            viewport: [w as f32, h as f32, (1.0 / w) as f32, (1.0 / h) as f32],
+            camera_world: [p[0] as f32, p[1] as f32, p[2] as f32, self.near_m as f32],
+            shade_bands: bands,
+            shade_slope: slope,
+            shade_flags: flags,
         }
     }
 }
@@ -229,6 +245,12 @@ pub struct TerrainViewGpu {
     pub lod_map_w: u32,
     pub lod_map_h: u32,
     pub pad: u32,
+    pub inv_view_proj: [[f32; 4]; 4],
+    pub viewport: [f32; 4],
+    pub camera_world: [f32; 4],
+    pub shade_bands: [f32; 4],
+    pub shade_slope: [f32; 4],
+    pub shade_flags: [u32; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<TerrainViewGpu>() == crate::shaders::structs::TERRAIN_VIEW);

@@ -31,6 +31,8 @@ impl SmokeTriangle {
             color_formats: &[TARGET_FORMAT],
             depth_format: None,
             depth_compare: vk::CompareOp::ALWAYS,
+            depth_write: true,
+            stencil: None,
             cull_mode: vk::CullModeFlags::NONE,
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
         };

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use vista::frame::FrameTimings;
 use vista::gpu::{Context, QueueMode};
 use vista::passes::cull_patches::CullStages;
+use vista::render::gbuffer::{classification_colour, GBufferCapture};
 use vista::render::offscreen::{Capture, Offscreen};
 use vista::render::stats::RenderStats;
 use vista::render::{overview_camera, Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
@@ -244,7 +245,8 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         print!("{}", report.to_text());
     }
     if let Some(dir) = &args.out {
-        write_outputs(dir, &frames, &capture, view, &stats)?;
+        let gbuffer = renderer.gbuffer.as_ref().expect("a frame was rendered").capture(ctx)?;
+        write_outputs(dir, &frames, &capture, &gbuffer, view, &stats)?;
         std::fs::write(dir.join("report.json"), serde_json::to_string_pretty(&report)?)?;
     }
     print!("{}", renderer.terrain.memory_report());
@@ -296,12 +298,12 @@ fn print_timings(timed: &[FrameTimings]) {
         println!("no pass timings (timestamps unsupported or no frame finished)");
         return;
     }
-    println!("{:<28} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
+    println!("{:<44} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
     let mut total = 0.0;
     for s in vista::frame::profiler::summarize(timed) {
         total += s.median_ms;
         println!(
-            "{:<28} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
+            "{:<44} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
             vista::frame::pass_label(s.name, s.late),
             format!("{:?}", s.queue).to_lowercase(),
             s.median_ms,
@@ -310,13 +312,14 @@ fn print_timings(timed: &[FrameTimings]) {
             s.samples
         );
     }
-    println!("{:<28} {:<9} {:>10.4}", "sum of medians", "", total);
+    println!("{:<44} {:<9} {:>10.4}", "sum of medians", "", total);
 }
 
 fn write_outputs(
     dir: &Path,
     frames: &[FrameTimings],
     capture: &Capture,
+    gbuffer: &GBufferCapture,
     view: &View,
     stats: &RenderStats,
 ) -> Result<()> {
@@ -331,7 +334,33 @@ fn write_outputs(
     let exr_path = dir.join("depth.exr");
     write_depth_exr(&exr_path, [w as usize, h as usize], depth)
         .with_context(|| format!("writing {}", exr_path.display()))?;
-    println!("wrote {}/{{image.png, depth.exr, timings.json, trace.json, stats.json, report.json}}", dir.display());
+    write_lit_exr(&dir.join("lit.exr"), [w as usize, h as usize], &gbuffer.hdr)
+        .with_context(|| format!("writing {}", dir.join("lit.exr").display()))?;
+    let class: Vec<u8> = gbuffer.classification.iter().flat_map(|&b| classification_colour(b)).collect();
+    image::save_buffer(dir.join("classification.png"), &class, w, h, image::ExtendedColorType::Rgb8)
+        .with_context(|| format!("writing {}", dir.join("classification.png").display()))?;
+    println!(
+        "wrote {}/{{image.png, lit.exr, depth.exr, classification.png, timings.json, trace.json, stats.json, \
+         report.json}}",
+        dir.display()
+    );
+    Ok(())
+}
+
+/// The lit image before display encoding: linear RGB radiance (float16
+/// channels R, G, B), row 0 at the top.
+fn write_lit_exr(path: &Path, size: [usize; 2], hdr: &[[f32; 4]]) -> Result<()> {
+    use exr::prelude::*;
+    let channel = |name: &str, i: usize| {
+        AnyChannel::new(name, FlatSamples::F16(hdr.iter().map(|p| f16::from_f32(p[i])).collect()))
+    };
+    let layer = Layer::new(
+        (size[0], size[1]),
+        LayerAttributes::named("lit"),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(vec![channel("R", 0), channel("G", 1), channel("B", 2)])),
+    );
+    Image::from_layer(layer).write().non_parallel().to_file(path)?;
     Ok(())
 }
 

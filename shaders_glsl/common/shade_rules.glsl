@@ -1,0 +1,40 @@
+// Which shading flavours a terrain pixel needs, and how much of each: the
+// classification rule of terrain_geometry.frag and the blend weights of
+// gbuffer_tiles.frag, one function so both agree. Every threshold is a field
+// of the view (render/shading.rs), not a literal here.
+//
+//   c  = cliff share from the geometric normal's z (cliffs effect only)
+//   f  = far-atlas share from view depth (1 everywhere without splat)
+//   fc = far-cliff share from view depth
+//   near cliff = c (1 - fc), far cliff = c fc, splat = (1 - c)(1 - f),
+//   far atlas = (1 - c) f: the shares sum to 1 and a pixel needs exactly
+//   the flavours with a positive share.
+#ifndef VISTA_SHADE_RULES_GLSL
+#define VISTA_SHADE_RULES_GLSL
+#include "constants.glsl"
+
+float ramp(float x, float lo, float hi) {
+    return clamp((x - lo) / max(hi - lo, 1e-6), 0.0, 1.0);
+}
+
+// Shares in flavour-bit order: x virtual texture (always 0 in this version:
+// it falls back to splat), y far atlas, z near cliff, w far cliff; splat in
+// `splat`.
+vec4 flavour_shares(float depth_m, float normal_z, vec4 bands, vec4 slope, uint allowed, out float splat) {
+    float c = (allowed & FLAVOUR_NEAR_CLIFF) != 0u ? ramp(slope.x - normal_z, 0.0, slope.x - slope.y) : 0.0;
+    float f = (allowed & FLAVOUR_SPLAT) != 0u ? ramp(depth_m, bands.x, bands.y) : 1.0;
+    float fc = ramp(depth_m, bands.z, bands.w);
+    splat = (1.0 - c) * (1.0 - f);
+    return vec4(0.0, (1.0 - c) * f, c * (1.0 - fc), c * fc);
+}
+
+uint flavour_bits(vec4 shares, float splat) {
+    uint bits = 0u;
+    bits |= shares.y > 0.0 ? FLAVOUR_FAR_ATLAS : 0u;
+    bits |= shares.z > 0.0 ? FLAVOUR_NEAR_CLIFF : 0u;
+    bits |= shares.w > 0.0 ? FLAVOUR_FAR_CLIFF : 0u;
+    bits |= splat > 0.0 ? FLAVOUR_SPLAT : 0u;
+    return bits;
+}
+
+#endif

@@ -1,0 +1,312 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// variants: MATERIALS
+// Shades the tiles of one variant into the G-buffer. The variant's flavour
+// bits are a specialization constant, so each pipeline contains only the
+// flavours its tiles need; per pixel, the flavours are weighted by the
+// shared rule (shade_rules.glsl) restricted to the pixel's own
+// classification bits, so a tiled variant and the all-flavour pipeline give
+// the same pixel. Position and derivatives come from depth and the
+// triangle normal (reconstruct.glsl); materials from the splat map of the
+// finest resident node (terrain_sample.glsl). Without MATERIALS (no splat
+// or cliffs effect) only the far atlas flavour exists and no material
+// resource is bound or built.
+#include "terrain_view.glsl"
+#include "octahedral.glsl"
+#include "shade_rules.glsl"
+#include "reconstruct.glsl"
+#include "hashed_noise.glsl"
+#include "materials.glsl"
+#include "tile_lists.glsl"
+
+layout(constant_id = 0) const uint VARIANT_BITS = 0u;
+
+layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
+layout(set = 0, binding = 2) uniform texture2D depth_target;
+layout(set = 0, binding = 3) uniform utexture2D classification;
+layout(set = 0, binding = 4) uniform utexture2D normals;
+layout(set = 0, binding = 5, std430) readonly buffer SectorData { uvec2 sectors[]; } sector_data;
+layout(set = 0, binding = 6) uniform texture2DArray albedo_atlas;
+layout(set = 0, binding = 7) uniform texture2DArray normal_atlas;
+#ifdef MATERIALS
+layout(set = 0, binding = 8) uniform utexture2DArray splat_atlas;
+layout(set = 0, binding = 9, std430) readonly buffer Materials { TerrainMaterial m[]; } materials;
+layout(set = 0, binding = 10) uniform texture2DArray detail_albedo;
+layout(set = 0, binding = 11) uniform texture2DArray detail_normal;
+layout(set = 0, binding = 12) uniform texture2DArray detail_height;
+layout(set = 0, binding = 15) uniform sampler detail_sampler;
+#define VISTA_SPLAT_ATLAS splat_atlas
+#else
+#define VISTA_NO_MATERIAL_QUERY
+#endif
+layout(set = 0, binding = 13) uniform sampler nearest;
+layout(set = 0, binding = 14) uniform sampler linear_clamp;
+layout(set = 0, binding = 16) uniform texture2DArray height_atlas;
+
+#define VISTA_SECTOR(i) sector_data.sectors[i]
+#define VISTA_HEIGHT_ATLAS height_atlas
+#define VISTA_NORMAL_ATLAS normal_atlas
+#define VISTA_ATLAS_SAMPLER nearest
+#define VISTA_TERRAIN pc.terrain
+#define VISTA_TERRAIN_DECLARE_ONLY
+#include "terrain_sample.glsl"
+
+layout(push_constant, std430) uniform TileDrawPush { TilePush p; VistaTerrain terrain; } pc;
+
+#undef VISTA_TERRAIN_DECLARE_ONLY
+#include "terrain_sample.glsl"
+
+layout(location = 0) out vec4 gb_albedo;    // rgb albedo (sRGB target)
+layout(location = 1) out vec4 gb_normal;    // xy octahedral shading normal, z roughness
+layout(location = 2) out uvec2 gb_material; // x material id, y flavour bits shaded
+
+// Height-weighted blending: how far (in height units) below the highest
+// layer a texel still shows.
+const float HEIGHT_BLEND = 0.6;
+const float BLEND_DEPTH = 0.2;
+
+struct Surface {
+    vec3 albedo;
+    vec3 normal;   // world space
+    float roughness;
+};
+
+struct Texel {
+    vec3 albedo;
+    vec2 tangent;  // detail normal xy on its plane, world-aligned
+    float roughness;
+    float height;
+};
+
+#ifdef MATERIALS
+// The four splat texels around `xy` and their bilinear weights.
+void splat_texels(vec2 xy, out uint ids[4], out vec4 weights) {
+    VistaNodeHit hit = vista_find_node(xy);
+    if (hit.slot == 0u) {
+        ids = uint[4](0u, 0u, 0u, 0u);
+        weights = vec4(1.0, 0.0, 0.0, 0.0);
+        return;
+    }
+    vec2 t = hit.local * 0.5;
+    ivec2 i0 = min(ivec2(floor(t)), ivec2(int(SPLAT_TEXELS) - 2));
+    vec2 f = clamp(t - vec2(i0), 0.0, 1.0);
+    for (int k = 0; k < 4; ++k) {
+        ivec2 o = ivec2(k & 1, k >> 1);
+        ids[k] = texelFetch(usampler2DArray(splat_atlas, nearest), ivec3(i0 + o, int(hit.slot)), 0).r;
+    }
+    weights = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+}
+
+// Material `id` on a plane with coordinates `plane` (m) and their screen
+// derivatives, at tiling scale `scale` (1 = the material's own).
+Texel sample_material(uint id, vec2 plane, vec2 dx, vec2 dy, float scale) {
+    uint layers = materials.m[id].layers;
+    float k = scale / materials.m[id].tiling_m;
+    vec2 cs = vec2(materials.m[id].cos_rot, materials.m[id].sin_rot);
+    mat2 rot = mat2(cs.x, cs.y, -cs.y, cs.x);
+    vec2 uv = rot * plane * k;
+    vec2 gx = rot * dx * k, gy = rot * dy * k;
+    vec3 a = vec3(uv, float(layers & 0xFFu));
+    vec3 n = vec3(uv, float((layers >> 8u) & 0xFFu));
+    vec3 h = vec3(uv, float((layers >> 16u) & 0xFFu));
+    Texel t;
+    t.albedo = textureGrad(sampler2DArray(detail_albedo, detail_sampler), a, gx, gy).rgb;
+    vec4 nr = textureGrad(sampler2DArray(detail_normal, detail_sampler), n, gx, gy);
+    // Back from texture axes to the plane's axes.
+    t.tangent = transpose(rot) * (nr.xy * 2.0 - 1.0);
+    t.roughness = nr.a;
+    t.height = textureGrad(sampler2DArray(detail_height, detail_sampler), h, gx, gy).r;
+    return t;
+}
+
+#endif
+
+Surface far_atlas(vec3 world, vec3 ng) {
+    VistaNodeHit hit = vista_find_node(world.xy);
+    if (hit.slot == 0u) {
+        return Surface(vec3(0.3), ng, 0.8);
+    }
+    vec3 uvw = vec3((hit.local + 0.5) / 129.0, float(hit.slot));
+    vec3 albedo = texture(sampler2DArray(albedo_atlas, linear_clamp), uvw).rgb;
+    float smoothness = texture(sampler2DArray(normal_atlas, linear_clamp), uvw).a;
+    return Surface(albedo, ng, 1.0 - smoothness);
+}
+
+#ifdef MATERIALS
+// Full splat: four materials on the ground plane, height-weighted.
+Surface splat_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, out uint dominant) {
+    uint ids[4];
+    vec4 bil;
+    splat_texels(world.xy, ids, bil);
+    Texel t[4];
+    float a[4];
+    float top = -1e9;
+    for (int k = 0; k < 4; ++k) {
+        t[k] = sample_material(ids[k], world.xy, ddx.xy, ddy.xy, 1.0);
+        a[k] = bil[k] + t[k].height * HEIGHT_BLEND;
+        top = max(top, a[k]);
+    }
+    Surface s = Surface(vec3(0.0), vec3(0.0), 0.0);
+    vec2 tangent = vec2(0.0);
+    float sum = 0.0, best = -1.0;
+    dominant = ids[0];
+    for (int k = 0; k < 4; ++k) {
+        float w = max(a[k] - top + BLEND_DEPTH, 0.0) * step(1e-6, bil[k]);
+        if (w > best) {
+            best = w;
+            dominant = ids[k];
+        }
+        s.albedo += w * t[k].albedo;
+        tangent += w * t[k].tangent;
+        s.roughness += w * t[k].roughness;
+        sum += w;
+    }
+    sum = max(sum, 1e-6);
+    s.albedo /= sum;
+    s.roughness /= sum;
+    tangent /= sum;
+    s.normal = normalize(vec3(ng.xy + tangent, ng.z));
+    return s;
+}
+
+// Plane coordinates of tri-planar projection `p` (0: x axis, 1: y, 2: z).
+vec2 project(vec3 v, int p) {
+    return p == 0 ? v.yz : (p == 1 ? v.xz : v.xy);
+}
+
+// The detail normal of projection `p` applied to the geometric normal.
+vec3 perturb(vec3 ng, vec2 tangent, int p) {
+    if (p == 0) {
+        return vec3(ng.x, ng.y + tangent.x, ng.z + tangent.y);
+    } else if (p == 1) {
+        return vec3(ng.x + tangent.x, ng.y, ng.z + tangent.y);
+    }
+    return vec3(ng.xy + tangent, ng.z);
+}
+
+// Index picked by uniform `u` in proportion to `w` (which sums to 1).
+int pick(vec4 w, float u) {
+    float c = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        c += w[k];
+        if (u < c) {
+            return k;
+        }
+    }
+    return 3;
+}
+
+// Tri-planar cliff shading. Near: every projection, one material picked
+// stochastically (3 material samples). Far: one material and one projection
+// picked stochastically, at two tiling scales blended by distance (2
+// samples). Not stochastic: every material and projection blended (the
+// reference the stochastic paths converge to over hash seeds).
+Surface cliff_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, bool far_cliff, float depth_m, inout uint dominant) {
+    uint ids[4];
+    vec4 bil;
+    splat_texels(world.xy, ids, bil);
+    vec3 tw = pow(abs(ng), vec3(4.0));
+    tw /= (tw.x + tw.y + tw.z);
+    bool stochastic = view.v.shade_flags.z != 0u;
+    float footprint = max(length(ddx), length(ddy));
+    float u_material = hashed_uniform(world, footprint, view.v.shade_slope.w, view.v.shade_flags.y, 0u);
+    float u_projection = hashed_uniform(world, footprint, view.v.shade_slope.w, view.v.shade_flags.y, 1u);
+    float coarse = far_cliff ? ramp(depth_m, view.v.shade_bands.z, view.v.shade_bands.z * view.v.shade_slope.z) : 0.0;
+    int picked = pick(bil, u_material);
+    dominant = ids[picked];
+    int kp = pick(vec4(tw, 0.0), u_projection);
+    Surface s = Surface(vec3(0.0), vec3(0.0), 0.0);
+    for (int k = 0; k < 4; ++k) {
+        float wm = stochastic ? (k == picked ? 1.0 : 0.0) : bil[k];
+        if (wm <= 0.0) {
+            continue;
+        }
+        for (int p = 0; p < 3; ++p) {
+            float wp = (stochastic && far_cliff) ? (p == kp ? 1.0 : 0.0) : tw[p];
+            if (wp <= 0.0) {
+                continue;
+            }
+            vec2 plane = project(world, p), dx = project(ddx, p), dy = project(ddy, p);
+            for (int scale = 0; scale < 2; ++scale) {
+                float ws = scale == 0 ? 1.0 - coarse : coarse;
+                if (ws <= 0.0) {
+                    continue;
+                }
+                Texel t = sample_material(ids[k], plane, dx, dy, scale == 0 ? 1.0 : 1.0 / view.v.shade_slope.z);
+                float w = wm * wp * ws;
+                s.albedo += w * t.albedo;
+                s.normal += w * perturb(ng, t.tangent, p);
+                s.roughness += w * t.roughness;
+            }
+        }
+    }
+    s.normal = normalize(s.normal);
+    return s;
+}
+
+#endif
+
+void main() {
+    uint variant = VARIANT_BITS;
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    float depth = texelFetch(sampler2D(depth_target, nearest), px, 0).r;
+    uint bits = texelFetch(usampler2D(classification, nearest), px, 0).r & variant;
+    uvec4 codes = texelFetch(usampler2D(normals, nearest), px, 0);
+    vec3 ng = oct_decode8(codes.xy);
+    vec3 nt = oct_decode8(codes.zw);
+    vec2 pixel = gl_FragCoord.xy;
+    vec3 p = reconstruct_position(view.v.inv_view_proj, pixel, view.v.viewport, depth);
+    vec3 ddx, ddy;
+    position_derivatives(view.v.inv_view_proj, pixel, view.v.viewport, p, nt, ddx, ddy);
+    vec3 world = view.v.camera_world.xyz + p;
+    float depth_m = view.v.camera_world.w / max(depth, 1e-30);
+
+    float splat_share;
+    vec4 shares = flavour_shares(depth_m, ng.z, view.v.shade_bands, view.v.shade_slope, view.v.shade_flags.x, splat_share);
+    // Only the pixel's own flavours (its tile's variant contains them).
+    shares *= vec4(0.0, (bits & FLAVOUR_FAR_ATLAS) != 0u ? 1.0 : 0.0, (bits & FLAVOUR_NEAR_CLIFF) != 0u ? 1.0 : 0.0,
+                   (bits & FLAVOUR_FAR_CLIFF) != 0u ? 1.0 : 0.0);
+    splat_share *= (bits & FLAVOUR_SPLAT) != 0u ? 1.0 : 0.0;
+    float total = shares.y + shares.z + shares.w + splat_share;
+    if (total <= 0.0) {
+        // Rounding left the pixel with none of its flavours' shares: the
+        // cheapest one it has, in full.
+        shares.y = 1.0;
+        total = 1.0;
+    }
+    shares /= total;
+    splat_share /= total;
+
+    Surface s = Surface(vec3(0.0), vec3(0.0), 0.0);
+    uint material = 0u;
+    if ((variant & FLAVOUR_FAR_ATLAS) != 0u && shares.y > 0.0) {
+        Surface f = far_atlas(world, ng);
+        s.albedo += shares.y * f.albedo;
+        s.normal += shares.y * f.normal;
+        s.roughness += shares.y * f.roughness;
+    }
+#ifdef MATERIALS
+    if ((variant & (FLAVOUR_SPLAT | FLAVOUR_VIRTUAL_TEXTURE)) != 0u && splat_share > 0.0) {
+        Surface f = splat_surface(world, ng, ddx, ddy, material);
+        s.albedo += splat_share * f.albedo;
+        s.normal += splat_share * f.normal;
+        s.roughness += splat_share * f.roughness;
+    }
+    if ((variant & FLAVOUR_NEAR_CLIFF) != 0u && shares.z > 0.0) {
+        Surface f = cliff_surface(world, ng, ddx, ddy, false, depth_m, material);
+        s.albedo += shares.z * f.albedo;
+        s.normal += shares.z * f.normal;
+        s.roughness += shares.z * f.roughness;
+    }
+    if ((variant & FLAVOUR_FAR_CLIFF) != 0u && shares.w > 0.0) {
+        Surface f = cliff_surface(world, ng, ddx, ddy, true, depth_m, material);
+        s.albedo += shares.w * f.albedo;
+        s.normal += shares.w * f.normal;
+        s.roughness += shares.w * f.roughness;
+    }
+#endif
+    vec3 n = normalize(s.normal);
+    gb_albedo = vec4(s.albedo, 1.0);
+    gb_normal = vec4(oct_encode(n), s.roughness, 1.0);
+    gb_material = uvec2(material, bits);
+}

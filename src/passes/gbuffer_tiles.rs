@@ -1,0 +1,191 @@
+//! `gbuffer_tiles`: one indirect draw per shader variant over the tiles
+//! `classify_tiles` listed for it, stencil-tested against the terrain bit,
+//! writing the G-buffer (albedo, normal + roughness, material id + flavour
+//! bits). A variant is a specialization constant (its flavour bits);
+//! pipelines exist only for the variants the scene can produce (every
+//! non-empty subset of its allowed flavours), and the fragment shader's
+//! MATERIALS switch, with the material resources, only where splat or
+//! cliffs are on. Each variant's draw is timed on its own
+//! (`gbuffer_tiles[far_atlas+splat]`); a variant with no tiles this frame
+//! draws zero instances.
+
+use crate::error::Result;
+use crate::gpu::{
+    vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, Pipeline, Recorder, Resource, Sampler,
+    SamplerDesc, StencilDesc,
+};
+use crate::passes::classify_tiles::{TileLists, TilePush};
+use crate::passes::cull_patches::nearest_sampler;
+use crate::passes::terrain_geometry::{RenderTargets, DEPTH_FORMAT};
+use crate::passes::terrain_query::VistaTerrain;
+use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
+use crate::render::shading::variant_name;
+use crate::shaders::consts::{FLAVOUR_VARIANTS, TERRAIN_STENCIL};
+use crate::shaders::{gbuffer_tiles_frag as fs, gbuffer_tiles_vert as vs, structs};
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT};
+use std::sync::OnceLock;
+
+/// Host twin of `TileDrawPush` (gbuffer_tiles.vert/.frag).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TileDrawPush {
+    pub tiles: TilePush,
+    pub terrain: VistaTerrain,
+}
+
+const _: () = assert!(std::mem::size_of::<TileDrawPush>() == structs::TILE_DRAW_PUSH);
+
+/// Timer and debug label of each variant's draw: the pass name with the
+/// variant's flavours (static: timings carry `&'static str` names).
+pub fn variant_label(bits: u32) -> &'static str {
+    static LABELS: OnceLock<Vec<String>> = OnceLock::new();
+    let labels = LABELS.get_or_init(|| {
+        (0..FLAVOUR_VARIANTS).map(|v| format!("{}[{}]", GbufferTiles::NAME, variant_name(v))).collect()
+    });
+    &labels[bits as usize]
+}
+
+/// The splat material resources (effects `splat` or `cliffs`).
+pub struct MaterialBindings<'a> {
+    /// 256 `TerrainMaterial`s.
+    pub table: &'a Buffer,
+    pub albedo: &'a Image,
+    pub normal: &'a Image,
+    pub height: &'a Image,
+}
+
+pub struct GbufferTiles {
+    /// (flavour bits, pipeline), in increasing bits.
+    pipelines: Vec<(u32, Pipeline)>,
+    materials: bool,
+    nearest: Sampler,
+    linear: Sampler,
+    detail: Sampler,
+}
+
+impl GbufferTiles {
+    pub const NAME: &'static str = vs::PASS;
+
+    /// Pipelines for `variants`; `materials`: the shader with the splat and
+    /// cliff paths (bound to material resources at record time).
+    pub fn new(ctx: &Context, variants: &[u32], materials: bool) -> Result<Self> {
+        let fragment = fs::variant(if materials { fs::VARIANT_MATERIALS } else { 0 });
+        let pipelines = variants
+            .iter()
+            .map(|&bits| {
+                let spec = [(vs::SPEC_VARIANT_BITS, bits)];
+                let desc = GraphicsPipelineDesc {
+                    name: variant_label(bits),
+                    vertex: &vs::SHADER,
+                    fragment,
+                    specialization: &spec,
+                    color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
+                    depth_format: Some(DEPTH_FORMAT),
+                    depth_compare: vk::CompareOp::ALWAYS,
+                    depth_write: false,
+                    stencil: Some(StencilDesc {
+                        compare: vk::CompareOp::EQUAL,
+                        reference: TERRAIN_STENCIL,
+                        compare_mask: TERRAIN_STENCIL,
+                        write_mask: 0,
+                    }),
+                    cull_mode: vk::CullModeFlags::NONE,
+                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                };
+                Ok((bits, Pipeline::graphics(ctx, &desc)?))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let sampler = |name, filter, address_mode| Sampler::new(ctx, &SamplerDesc { name, filter, address_mode });
+        Ok(GbufferTiles {
+            pipelines,
+            materials,
+            nearest: nearest_sampler(ctx, "gbuffer_tiles_nearest")?,
+            linear: sampler("gbuffer_tiles_linear", vk::Filter::LINEAR, vk::SamplerAddressMode::CLAMP_TO_EDGE)?,
+            detail: Sampler::mipmapped(
+                ctx,
+                &SamplerDesc {
+                    name: "gbuffer_tiles_detail",
+                    filter: vk::Filter::LINEAR,
+                    address_mode: vk::SamplerAddressMode::REPEAT,
+                },
+            )?,
+        })
+    }
+
+    /// The variants built, in increasing flavour bits.
+    pub fn variants(&self) -> Vec<u32> {
+        self.pipelines.iter().map(|(b, _)| *b).collect()
+    }
+
+    pub fn pipeline_labels(&self) -> Vec<String> {
+        self.pipelines.iter().map(|(_, p)| p.label.clone()).collect()
+    }
+
+    /// Moves the inputs into the layouts the draws read them in and the
+    /// G-buffer into attachment layout (before the first variant).
+    pub fn begin(rec: &mut Recorder, targets: &RenderTargets, gbuffer: &GBuffer) {
+        rec.transition(&gbuffer.geometry_normals, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+        rec.transition(targets.depth, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+        for img in [&gbuffer.albedo, &gbuffer.normal, &gbuffer.material] {
+            rec.discard_to(img, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+        }
+    }
+
+    /// Draws variant `bits`' tiles (`first`: clears the G-buffer first).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_variant(
+        &self,
+        rec: &mut Recorder,
+        bits: u32,
+        first: bool,
+        targets: &RenderTargets,
+        gbuffer: &GBuffer,
+        view: &Buffer,
+        lists: &TileLists,
+        sector_data: &Buffer,
+        terrain: VistaTerrain,
+        tree: &GpuQuadtree,
+        materials: Option<&MaterialBindings>,
+    ) {
+        let (_, pipeline) = self.pipelines.iter().find(|(b, _)| *b == bits).expect("variant was built");
+        let clear = first.then_some([0.0; 4]);
+        rec.begin_rendering(
+            &[
+                ColorTarget { image: &gbuffer.albedo, clear },
+                ColorTarget { image: &gbuffer.normal, clear },
+                ColorTarget { image: &gbuffer.material, clear },
+            ],
+            Some(DepthTarget { image: targets.depth, clear: None, read_only: true }),
+        );
+        rec.bind_pipeline(pipeline);
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let mut bindings = vec![
+            (fs::VIEW, Resource::Buffer(view)),
+            (vs::LISTS, Resource::Buffer(&lists.buffer)),
+            (fs::DEPTH_TARGET, Resource::Image(targets.depth, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL)),
+            (fs::CLASSIFICATION, Resource::Image(&gbuffer.classification, read)),
+            (fs::NORMALS, Resource::Image(&gbuffer.geometry_normals, read)),
+            (fs::SECTOR_DATA, Resource::Buffer(sector_data)),
+            (fs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),
+            (fs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
+            (fs::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
+            (fs::NEAREST, Resource::Sampler(self.nearest.raw())),
+            (fs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
+        ];
+        if self.materials {
+            let m = materials.expect("the MATERIALS shader needs the material resources");
+            bindings.extend([
+                (fs::SPLAT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_SPLAT), ATLAS_LAYOUT)),
+                (fs::MATERIALS, Resource::Buffer(m.table)),
+                (fs::DETAIL_ALBEDO, Resource::Image(m.albedo, read)),
+                (fs::DETAIL_NORMAL, Resource::Image(m.normal, read)),
+                (fs::DETAIL_HEIGHT, Resource::Image(m.height, read)),
+                (fs::DETAIL_SAMPLER, Resource::Sampler(self.detail.raw())),
+            ]);
+        }
+        rec.push_descriptors(pipeline, &bindings);
+        rec.push_constants(pipeline, &TileDrawPush { tiles: lists.push, terrain });
+        rec.draw_indirect(&lists.buffer, TileLists::args_offset(bits));
+        rec.end_rendering();
+    }
+}

@@ -1,0 +1,125 @@
+//! The renderer's own screen-sized targets between the geometry pass and
+//! the lit output: the classification and geometry-normal targets the
+//! geometry pass writes, the G-buffer the tile passes write, and the HDR
+//! lit image. Made for the first view size seen and remade (the old ones
+//! deferred-destroyed) when it changes.
+
+use crate::error::Result;
+use crate::gpu::{vk, Context, Image, ImageDesc};
+
+/// One bit per flavour the pixel needs (0 = no terrain).
+pub const CLASSIFICATION_FORMAT: vk::Format = vk::Format::R8_UINT;
+/// Two octahedral normals as 8-bit codes: geometric (baked), triangle.
+pub const GEOMETRY_NORMALS_FORMAT: vk::Format = vk::Format::R8G8B8A8_UINT;
+/// rgb albedo.
+pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
+/// xy octahedral shading normal, z roughness.
+pub const NORMAL_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+/// x material id, y the flavour bits shaded (debug).
+pub const MATERIAL_FORMAT: vk::Format = vk::Format::R8G8_UINT;
+/// Linear lit radiance.
+pub const HDR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
+pub struct GBuffer {
+    pub classification: Image,
+    pub geometry_normals: Image,
+    pub albedo: Image,
+    pub normal: Image,
+    pub material: Image,
+    pub hdr: Image,
+}
+
+impl GBuffer {
+    pub fn new(ctx: &Context, size: [u32; 2]) -> Result<GBuffer> {
+        let attach = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
+        let image = |name, format| {
+            Image::new(
+                ctx,
+                &ImageDesc {
+                    name,
+                    format,
+                    extent: size,
+                    mip_levels: 1,
+                    array_layers: 1,
+                    // Read back by tools and tests.
+                    usage: attach | vk::ImageUsageFlags::TRANSFER_SRC,
+                },
+            )
+        };
+        Ok(GBuffer {
+            classification: image("classification", CLASSIFICATION_FORMAT)?,
+            geometry_normals: image("geometry_normals", GEOMETRY_NORMALS_FORMAT)?,
+            albedo: image("gbuffer_albedo", ALBEDO_FORMAT)?,
+            normal: image("gbuffer_normal", NORMAL_FORMAT)?,
+            material: image("gbuffer_material", MATERIAL_FORMAT)?,
+            hdr: image("lit_hdr", HDR_FORMAT)?,
+        })
+    }
+
+    pub fn size(&self) -> [u32; 2] {
+        self.classification.extent
+    }
+
+    pub fn images(&self) -> [&Image; 6] {
+        [&self.classification, &self.geometry_normals, &self.albedo, &self.normal, &self.material, &self.hdr]
+    }
+
+    pub fn memory_bytes(&self) -> u64 {
+        self.images().iter().map(|i| i.memory_bytes()).sum()
+    }
+}
+
+/// The G-buffer and lit image of the last frame, read back (tools, tests).
+pub struct GBufferCapture {
+    pub size: [u32; 2],
+    /// Linear lit radiance, RGBA.
+    pub hdr: Vec<[f32; 4]>,
+    pub classification: Vec<u8>,
+    /// Two octahedral codes each: geometric normal, triangle normal.
+    pub geometry_normals: Vec<[u8; 4]>,
+    /// sRGB-encoded albedo.
+    pub albedo: Vec<[u8; 4]>,
+    pub normal: Vec<[u8; 4]>,
+    /// Material id, flavour bits shaded.
+    pub material: Vec<[u8; 2]>,
+}
+
+impl GBuffer {
+    /// Reads every target back (waits for the GPU).
+    pub fn capture(&self, ctx: &Context) -> Result<GBufferCapture> {
+        let rgba8 =
+            |img: &Image| -> Result<Vec<[u8; 4]>> { Ok(bytemuck::pod_collect_to_vec(&ctx.read_image(img, 0, 0, 4)?)) };
+        let hdr_bytes = ctx.read_image(&self.hdr, 0, 0, 8)?;
+        let halves: Vec<u16> = bytemuck::pod_collect_to_vec(&hdr_bytes);
+        let hdr = halves.chunks_exact(4).map(|c| [0, 1, 2, 3].map(|i| half::f16::from_bits(c[i]).to_f32())).collect();
+        Ok(GBufferCapture {
+            size: self.size(),
+            hdr,
+            classification: ctx.read_image(&self.classification, 0, 0, 1)?,
+            geometry_normals: rgba8(&self.geometry_normals)?,
+            albedo: rgba8(&self.albedo)?,
+            normal: rgba8(&self.normal)?,
+            material: bytemuck::pod_collect_to_vec(&ctx.read_image(&self.material, 0, 0, 2)?),
+        })
+    }
+}
+
+/// Debug colour of a classification value: the mean of its flavours'
+/// colours (far atlas blue, splat green, near cliff red, far cliff orange,
+/// virtual texture violet); black where no terrain.
+pub fn classification_colour(bits: u8) -> [u8; 3] {
+    use crate::shaders::consts::*;
+    let palette = [
+        (FLAVOUR_FAR_ATLAS, [60.0, 100.0, 255.0]),
+        (FLAVOUR_SPLAT, [60.0, 220.0, 60.0]),
+        (FLAVOUR_NEAR_CLIFF, [255.0, 50.0, 40.0]),
+        (FLAVOUR_FAR_CLIFF, [255.0, 190.0, 30.0]),
+        (FLAVOUR_VIRTUAL_TEXTURE, [200.0, 60.0, 255.0]),
+    ];
+    let on: Vec<[f32; 3]> = palette.iter().filter(|(b, _)| u32::from(bits) & b != 0).map(|(_, c)| *c).collect();
+    if on.is_empty() {
+        return [0, 0, 0];
+    }
+    let n = on.len() as f32;
+    [0, 1, 2].map(|i| (on.iter().map(|c| c[i]).sum::<f32>() / n).round() as u8)
+}

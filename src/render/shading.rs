@@ -1,0 +1,122 @@
+//! The rules of the G-buffer tile shading, from the scene's effects: which
+//! flavours a scene can produce, where each applies (view distance, slope)
+//! and how stochastic cliffs draw their random numbers. They reach the
+//! shaders through the view (`TerrainView.shade_*`); none is a literal in a
+//! shader. `shade_rules.glsl` states the rule they parameterise.
+
+use crate::render::effects::Effects;
+use crate::shaders::consts;
+
+/// Flavour bits, in the classification target's order.
+pub const FLAVOURS: [(u32, &str); 5] = [
+    (consts::FLAVOUR_VIRTUAL_TEXTURE, "virtual_texture"),
+    (consts::FLAVOUR_FAR_ATLAS, "far_atlas"),
+    (consts::FLAVOUR_NEAR_CLIFF, "near_cliff"),
+    (consts::FLAVOUR_FAR_CLIFF, "far_cliff"),
+    (consts::FLAVOUR_SPLAT, "splat"),
+];
+
+/// A variant's flavours joined by `+` (e.g. `far_atlas+splat`).
+pub fn variant_name(bits: u32) -> String {
+    let names: Vec<&str> = FLAVOURS.iter().filter(|(b, _)| bits & b != 0).map(|(_, n)| *n).collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join("+")
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadeRules {
+    /// Flavours the scene can produce (far atlas always; splat with the
+    /// `splat` effect; near and far cliff with `cliffs`).
+    pub allowed: u32,
+    /// View depth (m) where the far atlas starts replacing splat, and where
+    /// it has replaced it (the blend band hides the line).
+    pub far_start_m: f32,
+    pub far_end_m: f32,
+    /// Slope (degrees) at the middle of the splat-to-cliff band, and the
+    /// band's width.
+    pub cliff_slope_deg: f32,
+    pub cliff_band_deg: f32,
+    /// View depth (m) of the near-to-far cliff band.
+    pub cliff_split_start_m: f32,
+    pub cliff_split_end_m: f32,
+    /// The far cliff's second tiling scale (times the material's), reached
+    /// at `cliff_split_start_m` times this distance.
+    pub far_cliff_scale: f32,
+    /// Hashed-noise cell scale (Wyman-McGuire's g: 1 = a cell per pixel).
+    pub hash_scale: f32,
+    pub hash_seed: u32,
+    /// False: cliffs blend every material and projection (the reference).
+    pub stochastic: bool,
+}
+
+impl Default for ShadeRules {
+    fn default() -> Self {
+        ShadeRules {
+            allowed: consts::FLAVOUR_FAR_ATLAS,
+            far_start_m: 250.0,
+            far_end_m: 400.0,
+            cliff_slope_deg: 40.0,
+            cliff_band_deg: 8.0,
+            cliff_split_start_m: 60.0,
+            cliff_split_end_m: 100.0,
+            far_cliff_scale: 4.0,
+            hash_scale: 1.0,
+            hash_seed: 0,
+            stochastic: true,
+        }
+    }
+}
+
+impl ShadeRules {
+    pub fn from_effects(fx: &Effects, splat: bool, cliffs: bool) -> ShadeRules {
+        let mut allowed = consts::FLAVOUR_FAR_ATLAS;
+        if splat {
+            allowed |= consts::FLAVOUR_SPLAT;
+        }
+        if cliffs {
+            allowed |= consts::FLAVOUR_NEAR_CLIFF | consts::FLAVOUR_FAR_CLIFF;
+        }
+        ShadeRules { allowed, ..fx.shade }
+    }
+
+    /// Every variant a frame can produce: the non-empty subsets of the
+    /// allowed flavours (a tile ORs any of them).
+    pub fn variants(&self) -> Vec<u32> {
+        (1..consts::FLAVOUR_VARIANTS).filter(|v| v & !self.allowed == 0).collect()
+    }
+
+    /// Normal z where cliff shading starts and where it is full.
+    pub fn slope_normal_z(&self) -> [f32; 2] {
+        let lo = (self.cliff_slope_deg - self.cliff_band_deg * 0.5).clamp(0.0, 90.0);
+        let hi = (self.cliff_slope_deg + self.cliff_band_deg * 0.5).clamp(0.0, 90.0);
+        [lo.to_radians().cos(), hi.to_radians().cos()]
+    }
+
+    /// The view's `shade_bands`, `shade_slope` and `shade_flags`.
+    pub fn gpu(&self) -> ([f32; 4], [f32; 4], [u32; 4]) {
+        let [nz0, nz1] = self.slope_normal_z();
+        (
+            [self.far_start_m, self.far_end_m, self.cliff_split_start_m, self.cliff_split_end_m],
+            [nz0, nz1, self.far_cliff_scale, self.hash_scale],
+            [self.allowed, self.hash_seed, u32::from(self.stochastic), 0],
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variants_are_the_subsets_of_the_allowed_flavours() {
+        let far = ShadeRules::default();
+        assert_eq!(far.variants(), vec![consts::FLAVOUR_FAR_ATLAS]);
+        let all = ShadeRules::from_effects(&Effects::default(), true, true);
+        assert_eq!(all.variants().len(), 15, "4 flavours: 2^4 - 1 variants");
+        assert!(all.variants().iter().all(|v| v & consts::FLAVOUR_VIRTUAL_TEXTURE == 0));
+        assert_eq!(variant_name(consts::FLAVOUR_FAR_ATLAS | consts::FLAVOUR_SPLAT), "far_atlas+splat");
+    }
+}
