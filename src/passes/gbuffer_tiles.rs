@@ -12,15 +12,15 @@
 use crate::error::Result;
 use crate::gpu::{
     vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, Pipeline, Recorder, Resource, Sampler,
-    SamplerDesc, StencilDesc,
+    SamplerDesc,
 };
 use crate::passes::classify_tiles::{TileLists, TilePush};
 use crate::passes::cull_patches::nearest_sampler;
-use crate::passes::terrain_geometry::{RenderTargets, DEPTH_FORMAT};
+use crate::passes::terrain_geometry::{RenderTargets, DEPTH_FORMAT, TERRAIN_ONLY};
 use crate::passes::terrain_query::VistaTerrain;
 use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use crate::render::shading::variant_name;
-use crate::shaders::consts::{FLAVOUR_VARIANTS, TERRAIN_STENCIL};
+use crate::shaders::consts::FLAVOUR_VARIANTS;
 use crate::shaders::{gbuffer_tiles_frag as fs, gbuffer_tiles_vert as vs, structs};
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT};
 use std::sync::OnceLock;
@@ -83,12 +83,7 @@ impl GbufferTiles {
                     depth_format: Some(DEPTH_FORMAT),
                     depth_compare: vk::CompareOp::ALWAYS,
                     depth_write: false,
-                    stencil: Some(StencilDesc {
-                        compare: vk::CompareOp::EQUAL,
-                        reference: TERRAIN_STENCIL,
-                        compare_mask: TERRAIN_STENCIL,
-                        write_mask: 0,
-                    }),
+                    stencil: Some(TERRAIN_ONLY),
                     cull_mode: vk::CullModeFlags::NONE,
                     topology: vk::PrimitiveTopology::TRIANGLE_LIST,
                 };

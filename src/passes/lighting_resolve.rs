@@ -9,12 +9,11 @@
 use crate::error::Result;
 use crate::gpu::{
     depth_layout, vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Pipeline, Recorder, Resource,
-    Sampler, StencilDesc,
+    Sampler,
 };
 use crate::passes::cull_patches::nearest_sampler;
-use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT, TERRAIN_ONLY};
 use crate::render::gbuffer::{GBuffer, HDR_FORMAT};
-use crate::shaders::consts::TERRAIN_STENCIL;
 use crate::shaders::{lighting_resolve_frag as fs, lighting_resolve_vert as vs};
 
 pub struct LightingResolve {
@@ -35,12 +34,7 @@ impl LightingResolve {
             depth_format: Some(DEPTH_FORMAT),
             depth_compare: vk::CompareOp::ALWAYS,
             depth_write: false,
-            stencil: Some(StencilDesc {
-                compare: vk::CompareOp::EQUAL,
-                reference: TERRAIN_STENCIL,
-                compare_mask: TERRAIN_STENCIL,
-                write_mask: 0,
-            }),
+            stencil: Some(TERRAIN_ONLY),
             cull_mode: vk::CullModeFlags::NONE,
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
         };

@@ -23,6 +23,15 @@ use crate::world::{PATCHES_PER_NODE_SIDE, PATCH_QUADS};
 pub const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// Reversed-Z depth, infinite far plane; the stencil holds the terrain bit.
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT_S8_UINT;
+/// The stencil state of the passes that shade terrain pixels only
+/// (`gbuffer_tiles`, `lighting_resolve`): test the bit, write nothing.
+pub const TERRAIN_ONLY: StencilDesc = StencilDesc {
+    compare: vk::CompareOp::EQUAL,
+    reference: TERRAIN_STENCIL,
+    compare_mask: TERRAIN_STENCIL,
+    write_mask: 0,
+};
+
 /// The depth target's layout on entry to and exit from a frame.
 pub const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
 
