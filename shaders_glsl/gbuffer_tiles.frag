@@ -20,6 +20,10 @@
 #include "tile_lists.glsl"
 
 layout(constant_id = 0) const uint VARIANT_BITS = 0u;
+// 1: evaluate every flavour of the variant at every pixel, weighted by its
+// share even where that is 0 (the "one shader doing everything" baseline of
+// `vista bench shade`); 0: skip the flavours a pixel does not need.
+layout(constant_id = 1) const uint EVERY_FLAVOUR = 0u;
 
 layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
 layout(set = 0, binding = 2) uniform texture2D depth_target;
@@ -248,6 +252,9 @@ Surface cliff_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, bool far_cliff, f
 
 void main() {
     uint variant = VARIANT_BITS;
+    // A variable, not a constant expression: naga reads no SpecConstantOp.
+    uint every_bits = EVERY_FLAVOUR;
+    bool every = every_bits != 0u;
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(sampler2D(depth_target, nearest), px, 0).r;
     uint bits = texelFetch(usampler2D(classification, nearest), px, 0).r & variant;
@@ -279,27 +286,33 @@ void main() {
 
     Surface s = Surface(vec3(0.0), vec3(0.0), 0.0);
     uint material = 0u;
-    if ((variant & FLAVOUR_FAR_ATLAS) != 0u && shares.y > 0.0) {
+    if ((variant & FLAVOUR_FAR_ATLAS) != 0u && (every || shares.y > 0.0)) {
         Surface f = far_atlas(world, ng);
         s.albedo += shares.y * f.albedo;
         s.normal += shares.y * f.normal;
         s.roughness += shares.y * f.roughness;
     }
 #ifdef MATERIALS
-    if ((variant & (FLAVOUR_SPLAT | FLAVOUR_VIRTUAL_TEXTURE)) != 0u && splat_share > 0.0) {
-        Surface f = splat_surface(world, ng, ddx, ddy, material);
+    if ((variant & (FLAVOUR_SPLAT | FLAVOUR_VIRTUAL_TEXTURE)) != 0u && (every || splat_share > 0.0)) {
+        uint m;
+        Surface f = splat_surface(world, ng, ddx, ddy, m);
+        material = splat_share > 0.0 ? m : material;
         s.albedo += splat_share * f.albedo;
         s.normal += splat_share * f.normal;
         s.roughness += splat_share * f.roughness;
     }
-    if ((variant & FLAVOUR_NEAR_CLIFF) != 0u && shares.z > 0.0) {
-        Surface f = cliff_surface(world, ng, ddx, ddy, false, depth_m, material);
+    if ((variant & FLAVOUR_NEAR_CLIFF) != 0u && (every || shares.z > 0.0)) {
+        uint m = material;
+        Surface f = cliff_surface(world, ng, ddx, ddy, false, depth_m, m);
+        material = shares.z > 0.0 ? m : material;
         s.albedo += shares.z * f.albedo;
         s.normal += shares.z * f.normal;
         s.roughness += shares.z * f.roughness;
     }
-    if ((variant & FLAVOUR_FAR_CLIFF) != 0u && shares.w > 0.0) {
-        Surface f = cliff_surface(world, ng, ddx, ddy, true, depth_m, material);
+    if ((variant & FLAVOUR_FAR_CLIFF) != 0u && (every || shares.w > 0.0)) {
+        uint m = material;
+        Surface f = cliff_surface(world, ng, ddx, ddy, true, depth_m, m);
+        material = shares.w > 0.0 ? m : material;
         s.albedo += shares.w * f.albedo;
         s.normal += shares.w * f.normal;
         s.roughness += shares.w * f.roughness;

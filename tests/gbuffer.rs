@@ -11,7 +11,7 @@ use common::terrain::{view, Rig, Surface};
 use vista::passes::cull_patches::CullStages;
 use vista::reference::classify_tiles_cpu;
 use vista::render::gbuffer::GBufferCapture;
-use vista::render::{Effect, Effects, RendererOptions, View};
+use vista::render::{Effect, Effects, RendererOptions, Shading, View};
 use vista::shaders::consts::{
     FLAVOUR_FAR_ATLAS, FLAVOUR_FAR_CLIFF, FLAVOUR_NEAR_CLIFF, FLAVOUR_SPLAT, FLAVOUR_VARIANTS, TILE_SIZE,
 };
@@ -41,8 +41,8 @@ fn over_the_hills() -> View {
     view([512.0, 120.0, 520.0], 10.0, -25.0, SIZE, 1.0)
 }
 
-fn rig(ctx: &vista::gpu::Context, fx: Effects, one_shader: bool) -> Rig {
-    let options = RendererOptions { effects: fx, one_shader, ..RendererOptions::default() };
+fn rig(ctx: &vista::gpu::Context, fx: Effects, shading: Shading) -> Rig {
+    let options = RendererOptions { effects: fx, shading, ..RendererOptions::default() };
     Rig::with_options(ctx, world(), Surface::Hills, vec![], SIZE, false, options)
 }
 
@@ -53,7 +53,7 @@ fn capture(ctx: &vista::gpu::Context, rig: &Rig) -> GBufferCapture {
 #[test]
 fn tile_lists_equal_a_cpu_classification_of_the_read_back_target() {
     gpu_test(|ctx| {
-        let mut rig = rig(ctx, shading(), false);
+        let mut rig = rig(ctx, shading(), Shading::Tiled);
         rig.shot(ctx, &over_the_hills(), CullStages::ALL);
         let g = capture(ctx, &rig);
         let expected = classify_tiles_cpu(&g.classification, SIZE, TILE_SIZE, FLAVOUR_VARIANTS as usize);
@@ -80,27 +80,32 @@ fn tile_lists_equal_a_cpu_classification_of_the_read_back_target() {
 fn tiled_shading_equals_one_shader_doing_every_flavour() {
     gpu_test(|ctx| {
         let v = over_the_hills();
-        let mut tiled = rig(ctx, shading(), false);
+        let mut tiled = rig(ctx, shading(), Shading::Tiled);
         let a = tiled.shot(ctx, &v, CullStages::ALL);
         let ga = capture(ctx, &tiled);
         drop(tiled);
-        let mut one = rig(ctx, shading(), true);
-        let b = one.shot(ctx, &v, CullStages::ALL);
-        let gb = capture(ctx, &one);
-        assert_eq!(one.renderer.gbuffer_tiles.variants().len(), 1, "one pipeline");
-        assert_eq!(ga.classification, gb.classification);
-        // Each pipeline is compiled from the same code with other constant
-        // flavour bits; a compiler may still contract or reorder the
-        // arithmetic of the flavours both evaluate differently, so allow
-        // one 8-bit step; the material ids and flavour bits must agree.
-        let max_diff = |x: &[[u8; 4]], y: &[[u8; 4]]| {
-            x.iter().zip(y).flat_map(|(p, q)| (0..4).map(move |i| p[i].abs_diff(q[i]))).max().unwrap_or(0)
-        };
-        assert!(max_diff(&ga.albedo, &gb.albedo) <= 1, "albedo");
-        assert!(max_diff(&ga.normal, &gb.normal) <= 1, "normal");
-        assert_eq!(ga.material, gb.material, "material ids and flavour bits");
-        let rgba = |c: &[u8]| c.chunks(4).map(|p| [p[0], p[1], p[2], p[3]]).collect::<Vec<_>>();
-        assert!(max_diff(&rgba(&a.rgba), &rgba(&b.rgba)) <= 1, "lit image");
+        // Both one-pipeline references: branching past unneeded flavours,
+        // and evaluating every flavour with weight 0 where unneeded.
+        for mode in [Shading::OneShader, Shading::OneShaderEveryFlavour] {
+            let mut one = rig(ctx, shading(), mode);
+            let b = one.shot(ctx, &v, CullStages::ALL);
+            let gb = capture(ctx, &one);
+            assert_eq!(one.renderer.gbuffer_tiles.variants().len(), 1, "{mode:?}: one pipeline");
+            assert_eq!(ga.classification, gb.classification);
+            // Each pipeline is compiled from the same code with other
+            // constant flavour bits; a compiler may still contract or
+            // reorder the arithmetic of the flavours both evaluate
+            // differently, so allow one 8-bit step; the material ids and
+            // flavour bits must agree.
+            let max_diff = |x: &[[u8; 4]], y: &[[u8; 4]]| {
+                x.iter().zip(y).flat_map(|(p, q)| (0..4).map(move |i| p[i].abs_diff(q[i]))).max().unwrap_or(0)
+            };
+            assert!(max_diff(&ga.albedo, &gb.albedo) <= 1, "{mode:?}: albedo");
+            assert!(max_diff(&ga.normal, &gb.normal) <= 1, "{mode:?}: normal");
+            assert_eq!(ga.material, gb.material, "{mode:?}: material ids and flavour bits");
+            let rgba = |c: &[u8]| c.chunks(4).map(|p| [p[0], p[1], p[2], p[3]]).collect::<Vec<_>>();
+            assert!(max_diff(&rgba(&a.rgba), &rgba(&b.rgba)) <= 1, "{mode:?}: lit image");
+        }
         let terrain = ga.classification.iter().filter(|&&c| c != 0).count();
         assert!(terrain > SIZE[0] as usize * SIZE[1] as usize / 2, "mostly terrain: {terrain}");
     });
@@ -126,12 +131,12 @@ fn stochastic_cliffs_are_stable_and_average_to_the_blended_shading() {
         let v = over_the_hills();
         let mut fx = shading();
         fx.shade.stochastic = false;
-        let mut blended = rig(ctx, fx, false);
+        let mut blended = rig(ctx, fx, Shading::Tiled);
         blended.shot(ctx, &v, CullStages::ALL);
         let reference = capture(ctx, &blended);
         drop(blended);
 
-        let mut r = rig(ctx, shading(), false);
+        let mut r = rig(ctx, shading(), Shading::Tiled);
         r.shot(ctx, &v, CullStages::ALL);
         let one_seed = capture(ctx, &r);
         let (single_err, cliff_px) = cliff_mean_diff(&reference, &one_seed.hdr, &reference.hdr);

@@ -21,10 +21,16 @@ vec2 oct_encode(vec3 n) {
     return e;
 }
 
+// Codes 0..=254, so the square's centre (code 127) and edges are exact:
+// +z and the axis directions decode exactly. With 255 steps the centre fell
+// between two codes and a flat plane decoded 0.3 degrees tilted, which at
+// grazing incidence moved the reconstructed derivatives by whole mips.
+const float OCT_CODE_MAX = 254.0;
+
 // Unit vector -> two 8-bit codes (round to nearest, ties up).
 uvec2 oct_encode8(vec3 n) {
-    precise vec2 scaled = oct_encode(n) * 255.0 + 0.5;
-    return uvec2(clamp(floor(scaled), vec2(0.0), vec2(255.0)));
+    precise vec2 scaled = oct_encode(n) * OCT_CODE_MAX + 0.5;
+    return uvec2(clamp(floor(scaled), vec2(0.0), vec2(OCT_CODE_MAX)));
 }
 
 vec3 oct_decode(vec2 e) {
@@ -36,7 +42,7 @@ vec3 oct_decode(vec2 e) {
 }
 
 vec3 oct_decode8(uvec2 code) {
-    return oct_decode(vec2(code) / 255.0);
+    return oct_decode(vec2(code) / OCT_CODE_MAX);
 }
 
 #endif

@@ -100,7 +100,7 @@ pub fn bench_effects(
     }
     for _ in 0..cfg.rounds {
         for (_, _, r, timings) in runs.iter_mut() {
-            timings.extend(block(ctx, r, &mut off, &cfg.view, cfg)?);
+            timings.extend(super::measure(ctx, r, &mut off, &cfg.view, cfg.warmup_frames, cfg.frames)?);
         }
     }
     let mut rows = Vec::new();
@@ -130,23 +130,4 @@ pub fn bench_effects(
         row.cost_bytes = full_bytes - row.gpu_memory_bytes as i64;
     }
     Ok(rows)
-}
-
-/// Warm-up then measured frames of one variant; the timings of the
-/// measured frames only (they come back late: collected after a wait).
-fn block(
-    ctx: &Context,
-    r: &mut TerrainRenderer,
-    off: &mut Offscreen,
-    view: &View,
-    cfg: &EffectsBenchConfig,
-) -> Result<Vec<FrameTimings>> {
-    off.run(ctx, r, view, cfg.warmup_frames)?;
-    let first = r.frames_recorded() + 1;
-    let mut out: Vec<FrameTimings> = off.run(ctx, r, view, cfg.frames)?;
-    off.capture(ctx)?;
-    out.extend(r.poll_timings(ctx).cloned());
-    out.retain(|t| t.frame >= first);
-    out.dedup_by_key(|t| t.frame);
-    Ok(out)
 }

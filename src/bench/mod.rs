@@ -5,8 +5,39 @@
 
 pub mod cull;
 pub mod effects;
+pub mod shade;
+pub mod shade_views;
 pub mod traverse;
 
 pub use cull::{bench_cull, cull_views, CullBenchConfig, CullBenchRow};
 pub use effects::{bench_effects, EffectsBenchConfig, EffectsBenchRow};
+pub use shade::{bench_shade, ShadeBench, ShadeBenchConfig, ShadeRow};
+pub use shade_views::{shade_views, ShadeView};
 pub use traverse::{bench_traverse, TraverseBenchConfig, TraverseBenchRow};
+
+use crate::error::Result;
+use crate::frame::FrameTimings;
+use crate::gpu::Context;
+use crate::render::offscreen::Offscreen;
+use crate::render::view::View;
+use crate::render::TerrainRenderer;
+
+/// Warm-up then `frames` measured frames of one renderer; the timings of
+/// the measured frames only (they come back late: collected after a wait).
+pub(crate) fn measure(
+    ctx: &Context,
+    r: &mut TerrainRenderer,
+    off: &mut Offscreen,
+    view: &View,
+    warmup: u32,
+    frames: u32,
+) -> Result<Vec<FrameTimings>> {
+    off.run(ctx, r, view, warmup)?;
+    let first = r.frames_recorded() + 1;
+    let mut out: Vec<FrameTimings> = off.run(ctx, r, view, frames)?;
+    off.capture(ctx)?;
+    out.extend(r.poll_timings(ctx).cloned());
+    out.retain(|t| t.frame >= first);
+    out.dedup_by_key(|t| t.frame);
+    Ok(out)
+}

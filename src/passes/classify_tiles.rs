@@ -1,8 +1,8 @@
 //! `classify_tiles`: ORs the classification bits over each 8x8 screen tile
 //! and appends every tile with terrain to the list of its variant (its
 //! combined flavour bits); the list's append counter is the instance count
-//! of that variant's indirect draw in `gbuffer_tiles`. One workgroup per
-//! tile. The lists are sized for the first target size seen and remade
+//! of that variant's indirect draw in `gbuffer_tiles`. One invocation per
+//! tile (the shader says why not one per pixel). The lists are sized for the first target size seen and remade
 //! (the old buffer deferred-destroyed) when it changes.
 
 use crate::error::Result;
@@ -139,7 +139,8 @@ impl ClassifyTiles {
             ],
         );
         rec.push_constants(&self.pipeline, &TilePush { force_variant, ..lists.push });
-        rec.dispatch(lists.push.tiles_x, lists.push.tiles_y, 1);
+        let [gx, gy, _] = sh::WORKGROUP_SIZE;
+        rec.dispatch(lists.push.tiles_x.div_ceil(gx), lists.push.tiles_y.div_ceil(gy), 1);
         rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::ALL_COMMANDS);
     }
 }

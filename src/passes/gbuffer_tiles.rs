@@ -67,13 +67,14 @@ impl GbufferTiles {
     pub const NAME: &'static str = vs::PASS;
 
     /// Pipelines for `variants`; `materials`: the shader with the splat and
-    /// cliff paths (bound to material resources at record time).
-    pub fn new(ctx: &Context, variants: &[u32], materials: bool) -> Result<Self> {
+    /// cliff paths (bound to material resources at record time);
+    /// `every_flavour`: evaluate each variant's every flavour at every pixel.
+    pub fn new(ctx: &Context, variants: &[u32], materials: bool, every_flavour: bool) -> Result<Self> {
         let fragment = fs::variant(if materials { fs::VARIANT_MATERIALS } else { 0 });
         let pipelines = variants
             .iter()
             .map(|&bits| {
-                let spec = [(vs::SPEC_VARIANT_BITS, bits)];
+                let spec = [(vs::SPEC_VARIANT_BITS, bits), (fs::SPEC_EVERY_FLAVOUR, u32::from(every_flavour))];
                 let desc = GraphicsPipelineDesc {
                     name: variant_label(bits),
                     vertex: &vs::SHADER,

@@ -33,7 +33,7 @@ use crate::render::effects::{decide, Effect, EffectDecision, Effects, WorldConte
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FramePass, PassGraph, Skip};
 use crate::render::materials_gpu::MaterialResources;
-use crate::render::shading::ShadeRules;
+use crate::render::shading::{ShadeRules, Shading};
 use crate::render::stats::TRIANGLES_PER_PATCH;
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
@@ -52,10 +52,9 @@ pub struct RendererOptions {
     /// and tests turn them off to show what each removes and costs).
     pub stages: CullStages,
     pub effects: Effects,
-    /// Shade every terrain tile with one pipeline that has every flavour the
-    /// scene allows, instead of one pipeline per tile variant (the reference
-    /// the tiled shading is compared with in tests and `vista bench shade`).
-    pub one_shader: bool,
+    /// Tiled (default), or one pipeline for every tile: the references the
+    /// tiled shading is compared with in tests and `vista bench shade`.
+    pub shading: Shading,
     /// Tests only: keep an effect on although the world lacks its data, to
     /// show that its path changes nothing there.
     #[doc(hidden)]
@@ -83,7 +82,7 @@ pub struct TerrainRenderer {
     /// Made for the view size on the first frame (remade when it changes).
     pub gbuffer: Option<GBuffer>,
     pub shade: ShadeRules,
-    one_shader: bool,
+    shading: Shading,
     view_buffer: Buffer,
     telemetry: Telemetry,
     exec: FrameExecutor,
@@ -179,8 +178,9 @@ impl TerrainRenderer {
         } else {
             None
         };
-        let variants = if options.one_shader { vec![shade.allowed] } else { shade.variants() };
-        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, materials.is_some())?;
+        let variants = options.shading.pipelines(&shade);
+        let every = options.shading == Shading::OneShaderEveryFlavour;
+        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, materials.is_some(), every)?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
         let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
         let build =
@@ -230,7 +230,7 @@ impl TerrainRenderer {
             materials,
             gbuffer: None,
             shade,
-            one_shader: options.one_shader,
+            shading: options.shading,
             view_buffer,
             telemetry: Telemetry::new(ctx, options.terrain.frames_in_flight, layout)?,
             exec,
@@ -395,7 +395,7 @@ impl TerrainRenderer {
             });
         }
         let classify = &self.classify;
-        let force = if self.one_shader { self.shade.allowed } else { 0 };
+        let force = if self.shading == Shading::Tiled { 0 } else { self.shade.allowed };
         frame.pass(FramePass::ClassifyTiles.name(), false, QueueKind::Graphics, |r| classify.record(r, gb, force));
         log.ran(FramePass::ClassifyTiles, None);
         let lists = classify.lists.as_ref().expect("prepared above");

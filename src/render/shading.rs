@@ -26,6 +26,42 @@ pub fn variant_name(bits: u32) -> String {
     }
 }
 
+/// How terrain tiles are shaded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Shading {
+    /// One pipeline per tile variant, each drawing only its tiles.
+    #[default]
+    Tiled,
+    /// One pipeline with every flavour the scene allows for every tile; a
+    /// pixel branches past the flavours it does not need (an uber-shader).
+    OneShader,
+    /// One pipeline that evaluates every flavour at every pixel, weighting
+    /// the ones it does not need by 0 (no branches: the baseline of the
+    /// reference talk).
+    OneShaderEveryFlavour,
+}
+
+impl Shading {
+    pub const ALL: [Shading; 3] = [Shading::Tiled, Shading::OneShader, Shading::OneShaderEveryFlavour];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Shading::Tiled => "tiled",
+            Shading::OneShader => "one shader (branching)",
+            Shading::OneShaderEveryFlavour => "one shader (every flavour)",
+        }
+    }
+
+    /// The variants to build pipelines for, given the scene's.
+    pub fn pipelines(self, rules: &ShadeRules) -> Vec<u32> {
+        match self {
+            Shading::Tiled => rules.variants(),
+            _ => vec![rules.allowed],
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShadeRules {
     /// Flavours the scene can produce (far atlas always; splat with the

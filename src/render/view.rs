@@ -18,7 +18,7 @@ use glam::{DMat4, DVec3, DVec4};
 /// so it can be small enough for a camera standing on the ground.
 pub const DEFAULT_NEAR_M: f64 = 0.1;
 
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Camera {
     pub position_m: [f64; 3],
     /// Compass heading in degrees: 0 looks toward +y (north), 90 toward +x.

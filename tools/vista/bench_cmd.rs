@@ -17,6 +17,9 @@ pub enum BenchKind {
     /// GPU frame time and memory of the minimal scene, the full scene and
     /// the full scene without each effect in turn.
     Effects,
+    /// Tiled shading vs one pipeline doing every flavour, on views with and
+    /// without cliffs; classification's share; tiles per variant; stochastic
+    /// vs blended cliffs.
     Shade,
     Accuracy,
     All,
@@ -37,13 +40,13 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4,8")]
     targets: Vec<f32>,
     /// Measured frames per row (after warm-up); the median is reported
-    /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects].
+    /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects, 3 per block (3 rounds) for shade].
     #[arg(long)]
     frames: Option<u32>,
-    /// Target size of `bench cull` and `bench effects`.
+    /// Target size of `bench cull`, `bench effects` and `bench shade`.
     #[arg(long, default_value = "1280x720", value_parser = crate::render_cmd::parse_size)]
     size: [u32; 2],
-    /// Target projected error of `bench cull` and `bench effects`, pixels.
+    /// Target projected error of `bench cull`, `bench effects` and `bench shade`, pixels.
     #[arg(long, default_value_t = 1.0)]
     target_error: f32,
     /// Camera position (x,y,z metres); default: 60 m above the world's centre at mid height.
@@ -65,8 +68,16 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
             args.target_error,
             args.json.as_deref(),
         ),
+        BenchKind::Shade => crate::bench_shade_cmd::shade(
+            ctx,
+            &args.world,
+            args.frames.unwrap_or(3),
+            args.size,
+            args.target_error,
+            args.json.as_deref(),
+        ),
         other => bail!(
-            "bench {} needs passes that do not exist yet (tile shading, the accuracy reference); available: traverse, cull, effects",
+            "bench {} needs passes that do not exist yet (the accuracy reference); available: traverse, cull, effects, shade",
             format!("{other:?}").to_lowercase()
         ),
     }

@@ -5,6 +5,8 @@ mod bake;
 mod bench_cmd;
 mod bench_cull_cmd;
 mod bench_effects_cmd;
+mod bench_shade_cmd;
+mod golden_cmd;
 mod render_cmd;
 mod scene;
 mod world_args;
@@ -45,6 +47,9 @@ enum Command {
     Memory(bake::MemoryArgs),
     /// GPU-time benchmarks (medians after warm-up), e.g. `vista bench traverse --json t.json`.
     Bench(bench_cmd::BenchArgs),
+    /// Render the golden views and compare them with their references (FLIP);
+    /// `--update` rewrites the references and prints what changed.
+    Golden(golden_cmd::GoldenArgs),
 }
 
 fn main() {
@@ -106,6 +111,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bake(args) => bake::bake(args),
         Command::Memory(args) => bake::memory(args),
         Command::Bench(args) => with_gpu(&options, |ctx| bench_cmd::bench(ctx, args)),
+        Command::Golden(args) => with_gpu(&options, |ctx| golden_cmd::golden(ctx, &args)),
     }
 }
 

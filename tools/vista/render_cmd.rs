@@ -19,7 +19,7 @@ use vista::terrain::TerrainOptions;
 /// Frames excluded from medians (pipeline creation, first-use costs).
 const WARMUP_FRAMES: usize = 2;
 /// Background of the lit image where there is no terrain (sky blue, linear).
-const SKY_CLEAR: [f32; 4] = [0.55, 0.68, 0.85, 1.0];
+pub(crate) const SKY_CLEAR: [f32; 4] = [0.55, 0.68, 0.85, 1.0];
 
 #[derive(Args)]
 pub struct RenderArgs {

@@ -1,0 +1,48 @@
+//! Golden images: `vista golden` renders the default world (overview and a
+//! close cliff view) and Mont Blanc at 256x144 on the test device and
+//! compares each with its reference in tests/golden with NVIDIA FLIP
+//! (tolerance and its reason: `tools/vista/golden_cmd.rs`). A missing
+//! reference fails; `vista golden --update` rewrites them and prints what
+//! changed.
+
+use std::process::Command;
+
+#[test]
+fn golden_images_match_their_references_under_validation() {
+    let out = Command::new(env!("CARGO_BIN_EXE_vista"))
+        .args(["--validation", "golden", "--out"])
+        .arg(std::env::temp_dir().join(format!("vista-golden-{}", std::process::id())))
+        .output()
+        .expect("run vista golden");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stdout}{stderr}");
+    for name in ["default", "default-cliffs", "montblanc"] {
+        let line = stdout.lines().find(|l| l.split_whitespace().next() == Some(name));
+        assert!(line.is_some_and(|l| l.contains(" ok: ")), "{name} not checked:\n{stdout}");
+    }
+}
+
+#[test]
+fn a_missing_reference_fails_and_says_how_to_make_one() {
+    let empty = std::env::temp_dir().join(format!("vista-golden-empty-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&empty);
+    let out = Command::new(env!("CARGO_BIN_EXE_vista"))
+        .args(["golden", "--only", "montblanc", "--dir"])
+        .arg(&empty)
+        .arg("--out")
+        .arg(empty.join("diff"))
+        .output()
+        .expect("run vista golden");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(!out.status.success(), "{stdout}");
+    assert!(stdout.contains("montblanc        FAILED: no reference"), "{stdout}");
+    assert!(stderr.contains("vista golden --update"), "{stderr}");
+    // The rendered image is left to look at.
+    assert!(empty.join("diff/montblanc.png").exists());
+    let _ = std::fs::remove_dir_all(&empty);
+    // A typo in a view name is a one-line input error.
+    let out = Command::new(env!("CARGO_BIN_EXE_vista")).args(["golden", "--only", "mont-blanc"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("no golden view \"mont-blanc\"") && stderr.lines().count() == 1, "{stderr}");
+}
