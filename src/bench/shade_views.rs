@@ -50,7 +50,7 @@ pub fn shade_views(world: &WorldDesc, source: &dyn HeightSource, rules: &ShadeRu
     let scores: Vec<(f64, f64)> = candidates.par_iter().map(|c| score(world, source, c, fov_y_deg, cliff_z)).collect();
     let view = |name: &str, i: usize| ShadeView {
         name: name.into(),
-        camera: candidates[i].clone(),
+        camera: candidates[i],
         terrain_fraction: scores[i].0,
         cliff_fraction: scores[i].1,
     };
