@@ -170,8 +170,36 @@ fn bench_traverse_writes_a_table_and_json() {
         );
         assert!(r["final_nodes"].as_u64().unwrap() > 0);
     }
-    let (ok, _, err) = vista(&["bench", "shade"]);
-    assert!(!ok && err.contains("traverse, cull"), "{err}");
+    let (ok, _, err) = vista(&["bench", "accuracy"]);
+    assert!(!ok && err.contains("traverse, cull, effects, shade"), "{err}");
+}
+
+#[test]
+fn bench_shade_measures_every_shading_mode_per_view() {
+    let json = std::env::temp_dir().join(format!("vista-bench-shade-{}.json", std::process::id()));
+    let args =
+        ["bench", "shade", "--extent", "2048", "--spacing", "2", "--lods", "4", "--size", "64x48", "--frames", "1"];
+    let (ok, out, err) = vista(&[&args[..], &["--json", json.to_str().unwrap()]].concat());
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let views: Vec<&str> = v["views"].as_array().unwrap().iter().map(|w| w["name"].as_str().unwrap()).collect();
+    assert!(views.first() == Some(&"cliff wall") && views.last() == Some(&"no cliffs"), "{views:?}");
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 4 * views.len(), "{out}");
+    for r in rows {
+        let shading = r["shading"].as_str().unwrap();
+        assert!(r["shading_ms"].as_f64().unwrap() > 0.0, "{r}");
+        // A one-pipeline shader has one draw and no classification share.
+        let variants = r["variants"].as_array().unwrap().len();
+        if shading == "tiled" {
+            assert!(r["classify_fraction"].as_f64().is_some(), "{r}");
+        } else {
+            assert!(variants == 1 && r["classify_fraction"].is_null(), "{r}");
+        }
+    }
+    assert!(out.contains("floor: classification <= 0.1"), "{out}");
+    assert_eq!(v["stochastic_error"].as_array().unwrap().len(), views.len());
+    let _ = std::fs::remove_file(&json);
 }
 
 #[test]
