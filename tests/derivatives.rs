@@ -41,11 +41,16 @@ fn oct_decode8(code: [u32; 2]) -> DVec3 {
 /// (p0, n): None where it runs parallel (within the guard) or meets the
 /// plane behind the eye. Same definition as reconstruct.glsl, in f64.
 fn hit(inv: &DMat4, px: [f64; 2], p0: DVec3, n: DVec3) -> Option<DVec3> {
-    let ndc = [px[0] / f64::from(SIZE[0]) * 2.0 - 1.0, px[1] / f64::from(SIZE[1]) * 2.0 - 1.0];
-    let d = (*inv * DVec4::new(ndc[0], ndc[1], 0.0, 1.0)).truncate();
+    let d = eye_ray(inv, px);
     let cos = d.dot(n) / d.length();
     let t = p0.dot(n) / d.dot(n);
     (cos.abs() >= GRAZING_COS && t > 0.0).then_some(d * t)
+}
+
+/// The unnormalised eye ray through pixel `px` (reconstruct.glsl's eye_ray).
+fn eye_ray(inv: &DMat4, px: [f64; 2]) -> DVec3 {
+    let ndc = [px[0] / f64::from(SIZE[0]) * 2.0 - 1.0, px[1] / f64::from(SIZE[1]) * 2.0 - 1.0];
+    (*inv * DVec4::new(ndc[0], ndc[1], 0.0, 1.0)).truncate()
 }
 
 /// The step to a neighbour, forward where it hits, else backward.
@@ -271,8 +276,7 @@ fn beyond_the_guard_derivatives_stay_finite_and_bounded() {
                 for i in [0.5, 128.5, 255.5] {
                     // The centre rows: the pixel itself hits (or nearly).
                     for j in [71.5, 72.5] {
-                        let ndc = [i / 128.0 - 1.0, j / 72.0 - 1.0];
-                        let d = (inv * DVec4::new(ndc[0], ndc[1], 0.0, 1.0)).truncate();
+                        let d = eye_ray(&inv, [i, j]);
                         let t = p0.dot(n) / d.dot(n);
                         if t <= 0.0 {
                             continue;

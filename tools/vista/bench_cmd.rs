@@ -3,7 +3,7 @@
 use crate::world_args::WorldArgs;
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use vista::bench::{bench_traverse, TraverseBenchConfig};
 use vista::gpu::Context;
 
@@ -56,26 +56,44 @@ pub struct BenchArgs {
     world: WorldArgs,
 }
 
+/// What the view benchmarks (cull, effects, shade) take, checked once.
+pub struct ViewBench<'a> {
+    pub world: &'a WorldArgs,
+    pub frames: u32,
+    pub size: [u32; 2],
+    pub target_error_px: f32,
+    pub json: Option<&'a Path>,
+}
+
+impl<'a> ViewBench<'a> {
+    fn new(args: &'a BenchArgs, default_frames: u32) -> Result<Self> {
+        let frames = args.frames.unwrap_or(default_frames);
+        if frames == 0 || !(args.target_error.is_finite() && args.target_error > 0.0) {
+            bail!("--frames must be at least 1 and --target-error a positive number of pixels");
+        }
+        Ok(ViewBench {
+            world: &args.world,
+            frames,
+            size: args.size,
+            target_error_px: args.target_error,
+            json: args.json.as_deref(),
+        })
+    }
+}
+
+/// Writes a benchmark's table as pretty JSON and says so.
+pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
+    std::fs::write(path, serde_json::to_string_pretty(json)?).with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
 pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
     match args.kind {
         BenchKind::Traverse => traverse(ctx, args),
-        BenchKind::Cull => crate::bench_cull_cmd::cull(ctx, &args.world, args.frames.unwrap_or(7), args.size, args.target_error, args.json.as_deref()),
-        BenchKind::Effects => crate::bench_effects_cmd::effects(
-            ctx,
-            &args.world,
-            args.frames.unwrap_or(2),
-            args.size,
-            args.target_error,
-            args.json.as_deref(),
-        ),
-        BenchKind::Shade => crate::bench_shade_cmd::shade(
-            ctx,
-            &args.world,
-            args.frames.unwrap_or(3),
-            args.size,
-            args.target_error,
-            args.json.as_deref(),
-        ),
+        BenchKind::Cull => crate::bench_cull_cmd::cull(ctx, &ViewBench::new(&args, 7)?),
+        BenchKind::Effects => crate::bench_effects_cmd::effects(ctx, &ViewBench::new(&args, 2)?),
+        BenchKind::Shade => crate::bench_shade_cmd::shade(ctx, &ViewBench::new(&args, 3)?),
         other => bail!(
             "bench {} needs passes that do not exist yet (the accuracy reference); available: traverse, cull, effects, shade",
             format!("{other:?}").to_lowercase()
@@ -131,9 +149,7 @@ fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
     }
     if let Some(path) = args.json {
         let json = serde_json::json!({ "device": ctx.info().name, "world": world.label, "camera_m": camera, "frames": cfg.frames, "rows": rows });
-        std::fs::write(&path, serde_json::to_string_pretty(&json)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        write_json(&path, &json)?;
     }
     Ok(())
 }

@@ -1,25 +1,15 @@
 //! `vista bench cull [WORLD]`: the patch-culling table of one world.
 
-use crate::world_args::WorldArgs;
-use anyhow::{bail, Context as _, Result};
-use std::path::Path;
+use crate::bench_cmd::{write_json, ViewBench};
+use anyhow::Result;
 use std::time::Duration;
 use vista::bench::{bench_cull, cull_views, CullBenchConfig};
 use vista::gpu::Context;
 use vista::render::{RendererOptions, TerrainRenderer};
 
-pub fn cull(
-    ctx: &Context,
-    world_args: &WorldArgs,
-    frames: u32,
-    size: [u32; 2],
-    target_error_px: f32,
-    json: Option<&Path>,
-) -> Result<()> {
-    if frames == 0 || !(target_error_px.is_finite() && target_error_px > 0.0) {
-        bail!("--frames must be at least 1 and --target-error a positive number of pixels");
-    }
-    let world = world_args.load()?;
+pub fn cull(ctx: &Context, b: &ViewBench) -> Result<()> {
+    let (frames, size, target_error_px) = (b.frames, b.size, b.target_error_px);
+    let world = b.world.load()?;
     let d = world.desc;
     let options = RendererOptions { effects: world.effects.clone(), ..RendererOptions::default() };
     let mut renderer = TerrainRenderer::new(ctx, &d, world.source.clone(), world.holes.clone(), &options)?;
@@ -98,14 +88,12 @@ pub fn cull(
             |x: &vista::bench::cull::CullTiming| format!("{:.3}+{:.3}+{:.2}", x.traverse_ms, x.cull_ms, x.geometry_ms);
         println!("  {:<13} traverse+cull+geometry  {}  /  {}  /  {}", r.view, t(&r.all), t(&r.no_cone), t(&r.none));
     }
-    if let Some(path) = json {
+    if let Some(path) = b.json {
         let doc = serde_json::json!({
             "device": ctx.info().name, "world": world.label, "size": size,
             "target_error_px": target_error_px, "frames": frames, "rows": rows,
         });
-        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        write_json(path, &doc)?;
     }
     Ok(())
 }

@@ -1,26 +1,16 @@
 //! `vista bench effects [WORLD]`: GPU frame time and GPU memory of the
 //! minimal scene, the full scene and the full scene without each effect.
 
-use crate::world_args::WorldArgs;
-use anyhow::{bail, Context as _, Result};
-use std::path::Path;
+use crate::bench_cmd::{write_json, ViewBench};
+use anyhow::Result;
 use std::time::Duration;
 use vista::bench::{bench_effects, EffectsBenchConfig};
 use vista::gpu::Context;
 use vista::render::{overview_camera, Effect, View, DEFAULT_NEAR_M};
 
-pub fn effects(
-    ctx: &Context,
-    world_args: &WorldArgs,
-    frames: u32,
-    size: [u32; 2],
-    target_error_px: f32,
-    json: Option<&Path>,
-) -> Result<()> {
-    if frames == 0 || !(target_error_px.is_finite() && target_error_px > 0.0) {
-        bail!("--frames must be at least 1 and --target-error a positive number of pixels");
-    }
-    let world = world_args.load()?;
+pub fn effects(ctx: &Context, b: &ViewBench) -> Result<()> {
+    let (frames, size, target_error_px) = (b.frames, b.size, b.target_error_px);
+    let world = b.world.load()?;
     let d = world.desc;
     // The full scene: the scene's effects and parameters, every effect asked for.
     let mut full = world.effects.clone();
@@ -82,14 +72,12 @@ pub fn effects(
         println!("not measured (off in the full scene: not implemented, or no data in this world): {}", off.join(", "));
     }
     println!("cost = full minus the row (what the missing effect costs); minimal = geometry and lighting only");
-    if let Some(path) = json {
+    if let Some(path) = b.json {
         let json = serde_json::json!({
             "device": ctx.info().name, "world": world.label, "size": size, "target_error_px": target_error_px,
             "frames_per_variant": cfg.rounds * frames, "rows": rows, "not_measured": off,
         });
-        std::fs::write(path, serde_json::to_string_pretty(&json)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        write_json(path, &json)?;
     }
     Ok(())
 }

@@ -2,9 +2,8 @@
 //! every flavour, on a view with cliffs and one without; classification's
 //! share of shading time; tiles per variant; stochastic vs blended cliffs.
 
-use crate::world_args::WorldArgs;
-use anyhow::{bail, Context as _, Result};
-use std::path::Path;
+use crate::bench_cmd::{write_json, ViewBench};
+use anyhow::Result;
 use std::time::Duration;
 use vista::bench::{bench_shade, shade_views, ShadeBenchConfig};
 use vista::gpu::Context;
@@ -17,18 +16,9 @@ use vista::render::Effect;
 const CLASSIFY_FLOOR: f64 = 0.1;
 const TILED_FLOOR: f64 = 0.7;
 
-pub fn shade(
-    ctx: &Context,
-    world_args: &WorldArgs,
-    frames: u32,
-    size: [u32; 2],
-    target_error_px: f32,
-    json: Option<&Path>,
-) -> Result<()> {
-    if frames == 0 || !(target_error_px.is_finite() && target_error_px > 0.0) {
-        bail!("--frames must be at least 1 and --target-error a positive number of pixels");
-    }
-    let world = world_args.load()?;
+pub fn shade(ctx: &Context, args: &ViewBench) -> Result<()> {
+    let (frames, size, target_error_px) = (args.frames, args.size, args.target_error_px);
+    let world = args.world.load()?;
     let d = world.desc;
     // The scene's shading parameters with every flavour allowed.
     let fx = world.effects.clone().with(Effect::Splat, true).with(Effect::Cliffs, true);
@@ -116,15 +106,13 @@ pub fn shade(
         );
     }
     floors(&b.rows);
-    if let Some(path) = json {
+    if let Some(path) = args.json {
         let json = serde_json::json!({
             "device": ctx.info().name, "world": world.label, "size": size, "target_error_px": target_error_px,
             "frames_per_renderer": cfg.rounds * frames, "views": b.views, "rows": b.rows,
             "stochastic_error": b.stochastic_error,
         });
-        std::fs::write(path, serde_json::to_string_pretty(&json)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        write_json(path, &json)?;
     }
     Ok(())
 }
