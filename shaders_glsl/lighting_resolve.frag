@@ -21,6 +21,10 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     // The albedo target is sRGB: texelFetch returns linear values.
     vec3 albedo = texelFetch(sampler2D(gb_albedo, nearest), px, 0).rgb;
+    // The "lighting only" view: a uniform albedo.
+    if (view.v.shade_flags.w != 0u) {
+        albedo = vec3(uintBitsToFloat(view.v.shade_flags.w));
+    }
 #ifdef LIGHTING
     vec3 n = oct_decode(texelFetch(sampler2D(gb_normal, nearest), px, 0).xy);
     vec3 light = view.v.sun_color.rgb * max(dot(n, view.v.sun_dir.xyz), 0.0)

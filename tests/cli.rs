@@ -170,8 +170,67 @@ fn bench_traverse_writes_a_table_and_json() {
         );
         assert!(r["final_nodes"].as_u64().unwrap() > 0);
     }
-    let (ok, _, err) = vista(&["bench", "accuracy"]);
-    assert!(!ok && err.contains("traverse, cull, effects, shade"), "{err}");
+}
+
+/// The reduced form of `vista bench accuracy` (two targets, one view,
+/// 128x128) so its plumbing cannot rot; the full sweep is a command.
+#[test]
+fn bench_accuracy_sweeps_targets_and_culling_against_the_reference() {
+    let dir = std::env::temp_dir().join(format!("vista-bench-accuracy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (json, plot) = (dir.join("acc.json"), dir.join("acc.png"));
+    let args = [
+        "bench",
+        "accuracy",
+        "--extent",
+        "2048",
+        "--spacing",
+        "2",
+        "--lods",
+        "4",
+        "--size",
+        "128x128",
+        "--frames",
+        "1",
+        "--targets",
+        "1,4",
+        "--views",
+        "high-flight",
+    ];
+    let extra = ["--json", json.to_str().unwrap(), "--plot", plot.to_str().unwrap(), "--images", dir.to_str().unwrap()];
+    let (ok, out, err) = vista(&[&args[..], &extra[..]].concat());
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let points = v["bench"]["points"].as_array().unwrap();
+    // Two targets x culling on/off; no shading rows (no splat, no cliffs).
+    assert_eq!(points.len(), 4, "{out}");
+    assert!(v["bench"]["shading_skipped"].as_str().is_some(), "{out}");
+    for p in points {
+        assert_eq!(p["view"], "high flight");
+        let e = &p["error"];
+        assert!(p["gpu_ms"].as_f64().unwrap() > 0.0 && p["triangles_drawn"].as_u64().unwrap() > 0, "{p}");
+        // A high view of a 2 km world: almost every pixel is terrain, and
+        // the frame agrees with the reference on nearly all of them.
+        assert!(e["terrain_pixels"].as_u64().unwrap() > 128 * 128 * 9 / 10, "{p}");
+        assert!(e["depth_within_2pct"].as_f64().unwrap() > 0.95, "{p}");
+        assert!(e["flip_mean"].as_f64().unwrap() < 0.2 && e["psnr_db"].as_f64().unwrap() > 20.0, "{p}");
+        if p["family"] == "culling off" {
+            assert_eq!(p["differs_from_culled_px"], 0, "culling changed the picture: {p}");
+        }
+    }
+    let drawn = |t: f64| points.iter().find(|p| p["target_error_px"] == t && p["family"] == "culling off").unwrap();
+    assert!(drawn(4.0)["triangles_drawn"].as_u64() <= drawn(1.0)["triangles_drawn"].as_u64(), "{out}");
+    let png = image::open(&plot).expect("the plot is a PNG").to_rgb8();
+    assert_eq!(png.dimensions(), (1400, 1000));
+    for f in ["high_flight_reference.png", "high_flight_frame.png", "high_flight_flip.png"] {
+        assert!(dir.join(f).is_file(), "{f} missing: {out}");
+    }
+    // Bad names fail before any work, naming the option.
+    let (ok, _, err) = vista(&["bench", "accuracy", "--views", "sideways", "--extent", "2048", "--spacing", "2"]);
+    assert!(!ok && err.contains("--views") && err.contains("facing-ridge"), "{err}");
+    let (ok, _, err) = vista(&["bench", "accuracy", "--plot", "/nonexistent-dir/a.png"]);
+    assert!(!ok && err.contains("--plot"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -30,7 +30,7 @@ struct TerrainView {
     vec4 shade_bands;       // view depth (m): far atlas from x to y; far cliff from z to w
     vec4 shade_slope;       // x: normal z where cliff shading starts, y: where it is full;
                             // z: far cliff's second tiling scale; w: hash scale (Wyman-McGuire g)
-    uvec4 shade_flags;      // x: flavours the scene can produce; y: hash seed; z: 1 = stochastic cliffs
+    uvec4 shade_flags;      // x: flavours the scene can produce; y: hash seed; z: 1 = stochastic cliffs; w: clay albedo bits (0: G-buffer albedo)
 };
 
 // LOD-0 sample index -> camera-relative metres (x, y). Takes fields, not

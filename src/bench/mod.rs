@@ -3,12 +3,16 @@
 //! timed in the same run so their ratios are measured under the same
 //! conditions.
 
+pub mod accuracy;
+pub mod accuracy_error;
 pub mod cull;
 pub mod effects;
 pub mod shade;
 pub mod shade_views;
 pub mod traverse;
 
+pub use accuracy::{bench_accuracy, AccuracyBench, AccuracyBenchConfig, AccuracyPoint};
+pub use accuracy_error::{accuracy_error, AccuracyError};
 pub use cull::{bench_cull, cull_views, CullBenchConfig, CullBenchRow};
 pub use effects::{bench_effects, EffectsBenchConfig, EffectsBenchRow};
 pub use shade::{bench_shade, ShadeBench, ShadeBenchConfig, ShadeRow};

@@ -5,11 +5,13 @@ pub mod classify;
 pub mod image_metric;
 pub mod lod_map;
 pub mod occlusion;
+pub mod raycast;
 pub mod sector_data;
 pub mod traverse;
 
 pub use classify::classify_tiles_cpu;
 pub use image_metric::{flip_magma, flip_map, flip_stats, FlipStats};
 pub use lod_map::lod_map_cpu;
+pub use raycast::{HeightBounds, RayCaster, RaycastConfig, ReferenceImage, Trace};
 pub use sector_data::{sample_height_cpu, sector_data_cpu};
 pub use traverse::{traverse_cpu, wanted_finer_cpu};

@@ -109,7 +109,7 @@ impl Effect {
     /// Parameter names a table may give besides `enabled`.
     fn parameters(self) -> &'static [&'static str] {
         match self {
-            Effect::Lighting => &["sun_azimuth_deg", "sun_elevation_deg", "sun_color", "sky_color"],
+            Effect::Lighting => &["sun_azimuth_deg", "sun_elevation_deg", "sun_color", "sky_color", "clay_albedo"],
             Effect::Cliffs => &["slope_deg", "band_deg", "near_far_m", "stochastic", "hash_seed"],
             Effect::Splat => &["materials", "far_start_m", "far_band_m"],
             Effect::VirtualTexture => &["cache_mb"],
@@ -220,6 +220,8 @@ impl Effects {
                 "sun_elevation_deg" => self.lighting.sun_elevation_deg = number(&key, v, -90.0, 90.0)?,
                 "sun_color" => self.lighting.sun_color = colour(&key, v)?,
                 "sky_color" => self.lighting.sky_color = colour(&key, v)?,
+                // Zero would read as "off" on the GPU: the range starts above it.
+                "clay_albedo" => self.lighting.clay_albedo = Some(number(&key, v, 1e-3, 1.0)? as f32),
                 "slope_deg" => self.shade.cliff_slope_deg = number(&key, v, 0.0, 90.0)? as f32,
                 "band_deg" => self.shade.cliff_band_deg = number(&key, v, 0.0, 45.0)? as f32,
                 "near_far_m" => {

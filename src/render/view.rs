@@ -156,7 +156,9 @@ impl View {
         let inv = self.view_proj().inverse().as_mat4();
         let f4 = |v: DVec4| v.as_vec4().to_array();
         let [w, h] = self.size.map(f64::from);
-        let (bands, slope, flags) = shade.gpu();
+        let (bands, slope, mut flags) = shade.gpu();
+        // w: the clay albedo's f32 bits, 0 = the G-buffer's albedo.
+        flags[3] = light.clay_albedo.map_or(0, f32::to_bits);
         TerrainViewGpu {
             view_proj: vp.to_cols_array_2d(),
             frustum: self.frustum_planes().map(f4),
@@ -203,6 +205,11 @@ pub struct Lighting {
     pub sun_elevation_deg: f64,
     pub sun_color: [f32; 3],
     pub sky_color: [f32; 3],
+    /// Lights a uniform albedo (linear, in (0, 1]) instead of the G-buffer's:
+    /// the "lighting only" view, where the picture depends on geometry and
+    /// normals alone. `vista bench accuracy` uses it to compare the lit
+    /// image with its reference, which knows the surface but not the textures.
+    pub clay_albedo: Option<f32>,
 }
 
 impl Default for Lighting {
@@ -213,6 +220,7 @@ impl Default for Lighting {
             sun_elevation_deg: 30.0,
             sun_color: [1.55, 1.45, 1.3],
             sky_color: [0.35, 0.42, 0.55],
+            clay_albedo: None,
         }
     }
 }

@@ -43,6 +43,13 @@ pub enum Surface {
         c: f64,
         slope: f64,
     },
+    /// A sphere's cap rising from a plane at z0: the sphere (centre c,
+    /// radius r) has its centre below z0, so the rim slope stays finite.
+    SphereCap {
+        z0: f64,
+        c: [f64; 3],
+        r: f64,
+    },
 }
 
 impl Surface {
@@ -54,6 +61,14 @@ impl Surface {
             Surface::Bump { z0, c, r, h } => z0 + h * (1.0 - (x - c[0]).hypot(y - c[1]) / r).max(0.0),
             Surface::Hills => 300.0 + 120.0 * (x / 97.0).sin() * (y / 131.0).cos() + 40.0 * (x / 23.0 + y / 31.0).sin(),
             Surface::Gorge { c, slope } => 500.0 + slope * (x - c).abs(),
+            Surface::SphereCap { z0, c, r } => {
+                let d2 = (x - c[0]).powi(2) + (y - c[1]).powi(2);
+                if d2 < r * r {
+                    z0.max(c[2] + (r * r - d2).sqrt())
+                } else {
+                    z0
+                }
+            }
         }
     }
 
@@ -83,6 +98,23 @@ impl Surface {
                     } else {
                         hi
                     }
+                }
+            }
+            Surface::SphereCap { z0, c, r } => {
+                // The sphere's first entry above the plane, else the plane
+                // outside the cap's rim.
+                let oc = [o[0] - c[0], o[1] - c[1], o[2] - c[2]];
+                let b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
+                let disc = b * b - (oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - r * r);
+                let sphere = (disc >= 0.0).then(|| -b - disc.sqrt()).filter(|&t| t > 0.0 && o[2] + t * d[2] >= z0);
+                let rim2 = r * r - (z0 - c[2]).powi(2);
+                let plane = Some((z0 - o[2]) / d[2]).filter(|&t| {
+                    let (x, y) = (o[0] + t * d[0] - c[0], o[1] + t * d[1] - c[1]);
+                    t > 0.0 && x * x + y * y >= rim2
+                });
+                match (sphere, plane) {
+                    (Some(a), Some(b)) => a.min(b),
+                    (a, b) => a.or(b)?,
                 }
             }
             _ => panic!("no closed-form intersection for {self:?}"),

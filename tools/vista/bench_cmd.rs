@@ -21,8 +21,10 @@ pub enum BenchKind {
     /// without cliffs; classification's share; tiles per variant; stochastic
     /// vs blended cliffs.
     Shade,
+    /// What accuracy costs: target error, culling and shading settings
+    /// against a CPU ray-caster (depth, silhouette, geometric error in px,
+    /// PSNR and FLIP of the lit image), with a Pareto plot (`--plot`).
     Accuracy,
-    All,
 }
 
 #[derive(Args)]
@@ -36,9 +38,21 @@ pub struct BenchArgs {
     /// Resident-set sizes (nodes; at most 1023: slots are 10-bit).
     #[arg(long, value_delimiter = ',', default_value = "64,256,512,1000")]
     sets: Vec<u32>,
-    /// Target projected errors in pixels.
-    #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4,8")]
-    targets: Vec<f32>,
+    /// Target projected errors in pixels [default: 0.5,1,2,4,8 for
+    /// traverse; 0.25,0.5,1,2,4,8,16 for accuracy].
+    #[arg(long, value_delimiter = ',')]
+    targets: Option<Vec<f32>>,
+    /// `bench accuracy`: only these views (ground, low-flight, high-flight,
+    /// facing-ridge) [default: all four].
+    #[arg(long, value_delimiter = ',')]
+    views: Option<Vec<String>>,
+    /// `bench accuracy`: write the Pareto plot (GPU ms against error) here, as PNG.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// `bench accuracy`: write each view's reference, its frame at the
+    /// shading target and their FLIP map into this folder.
+    #[arg(long)]
+    images: Option<PathBuf>,
     /// Measured frames per row (after warm-up); the median is reported
     /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects, 3 per block (3 rounds) for shade].
     #[arg(long)]
@@ -94,17 +108,26 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
         BenchKind::Cull => crate::bench_cull_cmd::cull(ctx, &ViewBench::new(&args, 7)?),
         BenchKind::Effects => crate::bench_effects_cmd::effects(ctx, &ViewBench::new(&args, 2)?),
         BenchKind::Shade => crate::bench_shade_cmd::shade(ctx, &ViewBench::new(&args, 3)?),
-        other => bail!(
-            "bench {} needs passes that do not exist yet (the accuracy reference); available: traverse, cull, effects, shade",
-            format!("{other:?}").to_lowercase()
-        ),
+        BenchKind::Accuracy => {
+            let targets = args.targets.clone().unwrap_or(crate::bench_accuracy_cmd::DEFAULT_TARGETS.to_vec());
+            let bench = ViewBench::new(&args, 3)?;
+            crate::bench_accuracy_cmd::accuracy(
+                ctx,
+                &bench,
+                &targets,
+                args.views.as_deref(),
+                args.plot.as_deref(),
+                args.images.as_deref(),
+            )
+        }
     }
 }
 
 fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
     let frames = args.frames.unwrap_or(15);
+    let targets = args.targets.clone().unwrap_or(vec![0.5, 1.0, 2.0, 4.0, 8.0]);
     if args.sets.iter().any(|&n| n == 0 || n > 1023)
-        || args.targets.iter().any(|t| !(t.is_finite() && *t > 0.0))
+        || targets.iter().any(|t| !(t.is_finite() && *t > 0.0))
         || frames == 0
     {
         bail!("--sets must be 1..=1023 nodes, --targets positive pixels, --frames at least 1");
@@ -115,7 +138,7 @@ fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
     let camera = args.camera.unwrap_or([d.extent_m[0] / 2.0, d.extent_m[1] / 2.0, mid + 60.0]);
     let cfg = TraverseBenchConfig {
         resident_sets: args.sets,
-        targets_px: args.targets,
+        targets_px: targets,
         warmup_frames: 3,
         frames,
         camera_m: camera,

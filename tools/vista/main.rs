@@ -1,7 +1,9 @@
 //! The `vista` command line: device info, rendering with per-pass timings,
 //! baking node payloads and memory reports.
 
+mod accuracy_plot;
 mod bake;
+mod bench_accuracy_cmd;
 mod bench_cmd;
 mod bench_cull_cmd;
 mod bench_effects_cmd;

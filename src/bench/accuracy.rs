@@ -1,0 +1,360 @@
+//! `vista bench accuracy`: what accuracy costs in time. On fixed views, a
+//! sweep of the target screen-space error with the culling stages on and
+//! off (the picture must not change; the time does), and at one target the
+//! shading settings (tiled vs one shader doing every flavour, stochastic vs
+//! blended cliffs, near/far thresholds halved and doubled). Each point has
+//! per-pass GPU medians, what was drawn and resident, and its error against
+//! the CPU ray-caster of `reference::raycast`.
+//!
+//! The frames are lit with a uniform ("clay") albedo so the colour error
+//! measures geometry and normals: the reference knows the surface, not the
+//! texture set. For the same reason the geometry sweep draws without splat
+//! and cliffs (their detail normals); the shading rows draw the scene's
+//! effects and also give the FLIP of the textured image against the most
+//! accurate shading (one shader, every flavour, blended cliffs). The world's hole regions are left out: the
+//! reference does not model looking through holes.
+
+use super::accuracy_error::{accuracy_error, AccuracyError};
+use crate::error::Result;
+use crate::frame::profiler::summarize;
+use crate::frame::FrameTimings;
+use crate::gpu::Context;
+use crate::passes::cull_patches::CullStages;
+use crate::reference::{flip_map, RayCaster, RaycastConfig, ReferenceImage};
+use crate::render::effects::{Effect, Effects};
+use crate::render::offscreen::{Capture, Offscreen};
+use crate::render::shading::Shading;
+use crate::render::stats::{collect, RenderStats};
+use crate::render::view::{Camera, View, DEFAULT_NEAR_M};
+use crate::render::{RendererOptions, TerrainRenderer};
+use crate::terrain::TerrainOptions;
+use crate::world::{HeightSource, WorldDesc};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Linear albedo of the clay image (mid grey keeps sunlit slopes below 1).
+pub const CLAY_ALBEDO: f32 = 0.4;
+/// Background of the frames and the reference.
+pub const SKY: [f32; 4] = [0.55, 0.68, 0.85, 1.0];
+
+pub struct AccuracyBenchConfig {
+    pub size: [u32; 2],
+    pub fov_y_deg: f64,
+    /// Target errors of the geometry sweep, pixels.
+    pub targets_px: Vec<f32>,
+    /// The target of the shading rows.
+    pub shading_target_px: f32,
+    /// Shading rows (when the effects have splat or cliffs).
+    pub shading: bool,
+    pub warmup_frames: u32,
+    pub frames: u32,
+    pub settle_timeout: Duration,
+    pub cache_dir: PathBuf,
+    pub raycast: RaycastConfig,
+    /// Keep, per view, the reference and the frame at the shading target.
+    pub keep_images: bool,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PassMs {
+    pub name: String,
+    pub late: bool,
+    pub median_ms: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct AccuracyPoint {
+    pub view: String,
+    /// "culling on", "culling off" or "shading".
+    pub family: String,
+    pub setting: String,
+    pub target_error_px: f32,
+    pub passes: Vec<PassMs>,
+    /// Sum of the pass medians.
+    pub gpu_ms: f64,
+    pub samples: usize,
+    pub triangles_drawn: u64,
+    pub patches_drawn: u32,
+    pub nodes_drawn_per_lod: Vec<u32>,
+    pub resident_per_lod: Vec<u32>,
+    /// Final nodes the camera wanted finer than was resident.
+    pub wanted_finer: u32,
+    pub settled: bool,
+    pub error: AccuracyError,
+    /// Culling off: pixels whose colour or depth differ from culling on.
+    pub differs_from_culled_px: Option<u64>,
+    /// Shading rows: FLIP of the textured image against the most accurate
+    /// shading's.
+    pub texture_flip_vs_accurate: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ReferenceInfo {
+    pub view: String,
+    pub camera: Camera,
+    pub seconds: f64,
+    pub samples_per_ray: f64,
+    pub terrain_fraction: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct AccuracyBench {
+    pub references: Vec<ReferenceInfo>,
+    pub bounds_seconds: f64,
+    pub points: Vec<AccuracyPoint>,
+    /// Why shading rows are absent, when they are.
+    pub shading_skipped: Option<String>,
+    #[serde(skip)]
+    pub images: Vec<ViewImages>,
+}
+
+/// The reference and the culled frame at the shading target (RGBA8).
+#[derive(Debug, Clone)]
+pub struct ViewImages {
+    pub view: String,
+    pub size: [u32; 2],
+    pub reference: Vec<u8>,
+    pub frame: Vec<u8>,
+}
+
+/// A frame configuration of the shading family.
+struct ShadingSetting {
+    name: &'static str,
+    shading: Shading,
+    stochastic: bool,
+    threshold_scale: f32,
+}
+
+const SHADING_SETTINGS: [ShadingSetting; 6] = [
+    ShadingSetting {
+        name: "tiled, stochastic cliffs",
+        shading: Shading::Tiled,
+        stochastic: true,
+        threshold_scale: 1.0,
+    },
+    ShadingSetting { name: "tiled, blended cliffs", shading: Shading::Tiled, stochastic: false, threshold_scale: 1.0 },
+    ShadingSetting {
+        name: "tiled, near/far thresholds x0.5",
+        shading: Shading::Tiled,
+        stochastic: true,
+        threshold_scale: 0.5,
+    },
+    ShadingSetting {
+        name: "tiled, near/far thresholds x2",
+        shading: Shading::Tiled,
+        stochastic: true,
+        threshold_scale: 2.0,
+    },
+    ShadingSetting {
+        name: "every flavour, stochastic cliffs",
+        shading: Shading::OneShaderEveryFlavour,
+        stochastic: true,
+        threshold_scale: 1.0,
+    },
+    // Last: the accurate one the textured images are compared with.
+    ShadingSetting {
+        name: "every flavour, blended cliffs",
+        shading: Shading::OneShaderEveryFlavour,
+        stochastic: false,
+        threshold_scale: 1.0,
+    },
+];
+
+/// Everything a bench run shares.
+struct Run<'a> {
+    ctx: &'a Context,
+    world: &'a WorldDesc,
+    source: &'a Arc<dyn HeightSource>,
+    cfg: &'a AccuracyBenchConfig,
+    off: Offscreen,
+}
+
+pub fn bench_accuracy(
+    ctx: &Context,
+    world: &WorldDesc,
+    source: Arc<dyn HeightSource>,
+    effects: &Effects,
+    views: &[(String, Camera)],
+    cfg: &AccuracyBenchConfig,
+) -> Result<AccuracyBench> {
+    let start = Instant::now();
+    let caster = RayCaster::new(&*source, world, cfg.raycast);
+    let bounds_seconds = start.elapsed().as_secs_f64();
+    let mut fx = effects.clone();
+    fx.lighting.clay_albedo = Some(CLAY_ALBEDO);
+    let shading_skipped = (!(fx.is_on(Effect::Splat) || fx.is_on(Effect::Cliffs)))
+        .then(|| "the scene has neither splat nor cliffs: every shading setting draws the same".to_string())
+        .or_else(|| (!cfg.shading).then(|| "not asked for".to_string()));
+    let terrain = TerrainOptions { cache_dir: Some(cfg.cache_dir.clone()), ..TerrainOptions::default() };
+    let options =
+        |shading| RendererOptions { terrain: terrain.clone(), effects: fx.clone(), shading, ..Default::default() };
+    // The geometry sweep draws without the detail normals of splat and
+    // cliffs: the reference cannot know them (the shading rows have them).
+    let geometry = RendererOptions {
+        effects: fx.clone().with(Effect::Splat, false).with(Effect::Cliffs, false),
+        ..options(Shading::Tiled)
+    };
+    let off = Offscreen::new(ctx, cfg.size, 2, SKY)?;
+    let mut run = Run { ctx, world, source: &source, cfg, off };
+    let mut out = AccuracyBench {
+        references: Vec::new(),
+        bounds_seconds,
+        points: Vec::new(),
+        shading_skipped,
+        images: Vec::new(),
+    };
+    for (name, camera) in views {
+        let view = |target| View {
+            camera: *camera,
+            fov_y_deg: cfg.fov_y_deg,
+            size: cfg.size,
+            target_error_px: target,
+            near_m: DEFAULT_NEAR_M,
+        };
+        let t = Instant::now();
+        let reference = caster.image(&view(1.0), &fx.lighting, CLAY_ALBEDO, SKY);
+        let rays = f64::from(cfg.size[0]) * f64::from(cfg.size[1]);
+        out.references.push(ReferenceInfo {
+            view: name.clone(),
+            camera: *camera,
+            seconds: t.elapsed().as_secs_f64(),
+            samples_per_ray: reference.samples as f64 / rays,
+            terrain_fraction: reference.depth_m.iter().filter(|&&d| d > 0.0).count() as f64 / rays,
+        });
+        let mut r = TerrainRenderer::new(ctx, world, source.clone(), Vec::new(), &geometry)?;
+        for &target in &cfg.targets_px {
+            let v = view(target);
+            let settled = run.settle(&mut r, &v)?;
+            r.stages = CullStages::ALL;
+            let (on, on_img) = run.point(&mut r, &v, &reference, name, "culling on", "all stages", settled)?;
+            r.stages = CullStages::NONE;
+            let (mut off_pt, off_img) = run.point(&mut r, &v, &reference, name, "culling off", "no stage", settled)?;
+            r.stages = CullStages::ALL;
+            off_pt.differs_from_culled_px = Some(differing_pixels(&on_img, &off_img));
+            if cfg.keep_images && target == cfg.shading_target_px {
+                out.images.push(ViewImages {
+                    view: name.clone(),
+                    size: cfg.size,
+                    reference: reference.rgba.clone(),
+                    frame: on_img.rgba.clone(),
+                });
+            }
+            out.points.extend([on, off_pt]);
+        }
+        if out.shading_skipped.is_none() {
+            out.points.extend(run.shading_rows(&options, &view(cfg.shading_target_px), &reference, name)?);
+        }
+    }
+    Ok(out)
+}
+
+impl Run<'_> {
+    fn settle(&mut self, r: &mut TerrainRenderer, view: &View) -> Result<bool> {
+        let s = self.off.settle(self.ctx, r, view, self.cfg.settle_timeout)?;
+        if !s.settled {
+            log::warn!("streaming did not settle in {:.0} s", self.cfg.settle_timeout.as_secs_f64());
+        }
+        Ok(s.settled)
+    }
+
+    /// Measures one configuration and compares its last frame.
+    #[allow(clippy::too_many_arguments)]
+    fn point(
+        &mut self,
+        r: &mut TerrainRenderer,
+        view: &View,
+        reference: &ReferenceImage,
+        view_name: &str,
+        family: &str,
+        setting: &str,
+        settled: bool,
+    ) -> Result<(AccuracyPoint, Capture)> {
+        let timings: Vec<FrameTimings> =
+            super::measure(self.ctx, r, &mut self.off, view, self.cfg.warmup_frames, self.cfg.frames)?;
+        let capture = self.off.capture(self.ctx)?;
+        let stats: RenderStats = collect(self.ctx, r, view)?;
+        let passes: Vec<PassMs> = summarize(&timings)
+            .into_iter()
+            .map(|p| PassMs { name: p.name.to_string(), late: p.late, median_ms: p.median_ms })
+            .collect();
+        let mut resident = vec![0u32; self.world.lod_count as usize];
+        for id in r.terrain.resident_nodes() {
+            resident[id.lod as usize] += 1;
+        }
+        let point = AccuracyPoint {
+            view: view_name.to_string(),
+            family: family.to_string(),
+            setting: setting.to_string(),
+            target_error_px: view.target_error_px,
+            gpu_ms: passes.iter().map(|p| p.median_ms).sum(),
+            passes,
+            samples: timings.len(),
+            triangles_drawn: stats.triangles_drawn,
+            patches_drawn: stats.patches.drawn,
+            nodes_drawn_per_lod: stats.nodes_per_lod,
+            resident_per_lod: resident,
+            wanted_finer: stats.wanted_finer_per_lod.iter().sum(),
+            settled,
+            error: accuracy_error(&capture, reference, view, &**self.source, self.world),
+            differs_from_culled_px: None,
+            texture_flip_vs_accurate: None,
+        };
+        Ok((point, capture))
+    }
+
+    /// The textured (not clay) picture of the renderer's current settings.
+    fn textured(&mut self, r: &mut TerrainRenderer, view: &View) -> Result<Vec<u8>> {
+        let clay = r.effects.lighting.clay_albedo.take();
+        self.off.run(self.ctx, r, view, 2)?;
+        r.effects.lighting.clay_albedo = clay;
+        Ok(self.off.capture(self.ctx)?.rgba)
+    }
+
+    /// The shading family at one target, with the scene's effects: a tiled
+    /// renderer and one doing every flavour in one shader.
+    fn shading_rows(
+        &mut self,
+        options: &dyn Fn(Shading) -> RendererOptions,
+        view: &View,
+        reference: &ReferenceImage,
+        view_name: &str,
+    ) -> Result<Vec<AccuracyPoint>> {
+        let new =
+            |shading| TerrainRenderer::new(self.ctx, self.world, self.source.clone(), Vec::new(), &options(shading));
+        let (mut tiled, mut every) = (new(Shading::Tiled)?, new(Shading::OneShaderEveryFlavour)?);
+        let base = tiled.shade;
+        let mut rows = Vec::new();
+        let mut textured = Vec::new();
+        for s in &SHADING_SETTINGS {
+            let r = if s.shading == Shading::Tiled { &mut tiled } else { &mut every };
+            r.shade = base;
+            r.shade.stochastic = s.stochastic;
+            let k = s.threshold_scale;
+            r.shade.far_start_m *= k;
+            r.shade.far_end_m *= k;
+            r.shade.cliff_split_start_m *= k;
+            r.shade.cliff_split_end_m *= k;
+            let settled = self.settle(r, view)?;
+            let (row, _) = self.point(r, view, reference, view_name, "shading", s.name, settled)?;
+            rows.push(row);
+            textured.push(self.textured(r, view)?);
+        }
+        let accurate = textured.last().expect("settings are never empty");
+        for (row, img) in rows.iter_mut().zip(&textured) {
+            let f = flip_map(accurate, img, view.size);
+            row.texture_flip_vs_accurate = Some(f.iter().map(|&e| f64::from(e)).sum::<f64>() / f.len().max(1) as f64);
+        }
+        Ok(rows)
+    }
+}
+
+/// Pixels whose colour or depth differ between two frames.
+fn differing_pixels(a: &Capture, b: &Capture) -> u64 {
+    let colour = a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4));
+    colour
+        .zip(a.depth.iter().zip(&b.depth))
+        .filter(|((ca, cb), (da, db))| ca != cb || da.to_bits() != db.to_bits())
+        .count() as u64
+}

@@ -1,0 +1,123 @@
+//! What one rendered frame loses against the reference ray-caster: depth,
+//! silhouette, screen-space geometric error and colour.
+
+use crate::reference::{flip_map, ReferenceImage};
+use crate::render::offscreen::Capture;
+use crate::render::view::{linear_depth, View};
+use crate::world::{HeightSource, WorldDesc};
+use glam::DVec3;
+use serde::Serialize;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct AccuracyError {
+    /// Pixels where both the frame and the reference see terrain.
+    pub terrain_pixels: u64,
+    /// Of those, the share whose depth is within 0.5 % / 2 % of the reference.
+    pub depth_within_0_5pct: f64,
+    pub depth_within_2pct: f64,
+    /// Relative depth error |d - d_ref| / d_ref, median and 99th percentile.
+    pub depth_rel_p50: f64,
+    pub depth_rel_p99: f64,
+    /// Pixels where one image has terrain and the other not, and their
+    /// share of the image.
+    pub silhouette_pixels: u64,
+    pub silhouette_fraction: f64,
+    /// Per rendered terrain pixel: the vertical distance from its world
+    /// position (from the depth buffer) to the source surface, projected
+    /// onto the screen, in pixels. What the LOD criterion bounds.
+    pub geometric_px_max: f64,
+    pub geometric_px_p99: f64,
+    pub geometric_px_mean: f64,
+    /// Lit (clay) image against the reference's: PSNR over RGB (dB; null
+    /// when identical) and mean FLIP (nv-flip, the NVIDIA FLIP metric).
+    pub psnr_db: f64,
+    pub flip_mean: f64,
+}
+
+/// The `q`-quantile of `v` (sorted in place); 0 when empty.
+fn quantile(v: &mut [f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_unstable_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+/// The vertical distance of each rendered terrain pixel's world position to
+/// the source surface, projected onto the screen (pixels).
+pub fn geometric_error_px(capture: &Capture, view: &View, source: &dyn HeightSource, world: &WorldDesc) -> Vec<f64> {
+    let [w, h] = capture.size;
+    let origin = DVec3::from(view.camera.position_m);
+    let forward = view.camera.basis()[0];
+    let mut out = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let d = capture.depth[(y * w + x) as usize];
+            if d <= 0.0 {
+                continue;
+            }
+            let px = [f64::from(x) + 0.5, f64::from(y) + 0.5];
+            let ray = view.ray(px);
+            let p = origin + ray * (f64::from(linear_depth(d, view.near_m)) / ray.dot(forward));
+            let inside = (0.0..=world.extent_m[0]).contains(&p.x) && (0.0..=world.extent_m[1]).contains(&p.y);
+            if !inside {
+                continue;
+            }
+            let dz = p.z - f64::from(source.sample(p.x, p.y));
+            let q = DVec3::new(p.x, p.y, p.z - dz);
+            if let (Some((a, _)), Some((b, _))) = (view.project(p.to_array()), view.project(q.to_array())) {
+                out.push((a[0] - b[0]).hypot(a[1] - b[1]));
+            }
+        }
+    }
+    out
+}
+
+pub fn accuracy_error(
+    capture: &Capture,
+    reference: &ReferenceImage,
+    view: &View,
+    source: &dyn HeightSource,
+    world: &WorldDesc,
+) -> AccuracyError {
+    assert_eq!(capture.size, reference.size, "frame and reference sizes differ");
+    let (mut rel, mut silhouette) = (Vec::new(), 0u64);
+    for (&d, &r) in capture.depth.iter().zip(&reference.depth_m) {
+        match (d > 0.0, r > 0.0) {
+            (true, true) => {
+                let lin = f64::from(linear_depth(d, view.near_m));
+                rel.push((lin - f64::from(r)).abs() / f64::from(r));
+            }
+            (false, false) => {}
+            _ => silhouette += 1,
+        }
+    }
+    let n = rel.len().max(1) as f64;
+    let within = |f: f64| rel.iter().filter(|&&e| e <= f).count() as f64 / n;
+    let (d05, d2) = (within(0.005), within(0.02));
+    let mut geo = geometric_error_px(capture, view, source, world);
+    let geo_mean = geo.iter().sum::<f64>() / geo.len().max(1) as f64;
+    let mse = capture
+        .rgba
+        .chunks_exact(4)
+        .zip(reference.rgba.chunks_exact(4))
+        .map(|(a, b)| (0..3).map(|i| (f64::from(a[i]) - f64::from(b[i])).powi(2)).sum::<f64>())
+        .sum::<f64>()
+        / (3 * capture.rgba.len() / 4).max(1) as f64;
+    let flip = flip_map(&reference.rgba, &capture.rgba, capture.size);
+    let pixels = u64::from(capture.size[0]) * u64::from(capture.size[1]);
+    AccuracyError {
+        terrain_pixels: rel.len() as u64,
+        depth_within_0_5pct: d05,
+        depth_within_2pct: d2,
+        depth_rel_p50: quantile(&mut rel, 0.5),
+        depth_rel_p99: quantile(&mut rel, 0.99),
+        silhouette_pixels: silhouette,
+        silhouette_fraction: silhouette as f64 / pixels as f64,
+        geometric_px_max: geo.iter().copied().fold(0.0, f64::max),
+        geometric_px_p99: quantile(&mut geo, 0.99),
+        geometric_px_mean: geo_mean,
+        psnr_db: 10.0 * (255.0f64.powi(2) / mse).log10(),
+        flip_mean: flip.iter().map(|&e| f64::from(e)).sum::<f64>() / flip.len().max(1) as f64,
+    }
+}

@@ -1,0 +1,207 @@
+//! `vista bench accuracy [WORLD]`: what accuracy costs in time, against the
+//! CPU ray-caster: a table, JSON (`--json`) and a Pareto plot (`--plot`).
+
+use crate::bench_cmd::{write_json, ViewBench};
+use anyhow::{bail, Context as _, Result};
+use std::path::Path;
+use std::time::{Duration, Instant};
+use vista::bench::accuracy::CLAY_ALBEDO;
+use vista::bench::{bench_accuracy, cull_views, AccuracyBench, AccuracyBenchConfig};
+use vista::gpu::Context;
+use vista::reference::{flip_magma, flip_map, RaycastConfig};
+
+/// The full sweep of target errors (pixels).
+pub const DEFAULT_TARGETS: [f32; 7] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
+
+/// The names `--views` accepts: the view's name with '-' for spaces.
+fn view_key(name: &str) -> String {
+    name.replace(' ', "-")
+}
+
+pub fn accuracy(
+    ctx: &Context,
+    args: &ViewBench,
+    targets: &[f32],
+    views: Option<&[String]>,
+    plot: Option<&Path>,
+    images: Option<&Path>,
+) -> Result<()> {
+    if targets.is_empty() || targets.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+        bail!("--targets must be positive numbers of pixels");
+    }
+    if let Some(p) = plot {
+        check_plot_path(p)?;
+    }
+    if let Some(dir) = images {
+        if !dir.is_dir() {
+            bail!("--images {}: not an existing folder", dir.display());
+        }
+    }
+    let world = args.world.load()?;
+    let d = world.desc;
+    let mut all = cull_views(&d, &*world.source);
+    if let Some(wanted) = views {
+        let known: Vec<String> = all.iter().map(|(n, _)| view_key(n)).collect();
+        if let Some(bad) = wanted.iter().find(|w| !known.contains(w)) {
+            bail!("--views: no view named {bad:?} (known: {})", known.join(", "));
+        }
+        all.retain(|(n, _)| wanted.contains(&view_key(n)));
+    }
+    let shading_target_px = if targets.contains(&args.target_error_px) { args.target_error_px } else { targets[0] };
+    let cache = std::env::temp_dir().join(format!("vista-bench-accuracy-{}", std::process::id()));
+    let cfg = AccuracyBenchConfig {
+        size: args.size,
+        fov_y_deg: 60.0,
+        targets_px: targets.to_vec(),
+        shading_target_px,
+        shading: true,
+        warmup_frames: 2,
+        frames: args.frames,
+        settle_timeout: Duration::from_secs(300),
+        cache_dir: cache.clone(),
+        raycast: RaycastConfig::default(),
+        keep_images: images.is_some(),
+    };
+    let start = Instant::now();
+    let result = bench_accuracy(ctx, &d, world.source.clone(), &world.effects, &all, &cfg);
+    let _ = std::fs::remove_dir_all(&cache);
+    let b = result?;
+    print_table(&b, &world.label, ctx, &cfg, start.elapsed().as_secs_f64());
+    if let Some(path) = args.json {
+        let json = serde_json::json!({
+            "device": ctx.info().name,
+            "world": world.label,
+            "size": cfg.size,
+            "fov_y_deg": cfg.fov_y_deg,
+            "clay_albedo": CLAY_ALBEDO,
+            "frames": cfg.frames,
+            "warmup_frames": cfg.warmup_frames,
+            "raycast": format!("{:?}", cfg.raycast),
+            "bench": b,
+        });
+        write_json(path, &json)?;
+    }
+    if let Some(dir) = images {
+        write_images(dir, &b)?;
+    }
+    if let Some(path) = plot {
+        let title = format!("{} on {}, {}x{}", world.label, ctx.info().name, cfg.size[0], cfg.size[1]);
+        crate::accuracy_plot::pareto_plot(&b, &title, path)?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// Per view: `<view>_reference.png`, `<view>_frame.png` and the FLIP map
+/// between them, `<view>_flip.png`.
+fn write_images(dir: &Path, b: &AccuracyBench) -> Result<()> {
+    for v in &b.images {
+        let stem = v.view.replace(' ', "_");
+        let flip = flip_magma(&flip_map(&v.reference, &v.frame, v.size), v.size);
+        for (suffix, data, colour) in [
+            ("reference", &v.reference, image::ExtendedColorType::Rgba8),
+            ("frame", &v.frame, image::ExtendedColorType::Rgba8),
+            ("flip", &flip, image::ExtendedColorType::Rgb8),
+        ] {
+            let path = dir.join(format!("{stem}_{suffix}.png"));
+            image::save_buffer(&path, data, v.size[0], v.size[1], colour)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+    }
+    println!("wrote {} images to {}", 3 * b.images.len(), dir.display());
+    Ok(())
+}
+
+/// Checked before the (long) run: a PNG path in an existing folder.
+fn check_plot_path(p: &Path) -> Result<()> {
+    if p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png") {
+        bail!("--plot {}: the plot is a PNG; give a path ending in .png", p.display());
+    }
+    if p.is_dir() {
+        bail!("--plot {} is a directory; give a file path ending in .png", p.display());
+    }
+    let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !parent.is_dir() {
+        bail!("--plot {}: the folder {} does not exist", p.display(), parent.display());
+    }
+    Ok(())
+}
+
+fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenchConfig, seconds: f64) {
+    println!(
+        "bench accuracy: {label} on {}, {}x{}, clay albedo {CLAY_ALBEDO}; GPU ms = sum of pass medians over {} frames after {} warm-up",
+        ctx.info().name,
+        cfg.size[0],
+        cfg.size[1],
+        cfg.frames,
+        cfg.warmup_frames
+    );
+    println!("reference ray-caster (CPU, {} threads): bounds {:.1} s", rayon::current_num_threads(), b.bounds_seconds);
+    for r in &b.references {
+        let c = &r.camera;
+        println!(
+            "  view {:<14} camera {:.0},{:.0},{:.0},{:.0},{:.0}: {:.1} s, {:.0} samples/ray, {:.0}% terrain",
+            format!("\"{}\"", r.view),
+            c.position_m[0],
+            c.position_m[1],
+            c.position_m[2],
+            c.yaw_deg,
+            c.pitch_deg,
+            r.seconds,
+            r.samples_per_ray,
+            100.0 * r.terrain_fraction
+        );
+    }
+    println!(
+        "{:<12} {:<34} {:>6} {:>9} {:>10} {:>7} {:>6} {:>7} {:>7} {:>9} {:>8} {:>7} {:>7} {:>6} {:>6} {:>8}",
+        "view",
+        "setting",
+        "target",
+        "GPU ms",
+        "triangles",
+        "patches",
+        "nodes",
+        "d<0.5%",
+        "d<2%",
+        "d p99",
+        "silh px",
+        "geo max",
+        "geo p99",
+        "PSNR",
+        "FLIP",
+        "extra"
+    );
+    for p in &b.points {
+        let e = &p.error;
+        let setting = if p.family == "shading" { p.setting.clone() } else { p.family.clone() };
+        let extra = match (p.differs_from_culled_px, p.texture_flip_vs_accurate) {
+            (Some(n), _) => format!("diff {n}"),
+            (_, Some(f)) => format!("tex {f:.4}"),
+            _ => String::new(),
+        };
+        println!(
+            "{:<12} {:<34} {:>6} {:>9.2} {:>10} {:>7} {:>6} {:>6.1}% {:>6.1}% {:>9.2e} {:>8} {:>7.2} {:>7.2} {:>6.1} {:>6.4} {:>8}{}",
+            p.view,
+            setting,
+            p.target_error_px,
+            p.gpu_ms,
+            p.triangles_drawn,
+            p.patches_drawn,
+            p.nodes_drawn_per_lod.iter().sum::<u32>(),
+            100.0 * e.depth_within_0_5pct,
+            100.0 * e.depth_within_2pct,
+            e.depth_rel_p99,
+            e.silhouette_pixels,
+            e.geometric_px_max,
+            e.geometric_px_p99,
+            e.psnr_db,
+            e.flip_mean,
+            extra,
+            if p.settled { "" } else { " (not settled)" }
+        );
+    }
+    if let Some(why) = &b.shading_skipped {
+        println!("shading rows skipped: {why}");
+    }
+    println!("({seconds:.0} s in all)");
+}
