@@ -293,3 +293,49 @@ fn the_automatic_exr_range_holds_every_resampled_height() {
     assert!(lo <= mn && mx <= hi, "samples {mn}..{mx} outside {lo}..{hi}");
     assert!(mn < -7.0 && mx > 107.0, "the cliff overshoots: {mn}..{mx}");
 }
+
+#[test]
+fn paths_of_the_wrong_kind_are_named_with_their_option() {
+    let dir = temp_dir("paths");
+    let file = dir.join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let (f, d) = (file.to_str().unwrap(), dir.to_str().unwrap());
+    let under = file.join("sub");
+    let region = ["--region", "0,0,10,10"];
+    for (args, needles) in [
+        (vec!["bake", "--out", f], vec!["--out", "afile is a file", "choose another --out"]),
+        (vec!["bake", "--out", under.to_str().unwrap()], vec!["--out", "afile is a file, not a folder"]),
+        (vec!["bake", "--out", d, "--json", d], vec!["--json", "is a folder"]),
+        (vec!["bake", "--out", d, "--heightmap", d, "--extent", "100"], vec!["--heightmap", "is a directory"]),
+        (vec!["bake", "--out", d, "--scene", d], vec!["--scene", "is a directory"]),
+    ] {
+        let (ok, _, err) = vista(&[&args[..], &region[..]].concat());
+        assert!(!ok && err.trim_end().lines().count() == 1, "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {n:?} missing from: {err}");
+        }
+        // Not the OS's words, twice or at all.
+        for bad in ["File exists", "Is a directory", "Not a directory", "too short"] {
+            assert!(!err.contains(bad), "{args:?}: {err}");
+        }
+    }
+    let empty = dir.join("empty.exr");
+    std::fs::write(&empty, "").unwrap();
+    let args = ["bake", "--out", d, "--heightmap", empty.to_str().unwrap(), "--extent", "100"];
+    assert_fails_naming(&args, &["--heightmap", "empty.exr", "too short to be a PNG or EXR file"]);
+}
+
+#[test]
+fn repeated_single_valued_options_are_errors() {
+    let dir = temp_dir("repeat");
+    let o = dir.to_str().unwrap();
+    for (args, option) in [
+        (&["bake", "--out", o, "--extent", "100", "--extent", "200"][..], "--extent"),
+        (&["bake", "--out", o, "--height-range", "0", "1", "--height-range", "2", "3"][..], "--height-range"),
+        (&["bake", "--out", o, "--out", o][..], "--out"),
+        (&["render", "--size", "64x48", "--size", "32x32"][..], "--size"),
+        (&["render", "--camera", "1,2,3", "--camera", "4,5,6"][..], "--camera"),
+    ] {
+        assert_fails_naming(args, &[option, "multiple times"]);
+    }
+}
