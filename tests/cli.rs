@@ -85,6 +85,7 @@ fn render_prints_pass_timings_and_writes_every_output() {
     for f in ["timings.json", "trace.json", "report.json"] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
+    printed_timings_match_the_json(&out, &dir.join("timings.json"));
     // The lit image in HDR (R, G, B) and the classification view.
     let lit = exr::prelude::read_first_flat_layer_from_file(dir.join("lit.exr")).unwrap();
     let names: Vec<String> = lit.layer_data.channel_data.list.iter().map(|c| c.name.to_string()).collect();
@@ -95,6 +96,36 @@ fn render_prints_pass_timings_and_writes_every_output() {
     assert_eq!(class.get_pixel(0, 0).0, [0, 0, 0], "sky: no flavour");
     assert_ne!(class.get_pixel(0, 47).0, [0, 0, 0], "ground: a flavour");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The frame count and every pass row printed are what timings.json holds:
+/// `(... frames rendered: W warm-up, N timed; ...)` against its `frames`, and per pass the median
+/// (printed to 4 decimals) and the sample count against its `summary`.
+fn printed_timings_match_the_json(out: &str, json: &std::path::Path) {
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(json).unwrap()).unwrap();
+    let header = out.lines().next().unwrap_or_default();
+    let timed: usize = header
+        .split(" timed;")
+        .next()
+        .and_then(|h| h.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no timed frame count in {header:?}"));
+    assert_eq!(v["frames"].as_array().unwrap().len(), timed, "{header}");
+    let summary = v["summary"].as_array().unwrap();
+    assert!(!summary.is_empty());
+    for pass in summary {
+        let name = pass["name"].as_str().unwrap();
+        let label = if pass["late"] == true { format!("{name} (phase 2)") } else { name.to_string() };
+        // The label, then the queue column ("cull_patches" is not "cull_patches (phase 2)").
+        fn cells<'a>(line: &'a str, label: &str) -> Option<Vec<&'a str>> {
+            let f: Vec<&str> = line.strip_prefix(label)?.split_whitespace().collect();
+            (f.len() == 5 && !f[0].starts_with('(')).then_some(f)
+        }
+        let fields = out.lines().find_map(|l| cells(l, &label)).unwrap_or_else(|| panic!("no row for {label}: {out}"));
+        let median: f64 = fields[1].parse().unwrap();
+        assert!((median - pass["median_ms"].as_f64().unwrap()).abs() <= 5e-5, "{label}: {fields:?} vs {pass}");
+        assert_eq!(fields[4].parse::<u64>().ok(), pass["samples"].as_u64(), "{label}: {fields:?} vs {pass}");
+    }
 }
 
 #[test]
@@ -125,7 +156,68 @@ fn bad_arguments_fail_with_a_clear_message() {
     assert!(err.contains("--frames"), "{err}");
     let (ok, _, err) = vista(&["--device", "no-such-gpu-xyz", "info"]);
     assert!(!ok);
-    assert!(err.contains("no-such-gpu-xyz"), "{err}");
+    // Names what there is instead of an empty list of rejected devices.
+    assert!(err.contains("no-such-gpu-xyz") && err.contains("usable: ") && !err.contains("[]"), "{err}");
+}
+
+/// A tiny world, so a check that needs the device stays quick.
+const TINY: [&str; 10] = ["--extent", "2048", "--spacing", "2", "--lods", "4", "--size", "64x48", "--frames", "1"];
+
+#[test]
+fn negative_camera_coordinates_are_numbers() {
+    // --fov 0 fails after the camera was parsed, before any rendering: the
+    // error is about --fov, not an unexpected '-5'.
+    for camera in [&["--camera", "-5,10,20"][..], &["--camera=-5,-10,20,-90,-45"][..]] {
+        let (ok, _, err) = vista(&[&["render"][..], camera, &TINY[..], &["--fov", "0"][..]].concat());
+        assert!(!ok && err.contains("--fov") && !err.contains("unexpected"), "{camera:?}: {err}");
+    }
+    // bench: --sets 0 is refused once the device is up, nothing measured.
+    let args = ["bench", "traverse", "--camera", "-5,-10,20", "--sets", "0"];
+    let (ok, _, err) = vista(&args);
+    assert!(!ok && err.contains("--sets") && !err.contains("unexpected"), "{err}");
+}
+
+#[test]
+fn a_world_too_large_for_the_device_says_so_in_world_terms() {
+    // 62 500 sectors of 64 m per side: wider than any device's 2D images.
+    let (ok, _, err) = vista(&["render", "--extent", "4000000", "--size", "8x8", "--frames", "1"]);
+    assert!(!ok);
+    for n in ["the world's quadtree", "62500 x 62500 sectors of 64 m", "MiB of GPU memory", "larger spacing"] {
+        assert!(err.contains(n), "{n:?} missing from: {err}");
+    }
+    assert!(!err.contains("quadtree_nodes") && !err.contains("image \""), "{err}");
+}
+
+#[test]
+fn render_out_is_checked_before_rendering() {
+    let dir = std::env::temp_dir().join(format!("vista-render-out-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let png = dir.join("shot.png");
+    let under = file.join("sub");
+    for (out, needles) in [
+        (&file, &["--out", "afile is a file", "takes a folder"][..]),
+        (&under, &["--out", "afile is a file, not a folder"][..]),
+        (&png, &["--out", "shot.png looks like a .png file"][..]),
+    ] {
+        let start = std::time::Instant::now();
+        let (code, stdout, err) = vista_code(&[&["render", "--out", out.to_str().unwrap()][..], &TINY[..]].concat());
+        assert_eq!(code, Some(2), "{out:?}: {err}");
+        assert!(stdout.is_empty(), "nothing rendered: {stdout}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        for n in needles {
+            assert!(err.contains(n), "{n:?} missing from: {err}");
+        }
+        assert!(!err.contains("File exists"), "{err}");
+        // Before the Vulkan start, let alone a frame.
+        assert!(start.elapsed().as_secs_f64() < 5.0, "{out:?} took {:?}", start.elapsed());
+    }
+    assert!(!png.exists(), "a refused --out is not created");
+    let (code, _, err) = vista_code(&[&["render", "--cache", file.to_str().unwrap()][..], &TINY[..]].concat());
+    assert!(code == Some(2) && err.contains("--cache") && err.contains("is a file"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -180,3 +180,162 @@ fn bad_inputs_fail_with_one_line_naming_the_problem() {
     );
     assert_eq!(node_files(Path::new(o)), 0, "nothing baked on bad input");
 }
+
+/// Writes a single-channel f32 EXR (row 0 north), as a user's tool would.
+fn write_exr(path: &Path, w: usize, h: usize, heights: Vec<f32>) {
+    use exr::prelude::*;
+    let channel = AnyChannel::new("Y", FlatSamples::F32(heights));
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::named("height"),
+        Encoding::UNCOMPRESSED,
+        AnyChannels::sort(SmallVec::from_vec(vec![channel])),
+    );
+    Image::from_layer(layer).write().to_file(path).expect("write test EXR");
+}
+
+/// 8x8 heights 0..63 m, with three pixels far above 1000 m and two below 0:
+/// five of 64 outside 0..1000.
+fn exr_with_outliers(dir: &Path) -> PathBuf {
+    let mut heights: Vec<f32> = (0..64).map(|k| k as f32).collect();
+    heights[9] = 1500.0;
+    heights[10] = 1200.0;
+    heights[40] = 1000.5;
+    heights[20] = -12.0;
+    heights[50] = -0.25;
+    let path = dir.join("outliers.exr");
+    write_exr(&path, 8, 8, heights);
+    path
+}
+
+/// One 512 m node per LOD (2 LODs) at 4 m spacing: quick to bake.
+const SMALL: [&str; 8] = ["--extent", "512", "--spacing", "4", "--lods", "2", "--region", "0,0,10,10"];
+
+#[test]
+fn an_exr_height_range_that_clips_fails_naming_the_count() {
+    let dir = temp_dir("exr-clip");
+    let exr = exr_with_outliers(&dir);
+    let (e, o) = (exr.to_str().unwrap(), dir.join("nodes"));
+    let o = o.to_str().unwrap();
+    let args = [&["bake", "--heightmap", e, "--out", o][..], &SMALL[..]].concat();
+    let clip = [&args[..], &["--height-range", "0", "1000"][..]].concat();
+    assert_fails_naming(
+        &clip,
+        &[
+            "--height-range 0 1000 clips 5 of 64 samples",
+            "outliers.exr",
+            "min -12.0 m, max 1500.0 m",
+            "--clamp-heights",
+        ],
+    );
+    assert_eq!(node_files(Path::new(o)), 0, "nothing baked");
+
+    // Asked for: clamped, and said how many.
+    let (ok, text, err) = vista(&[&clip[..], &["--clamp-heights"][..]].concat());
+    assert!(ok, "{err}");
+    assert!(err.contains("5 of 64 samples") && err.contains("clamped"), "{err}");
+    assert!(text.contains("heights 0..1000 m"), "{text}");
+
+    // A range holding every pixel passes, but Catmull-Rom overshoots next
+    // to the 1500 m spike (its negative lobe weighs a neighbour by down to
+    // -0.074: about -100 m below the ground around it): said, not refused.
+    let (ok, _, err) = vista(&[&args[..], &["--height-range", "-20", "1600"][..]].concat());
+    assert!(ok && err.contains("warning") && err.contains("resampling between them reaches"), "{err}");
+    // One holding the overshoot too passes without a word.
+    let (ok, _, err) = vista(&[&args[..], &["--height-range", "-200", "1700"][..]].concat());
+    assert!(ok && err.is_empty(), "{err}");
+
+    // The scene's height_range is held to the same rule, and says how to opt out there.
+    let scene = dir.join("s.toml");
+    let text = "[world]\nsource = \"outliers.exr\"\nextent = 512\nheight_range = [0, 1000]\nspacing = 4\nlods = 2\n";
+    std::fs::write(&scene, text).unwrap();
+    let s = scene.to_str().unwrap();
+    let scene_args = ["bake", "--scene", s, "--out", o, "--region", "0,0,10,10"];
+    assert_fails_naming(&scene_args, &["height_range [0, 1000] clips 5 of 64 samples", "clamp_heights = true"]);
+    std::fs::write(&scene, format!("{text}clamp_heights = true\n")).unwrap();
+    let (ok, _, err) = vista(&scene_args);
+    assert!(ok && err.contains("5 of 64 samples"), "{err}");
+}
+
+#[test]
+fn the_automatic_exr_range_holds_every_resampled_height() {
+    // A 100 m cliff along x. The Catmull-Rom cubic through 0, 0, 0, 100 is
+    // 50 (t³ - t²): it dips to -200/27 = -7.41 m at t = 2/3 (and mirrored
+    // rises to 107.41 m), below and above every pixel.
+    let dir = temp_dir("exr-auto");
+    let (w, h) = (16, 8);
+    let heights: Vec<f32> = (0..w * h).map(|k| if k % w < 8 { 0.0 } else { 100.0 }).collect();
+    let exr = dir.join("cliff.exr");
+    write_exr(&exr, w, h, heights);
+    let json = dir.join("bake.json");
+    let (e, o, j) = (exr.to_str().unwrap(), dir.join("nodes"), json.to_str().unwrap());
+    let args = [&["bake", "--heightmap", e, "--out", o.to_str().unwrap(), "--json", j][..], &SMALL[..]].concat();
+    let (ok, _, err) = vista(&args);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let range = &v["world"]["height_range_m"];
+    let (lo, hi) = (range[0].as_f64().unwrap() as f32, range[1].as_f64().unwrap() as f32);
+    let overshoot = 200.0 / 27.0;
+    assert!(lo <= -overshoot && lo > -overshoot - 0.01, "low end {lo}");
+    assert!(hi >= 100.0 + overshoot && hi < 100.0 + overshoot + 0.01, "high end {hi}");
+
+    // Sampled between the pixel centres (32 steps per pixel), nothing
+    // leaves the range, and the cliff does overshoot the pixels.
+    use vista::world::HeightSource as _;
+    let src = vista::world::ExrSource::open(&exr, [512.0, 512.0]).unwrap();
+    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+    for j in 0..=h * 32 {
+        for i in 0..=w * 32 {
+            let s = src.sample(512.0 * i as f64 / (w * 32) as f64, 512.0 * j as f64 / (h * 32) as f64);
+            (mn, mx) = (mn.min(s), mx.max(s));
+        }
+    }
+    assert!(lo <= mn && mx <= hi, "samples {mn}..{mx} outside {lo}..{hi}");
+    assert!(mn < -7.0 && mx > 107.0, "the cliff overshoots: {mn}..{mx}");
+}
+
+#[test]
+fn paths_of_the_wrong_kind_are_named_with_their_option() {
+    let dir = temp_dir("paths");
+    let file = dir.join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let (f, d) = (file.to_str().unwrap(), dir.to_str().unwrap());
+    let under = file.join("sub");
+    let region = ["--region", "0,0,10,10"];
+    for (args, needles) in [
+        (vec!["bake", "--out", f], vec!["--out", "afile is a file", "choose another --out"]),
+        (vec!["bake", "--out", under.to_str().unwrap()], vec!["--out", "afile is a file, not a folder"]),
+        (vec!["bake", "--out", d, "--json", d], vec!["--json", "is a folder"]),
+        (vec!["bake", "--out", d, "--heightmap", d, "--extent", "100"], vec!["--heightmap", "is a directory"]),
+        (vec!["bake", "--out", d, "--scene", d], vec!["--scene", "is a directory"]),
+    ] {
+        let (ok, _, err) = vista(&[&args[..], &region[..]].concat());
+        assert!(!ok && err.trim_end().lines().count() == 1, "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {n:?} missing from: {err}");
+        }
+        // Not the OS's words, twice or at all.
+        for bad in ["File exists", "Is a directory", "Not a directory", "too short"] {
+            assert!(!err.contains(bad), "{args:?}: {err}");
+        }
+    }
+    let empty = dir.join("empty.exr");
+    std::fs::write(&empty, "").unwrap();
+    let args = ["bake", "--out", d, "--heightmap", empty.to_str().unwrap(), "--extent", "100"];
+    assert_fails_naming(&args, &["--heightmap", "empty.exr", "too short to be a PNG or EXR file"]);
+}
+
+#[test]
+fn repeated_single_valued_options_are_errors() {
+    let dir = temp_dir("repeat");
+    let o = dir.to_str().unwrap();
+    for (args, option) in [
+        (&["bake", "--out", o, "--extent", "100", "--extent", "200"][..], "--extent"),
+        (&["bake", "--out", o, "--height-range", "0", "1", "--height-range", "2", "3"][..], "--height-range"),
+        (&["bake", "--out", o, "--out", o][..], "--out"),
+        (&["render", "--size", "64x48", "--size", "32x32"][..], "--size"),
+        (&["render", "--camera", "1,2,3", "--camera", "4,5,6"][..], "--camera"),
+    ] {
+        assert_fails_naming(args, &[option, "multiple times"]);
+    }
+}

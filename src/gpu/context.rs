@@ -150,6 +150,7 @@ fn pick_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::Ph
             Err(why) => rejected.push(why),
         }
     }
+    let usable: Vec<String> = candidates.iter().map(|(_, i)| i.name.clone()).collect();
     if let Some(w) = wanted {
         candidates.retain(|(_, i)| i.name.contains(w));
     }
@@ -158,8 +159,18 @@ fn pick_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::Ph
         device_info::type_rank(unsafe { instance.get_physical_device_properties(*pd) }.device_type)
     });
     candidates.into_iter().next().ok_or_else(|| {
-        let filter = wanted.map(|w| format!(" named like {w:?}")).unwrap_or_default();
-        Error::Unsupported(format!("no usable Vulkan device{filter}; rejected: [{}]", rejected.join("; ")))
+        // Say what there is to choose from, and only lists that have entries.
+        let mut msg = match wanted {
+            Some(w) => format!("no usable Vulkan device named like {w:?}"),
+            None => "no usable Vulkan device".to_string(),
+        };
+        if !usable.is_empty() {
+            msg += &format!("; usable: {}", usable.join(", "));
+        }
+        if !rejected.is_empty() {
+            msg += &format!("; not usable: {}", rejected.join("; "));
+        }
+        Error::Unsupported(msg)
     })
 }
 

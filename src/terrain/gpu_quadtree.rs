@@ -146,10 +146,15 @@ impl GpuQuadtree {
         if !(1..=MAX_SLOTS).contains(&slots) {
             return Err(Error::BadInput(format!("slot budget {slots} outside 1..={MAX_SLOTS} (slots are 10-bit)")));
         }
+        let extent = texture_extent(world);
+        // Before the CPU shadow, which is as large as the texture.
+        let max = ctx.info().limits.max_image_dimension_2d;
+        if extent.iter().any(|&e| e > max) {
+            return Err(node_texture_error(ctx, world, extent, None));
+        }
         let mut shadow = QuadtreeShadow::new(world, slots);
         // A freed slot waits until the frames that drew its last node are done.
         shadow.set_reuse_delay(frames_in_flight.max(1) as u64);
-        let extent = texture_extent(world);
         let node_texture = Image::new(
             ctx,
             &ImageDesc {
@@ -163,7 +168,8 @@ impl GpuQuadtree {
                     | vk::ImageUsageFlags::TRANSFER_DST
                     | vk::ImageUsageFlags::TRANSFER_SRC,
             },
-        )?;
+        )
+        .map_err(|e| node_texture_error(ctx, world, extent, Some(e)))?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let layers = slots + FIRST_SLOT;
         let node_descs = Buffer::new(
@@ -408,5 +414,34 @@ impl GpuQuadtree {
     /// The update list written by the last `prepare_frame`.
     pub fn current_updates(&self) -> &Buffer {
         &self.ring[self.current].updates
+    }
+}
+
+/// A world too large for the device fails where its node texture is made;
+/// say what was asked for (a world this size), not which GPU resource.
+/// `e` is the allocation's error, None for a texture wider than the device
+/// allows.
+fn node_texture_error(ctx: &Context, world: &WorldDesc, extent: [u32; 2], e: Option<Error>) -> Error {
+    let [w, h] = extent;
+    // R16 texels over the mip chain, each mip half the one above.
+    let bytes: u64 = (0..world.lod_count).map(|k| u64::from((w >> k).max(1)) * u64::from((h >> k).max(1)) * 2).sum();
+    let [sx, sy] = world.sectors();
+    let asked = format!(
+        "the world's quadtree ({sx} x {sy} sectors of {} m, {} LODs) needs a {w} x {h} node texture, {:.0} MiB of GPU \
+         memory",
+        world.sector_size_m(),
+        world.lod_count,
+        bytes as f64 / f64::from(1 << 20)
+    );
+    let max = ctx.info().limits.max_image_dimension_2d;
+    match e {
+        None => Error::BadInput(format!(
+            "{asked}; this device allows at most {max} texels per side: a larger spacing or a smaller extent fits"
+        )),
+        Some(Error::OutOfDeviceMemory) => Error::BadInput(format!("{asked}, more than the device has free")),
+        Some(Error::Allocation { source, .. }) => {
+            Error::BadInput(format!("{asked}, which failed to allocate: {source}"))
+        }
+        Some(e) => e,
     }
 }

@@ -56,7 +56,7 @@ impl NodeCache {
     /// Creates `dir` if needed. Fails on an invalid world.
     pub fn new(dir: &Path, world: WorldDesc, source: Arc<dyn HeightSource>, holes: Vec<Hole>) -> Result<Self> {
         world.validate()?;
-        std::fs::create_dir_all(dir).map_err(|e| WorldError::io(dir, e))?;
+        std::fs::create_dir_all(dir).map_err(|e| WorldError::create_dir(dir, e))?;
         let keys = [world.hash(), source.id_hash(), holes_hash(&holes)];
         Ok(NodeCache { dir: dir.to_path_buf(), world, source, holes, keys })
     }
@@ -130,14 +130,14 @@ impl NodeCache {
     pub fn write(&self, node: &BakedNode) -> Result<u64> {
         let path = self.path(node.id);
         let dir = path.parent().unwrap_or(&self.dir);
-        std::fs::create_dir_all(dir).map_err(|e| WorldError::io(dir, e))?;
+        std::fs::create_dir_all(dir).map_err(|e| WorldError::create_dir(dir, e))?;
         let bytes = self.encode(node);
         let tmp =
             path.with_extension(format!("tmp{}_{}", std::process::id(), TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)));
-        std::fs::write(&tmp, &bytes).map_err(|e| WorldError::io(&tmp, e))?;
+        std::fs::write(&tmp, &bytes).map_err(|e| WorldError::io_write(&tmp, e))?;
         std::fs::rename(&tmp, &path).map_err(|e| {
             let _ = std::fs::remove_file(&tmp);
-            WorldError::io(&path, e)
+            WorldError::io_write(&path, e)
         })?;
         Ok(bytes.len() as u64)
     }

@@ -11,12 +11,12 @@ pub enum WorldError {
     InvalidDesc(String),
     #[error("file not found: {}", path.display())]
     FileNotFound { path: PathBuf },
-    #[error("cannot read {}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    /// The I/O error is part of the message, not a `source`: a chain
+    /// printer would otherwise say it twice.
+    #[error("cannot {action} {}: {error}", path.display())]
+    Io { path: PathBuf, action: &'static str, error: std::io::Error },
+    #[error("cannot create the folder {}: {} is a file, not a folder", path.display(), file.display())]
+    FileInTheWay { path: PathBuf, file: PathBuf },
     #[error("{}: corrupt or truncated file: {detail}", path.display())]
     Corrupt { path: PathBuf, detail: String },
     #[error("{}: expected {expected}, found {found}", path.display())]
@@ -42,16 +42,57 @@ pub type Result<T> = std::result::Result<T, WorldError>;
 impl WorldError {
     /// Maps an I/O error while opening `path` to the specific "missing file"
     /// variant when that is what happened.
-    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub(crate) fn io(path: impl Into<PathBuf>, error: std::io::Error) -> Self {
         let path = path.into();
-        if source.kind() == std::io::ErrorKind::NotFound {
+        if error.kind() == std::io::ErrorKind::NotFound {
             WorldError::FileNotFound { path }
         } else {
-            WorldError::Io { path, source }
+            WorldError::Io { path, action: "read", error }
+        }
+    }
+
+    pub(crate) fn io_write(path: impl Into<PathBuf>, error: std::io::Error) -> Self {
+        WorldError::Io { path: path.into(), action: "write", error }
+    }
+
+    /// `create_dir_all(path)` failed: names the file standing where a
+    /// folder is needed ("File exists" alone does not say which).
+    pub(crate) fn create_dir(path: &std::path::Path, error: std::io::Error) -> Self {
+        match path.ancestors().find(|a| a.exists()) {
+            Some(file) if !file.is_dir() => {
+                WorldError::FileInTheWay { path: path.to_path_buf(), file: file.to_path_buf() }
+            }
+            _ => WorldError::Io { path: path.to_path_buf(), action: "create the folder", error },
         }
     }
 
     pub(crate) fn corrupt(path: impl Into<PathBuf>, detail: impl ToString) -> Self {
         WorldError::Corrupt { path: path.into(), detail: detail.to_string() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::world::{GridSource, NodeCache, WorldDesc};
+    use std::sync::Arc;
+
+    #[test]
+    fn a_file_where_the_cache_folder_goes_is_named_once() {
+        let dir = std::env::temp_dir().join(format!("vista-error-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("afile");
+        std::fs::write(&file, "x").unwrap();
+        let source = Arc::new(GridSource::new(1, 1, vec![0.0], [10.0, 10.0]));
+        for target in [file.clone(), file.join("sub")] {
+            let Err(e) = NodeCache::new(&target, WorldDesc::default(), source.clone(), Vec::new()) else {
+                panic!("{target:?}: a cache under a file");
+            };
+            let text = e.to_string();
+            let expected =
+                format!("cannot create the folder {}: {} is a file, not a folder", target.display(), file.display());
+            assert_eq!(text, expected);
+            assert!(std::error::Error::source(&e).is_none(), "no OS error to print a second time");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

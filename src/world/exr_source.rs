@@ -114,7 +114,7 @@ pub fn write_height_exr(path: &Path, width: usize, height: usize, heights: &[f32
         AnyChannels::sort(SmallVec::from_vec(vec![channel])),
     );
     Image::from_layer(layer).write().non_parallel().to_file(path).map_err(|e| match e {
-        exr::error::Error::Io(io) => WorldError::io(path, io),
+        exr::error::Error::Io(io) => WorldError::io_write(path, io),
         other => WorldError::corrupt(path, other),
     })
 }

@@ -48,10 +48,12 @@ impl Loader {
                 cancelled: Arc::clone(&cancelled),
                 shutdown: Arc::clone(&shutdown),
             };
+            let not_started =
+                |error| WorldError::Io { path: format!("loader thread {i}").into(), action: "start", error };
             let handle = std::thread::Builder::new()
                 .name(format!("vista-loader-{i}"))
                 .spawn(move || ctx.run())
-                .map_err(|e| WorldError::io("<loader thread>", e))?;
+                .map_err(not_started)?;
             loader.workers.push(handle);
         }
         Ok(loader)

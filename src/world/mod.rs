@@ -15,6 +15,7 @@ mod memory;
 mod payload;
 mod png16;
 mod procedural;
+mod resample_bound;
 mod source;
 mod streaming;
 
@@ -33,5 +34,6 @@ pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
 pub use payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
+pub use resample_bound::RangeFit;
 pub use source::{GridSource, HeightSource};
 pub use streaming::{Arrival, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};

@@ -110,6 +110,10 @@ pub fn bake(args: BakeArgs) -> Result<()> {
             bail!("--region {},{},{},{} does not overlap the world (0..{ex} x 0..{ey} m)", r[0], r[1], r[2], r[3]);
         }
     }
+    crate::out_path::prepare_out_dir(&args.out, "--out", "the node cache: lod{k}/{x}_{y}.vnode")?;
+    if let Some(json) = &args.json {
+        crate::out_path::check_out_file(json, "--json")?;
+    }
     let progress = !args.no_progress && std::io::stderr().is_terminal();
     let stats = bake_world(w.source.clone(), &w.desc, &w.holes, args.region, &args.out, progress)
         .with_context(|| format!("baking into {}", args.out.display()))?;

@@ -64,7 +64,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 1.0)]
     target_error: f32,
     /// Camera position (x,y,z metres); default: 60 m above the world's centre at mid height.
-    #[arg(long, value_parser = crate::render_cmd::parse_position)]
+    #[arg(long, value_parser = crate::render_cmd::parse_position, allow_hyphen_values = true)]
     camera: Option<[f64; 3]>,
     #[command(flatten)]
     world: WorldArgs,
@@ -103,6 +103,9 @@ pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
 }
 
 pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
+    if let Some(path) = &args.json {
+        crate::out_path::check_out_file(path, "--json")?;
+    }
     match args.kind {
         BenchKind::Traverse => traverse(ctx, args),
         BenchKind::Cull => crate::bench_cull_cmd::cull(ctx, &ViewBench::new(&args, 7)?),

@@ -9,6 +9,7 @@ mod bench_cull_cmd;
 mod bench_effects_cmd;
 mod bench_shade_cmd;
 mod golden_cmd;
+mod out_path;
 mod render_cmd;
 mod scene;
 mod world_args;
@@ -107,6 +108,7 @@ fn run(cli: Cli) -> Result<()> {
             // A bad world or view fails before the (slow) Vulkan start.
             let world = args.world.load()?;
             let view = render_cmd::view_of(&args, &world).map_err(|e| InputError(format!("{e:#}")))?;
+            render_cmd::prepare_paths(&args)?;
             with_gpu(&options, |ctx| render_cmd::render(ctx, &world, &view, &args))
         }
         // Baking and accounting are CPU-only: no Vulkan needed.

@@ -26,11 +26,13 @@ pub struct RenderArgs {
     /// Target size, e.g. 1280x720.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: [u32; 2],
-    /// Measured frames after streaming settled (the first 2 are warm-up).
+    /// Frames rendered after streaming settled; the first 2 are warm-up and
+    /// left out of the medians and timings.json.
     #[arg(long, default_value_t = 12)]
     pub frames: u32,
-    /// Write image.png, depth.exr, timings.json, trace.json, stats.json and
-    /// report.json here.
+    /// Folder (created if needed) for image.png, lit.exr, depth.exr,
+    /// classification.png, timings.json (the timed frames), trace.json
+    /// (every frame), stats.json and report.json.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print the pass report: effects and why each is on or off, pipelines
@@ -155,6 +157,21 @@ pub(crate) fn parse_stages(s: &str) -> Result<CullStages, String> {
     Ok(st)
 }
 
+/// What `--out` receives, for messages.
+const OUTPUTS: &str = "image.png, lit.exr, depth.exr, classification.png and the JSON reports";
+
+/// Creates `--out` and `--cache` and checks they are writable folders, so a
+/// bad path fails before the render, not after it.
+pub fn prepare_paths(args: &RenderArgs) -> Result<()> {
+    if let Some(dir) = &args.out {
+        crate::out_path::prepare_out_dir(dir, "--out", OUTPUTS)?;
+    }
+    if let Some(dir) = &args.cache {
+        crate::out_path::prepare_out_dir(dir, "--cache", "the baked node files")?;
+    }
+    Ok(())
+}
+
 /// The view the arguments ask for (the default camera needs the world).
 pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
     if args.frames == 0 {
@@ -198,14 +215,35 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     };
     let mut off = Offscreen::with_mode(ctx, view.size, options.terrain.frames_in_flight, SKY_CLEAR, mode)?;
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
-    let frames = off.run(ctx, &mut renderer, view, args.frames)?;
+    let first = renderer.frames_recorded() + 1;
+    let mut frames = off.run(ctx, &mut renderer, view, args.frames)?;
     let capture = off.capture(ctx)?;
-    // The last frame's timings are back once capture waited for it.
+    // The last frame's timings are back once capture waited for it; they
+    // count like the others.
     let last = renderer.poll_timings(ctx).cloned();
+    if let Some(t) = &last {
+        if frames.last().is_none_or(|l| l.frame < t.frame) {
+            frames.push(t.clone());
+        }
+    }
     let report = vista::render::frame_report(ctx, &renderer, last.as_ref())?;
-    let timed = if frames.len() > WARMUP_FRAMES { &frames[WARMUP_FRAMES..] } else { &frames[..] };
+    // Only this run's frames (the first poll may return a settling one),
+    // warm-up counted in frames rendered, not in timings received (some
+    // can be dropped when the GPU lags). The printed medians and
+    // timings.json come from these same frames.
+    frames.retain(|f| f.frame >= first);
+    let warmup = if args.frames as usize > WARMUP_FRAMES { WARMUP_FRAMES } else { 0 };
+    let warmup_timed = frames.iter().take_while(|f| f.frame < first + warmup as u64).count();
+    let timed = &frames[warmup_timed..];
     let c = &view.camera;
-    println!("device: {}  ({} measured frames, {}x{})", ctx.info().name, args.frames, view.size[0], view.size[1]);
+    println!(
+        "device: {}  ({} frames rendered: {warmup} warm-up, {} timed; {}x{})",
+        ctx.info().name,
+        args.frames,
+        timed.len(),
+        view.size[0],
+        view.size[1]
+    );
     println!(
         "world:  {}  camera ({:.1}, {:.1}, {:.1}) m, yaw {:.1}, pitch {:.1}, fov {:.1}, target error {} px",
         world.label,
@@ -246,8 +284,10 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     }
     if let Some(dir) = &args.out {
         let gbuffer = renderer.gbuffer.as_ref().expect("a frame was rendered").capture(ctx)?;
-        write_outputs(dir, &frames, &capture, &gbuffer, view, &stats)?;
-        std::fs::write(dir.join("report.json"), serde_json::to_string_pretty(&report)?)?;
+        write_outputs(dir, &frames, warmup_timed, &capture, &gbuffer, view, &stats)?;
+        let path = dir.join("report.json");
+        std::fs::write(&path, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     print!("{}", renderer.terrain.memory_report());
     Ok(())
@@ -315,18 +355,24 @@ fn print_timings(timed: &[FrameTimings]) {
     println!("{:<44} {:<9} {:>10.4}", "sum of medians", "", total);
 }
 
+/// timings.json holds the timed frames (what the printed table summarises);
+/// trace.json every frame, warm-up included, for looking at first-use costs.
 fn write_outputs(
     dir: &Path,
     frames: &[FrameTimings],
+    warmup: usize,
     capture: &Capture,
     gbuffer: &GBufferCapture,
     view: &View,
     stats: &RenderStats,
 ) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    std::fs::write(dir.join("timings.json"), vista::frame::profiler::to_json(frames))?;
-    std::fs::write(dir.join("trace.json"), vista::frame::profiler::to_chrome_trace(frames))?;
-    std::fs::write(dir.join("stats.json"), serde_json::to_string_pretty(stats)?)?;
+    let write = |name: &str, text: String| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
+    };
+    write("timings.json", vista::frame::profiler::to_json(&frames[warmup..]))?;
+    write("trace.json", vista::frame::profiler::to_chrome_trace(frames))?;
+    write("stats.json", serde_json::to_string_pretty(stats)?)?;
     let [w, h] = capture.size;
     image::save_buffer(dir.join("image.png"), &capture.rgba, w, h, image::ExtendedColorType::Rgba8)
         .with_context(|| format!("writing {}", dir.join("image.png").display()))?;

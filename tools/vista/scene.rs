@@ -6,6 +6,7 @@
 //! source = "procedural"        # or a PNG16 / EXR path, relative to this file
 //! extent = 10240               # metres; or [x, y]
 //! height_range = [0, 1600]
+//! clamp_heights = false        # EXR only: clamp data outside height_range, not fail
 //! spacing = 0.5
 //! lods = 6
 //! seed = 1
@@ -55,6 +56,9 @@ pub struct SceneWorld {
     pub source: SceneSource,
     pub extent: Option<Extent>,
     pub height_range: Option<[f32; 2]>,
+    /// Clamp EXR heights outside `height_range` instead of failing.
+    #[serde(default)]
+    pub clamp_heights: bool,
     pub spacing: Option<f64>,
     pub lods: Option<u32>,
     pub seed: Option<u64>,
@@ -101,6 +105,9 @@ impl Scene {
     /// Reads and parses `path`; a relative `source` is resolved against the
     /// scene file's folder so scenes can travel with their height maps.
     pub fn load(path: &Path) -> Result<Scene> {
+        if path.is_dir() {
+            bail!("--scene {} is a directory, expected a scene file (.toml)", path.display());
+        }
         let text = std::fs::read_to_string(path).with_context(|| format!("scene file {}", path.display()))?;
         let raw: RawScene = toml::from_str(&text).map_err(|e| {
             // toml's Display spans several lines (a source excerpt); one

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use vista::render::Effects;
-use vista::world::{ExrSource, HeightSource, Hole, Png16Source, ProceduralSource, WorldDesc};
+use vista::world::{ExrSource, GridSource, HeightSource, Hole, Png16Source, ProceduralSource, WorldDesc};
 
 use crate::scene::{Scene, SceneSource};
 
@@ -34,9 +34,16 @@ pub struct WorldArgs {
     #[arg(long, value_name = "METRES", value_parser = parse_extent, allow_negative_numbers = true, help_heading = "World")]
     pub extent: Option<[f64; 2]>,
     /// Heights in metres that the PNG's 0..65535 maps to; also the range of
-    /// the 16-bit height encoding. Optional for EXR (taken from the data).
-    #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true, help_heading = "World")]
+    /// the 16-bit height encoding. Optional for EXR (taken from the data,
+    /// resampling overshoot included); an EXR range that clips data is an
+    /// error unless --clamp-heights is given.
+    #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true, help_heading = "World",
+          action = clap::ArgAction::Set)]
     pub height_range: Option<Vec<f32>>,
+    /// Clamp EXR heights outside --height-range (or the scene's height_range)
+    /// to it instead of failing; prints how many samples were clamped.
+    #[arg(long, help_heading = "World")]
+    pub clamp_heights: bool,
     /// Distance between LOD-0 samples in metres [default: 0.5].
     #[arg(long, value_name = "METRES", allow_negative_numbers = true, help_heading = "World")]
     pub spacing: Option<f64>,
@@ -86,10 +93,12 @@ impl WorldArgs {
             (None, SceneSource::Procedural) => None,
         };
         let extent = self.extent.or(w.extent.map(|e| e.xy()));
-        let height_range = match &self.height_range {
-            Some(v) => Some([v[0], v[1]]),
-            None => w.height_range,
+        let height_range = match (&self.height_range, w.height_range) {
+            (Some(v), _) => Some(GivenRange::new([v[0], v[1]], "--height-range")),
+            (None, Some(r)) => Some(GivenRange::new(r, "the scene's height_range")),
+            (None, None) => None,
         };
+        let clamp = self.clamp_heights || w.clamp_heights;
         let defaults = WorldDesc::default();
         let spacing_m = self.spacing.or(w.spacing).unwrap_or(defaults.spacing_m);
         let lod_count = self.lods.or(w.lods).unwrap_or(defaults.lod_count);
@@ -100,7 +109,7 @@ impl WorldArgs {
         let (desc, source, label): (WorldDesc, Arc<dyn HeightSource>, String) = match heightmap {
             None => {
                 let extent_m = extent.unwrap_or(defaults.extent_m);
-                let height_range_m = height_range.unwrap_or(defaults.height_range_m);
+                let height_range_m = height_range.map_or(defaults.height_range_m, |r| r.range);
                 let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count };
                 check_desc(&desc)?;
                 let source = ProceduralSource::new(seed, extent_m, height_range_m)?;
@@ -110,7 +119,8 @@ impl WorldArgs {
                 let Some(extent_m) = extent else {
                     bail!("{what} {} needs --extent METRES (the world size it covers)", path.display());
                 };
-                let (desc, source) = open_heightmap(&path, what, extent_m, height_range, spacing_m, lod_count)?;
+                let geometry = WorldDesc { extent_m, height_range_m: [0.0, 1.0], spacing_m, lod_count };
+                let (desc, source) = open_heightmap(&path, what, geometry, height_range, clamp)?;
                 (desc, source, path.display().to_string())
             }
         };
@@ -125,30 +135,65 @@ fn check_desc(desc: &WorldDesc) -> Result<()> {
         .with_context(|| format!("world of {x} x {y} m at {} m spacing with {} LODs", desc.spacing_m, desc.lod_count))
 }
 
+/// A height range the user chose, and where: `--height-range` or the scene.
+#[derive(Clone, Copy)]
+struct GivenRange {
+    range: [f32; 2],
+    origin: &'static str,
+}
+
+impl GivenRange {
+    fn new(range: [f32; 2], origin: &'static str) -> Self {
+        GivenRange { range, origin }
+    }
+}
+
+impl std::fmt::Display for GivenRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [lo, hi] = self.range;
+        // As the user wrote it: two arguments, or a TOML array.
+        if self.origin.starts_with("--") {
+            write!(f, "{} {lo} {hi}", self.origin)
+        } else {
+            write!(f, "{} [{lo}, {hi}]", self.origin)
+        }
+    }
+}
+
+/// `geometry`'s height range is a placeholder: the file decides it.
 fn open_heightmap(
     path: &Path,
     what: &str,
-    extent_m: [f64; 2],
-    height_range: Option<[f32; 2]>,
-    spacing_m: f64,
-    lod_count: u32,
+    geometry: WorldDesc,
+    height_range: Option<GivenRange>,
+    clamp: bool,
 ) -> Result<(WorldDesc, Arc<dyn HeightSource>)> {
-    // The EXR range is only known after reading; a placeholder lets the
-    // geometry be validated first.
-    let probe = WorldDesc { extent_m, height_range_m: height_range.unwrap_or([0.0, 1.0]), spacing_m, lod_count };
+    // Geometry first, so an absurd world fails before any file is read.
+    let probe = WorldDesc { height_range_m: height_range.map_or([0.0, 1.0], |r| r.range), ..geometry };
     check_desc(&probe)?;
+    if path.is_dir() {
+        bail!("{what} {} is a directory, expected a PNG or EXR height map file", path.display());
+    }
     let mut magic = [0u8; 4];
     let mut file = std::fs::File::open(path).with_context(|| format!("heightmap file {}", path.display()))?;
-    file.read_exact(&mut magic).with_context(|| format!("heightmap file {} is too short", path.display()))?;
+    if let Err(e) = file.read_exact(&mut magic) {
+        if e.kind() == std::io::ErrorKind::UnexpectedEof {
+            bail!("{what} {} is too short to be a PNG or EXR file", path.display());
+        }
+        return Err(e).with_context(|| format!("reading {what} {}", path.display()));
+    }
     if magic == PNG_MAGIC {
-        let Some(range) = height_range else {
+        let Some(given) = height_range else {
             bail!("{what} {} is a PNG: give --height-range LO HI (metres of 0 and 65535)", path.display());
         };
-        let source = Png16Source::open(path, extent_m, range)?;
+        let source = Png16Source::open(path, geometry.extent_m, given.range)?;
         Ok((probe, Arc::new(source)))
     } else if magic == EXR_MAGIC {
-        let source = ExrSource::open(path, extent_m)?;
-        let range = height_range.unwrap_or_else(|| data_range(&source));
+        let source = ExrSource::open(path, geometry.extent_m)?;
+        let range = match height_range {
+            Some(given) => checked_range(&source, path, given, clamp)?,
+            None => auto_range(source.grid()),
+        };
         let desc = WorldDesc { height_range_m: range, ..probe };
         check_desc(&desc)?;
         Ok((desc, Arc::new(source)))
@@ -157,18 +202,45 @@ fn open_heightmap(
     }
 }
 
-/// Min..max of an EXR's heights, widened for a flat map so lo < hi.
-fn data_range(source: &ExrSource) -> [f32; 2] {
-    let g = source.grid();
-    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for j in 0..g.height() {
-        for i in 0..g.width() {
-            lo = lo.min(g.pixel(i, j));
-            hi = hi.max(g.pixel(i, j));
-        }
+/// The user's range for an EXR, refused if it would clip pixels (heights
+/// are clamped to the range when encoded, silently) unless `clamp`.
+fn checked_range(source: &ExrSource, path: &Path, given: GivenRange, clamp: bool) -> Result<[f32; 2]> {
+    let [lo, hi] = given.range;
+    let fit = source.grid().fit(given.range);
+    let file = path.display();
+    let (n, total) = (fit.outside, fit.total);
+    if n > 0 && !clamp {
+        let fix = if given.origin.starts_with("--") {
+            "widen it or pass --clamp-heights"
+        } else {
+            "widen it, or set clamp_heights = true in [world] or pass --clamp-heights"
+        };
+        bail!("{given} clips {n} of {total} samples of {file} (min {:.1} m, max {:.1} m); {fix}", fit.min, fit.max);
     }
+    if n > 0 {
+        eprintln!("note: {n} of {total} samples of {file} lie outside {given} and are clamped to {lo}..{hi} m");
+        return Ok(given.range);
+    }
+    // Every pixel fits, but Catmull-Rom may still overshoot between them.
+    let [rlo, rhi] = source.grid().resampled_range();
+    if rlo < lo || rhi > hi {
+        eprintln!(
+            "warning: {given} holds every sample of {file}, but resampling between them reaches {rlo:.1}..{rhi:.1} m, \
+             which is clamped; leave the range out to have it fitted"
+        );
+    }
+    Ok(given.range)
+}
+
+/// The range an EXR gets when none is given: every value the resampler can
+/// produce, overshoot next to cliffs included (see
+/// [`vista::world::GridSource::resampled_range`]), so no height is clamped;
+/// a flat map is widened to 1 m around its middle so lo < hi.
+fn auto_range(grid: &GridSource) -> [f32; 2] {
+    let [lo, hi] = grid.resampled_range();
     if hi - lo < 1.0 {
-        [lo - 0.5, lo + 0.5]
+        let mid = lo + (hi - lo) / 2.0;
+        [mid - 0.5, mid + 0.5]
     } else {
         [lo, hi]
     }
@@ -220,6 +292,19 @@ mod tests {
         assert!(parse_extent("1,2,3").is_err());
         assert!(parse_hole_circle("1,2,0").is_err());
         assert!(parse_hole_circle("1,2").is_err());
+    }
+
+    #[test]
+    fn the_automatic_range_holds_a_nearly_flat_map() {
+        // 0.8 m of relief: widened to 1 m around its middle, 0.4 m, so both
+        // ends stay inside (-0.1..0.9), not cut at lo + 0.5.
+        let g = GridSource::new(2, 1, vec![0.0, 0.8], [10.0, 10.0]);
+        let [lo, hi] = auto_range(&g);
+        assert!((lo + 0.1).abs() < 1e-4 && (hi - 0.9).abs() < 1e-4, "{lo}..{hi}");
+        // Real relief keeps its own range (a ramp does not overshoot).
+        let g = GridSource::new(3, 1, vec![0.0, 50.0, 100.0], [10.0, 10.0]);
+        let [lo, hi] = auto_range(&g);
+        assert!(lo.abs() < 1e-3 && (hi - 100.0).abs() < 1e-3, "{lo}..{hi}");
     }
 
     #[test]
