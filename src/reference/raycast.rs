@@ -21,6 +21,8 @@
 //!   `refine_rel` of the distance (1e-7: finer than D32 depth resolves).
 //! - The normal comes from central differences of the source at half the
 //!   world spacing: the surface at the detail the world is baked at.
+//! - Colour averages 4 rays per pixel (rotated grid): the filtered picture;
+//!   depth, position and normal are the pixel centre's.
 //!
 //! The bounds rest on sampled slopes: a surface steeper between lattice
 //! points than `slope_safety` times what was sampled could be tunnelled.
@@ -44,11 +46,22 @@ pub struct RaycastConfig {
     pub min_step_px: f64,
     /// Bisection stops when the bracket is this fraction of the distance.
     pub refine_rel: f64,
+    /// Rays per pixel for the colour: 1 (the pixel centre) or 4 (a rotated
+    /// grid, averaged): the filtered picture a renderer's point samples
+    /// approach. Depth, position and normal always come from the centre.
+    pub colour_samples: u32,
 }
 
 impl Default for RaycastConfig {
     fn default() -> Self {
-        RaycastConfig { bound_cells: 128, lattice: 9, slope_safety: 2.0, min_step_px: 0.25, refine_rel: 1e-7 }
+        RaycastConfig {
+            bound_cells: 128,
+            lattice: 9,
+            slope_safety: 2.0,
+            min_step_px: 0.25,
+            refine_rel: 1e-7,
+            colour_samples: 4,
+        }
     }
 }
 
@@ -263,6 +276,12 @@ pub struct ReferenceImage {
     pub samples: u64,
 }
 
+/// Display RGBA, 0..=255 before rounding.
+type Rgba = [f64; 4];
+
+/// Sub-pixel positions of 4x rotated-grid supersampling.
+const ROTATED_GRID: [[f64; 2]; 4] = [[0.375, 0.125], [0.875, 0.375], [0.125, 0.625], [0.625, 0.875]];
+
 fn image(rc: &RayCaster, view: &View, light: &Lighting, clay_albedo: f32, clear: [f32; 4]) -> ReferenceImage {
     let source = rc.source;
     let [w, hgt] = view.size;
@@ -271,7 +290,7 @@ fn image(rc: &RayCaster, view: &View, light: &Lighting, clay_albedo: f32, clear:
     let footprint = 2.0 / (view.focal() * f64::from(hgt));
     let sun = light.sun_dir();
     let h = 0.5 * rc.bounds.spacing_m;
-    let encode = |v: f64| (v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8;
+    let encode = |v: f64| v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0;
     let clear_px = [0, 1, 2, 3].map(|i| (f64::from(clear[i]).clamp(0.0, 1.0) * 255.0).round() as u8);
     let empty = || ReferenceImage {
         size: view.size,
@@ -281,36 +300,55 @@ fn image(rc: &RayCaster, view: &View, light: &Lighting, clay_albedo: f32, clear:
         rgba: Vec::new(),
         samples: 0,
     };
+    // Display colour (0..=255, unrounded), hit distance, point and normal of one ray.
+    let shade = |d: DVec3, samples: &mut u64| -> (Rgba, Option<(f64, DVec3, DVec3)>) {
+        let tr = rc.trace(origin, d, footprint);
+        *samples += u64::from(tr.samples);
+        let Some(t) = tr.t else {
+            return (clear_px.map(f64::from), None);
+        };
+        let p = origin + d * t;
+        let s = |x: f64, y: f64| f64::from(source.sample(x, y));
+        let gx = (s(p.x + h, p.y) - s(p.x - h, p.y)) / (2.0 * h);
+        let gy = (s(p.x, p.y + h) - s(p.x, p.y - h)) / (2.0 * h);
+        let n = DVec3::new(-gx, -gy, 1.0).normalize();
+        let lit = |i: usize| {
+            let sunlit = f64::from(light.sun_color[i]) * n.dot(sun).max(0.0);
+            let sky = f64::from(light.sky_color[i]) * (0.5 + 0.5 * n.z);
+            encode(f64::from(clay_albedo) * (sunlit + sky))
+        };
+        ([lit(0), lit(1), lit(2), 255.0], Some((t, p, n)))
+    };
+    let offsets: &[[f64; 2]] = if rc.cfg.colour_samples >= 4 { &ROTATED_GRID } else { &[[0.5, 0.5]] };
     let rows: Vec<ReferenceImage> = (0..hgt)
         .into_par_iter()
         .map(|y| {
             let mut row = empty();
             for x in 0..w {
-                let d = view.ray([f64::from(x) + 0.5, f64::from(y) + 0.5]);
-                let tr = rc.trace(origin, d, footprint);
-                row.samples += u64::from(tr.samples);
-                match tr.t {
-                    Some(t) => {
-                        let p = origin + d * t;
-                        let s = |x: f64, y: f64| f64::from(source.sample(x, y));
-                        let gx = (s(p.x + h, p.y) - s(p.x - h, p.y)) / (2.0 * h);
-                        let gy = (s(p.x, p.y + h) - s(p.x, p.y - h)) / (2.0 * h);
-                        let n = DVec3::new(-gx, -gy, 1.0).normalize();
-                        let lit = |i: usize| {
-                            let sunlit = f64::from(light.sun_color[i]) * n.dot(sun).max(0.0);
-                            let sky = f64::from(light.sky_color[i]) * (0.5 + 0.5 * n.z);
-                            f64::from(clay_albedo) * (sunlit + sky)
-                        };
+                let at = |o: [f64; 2]| view.ray([f64::from(x) + o[0], f64::from(y) + o[1]]);
+                let d = at([0.5, 0.5]);
+                let (centre, hit) = shade(d, &mut row.samples);
+                let colour = if offsets.len() == 1 {
+                    centre
+                } else {
+                    let mut sum = [0.0; 4];
+                    for &o in offsets {
+                        let (c, _) = shade(at(o), &mut row.samples);
+                        (0..4).for_each(|i| sum[i] += c[i] / offsets.len() as f64);
+                    }
+                    sum
+                };
+                row.rgba.extend(colour.map(|c| c.round().clamp(0.0, 255.0) as u8));
+                match hit {
+                    Some((t, p, n)) => {
                         row.depth_m.push((t * d.dot(forward)) as f32);
                         row.position_m.push(p.to_array());
                         row.normal.push(n.as_vec3().to_array());
-                        row.rgba.extend([encode(lit(0)), encode(lit(1)), encode(lit(2)), 255]);
                     }
                     None => {
                         row.depth_m.push(0.0);
                         row.position_m.push(origin.to_array());
                         row.normal.push([0.0; 3]);
-                        row.rgba.extend(clear_px);
                     }
                 }
             }

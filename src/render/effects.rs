@@ -372,6 +372,8 @@ mod tests {
         assert!(fx.is_on(Effect::Lighting));
         assert_eq!(fx.lighting.sun_elevation_deg, 25.0);
         assert_eq!(fx.lighting.sky_color, [0.1, 0.2, 0.3]);
+        assert_eq!(fx.lighting.clay_albedo, None);
+        assert_eq!(parse("lighting = { clay_albedo = 0.5 }\n").unwrap().lighting.clay_albedo, Some(0.5));
         assert!(!parse("[lighting]\nenabled = false\n").unwrap().is_on(Effect::Lighting));
     }
 
@@ -385,6 +387,8 @@ mod tests {
             ("cliffs = { materials = \"x\" }", "unknown parameter effects.cliffs.materials"),
             ("splat = { materials = \"no/such/file.toml\" }", "effects.splat.materials: file"),
             ("lighting = { sun_elevation_deg = 95 }", "outside"),
+            // 0 would mean "no clay" on the GPU.
+            ("lighting = { clay_albedo = 0 }", "effects.lighting.clay_albedo = 0 is outside"),
         ] {
             let e = parse(text).unwrap_err().to_string();
             assert!(e.contains(key) && !e.contains('\n'), "{text}: {e}");

@@ -52,12 +52,14 @@ fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn st
         let (x0, x1) = (xs.clone().fold(f64::MAX, f64::min), xs.fold(0.0, f64::max));
         let (y0, y1) = (ys.clone().fold(f64::MAX, f64::min), ys.fold(0.0, f64::max));
         let (dx, dy) = (((x1 - x0) * 0.1).max(1e-3), ((y1 - y0) * 0.15).max(1e-4));
+        // Room above the points for the legend.
+        let top = y1 + 3.0 * dy;
         let mut chart = ChartBuilder::on(panel)
             .caption(format!("view \"{view}\""), ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(70)
-            .build_cartesian_2d((x0 - dx).max(0.0)..x1 + dx, (y0 - dy).max(0.0)..y1 + dy)?;
+            .build_cartesian_2d((x0 - dx).max(0.0)..x1 + dx, (y0 - dy).max(0.0)..top)?;
         chart
             .configure_mesh()
             .x_desc("GPU ms per frame (sum of pass medians)")

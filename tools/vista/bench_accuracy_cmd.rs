@@ -25,7 +25,11 @@ pub fn accuracy(
     views: Option<&[String]>,
     plot: Option<&Path>,
     images: Option<&Path>,
+    slots: u32,
 ) -> Result<()> {
+    if !(1..=1023).contains(&slots) {
+        bail!("--slots must be 1..=1023 resident nodes (slots are 10-bit)");
+    }
     if targets.is_empty() || targets.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         bail!("--targets must be positive numbers of pixels");
     }
@@ -59,6 +63,7 @@ pub fn accuracy(
         frames: args.frames,
         settle_timeout: Duration::from_secs(300),
         cache_dir: cache.clone(),
+        slots,
         raycast: RaycastConfig::default(),
         keep_images: images.is_some(),
     };
@@ -75,6 +80,7 @@ pub fn accuracy(
             "fov_y_deg": cfg.fov_y_deg,
             "clay_albedo": CLAY_ALBEDO,
             "frames": cfg.frames,
+            "slots": cfg.slots,
             "warmup_frames": cfg.warmup_frames,
             "raycast": format!("{:?}", cfg.raycast),
             "bench": b,
@@ -129,10 +135,11 @@ fn check_plot_path(p: &Path) -> Result<()> {
 
 fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenchConfig, seconds: f64) {
     println!(
-        "bench accuracy: {label} on {}, {}x{}, clay albedo {CLAY_ALBEDO}; GPU ms = sum of pass medians over {} frames after {} warm-up",
+        "bench accuracy: {label} on {}, {}x{}, {} slots, clay albedo {CLAY_ALBEDO}; GPU ms = sum of pass medians over {} frames after {} warm-up",
         ctx.info().name,
         cfg.size[0],
         cfg.size[1],
+        cfg.slots,
         cfg.frames,
         cfg.warmup_frames
     );
@@ -153,7 +160,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         );
     }
     println!(
-        "{:<12} {:<34} {:>6} {:>9} {:>10} {:>7} {:>6} {:>7} {:>7} {:>9} {:>8} {:>7} {:>7} {:>6} {:>6} {:>8}",
+        "{:<12} {:<34} {:>6} {:>9} {:>10} {:>7} {:>6} {:>5} {:>7} {:>7} {:>9} {:>8} {:>7} {:>7} {:>6} {:>6} {:>8}",
         "view",
         "setting",
         "target",
@@ -161,6 +168,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         "triangles",
         "patches",
         "nodes",
+        "want+",
         "d<0.5%",
         "d<2%",
         "d p99",
@@ -180,7 +188,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
             _ => String::new(),
         };
         println!(
-            "{:<12} {:<34} {:>6} {:>9.2} {:>10} {:>7} {:>6} {:>6.1}% {:>6.1}% {:>9.2e} {:>8} {:>7.2} {:>7.2} {:>6.1} {:>6.4} {:>8}{}",
+            "{:<12} {:<34} {:>6} {:>9.2} {:>10} {:>7} {:>6} {:>5} {:>6.1}% {:>6.1}% {:>9.2e} {:>8} {:>7.2} {:>7.2} {:>6.1} {:>6.4} {:>8}{}",
             p.view,
             setting,
             p.target_error_px,
@@ -188,6 +196,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
             p.triangles_drawn,
             p.patches_drawn,
             p.nodes_drawn_per_lod.iter().sum::<u32>(),
+            p.wanted_finer,
             100.0 * e.depth_within_0_5pct,
             100.0 * e.depth_within_2pct,
             e.depth_rel_p99,
@@ -200,6 +209,13 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
             if p.settled { "" } else { " (not settled)" }
         );
     }
+    println!(
+        "want+: drawn nodes the camera wants finer whose children are not resident (the slot budget); \
+         d: relative depth error; silh: pixels terrain in one image only; geo: vertical error to the \
+         source surface projected on screen (px); PSNR, FLIP: the clay-lit image vs the reference's \
+         (4 rays per pixel); extra: culling off, pixels differing from culling on; shading rows, FLIP \
+         of the textured image vs every flavour + blended cliffs"
+    );
     if let Some(why) = &b.shading_skipped {
         println!("shading rows skipped: {why}");
     }

@@ -53,6 +53,10 @@ pub struct BenchArgs {
     /// shading target and their FLIP map into this folder.
     #[arg(long)]
     images: Option<PathBuf>,
+    /// `bench accuracy`: resident node slots of the renderers (at most
+    /// 1023) [default: the renderer's default].
+    #[arg(long)]
+    slots: Option<u32>,
     /// Measured frames per row (after warm-up); the median is reported
     /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects, 3 per block (3 rounds) for shade].
     #[arg(long)]
@@ -121,6 +125,7 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
                 args.views.as_deref(),
                 args.plot.as_deref(),
                 args.images.as_deref(),
+                args.slots.unwrap_or(vista::terrain::TerrainOptions::default().slots),
             )
         }
     }
