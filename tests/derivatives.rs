@@ -27,14 +27,9 @@ const ALPHA: f64 = 0.008_019;
 /// reconstruct.glsl's guard.
 const GRAZING_COS: f64 = 1.745e-4;
 
-/// CPU twin of `oct_decode8` (octahedral.glsl), in f64.
+/// The CPU twin of `oct_decode8` (octahedral.glsl), in f64.
 fn oct_decode8(code: [u32; 2]) -> DVec3 {
-    let f = [f64::from(code[0]) / 254.0 * 2.0 - 1.0, f64::from(code[1]) / 254.0 * 2.0 - 1.0];
-    let mut n = DVec3::new(f[0], f[1], 1.0 - f[0].abs() - f[1].abs());
-    let t = (-n.z).max(0.0);
-    n.x += if n.x >= 0.0 { -t } else { t };
-    n.y += if n.y >= 0.0 { -t } else { t };
-    n.normalize()
+    DVec3::from(vista::reference::octahedral::oct_decode8(code))
 }
 
 /// The exact intersection of the eye ray through `px` with the plane

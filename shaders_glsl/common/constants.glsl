@@ -82,5 +82,7 @@
 #define MATERIAL_COUNT 256u
 // Splat map texels per node side (65x65: one per two height samples).
 #define SPLAT_TEXELS 65u
+// The largest octahedral normal code (octahedral.glsl): 255 codes per axis.
+#define OCT_CODE_LAST 254u
 
 #endif

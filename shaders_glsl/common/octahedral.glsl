@@ -4,6 +4,7 @@
 // case 3 compares them).
 #ifndef VISTA_OCTAHEDRAL_GLSL
 #define VISTA_OCTAHEDRAL_GLSL
+#include "constants.glsl"
 
 float oct_sign(float v) {
     return v >= 0.0 ? 1.0 : -1.0;
@@ -25,7 +26,7 @@ vec2 oct_encode(vec3 n) {
 // +z and the axis directions decode exactly. With 255 steps the centre fell
 // between two codes and a flat plane decoded 0.3 degrees tilted, which at
 // grazing incidence moved the reconstructed derivatives by whole mips.
-const float OCT_CODE_MAX = 254.0;
+const float OCT_CODE_MAX = float(OCT_CODE_LAST);
 
 // Unit vector -> two 8-bit codes (round to nearest, ties up).
 uvec2 oct_encode8(vec3 n) {

@@ -5,6 +5,7 @@ pub mod classify;
 pub mod image_metric;
 pub mod lod_map;
 pub mod occlusion;
+pub mod octahedral;
 pub mod raycast;
 pub mod sector_data;
 pub mod traverse;
