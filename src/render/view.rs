@@ -38,6 +38,15 @@ impl Camera {
     }
 }
 
+/// `x,y,z,yaw,pitch` in whole metres and degrees: the form `--camera`
+/// takes, so a printed view can be rendered again.
+impl std::fmt::Display for Camera {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [x, y, z] = self.position_m;
+        write!(f, "{x:.0},{y:.0},{z:.0},{:.0},{:.0}", self.yaw_deg, self.pitch_deg)
+    }
+}
+
 /// Everything that decides one frame's picture.
 #[derive(Debug, Clone, PartialEq)]
 pub struct View {
@@ -335,6 +344,12 @@ mod tests {
         // Behind the near plane is outside.
         let p = v.camera.basis()[0] * 0.05;
         assert!(planes[4].truncate().dot(p) + planes[4].w < 0.0);
+    }
+
+    #[test]
+    fn cameras_print_as_the_command_line_takes_them() {
+        let c = Camera { position_m: [1280.4, -5.0, 627.6], yaw_deg: 270.0, pitch_deg: -15.2 };
+        assert_eq!(c.to_string(), "1280,-5,628,270,-15");
     }
 
     #[test]

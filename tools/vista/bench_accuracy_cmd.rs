@@ -145,15 +145,10 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
     );
     println!("reference ray-caster (CPU, {} threads): bounds {:.1} s", rayon::current_num_threads(), b.bounds_seconds);
     for r in &b.references {
-        let c = &r.camera;
         println!(
-            "  view {:<14} camera {:.0},{:.0},{:.0},{:.0},{:.0}: {:.1} s, {:.0} samples/ray, {:.0}% terrain",
+            "  view {:<14} camera {}: {:.1} s, {:.0} samples/ray, {:.0}% terrain",
             format!("\"{}\"", r.view),
-            c.position_m[0],
-            c.position_m[1],
-            c.position_m[2],
-            c.yaw_deg,
-            c.pitch_deg,
+            r.camera,
             r.seconds,
             r.samples_per_ray,
             100.0 * r.terrain_fraction

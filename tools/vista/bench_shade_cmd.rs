@@ -50,15 +50,10 @@ pub fn shade(ctx: &Context, args: &ViewBench) -> Result<()> {
         frames
     );
     for v in &b.views {
-        let c = &v.camera;
         println!(
-            "view {:<14} camera {:.0},{:.0},{:.0},{:.0},{:.0} (x,y,z,yaw,pitch); CPU estimate: {:.0}% terrain, {:.0}% of it cliff",
+            "view {:<14} camera {} (x,y,z,yaw,pitch); CPU estimate: {:.0}% terrain, {:.0}% of it cliff",
             format!("\"{}\":", v.name),
-            c.position_m[0],
-            c.position_m[1],
-            c.position_m[2],
-            c.yaw_deg,
-            c.pitch_deg,
+            v.camera,
             100.0 * v.terrain_fraction,
             100.0 * v.cliff_fraction
         );
