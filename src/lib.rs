@@ -20,6 +20,7 @@ pub mod passes;
 pub mod reference;
 pub mod render;
 pub mod shaders;
+pub mod stability;
 pub mod terrain;
 pub mod world;
 
