@@ -55,6 +55,10 @@ pub struct RendererOptions {
     /// Tiled (default), or one pipeline for every tile: the references the
     /// tiled shading is compared with in tests and `vista bench shade`.
     pub shading: Shading,
+    /// Where the world's south-west corner lies in the caller's coordinates
+    /// (e.g. UTM metres east, north): views are given in those coordinates
+    /// and made world-relative in f64 before anything is rounded to f32.
+    pub origin_m: [f64; 2],
     /// Tests only: keep an effect on although the world lacks its data, to
     /// show that its path changes nothing there.
     #[doc(hidden)]
@@ -90,6 +94,8 @@ pub struct TerrainRenderer {
     /// Culling stages of the next recorded frame (of those built).
     pub stages: CullStages,
     pub effects: Effects,
+    /// See [`RendererOptions::origin_m`]; may change between frames.
+    pub origin_m: [f64; 2],
     decisions: Vec<EffectDecision>,
     /// How the last frame was recorded.
     mode: Option<QueueMode>,
@@ -237,6 +243,7 @@ impl TerrainRenderer {
             graph,
             stages: options.stages,
             effects: options.effects.clone(),
+            origin_m: options.origin_m,
             decisions,
             mode: None,
         })
@@ -297,6 +304,10 @@ impl TerrainRenderer {
         targets: &RenderTargets,
     ) -> Result<()> {
         view.validate()?;
+        if !self.origin_m.iter().all(|v| v.is_finite()) {
+            return Err(Error::BadInput(format!("world origin {:?} is not finite", self.origin_m)));
+        }
+        let view = &view.relative_to(self.origin_m);
         for (what, image, format) in [("colour", targets.color, COLOR_FORMAT), ("depth", targets.depth, DEPTH_FORMAT)] {
             if image.extent != view.size || image.format != format {
                 return Err(Error::BadInput(format!(

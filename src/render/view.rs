@@ -89,6 +89,17 @@ impl View {
         Ok(())
     }
 
+    /// This view with the camera moved from the caller's coordinates into
+    /// the world's own (south-west corner at 0, 0), where the world's
+    /// south-west corner lies at `origin_m`. In f64, so a camera at UTM
+    /// coordinates (millions of metres) loses nothing the renderer needs:
+    /// f64 keeps 1e7 m to 2 nm.
+    pub fn relative_to(&self, origin_m: [f64; 2]) -> View {
+        let [x, y, z] = self.camera.position_m;
+        let camera = Camera { position_m: [x - origin_m[0], y - origin_m[1], z], ..self.camera };
+        View { camera, ..self.clone() }
+    }
+
     /// Focal length in units of half the target height: 1 / tan(fov / 2).
     pub fn focal(&self) -> f64 {
         1.0 / (self.fov_y_deg.to_radians() / 2.0).tan()

@@ -6,6 +6,13 @@
 
 use serde::Serialize;
 
+pub mod depth;
+pub mod determinism;
+pub mod hygiene;
+pub mod origin;
+pub mod rig;
+pub mod seams;
+
 /// How long a case runs: the quick form (the test suite, the default of
 /// `vista stability`) or the full form (`--full`, nightly).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

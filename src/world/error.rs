@@ -25,6 +25,8 @@ pub enum WorldError {
     BadDimensions { path: PathBuf, width: u64, height: u64, max: u32 },
     #[error("{}: {count} heights are NaN or infinite", path.display())]
     NonFiniteHeights { path: PathBuf, count: usize },
+    #[error("{}: {count} heights lie beyond +-{limit:e} m (heights must be metres)", path.display())]
+    HugeHeights { path: PathBuf, count: usize, limit: f32 },
     #[error("node {0} is not a valid node of this world")]
     InvalidNode(NodeId),
     #[error("the {roots} root nodes alone exceed the slot budget of {budget}")]

@@ -52,6 +52,11 @@ impl ExrSource {
         if bad > 0 {
             return Err(WorldError::NonFiniteHeights { path: PathBuf::from(label), count: bad });
         }
+        let limit = crate::world::MAX_ABS_HEIGHT_M;
+        let huge = heights.iter().filter(|v| v.abs() > limit).count();
+        if huge > 0 {
+            return Err(WorldError::HugeHeights { path: PathBuf::from(label), count: huge, limit });
+        }
         Ok(ExrSource { grid: GridSource::new(w, h, heights, extent_m) })
     }
 

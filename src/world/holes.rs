@@ -16,6 +16,16 @@ pub enum Hole {
 }
 
 impl Hole {
+    /// The same hole moved by `-origin_m`: from the caller's coordinates
+    /// (a world placed at `origin_m`) into the world's own.
+    pub fn relative_to(&self, origin_m: [f64; 2]) -> Hole {
+        let m = |p: &[f64; 2]| [p[0] - origin_m[0], p[1] - origin_m[1]];
+        match self {
+            Hole::Circle { center_m, radius_m } => Hole::Circle { center_m: m(center_m), radius_m: *radius_m },
+            Hole::Polygon(pts) => Hole::Polygon(pts.iter().map(m).collect()),
+        }
+    }
+
     pub fn contains(&self, x: f64, y: f64) -> bool {
         match self {
             Hole::Circle { center_m, radius_m } => {

@@ -47,6 +47,11 @@ pub struct WorldDesc {
     pub lod_count: u32,
 }
 
+/// Heights beyond this many metres are refused: 100 times Mount Everest, so
+/// a height map in other units (millimetres, raw sensor counts) is caught,
+/// and the span of any accepted range stays finite in f32.
+pub const MAX_ABS_HEIGHT_M: f32 = 1e6;
+
 impl Default for WorldDesc {
     /// The default procedural world: Far Cry 5's 10 km map at 0.5 m.
     fn default() -> Self {
@@ -124,6 +129,11 @@ impl WorldDesc {
         let [lo, hi] = self.height_range_m;
         if !lo.is_finite() || !hi.is_finite() || lo >= hi {
             return bad(format!("height range must be finite with lo < hi, got {lo}..{hi}"));
+        }
+        if lo.abs() > MAX_ABS_HEIGHT_M || hi.abs() > MAX_ABS_HEIGHT_M {
+            return bad(format!(
+                "height range {lo}..{hi} reaches beyond +-{MAX_ABS_HEIGHT_M:e} m (heights must be metres)"
+            ));
         }
         if !(1..=MAX_LOD_COUNT).contains(&self.lod_count) {
             return bad(format!("lod count must be 1..={MAX_LOD_COUNT}, got {}", self.lod_count));

@@ -26,8 +26,9 @@ pub use error::{Result, WorldError};
 pub use exr_source::{write_height_exr, ExrSource};
 pub use holes::{holes_hash, Hole};
 pub use layout::{
-    decode_height, encode_height, NodeId, WorldDesc, MAX_IMAGE_SIDE, MAX_LOD_COUNT, MAX_SECTORS_PER_SIDE, NODE_QUADS,
-    NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES,
+    decode_height, encode_height, NodeId, WorldDesc, MAX_ABS_HEIGHT_M, MAX_IMAGE_SIDE, MAX_LOD_COUNT,
+    MAX_SECTORS_PER_SIDE, NODE_QUADS, NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS,
+    PATCH_SAMPLES, SPLAT_RES,
 };
 pub use loader::{LoadFn, Loader};
 pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};

@@ -42,6 +42,7 @@ pub fn accuracy(
         }
     }
     let world = args.world.load()?;
+    world.require_unplaced("vista bench accuracy")?;
     let d = world.desc;
     let mut all = cull_views(&d, &*world.source);
     if let Some(wanted) = views {

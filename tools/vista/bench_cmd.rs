@@ -141,6 +141,7 @@ fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
         bail!("--sets must be 1..=1023 nodes, --targets positive pixels, --frames at least 1");
     }
     let world = args.world.load()?;
+    world.require_unplaced("vista bench traverse")?;
     let d = &world.desc;
     let mid = f64::from(d.height_range_m[0] + d.height_range_m[1]) / 2.0;
     let camera = args.camera.unwrap_or([d.extent_m[0] / 2.0, d.extent_m[1] / 2.0, mid + 60.0]);

@@ -10,6 +10,7 @@ use vista::render::{RendererOptions, TerrainRenderer};
 pub fn cull(ctx: &Context, b: &ViewBench) -> Result<()> {
     let (frames, size, target_error_px) = (b.frames, b.size, b.target_error_px);
     let world = b.world.load()?;
+    world.require_unplaced("vista bench cull")?;
     let d = world.desc;
     let options = RendererOptions { effects: world.effects.clone(), ..RendererOptions::default() };
     let mut renderer = TerrainRenderer::new(ctx, &d, world.source.clone(), world.holes.clone(), &options)?;

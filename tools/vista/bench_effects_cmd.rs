@@ -11,6 +11,7 @@ use vista::render::{overview_camera, Effect, View, DEFAULT_NEAR_M};
 pub fn effects(ctx: &Context, b: &ViewBench) -> Result<()> {
     let (frames, size, target_error_px) = (b.frames, b.size, b.target_error_px);
     let world = b.world.load()?;
+    world.require_unplaced("vista bench effects")?;
     let d = world.desc;
     // The full scene: the scene's effects and parameters, every effect asked for.
     let mut full = world.effects.clone();

@@ -19,6 +19,7 @@ const TILED_FLOOR: f64 = 0.7;
 pub fn shade(ctx: &Context, args: &ViewBench) -> Result<()> {
     let (frames, size, target_error_px) = (args.frames, args.size, args.target_error_px);
     let world = args.world.load()?;
+    world.require_unplaced("vista bench shade")?;
     let d = world.desc;
     // The scene's shading parameters with every flavour allowed.
     let fx = world.effects.clone().with(Effect::Splat, true).with(Effect::Cliffs, true);

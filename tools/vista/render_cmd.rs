@@ -40,8 +40,8 @@ pub struct RenderArgs {
     /// memory per effect.
     #[arg(long)]
     pub report: bool,
-    /// Camera X,Y,Z[,YAW,PITCH]: world metres (x east, y north, z up, origin
-    /// at the south-west corner); YAW compass degrees (0 = +y, 90 = +x);
+    /// Camera X,Y,Z[,YAW,PITCH]: metres (x east, y north, z up; the world's
+    /// south-west corner at --origin, default 0,0); YAW compass degrees (0 = +y, 90 = +x);
     /// PITCH degrees above the horizon (-90 = straight down). Default: above
     /// the south edge looking north over the world.
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
@@ -181,7 +181,12 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
         bail!("--settle-seconds must be a non-negative number");
     }
     let camera = match args.camera {
-        None => overview_camera(&world.desc, &*world.source),
+        None => {
+            let mut c = overview_camera(&world.desc, &*world.source);
+            c.position_m[0] += world.origin_m[0];
+            c.position_m[1] += world.origin_m[1];
+            c
+        }
         Some(CameraArg { position, angles }) => {
             let [yaw_deg, pitch_deg] = angles.unwrap_or([0.0, -20.0]);
             Camera { position_m: position, yaw_deg, pitch_deg }
@@ -205,6 +210,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         terrain: TerrainOptions { slots: args.slots, cache_dir: args.cache.clone(), ..TerrainOptions::default() },
         stages: args.cull,
         effects: world.effects.clone(),
+        origin_m: world.origin_m,
         ..RendererOptions::default()
     };
     let d = &world.desc;

@@ -10,6 +10,8 @@
 //! spacing = 0.5
 //! lods = 6
 //! seed = 1
+//! origin = [340000, 5080000]   # where the south-west corner lies (e.g. UTM E, N);
+//!                              # cameras and holes are then given in these coordinates
 //!
 //! [[holes]]
 //! circle = [5000, 5000, 20]    # x, y, radius
@@ -62,6 +64,9 @@ pub struct SceneWorld {
     pub spacing: Option<f64>,
     pub lods: Option<u32>,
     pub seed: Option<u64>,
+    /// Where the world's south-west corner lies in the coordinates cameras
+    /// and holes are given in.
+    pub origin: Option<[f64; 2]>,
 }
 
 #[derive(Debug, Default, Clone, PartialEq)]

@@ -57,6 +57,10 @@ pub struct WorldArgs {
     /// radius R, metres.
     #[arg(long, value_name = "X,Y,R", value_parser = parse_hole_circle, allow_hyphen_values = true, help_heading = "World")]
     pub hole_circle: Vec<Hole>,
+    /// Where the world's south-west corner lies, E,N metres (e.g. UTM):
+    /// cameras and holes are then given in these coordinates [default: 0,0].
+    #[arg(long, value_name = "E,N", value_parser = parse_origin, allow_hyphen_values = true, help_heading = "World")]
+    pub origin: Option<[f64; 2]>,
 }
 
 /// A resolved world, ready to bake or render.
@@ -68,6 +72,22 @@ pub struct LoadedWorld {
     pub effects: Effects,
     /// What the terrain comes from, for reports.
     pub label: String,
+    /// Where the world's south-west corner lies in the user's coordinates
+    /// (`--origin`, the scene's `origin`); `holes` are already relative to it.
+    pub origin_m: [f64; 2],
+}
+
+impl LoadedWorld {
+    /// Commands whose views are chosen in world metres (benchmarks, golden)
+    /// refuse a placed world rather than silently ignoring the placement.
+    pub fn require_unplaced(&self, command: &str) -> Result<()> {
+        if self.origin_m != [0.0, 0.0] {
+            return Err(anyhow::Error::new(crate::InputError(format!(
+                "{command} chooses its views in world metres (south-west corner at 0,0); drop --origin (or the scene's origin), which only `vista render` uses"
+            ))));
+        }
+        Ok(())
+    }
 }
 
 impl WorldArgs {
@@ -103,8 +123,13 @@ impl WorldArgs {
         let spacing_m = self.spacing.or(w.spacing).unwrap_or(defaults.spacing_m);
         let lod_count = self.lods.or(w.lods).unwrap_or(defaults.lod_count);
         let seed = self.seed.or(w.seed).unwrap_or(1);
+        let origin_m = self.origin.or(w.origin).unwrap_or([0.0, 0.0]);
+        if !origin_m.iter().all(|v| v.is_finite()) {
+            bail!("the scene's origin {origin_m:?} must be two finite numbers");
+        }
         let mut holes = scene.holes()?;
         holes.extend(self.hole_circle.iter().cloned());
+        let holes = holes.iter().map(|h| h.relative_to(origin_m)).collect();
 
         let (desc, source, label): (WorldDesc, Arc<dyn HeightSource>, String) = match heightmap {
             None => {
@@ -124,7 +149,7 @@ impl WorldArgs {
                 (desc, source, path.display().to_string())
             }
         };
-        Ok(LoadedWorld { desc, source, holes, effects: scene.effects, label })
+        Ok(LoadedWorld { desc, source, holes, effects: scene.effects, label, origin_m })
     }
 }
 
@@ -268,6 +293,11 @@ fn parse_extent(s: &str) -> Result<[f64; 2], String> {
     if v.iter().any(|&e| e <= 0.0) {
         return Err(format!("extent {s:?} must be positive"));
     }
+    Ok([v[0], v[1]])
+}
+
+fn parse_origin(s: &str) -> Result<[f64; 2], String> {
+    let v = parse_list(s, 2, "origin")?;
     Ok([v[0], v[1]])
 }
 

@@ -1,0 +1,67 @@
+//! Case 7: determinism. A 30-frame script (the fly-through, each frame
+//! rendered once streaming has settled, so what is resident depends on the
+//! script, not on how fast the loader threads were) renders bit-identical
+//! images twice in one process; `vista stability` also runs it in a second
+//! process and with LP_NUM_THREADS=1 and compares the hashes. The traversal
+//! appends nodes with atomics, so draw lists can come in a different order;
+//! the pictures may not differ, because every pixel belongs to one triangle
+//! (shared edges follow the rasteriser's top-left rule) and the depth test
+//! does not depend on the order of disjoint triangles.
+
+use super::rig::{fly_through, Rig};
+use super::{CaseReport, Form};
+use crate::error::Result;
+use crate::gpu::Context;
+use crate::render::RendererOptions;
+use std::hash::Hasher;
+
+pub const FRAMES: u32 = 30;
+
+/// One hash per frame of the script (colour and depth bits).
+pub fn script_hashes(ctx: &Context) -> Result<Vec<u64>> {
+    let mut rig = Rig::new(ctx, [96, 64], 400, RendererOptions::default(), Vec::new())?;
+    let mut out = Vec::new();
+    for f in 0..FRAMES {
+        let view = rig.view(fly_through(&rig, f, FRAMES));
+        let shot = rig.settled_shot(ctx, &view)?;
+        // SipHash with fixed keys: the same in every process.
+        let mut h = std::hash::DefaultHasher::new();
+        h.write(&shot.rgba);
+        h.write(bytemuck::cast_slice(&shot.depth));
+        out.push(h.finish());
+    }
+    Ok(out)
+}
+
+/// Another process's run of the script: (what it was, its hashes).
+pub type Runs = Vec<(String, Result<Vec<u64>>)>;
+
+/// `others`: the script's hashes from other processes (the command line
+/// spawns itself; the test suite runs only the in-process half).
+pub fn run(ctx: &Context, _form: Form, others: Runs) -> Result<CaseReport> {
+    let mut r = CaseReport::new(7, "determinism");
+    r.measured = format!("frames of a {FRAMES}-frame script that differ between runs: twice in one process, a second process, LP_NUM_THREADS=1");
+    r.bound = "0 frames".into();
+    r.why = "the same inputs must give the same picture, or regression tests (golden images) cannot tell a change from noise".into();
+    let first = script_hashes(ctx)?;
+    let mut runs = vec![("the same process, again".to_string(), script_hashes(ctx))];
+    runs.extend(others);
+    let mut worst = 0usize;
+    let mut failed = false;
+    for (what, hashes) in runs {
+        match hashes {
+            Ok(h) => {
+                let differ = h.len().abs_diff(first.len()) + h.iter().zip(&first).filter(|(a, b)| a != b).count();
+                r.details.push(format!("{what}: {differ} of {FRAMES} frames differ"));
+                worst = worst.max(differ);
+            }
+            Err(e) => {
+                failed = true;
+                r.details.push(format!("{what}: did not run: {e}"));
+            }
+        }
+    }
+    r.worst = format!("{worst} frames");
+    r.pass = worst == 0 && !failed;
+    Ok(r)
+}
