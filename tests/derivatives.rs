@@ -8,24 +8,8 @@
 mod common;
 
 use common::gpu_test;
-use glam::{DMat4, DVec3, DVec4};
-use vista::gpu::{
-    vk, Buffer, BufferDesc, ComputePipelineDesc, Context, Image, ImageDesc, MemoryLocation, Pipeline, Resource,
-    Sampler, SamplerDesc,
-};
-use vista::render::{Camera, View, DEFAULT_NEAR_M};
-use vista::shaders::derivative_probe as sh;
-
-const SIZE: [u32; 2] = [256, 144];
-/// The probe's mip texture: 1024 texels, mips 0..=10, mip k holding k.
-const TEXELS: u32 = 1024;
-const LAST_MIP: f64 = 10.0;
-/// Texture repeats per metre (a 20 m material): mip ~2 straight down from 10 m.
-const UV_PER_M: f64 = 0.05;
-/// The angle between neighbouring pixels' rays (60 degrees over 144 rows).
-const ALPHA: f64 = 0.008_019;
-/// reconstruct.glsl's guard.
-const GRAZING_COS: f64 = 1.745e-4;
+use glam::{DMat4, DVec3};
+use vista::stability::grazing::{eye_ray, probe_gpu, setup, Probe, ALPHA, GRAZING_COS, LAST_MIP, TEXELS, UV_PER_M};
 
 /// The CPU twin of `oct_decode8` (octahedral.glsl), in f64.
 fn oct_decode8(code: [u32; 2]) -> DVec3 {
@@ -42,131 +26,11 @@ fn hit(inv: &DMat4, px: [f64; 2], p0: DVec3, n: DVec3) -> Option<DVec3> {
     (cos.abs() >= GRAZING_COS && t > 0.0).then_some(d * t)
 }
 
-/// The unnormalised eye ray through pixel `px` (reconstruct.glsl's eye_ray).
-fn eye_ray(inv: &DMat4, px: [f64; 2]) -> DVec3 {
-    let ndc = [px[0] / f64::from(SIZE[0]) * 2.0 - 1.0, px[1] / f64::from(SIZE[1]) * 2.0 - 1.0];
-    (*inv * DVec4::new(ndc[0], ndc[1], 0.0, 1.0)).truncate()
-}
-
 /// The step to a neighbour, forward where it hits, else backward.
 fn step(inv: &DMat4, px: [f64; 2], o: [f64; 2], p: DVec3, p0: DVec3, n: DVec3) -> Option<DVec3> {
     hit(inv, [px[0] + o[0], px[1] + o[1]], p0, n)
         .map(|q| q - p)
         .or_else(|| hit(inv, [px[0] - o[0], px[1] - o[1]], p0, n).map(|q| p - q))
-}
-
-struct Probe {
-    px: [f64; 2],
-    depth: f32,
-    code: [u32; 2],
-}
-
-fn probe_gpu(ctx: &Context, inv: &DMat4, probes: &[Probe]) -> Vec<[[f32; 4]; 2]> {
-    let mut data: Vec<f32> = inv.as_mat4().to_cols_array().to_vec();
-    let [w, h] = SIZE.map(|v| v as f32);
-    data.extend([w, h, 1.0 / w, 1.0 / h, UV_PER_M as f32, 0.0, 0.0, 0.0]);
-    data.extend(bytemuck::cast_slice::<u32, f32>(&[probes.len() as u32, 0, 0, 0]));
-    for p in probes {
-        data.extend([p.px[0] as f32, p.px[1] as f32, p.depth, f32::from_bits(p.code[0] | p.code[1] << 8)]);
-    }
-    let buffer = |name, size: u64, location| {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-        Buffer::new(ctx, &BufferDesc { name, size, usage, location }).unwrap()
-    };
-    let mut input = buffer("derivative_probes", data.len() as u64 * 4, MemoryLocation::CpuToGpu);
-    input.mapped_mut().unwrap().copy_from_slice(bytemuck::cast_slice(&data));
-    let results = buffer("derivative_results", probes.len() as u64 * 32, MemoryLocation::GpuToCpu);
-    let mips = mip_texture(ctx);
-    let sampler = Sampler::mipmapped(
-        ctx,
-        &SamplerDesc { name: "probe_mips", filter: vk::Filter::LINEAR, address_mode: vk::SamplerAddressMode::REPEAT },
-    )
-    .unwrap();
-    let pipeline = Pipeline::compute(
-        ctx,
-        &ComputePipelineDesc { name: "derivative_probe", shader: &sh::SHADER, specialization: &[] },
-    )
-    .unwrap();
-    ctx.submit_and_wait(|rec| {
-        rec.bind_pipeline(&pipeline);
-        rec.push_descriptors(
-            &pipeline,
-            &[
-                (sh::IN_, Resource::Buffer(&input)),
-                (sh::OUT_, Resource::Buffer(&results)),
-                (sh::MIP_SAMPLER, Resource::Sampler(sampler.raw())),
-                (sh::MIP_LEVELS, Resource::Image(&mips, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)),
-            ],
-        );
-        rec.dispatch((probes.len() as u32).div_ceil(sh::WORKGROUP_SIZE[0]), 1, 1);
-        rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::HOST);
-        Ok(())
-    })
-    .unwrap();
-    bytemuck::pod_collect_to_vec(results.mapped().unwrap())
-}
-
-/// R32F, mip k filled with k.
-fn mip_texture(ctx: &Context) -> Image {
-    let levels = LAST_MIP as u32 + 1;
-    let img = Image::new(
-        ctx,
-        &ImageDesc {
-            name: "probe_mip_levels",
-            format: vk::Format::R32_SFLOAT,
-            extent: [TEXELS, TEXELS],
-            mip_levels: levels,
-            array_layers: 1,
-            usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-        },
-    )
-    .unwrap();
-    let texels: Vec<f32> =
-        (0..levels).flat_map(|k| std::iter::repeat_n(k as f32, ((TEXELS >> k) * (TEXELS >> k)) as usize)).collect();
-    let mut staging = Buffer::new(
-        ctx,
-        &BufferDesc {
-            name: "probe_mip_staging",
-            size: texels.len() as u64 * 4,
-            usage: vk::BufferUsageFlags::TRANSFER_SRC,
-            location: MemoryLocation::CpuToGpu,
-        },
-    )
-    .unwrap();
-    staging.mapped_mut().unwrap().copy_from_slice(bytemuck::cast_slice(&texels));
-    ctx.submit_and_wait(|rec| {
-        rec.discard_to(&img, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
-        let mut off = 0;
-        for k in 0..levels {
-            rec.copy_buffer_to_image(&staging, off, &img, k, 0);
-            off += u64::from((TEXELS >> k) * (TEXELS >> k)) * 4;
-        }
-        rec.transition(&img, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
-        Ok(())
-    })
-    .unwrap();
-    img
-}
-
-/// A camera 10 m from the plane with normal `n` (camera-relative point
-/// p0 = -10 n), its centre ray at `incidence` degrees from the normal;
-/// `upside_down` flips the image rows (+y then leads away from the plane).
-fn setup(n: DVec3, incidence: f64, upside_down: bool) -> (DMat4, DVec3) {
-    let tangent = n.cross(DVec3::Z).try_normalize().unwrap_or(DVec3::X);
-    let t = tangent.cross(n).normalize();
-    let (s, c) = incidence.to_radians().sin_cos();
-    let forward = -n * c + t * s;
-    let camera = Camera {
-        position_m: [0.0; 3],
-        yaw_deg: forward.x.atan2(forward.y).to_degrees(),
-        pitch_deg: forward.z.clamp(-1.0, 1.0).asin().to_degrees(),
-    };
-    let view = View { camera, fov_y_deg: 60.0, size: SIZE, target_error_px: 1.0, near_m: DEFAULT_NEAR_M };
-    let mut vp = view.view_proj();
-    if upside_down {
-        vp = DMat4::from_diagonal(DVec4::new(1.0, -1.0, 1.0, 1.0)) * vp;
-    }
-    (vp, -n * 10.0)
 }
 
 /// The mip range the Vulkan spec allows for position steps `gx`, `gy` (m per
@@ -208,7 +72,7 @@ fn derivatives_and_mips_on_a_plane_from_0_to_89_9_degrees() {
                     }
                     assert!(!cases.is_empty() || incidence > 89.0, "{incidence}: no pixel on the plane");
                     let probes: Vec<Probe> = cases.iter().map(|c| Probe { ..c.0 }).collect();
-                    let got = probe_gpu(ctx, &inv, &probes);
+                    let got = probe_gpu(ctx, &inv, &probes).unwrap();
                     for ((probe, p, dx, dy), g) in cases.iter().zip(&got) {
                         let what =
                             format!("code {code:?} incidence {incidence} flipped {upside_down} pixel {:?}", probe.px);
@@ -257,43 +121,14 @@ fn derivatives_and_mips_on_a_plane_from_0_to_89_9_degrees() {
     });
 }
 
+/// Stability case 4 (src/stability/grazing.rs): beyond the guard, up to
+/// 89.995 degrees, and for every normal code, derivatives stay finite and
+/// bounded and the mip within the chain; the bounds' reasons are there.
 #[test]
 fn beyond_the_guard_derivatives_stay_finite_and_bounded() {
     gpu_test(|ctx| {
-        let n = DVec3::Z;
-        let mut checked = 0;
-        for incidence in [89.95, 89.99, 89.995] {
-            for upside_down in [false, true] {
-                let (vp, p0) = setup(n, incidence, upside_down);
-                let inv = vp.inverse();
-                let mut probes = Vec::new();
-                let mut dist = Vec::new();
-                for i in [0.5, 128.5, 255.5] {
-                    // The centre rows: the pixel itself hits (or nearly).
-                    for j in [71.5, 72.5] {
-                        let d = eye_ray(&inv, [i, j]);
-                        let t = p0.dot(n) / d.dot(n);
-                        if t <= 0.0 {
-                            continue;
-                        }
-                        let clip = vp * (d * t).extend(1.0);
-                        probes.push(Probe { px: [i, j], depth: (clip.z / clip.w) as f32, code: [127, 127] });
-                        dist.push((d * t).length());
-                    }
-                }
-                let got = probe_gpu(ctx, &inv, &probes);
-                for ((probe, r), g) in probes.iter().zip(&dist).zip(&got) {
-                    let bound = r * (1.0 + 1.0 / GRAZING_COS) * 1.01;
-                    for v in [&g[0], &g[1]] {
-                        let len = DVec3::new(v[0].into(), v[1].into(), v[2].into()).length();
-                        assert!(len.is_finite() && len <= bound, "{incidence} {:?}: step {len} over {bound}", probe.px);
-                    }
-                    let lod = g[0][3];
-                    assert!(lod.is_finite() && (0.0..=LAST_MIP as f32).contains(&lod), "{incidence}: mip {lod}");
-                    checked += 1;
-                }
-            }
-        }
-        assert!(checked >= 12, "{checked} probes");
+        let r = vista::stability::grazing::run(ctx, vista::stability::Form::Quick).expect("the case ran");
+        eprintln!("{}", r.details.join("\n"));
+        assert!(r.pass, "{} over {}: {}", r.worst, r.bound, r.details.join("; "));
     });
 }

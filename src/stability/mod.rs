@@ -8,7 +8,9 @@ use serde::Serialize;
 
 pub mod depth;
 pub mod determinism;
+pub mod grazing;
 pub mod hygiene;
+pub mod octahedral;
 pub mod origin;
 pub mod rig;
 pub mod seams;
