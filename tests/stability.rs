@@ -43,3 +43,10 @@ fn case_6_seams_under_motion() {
 fn case_7_determinism_in_one_process() {
     gpu_test(|ctx| check(stability::determinism::run(ctx, Form::Quick, Vec::new())));
 }
+
+/// Case 8 makes its own contexts (one per injected fault) and checks each
+/// one's teardown itself.
+#[test]
+fn case_8_faults() {
+    check(stability::faults::run(&common::validated(), Form::Quick));
+}

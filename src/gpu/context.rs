@@ -74,6 +74,7 @@ pub(crate) struct Shared {
     pub queue_lock: Mutex<()>,
     pub owns_handles: bool,
     pub live: LiveCounters,
+    pub faults: super::fault::FaultInjector,
     pub garbage: Mutex<Vec<(u64, Garbage)>>,
     pub frames_submitted: AtomicU64,
     pub frames_completed: AtomicU64,
@@ -291,6 +292,7 @@ impl Context {
             queue_lock: Mutex::new(()),
             owns_handles,
             live: LiveCounters::default(),
+            faults: Default::default(),
             garbage: Mutex::new(Vec::new()),
             frames_submitted: AtomicU64::new(0),
             frames_completed: AtomicU64::new(0),
@@ -333,6 +335,20 @@ impl Context {
     }
 
     /// Live Vulkan objects created through this context, not yet destroyed.
+    /// Device memory the allocator holds: (bytes in live allocations,
+    /// bytes of the memory blocks it reserved from the driver).
+    pub fn allocator_bytes(&self) -> (u64, u64) {
+        let report = self.shared.allocator.lock().unwrap_or_else(|e| e.into_inner()).generate_report();
+        (report.total_allocated_bytes, report.total_capacity_bytes)
+    }
+
+    /// Tests and `vista stability` only: arm allocation failures and lost
+    /// devices (see [`super::fault`]).
+    #[doc(hidden)]
+    pub fn faults(&self) -> &super::fault::FaultInjector {
+        &self.shared.faults
+    }
+
     pub fn live_objects(&self) -> LiveObjects {
         self.shared.live.snapshot()
     }
@@ -420,6 +436,20 @@ impl Shared {
         if frame <= self.frames_completed.load(Ordering::Acquire) {
             self.collect_garbage();
         }
+    }
+
+    /// The frame being recorded will not be submitted (its recording or
+    /// submission failed): what was dropped meanwhile was never in submitted
+    /// commands, so it waits for the frames before it only.
+    pub(crate) fn abandon_recording(&self) {
+        let submitted = self.frames_submitted.load(Ordering::Acquire);
+        self.frames_recording.fetch_min(submitted, Ordering::AcqRel);
+        let mut list = self.garbage.lock().unwrap_or_else(|e| e.into_inner());
+        for (frame, _) in list.iter_mut() {
+            *frame = (*frame).min(submitted);
+        }
+        drop(list);
+        self.collect_garbage();
     }
 
     pub(crate) fn collect_garbage(&self) {

@@ -10,6 +10,7 @@
 pub mod commands;
 pub mod context;
 pub mod device_info;
+pub mod fault;
 pub mod pipeline;
 pub mod query;
 pub mod resources;

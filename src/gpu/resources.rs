@@ -158,6 +158,9 @@ fn allocate(
     location: MemoryLocation,
     linear: bool,
 ) -> Result<Allocation> {
+    if s.faults.allocation_fails() {
+        return Err(Error::OutOfDeviceMemory);
+    }
     let desc = AllocationCreateDesc {
         name,
         requirements,

@@ -136,6 +136,9 @@ fn create_slot_on(ctx: &Context, name: &str, family: u32) -> Result<Slot> {
 }
 
 fn wait_fence(s: &Shared, fence: vk::Fence) -> Result<()> {
+    if s.faults.wait_loses_device() {
+        return Err(Error::DeviceLost);
+    }
     // SAFETY: live fence of this device.
     unsafe { s.device.wait_for_fences(&[fence], true, u64::MAX) }.map_err(vk_err("vkWaitForFences"))
 }
@@ -171,6 +174,11 @@ fn end_and_submit_with(
         .command_buffer_infos(&cmds)
         .wait_semaphore_infos(waits)
         .signal_semaphore_infos(signals);
+    if s.faults.submit_loses_device() {
+        // Nothing submitted and the fence not reset: it stays signalled, so
+        // nobody waits on it forever and teardown destroys the slot as is.
+        return Err(Error::DeviceLost);
+    }
     let _q = s.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
     // SAFETY: the buffer is in the recording state; the fence is signalled
     // and unused; the queue is externally synchronized by `queue_lock` (one
@@ -286,32 +294,22 @@ impl FrameRing {
         ctx.frame_completed(self.slots[i].frame);
         // Resources dropped while recording wait for this frame too.
         ctx.frame_recording();
-        begin(s, &self.slots[i])?;
-        // SAFETY: the slot's buffer was just begun and is used by nobody else.
-        let mut graphics = unsafe { Recorder::from_raw(ctx, self.slots[i].cmd) };
-        match self.compute.get(i) {
-            None => f(FrameCommands::One(&mut graphics))?,
-            Some(c) => {
-                begin(s, c)?;
-                // SAFETY: as above, for the slot's compute buffer.
-                let mut compute = unsafe { Recorder::from_raw(ctx, c.cmd) };
-                f(FrameCommands::Split { compute: &mut compute, graphics: &mut graphics })?;
+        match self.record_and_submit(ctx, i, f) {
+            Ok(()) => {}
+            Err((e, compute_submitted)) => {
+                if compute_submitted {
+                    // Its compute half runs: the frame counts, so what it
+                    // uses waits for its fence.
+                    let frame = ctx.frame_submitted();
+                    self.compute[i].frame = frame;
+                } else {
+                    // Nothing of it reached the queue: what was dropped while
+                    // it was recorded waits for the frames before it only.
+                    s.abandon_recording();
+                }
+                self.next = (self.next + 1) % self.slots.len();
+                return Err(e);
             }
-        }
-        self.frames += 1;
-        let k = self.frames;
-        if let (Some(c), Some(timeline)) = (self.compute.get(i), self.timeline) {
-            let info = |value| {
-                vk::SemaphoreSubmitInfo::default()
-                    .semaphore(timeline)
-                    .value(value)
-                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            };
-            let queue = if self.mode == QueueMode::AsyncCompute { s.compute.raw } else { s.graphics.raw };
-            end_and_submit_with(s, c, queue, &[info(2 * k - 2)], &[info(2 * k - 1)])?;
-            end_and_submit_with(s, &self.slots[i], s.graphics.raw, &[info(2 * k - 1)], &[info(2 * k)])?;
-        } else {
-            end_and_submit(s, &self.slots[i])?;
         }
         let frame = ctx.frame_submitted();
         self.slots[i].frame = frame;
@@ -320,6 +318,50 @@ impl FrameRing {
         }
         self.next = (self.next + 1) % self.slots.len();
         Ok(frame)
+    }
+
+    /// Records slot `i`'s commands and submits them; on failure, says
+    /// whether the compute half was already submitted.
+    fn record_and_submit<'c>(
+        &mut self,
+        ctx: &'c Context,
+        i: usize,
+        f: impl FnOnce(FrameCommands<'_, 'c>) -> Result<()>,
+    ) -> std::result::Result<(), (Error, bool)> {
+        let s = &ctx.shared;
+        let early = |e: Error| (e, false);
+        begin(s, &self.slots[i]).map_err(early)?;
+        // SAFETY: the slot's buffer was just begun and is used by nobody else.
+        let mut graphics = unsafe { Recorder::from_raw(ctx, self.slots[i].cmd) };
+        match self.compute.get(i) {
+            None => f(FrameCommands::One(&mut graphics)).map_err(early)?,
+            Some(c) => {
+                begin(s, c).map_err(early)?;
+                // SAFETY: as above, for the slot's compute buffer.
+                let mut compute = unsafe { Recorder::from_raw(ctx, c.cmd) };
+                f(FrameCommands::Split { compute: &mut compute, graphics: &mut graphics }).map_err(early)?;
+            }
+        }
+        let k = self.frames + 1;
+        if let (Some(c), Some(timeline)) = (self.compute.get(i), self.timeline) {
+            let info = |value| {
+                vk::SemaphoreSubmitInfo::default()
+                    .semaphore(timeline)
+                    .value(value)
+                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            };
+            let queue = if self.mode == QueueMode::AsyncCompute { s.compute.raw } else { s.graphics.raw };
+            end_and_submit_with(s, c, queue, &[info(2 * k - 2)], &[info(2 * k - 1)]).map_err(early)?;
+            // The timeline has moved: the next frame must signal past it.
+            // (After a failure here the ring cannot go on: 2k never comes.)
+            self.frames = k;
+            end_and_submit_with(s, &self.slots[i], s.graphics.raw, &[info(2 * k - 1)], &[info(2 * k)])
+                .map_err(|e| (e, true))?;
+        } else {
+            end_and_submit(s, &self.slots[i]).map_err(early)?;
+        }
+        self.frames = k;
+        Ok(())
     }
 
     /// Waits for every frame of the ring.

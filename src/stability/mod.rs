@@ -8,12 +8,15 @@ use serde::Serialize;
 
 pub mod depth;
 pub mod determinism;
+pub mod faults;
+pub mod fuzz;
 pub mod grazing;
 pub mod hygiene;
 pub mod octahedral;
 pub mod origin;
 pub mod rig;
 pub mod seams;
+pub mod soak;
 
 /// How long a case runs: the quick form (the test suite, the default of
 /// `vista stability`) or the full form (`--full`, nightly).

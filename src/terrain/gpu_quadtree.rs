@@ -426,12 +426,16 @@ fn node_texture_error(ctx: &Context, world: &WorldDesc, extent: [u32; 2], e: Opt
     // R16 texels over the mip chain, each mip half the one above.
     let bytes: u64 = (0..world.lod_count).map(|k| u64::from((w >> k).max(1)) * u64::from((h >> k).max(1)) * 2).sum();
     let [sx, sy] = world.sectors();
+    let size = if bytes < 1 << 20 {
+        format!("{:.1} KiB", bytes as f64 / 1024.0)
+    } else {
+        format!("{:.0} MiB", bytes as f64 / f64::from(1 << 20))
+    };
     let asked = format!(
-        "the world's quadtree ({sx} x {sy} sectors of {} m, {} LODs) needs a {w} x {h} node texture, {:.0} MiB of GPU \
+        "the world's quadtree ({sx} x {sy} sectors of {} m, {} LODs) needs a {w} x {h} node texture, {size} of GPU \
          memory",
         world.sector_size_m(),
         world.lod_count,
-        bytes as f64 / f64::from(1 << 20)
     );
     let max = ctx.info().limits.max_image_dimension_2d;
     match e {

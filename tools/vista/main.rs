@@ -12,6 +12,7 @@ mod golden_cmd;
 mod out_path;
 mod render_cmd;
 mod scene;
+mod stability_cmd;
 mod world_args;
 
 use anyhow::{bail, Context as _, Result};
@@ -53,6 +54,11 @@ enum Command {
     /// Render the golden views and compare them with their references (FLIP);
     /// `--update` rewrites the references and prints what changed.
     Golden(golden_cmd::GoldenArgs),
+    /// Run the hard cases (far from the origin, depth, octahedral normals,
+    /// grazing angles, NaN hygiene, seams, determinism, faults, fuzzing,
+    /// soak) under the validation layer and print the table; exits 1 when a
+    /// case fails.
+    Stability(stability_cmd::StabilityArgs),
 }
 
 fn main() {
@@ -116,6 +122,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Memory(args) => bake::memory(args),
         Command::Bench(args) => with_gpu(&options, |ctx| bench_cmd::bench(ctx, args)),
         Command::Golden(args) => with_gpu(&options, |ctx| golden_cmd::golden(ctx, &args)),
+        Command::Stability(args) => stability_cmd::stability(cli.device.clone(), &args),
     }
 }
 
