@@ -453,3 +453,49 @@ fn render_says_which_queue_mode_ran() {
         assert!(code != Some(0) && err.contains("no compute-only queue family"), "{err}");
     }
 }
+
+/// `vista stability` prints the table and runs case 7's second processes
+/// (as is and with LP_NUM_THREADS=1); a case that does not exist is an
+/// input error.
+#[test]
+fn stability_prints_the_table_and_compares_processes() {
+    let json = std::env::temp_dir().join(format!("vista-stability-{}.json", std::process::id()));
+    let (ok, out, err) = vista(&["stability", "--cases", "2,7", "--json", json.to_str().unwrap()]);
+    assert!(ok, "{out}\n{err}");
+    assert!(out.contains("| 2 depth |") && out.contains("| 7 determinism |"), "{out}");
+    assert!(out.contains("a second process: 0 of 30 frames differ"), "{out}");
+    assert!(out.contains("a second process with LP_NUM_THREADS=1: 0 of 30 frames differ"), "{out}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let cases = v["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 2);
+    assert!(cases.iter().all(|c| c["pass"] == true));
+    let _ = std::fs::remove_file(&json);
+    let (code, _, err) = vista_code(&["stability", "--cases", "11"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("there is no case 11") && err.lines().count() == 1, "{err}");
+}
+
+/// `--origin` places the world: a render at UTM-like coordinates with the
+/// camera given in them sees the same terrain as the unplaced world;
+/// benchmarks, whose views are world-relative, refuse it.
+#[test]
+fn origin_places_the_world_and_benchmarks_refuse_it() {
+    let small = ["--extent", "2048", "--spacing", "2", "--lods", "4", "--size", "64x48", "--frames", "1"];
+    let dir = std::env::temp_dir().join(format!("vista-origin-{}", std::process::id()));
+    let render = |extra: &[&str], out: &str| {
+        let out_dir = dir.join(out);
+        let mut args = vec!["render", "--out", out_dir.to_str().unwrap()];
+        args.extend(small);
+        args.extend(extra);
+        let (ok, stdout, err) = vista(&args);
+        assert!(ok, "{stdout}\n{err}");
+        std::fs::read(out_dir.join("image.png")).unwrap()
+    };
+    let local = render(&["--camera", "1000.25,600.5,300,20,-12"], "local");
+    let placed = render(&["--origin", "340000,5080000", "--camera", "341000.25,5080600.5,300,20,-12"], "placed");
+    assert!(local == placed, "the placed world's image differs from the unplaced one's");
+    let (code, _, err) = vista_code(&["bench", "cull", "--origin", "1,2", "--extent", "2048"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("drop --origin"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

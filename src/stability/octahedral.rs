@@ -115,7 +115,7 @@ pub fn run(ctx: &Context, form: Form) -> Result<CaseReport> {
             }
         }
         let d = oct_decode8(cpu);
-        let cos = d.iter().zip(v).map(|(a, b)| f64::from(*a) * f64::from(*b)).sum::<f64>();
+        let cos = d.iter().zip(v).map(|(a, b)| a * f64::from(*b)).sum::<f64>();
         let deg = cos.clamp(-1.0, 1.0).acos().to_degrees();
         max_deg = max_deg.max(deg);
         sum_deg += deg;

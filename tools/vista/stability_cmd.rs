@@ -20,9 +20,9 @@ pub struct StabilityArgs {
     /// Run only these cases, e.g. 1,2,7 [default: all ten].
     #[arg(long, value_delimiter = ',', value_name = "N,...")]
     pub cases: Option<Vec<u8>>,
-    /// Soak: sample every N frames.
-    #[arg(long, default_value_t = 1000, value_name = "N")]
-    pub soak_every: u32,
+    /// Soak: sample every N frames [default: 100 quick, 1000 full].
+    #[arg(long, value_name = "N")]
+    pub soak_every: Option<u32>,
     /// Internal: print the determinism script's frame hashes and exit (the
     /// second process of case 7).
     #[arg(long, hide = true)]
@@ -45,7 +45,7 @@ pub fn stability(device: Option<String>, args: &StabilityArgs) -> Result<()> {
             "--cases: there is no case {bad}; the cases are 1..=10"
         ))));
     }
-    if args.soak_every == 0 {
+    if args.soak_every == Some(0) {
         return Err(anyhow::Error::new(crate::InputError("--soak-every must be at least 1".into())));
     }
     let form = if args.full { Form::Full } else { Form::Quick };
@@ -99,7 +99,7 @@ fn run_case(
         6 => stability::seams::run(&ctx, form)?,
         7 => stability::determinism::run(&ctx, form, other_processes())?,
         8 => stability::faults::run(options, form)?,
-        10 => stability::soak::run(&ctx, form, args.soak_every, |s| {
+        10 => stability::soak::run(&ctx, form, args.soak_every.unwrap_or(form.pick(100, 1000)), |s| {
             eprintln!(
                 "  soak frame {}: {} messages, {} live objects, {} bytes allocated, {:.1} MiB resident",
                 s.frame, s.validation_messages, s.live_objects, s.allocated_bytes, s.rss_mib
