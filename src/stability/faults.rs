@@ -45,7 +45,7 @@ fn attempt(options: &ContextOptions, arm: &dyn Fn(&Context), f: &dyn Fn(&Context
 
 pub fn run(options: &ContextOptions, form: Form) -> Result<CaseReport> {
     let mut r = CaseReport::new(8, "faults");
-    r.measured = "panics, objects left alive, validation messages after an injected allocation failure (each of start-up and streaming) or a lost device at submit / fence wait; frames before a lost device is reported".into();
+    r.measured = "panics, objects left alive, validation messages after an injected allocation failure (each of start-up and the frames) or a lost device at submit / fence wait; frames before a lost device is reported".into();
     r.bound = "0, 0, 0; 0 frames late".into();
     r.why = "a failure the caller cannot prevent must reach them as an error from the call that met it, and dropping what exists must still free everything, so an engine can recover or shut down".into();
     // The clean run: how many allocations start-up and streaming make.
@@ -93,7 +93,7 @@ pub fn run(options: &ContextOptions, form: Form) -> Result<CaseReport> {
         }
     }
     r.details.push(format!(
-        "{} of {total} allocations failed in turn ({at_start} at start-up, {} while streaming): {errors} returned an error, {survived} went on without it",
+        "{} of {total} allocations failed in turn ({at_start} creating the renderer and targets, {} in the frames: the G-buffer and tile lists of the first frame, read-backs; streaming uses slots made at start-up): {errors} returned an error, {survived} went on without it",
         indices.len(),
         total - at_start
     ));
