@@ -13,6 +13,7 @@
 // resource is bound or built.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
+#include "atlas_texels.glsl"
 #include "shade_rules.glsl"
 #include "reconstruct.glsl"
 #include "hashed_noise.glsl"
@@ -130,9 +131,9 @@ Surface far_atlas(vec3 world, vec3 ng) {
     if (hit.slot == 0u) {
         return Surface(vec3(0.3), ng, 0.8);
     }
-    vec3 uvw = vec3((hit.local + 0.5) / 129.0, float(hit.slot));
+    vec3 uvw = vec3(atlas_texel_uv(hit.local), float(hit.slot));
     vec3 albedo = texture(sampler2DArray(albedo_atlas, linear_clamp), uvw).rgb;
-    float smoothness = texture(sampler2DArray(normal_atlas, linear_clamp), uvw).a;
+    float smoothness = atlas_smoothness(texture(sampler2DArray(normal_atlas, linear_clamp), uvw));
     return Surface(albedo, ng, 1.0 - smoothness);
 }
 

@@ -8,6 +8,7 @@
 // position. gbuffer_tiles shades from these; nothing is lit here.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
+#include "atlas_texels.glsl"
 #include "shade_rules.glsl"
 
 layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
@@ -22,8 +23,7 @@ layout(location = 1) out uvec4 normals;
 
 void main() {
     vec3 uvw = vec3(atlas_uv, float(atlas_layer));
-    // Baked as n * 127.5 + 127.5 in 8 bits: UNORM u = n / 2 + 1 / 2.
-    vec2 nxy = texture(sampler2DArray(normal_atlas, linear_clamp), uvw).xy * 2.0 - 1.0;
+    vec2 nxy = atlas_normal_xy(texture(sampler2DArray(normal_atlas, linear_clamp), uvw));
     vec3 geometric = normalize(vec3(nxy, sqrt(max(1.0 - dot(nxy, nxy), 0.0))));
     vec3 t = cross(dFdx(rel_pos), dFdy(rel_pos));
     float tl = length(t);

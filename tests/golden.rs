@@ -46,3 +46,19 @@ fn a_missing_reference_fails_and_says_how_to_make_one() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("no golden view \"mont-blanc\"") && stderr.lines().count() == 1, "{stderr}");
 }
+
+#[test]
+fn bc_payloads_stay_near_rgba8_ones_on_a_lit_render() {
+    // The default overview from BC3 / BC1 payloads against RGBA8 ones; the
+    // tolerance and its reason: `PAYLOAD_MAX_*` in tools/vista/golden_cmd.rs.
+    let out_dir = std::env::temp_dir().join(format!("vista-payload-diff-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_vista"))
+        .args(["--validation", "golden", "--payload-diff", "--only", "default", "--out"])
+        .arg(&out_dir)
+        .output()
+        .expect("run vista golden --payload-diff");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stdout}{stderr}");
+    assert!(stdout.contains("default          ok: BC against RGBA8 payloads: FLIP mean"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&out_dir);
+}

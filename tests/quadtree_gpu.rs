@@ -7,7 +7,7 @@ use common::{fake_node, gpu_test, Rng};
 use std::collections::BTreeSet;
 use vista::passes::quadtree_update::QuadtreeUpdatePass;
 use vista::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree};
-use vista::world::{NodeId, WorldDesc};
+use vista::world::{NodeId, PayloadFormat, WorldDesc};
 
 /// 8 x 6 sectors of 128 m, 4 LODs: a 1x1 root grid, texture padded to 8x8,
 /// with invalid cells along the top rows.
@@ -24,7 +24,7 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
     gpu_test(|ctx| {
         let world = small_world();
         let slots = 20;
-        let mut tree = GpuQuadtree::new(ctx, &world, slots, 2, AtlasSet::ALL).unwrap();
+        let mut tree = GpuQuadtree::new(ctx, &world, slots, 2, AtlasSet::ALL, PayloadFormat::Bc).unwrap();
         let pass = QuadtreeUpdatePass::new(ctx, false).unwrap();
         // Each step waits for the GPU, so a freed slot may be reused at once:
         // same-frame reuse is the hardest case for the GPU mirror.
@@ -73,7 +73,7 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
 fn payloads_land_in_the_atlas_layer_of_their_slot() {
     gpu_test(|ctx| {
         let world = small_world();
-        let mut tree = GpuQuadtree::new(ctx, &world, 8, 1, AtlasSet::ALL).unwrap();
+        let mut tree = GpuQuadtree::new(ctx, &world, 8, 1, AtlasSet::ALL, PayloadFormat::Bc).unwrap();
         let pass = QuadtreeUpdatePass::new(ctx, false).unwrap();
         let nodes: Vec<NodeId> = all_valid(&world).into_iter().take(5).collect();
         for (i, id) in nodes.iter().enumerate() {
@@ -85,8 +85,9 @@ fn payloads_land_in_the_atlas_layer_of_their_slot() {
             let node = fake_node(*id, i as u16);
             let h = ctx.read_image(tree.required_atlas(0), 0, slot, 2).unwrap();
             assert_eq!(bytemuck::cast_slice::<u8, u16>(&h), &node.heights[..], "heights of {id} in layer {slot}");
-            let a = ctx.read_image(tree.required_atlas(2), 0, slot, 4).unwrap();
-            assert_eq!(a, bytemuck::cast_slice::<[u8; 4], u8>(&node.albedo), "albedo of {id}");
+            // Block-compressed layers copy as bytes: 8 per 4x4 BC1 block.
+            let a = ctx.read_image(tree.required_atlas(2), 0, slot, 8).unwrap();
+            assert_eq!(a, node.albedo, "albedo of {id}");
             let c = ctx.read_image(tree.required_atlas(5), 0, slot, 16).unwrap();
             assert_eq!(c, bytemuck::cast_slice::<[f32; 4], u8>(&node.patch_cones), "cones of {id}");
         }
@@ -97,7 +98,7 @@ fn payloads_land_in_the_atlas_layer_of_their_slot() {
 fn budget_over_the_slot_limit_is_an_error() {
     gpu_test(|ctx| {
         assert!(matches!(
-            GpuQuadtree::new(ctx, &small_world(), 1024, 1, AtlasSet::ALL),
+            GpuQuadtree::new(ctx, &small_world(), 1024, 1, AtlasSet::ALL, PayloadFormat::Bc),
             Err(vista::Error::BadInput(_))
         ));
     });

@@ -16,7 +16,7 @@ use vista::passes::traverse::{Traverse, TraverseMode};
 use vista::reference::{lod_map_cpu, sample_height_cpu, sector_data_cpu, traverse_cpu};
 use vista::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree};
 use vista::terrain::selection::{TraverseCamera, TraverseParams, TraverseResult};
-use vista::world::{NodeId, WorldDesc};
+use vista::world::{NodeId, PayloadFormat, WorldDesc};
 
 /// 32 x 31 sectors of 128 m, 5 LODs: a 2x2 root grid with a partial row.
 fn world() -> WorldDesc {
@@ -37,7 +37,7 @@ struct Scene {
 impl Scene {
     fn new(ctx: &Context, seed: u64) -> Self {
         let mut s = Scene {
-            tree: GpuQuadtree::new(ctx, &world(), SLOTS, 1, AtlasSet::ALL).unwrap(),
+            tree: GpuQuadtree::new(ctx, &world(), SLOTS, 1, AtlasSet::ALL, PayloadFormat::Bc).unwrap(),
             update: QuadtreeUpdatePass::new(ctx, false).unwrap(),
             resident: BTreeSet::new(),
             heights: std::collections::HashMap::new(),

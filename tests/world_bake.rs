@@ -125,7 +125,7 @@ fn plane_and_tilted_plane() {
             assert!(widest < 2.0, "plane cone too wide: {widest} deg");
             assert!(node.max_error_m < 1e-3, "plane error {}", node.max_error_m);
             assert!(node.patch_holes.iter().all(|&h| h == PATCH_HOLE_NONE));
-            assert!(node.albedo.iter().all(|a| a[3] == 255));
+            assert!(node.hole_mask().iter().all(|h| !h));
         }
     }
 }
@@ -142,8 +142,13 @@ fn paraboloid_error_matches_analytic_bound_and_brute_force() {
         // Bilinear error of a(x^2 + y^2) peaks at cell centres: a h^2 / 2.
         let h = w.node_spacing_m(id.lod);
         let analytic = a * h * h / 2.0;
-        let brute = brute_error(&src, &w, id);
         let e = node.max_error_m as f64;
+        if id.lod == 0 {
+            // No finer level: LOD 0 is never refined.
+            assert_eq!(e, 0.0, "{id}");
+            continue;
+        }
+        let brute = brute_error(&src, &w, id);
         assert!((e - analytic).abs() < 2e-4 + 1e-3 * analytic, "{id}: {e} vs {analytic}");
         assert!((e - brute).abs() < 2e-4, "{id}: {e} vs brute {brute}");
     }
@@ -170,12 +175,13 @@ fn samples_outside_extent_clamp_to_edge_and_are_holes() {
     assert_eq!(w.sectors(), [3, 3]);
     let src = Surface::Tilted { z0: 10.0, gx: 1.0, gy: 0.0 };
     let node = bake_node(&src, &w, &[], NodeId::new(0, 2, 0));
+    let mask = node.hole_mask();
     let edge = w.encode_height(310.0);
-    for i in 0..N {
+    for (i, (&height, &hole)) in node.heights.iter().zip(&mask).take(N).enumerate() {
         let x = 256.0 + i as f64;
         let expect = if x >= 300.0 { edge } else { w.encode_height(10.0 + x as f32) };
-        assert_eq!(node.heights[i], expect);
-        assert_eq!(node.albedo[i][3] == 0, x > 300.0, "hole flag at x = {x}");
+        assert_eq!(height, expect);
+        assert_eq!(hole, x > 300.0, "hole flag at x = {x}");
     }
     // Patches 0 and 1 (x 256..288 m) lie inside, patch 2 (288..304 m) is
     // cut at 300 m, patches 3..8 lie wholly beyond the extent.
@@ -192,11 +198,12 @@ fn holes_clear_alpha_and_flag_patches() {
         Hole::Polygon(vec![[0.0, 100.0], [20.0, 100.0], [20.0, 128.0], [0.0, 128.0]]),
     ];
     let node = bake_node(&Surface::Plane(0.0), &w, &holes, NodeId::new(0, 0, 0));
+    let mask = node.hole_mask();
     for j in 0..N {
         for i in 0..N {
             let (x, y) = (i as f64, j as f64);
             let inside = holes.iter().any(|h| h.contains(x, y));
-            assert_eq!(node.albedo[j * N + i][3] == 0, inside, "({x},{y})");
+            assert_eq!(mask[j * N + i], inside, "({x},{y})");
         }
     }
     // Patch (4,4) spans 64..80 m, well inside the circle; patch (0,0) is
@@ -266,7 +273,7 @@ fn payload_roundtrip_and_memory_report() {
     let src = Surface::Paraboloid { z0: 0.0, a: 0.004, c: [100.0, 50.0] };
     let node = bake_node(&src, &w, &[], NodeId::new(1, 1, 0));
     let bytes = node.to_bytes();
-    assert_eq!(bytes.len(), BakedNode::SERIALIZED_BYTES);
+    assert_eq!(bytes.len(), BakedNode::serialized_bytes(PayloadFormat::Bc));
     assert_eq!(BakedNode::from_bytes(&bytes), Some(node.clone()));
     assert_eq!(BakedNode::from_bytes(&bytes[1..]), None);
 
@@ -312,4 +319,41 @@ fn procedural_rejects_bad_params() {
     assert!(ProceduralSource::new(1, [f64::NAN, 1.0], [0.0, 1.0]).is_err());
     assert!(ProceduralSource::new(1, [10.0, 10.0], [1.0, 1.0]).is_err());
     assert!(ProceduralSource::new(1, [10.0, 10.0], [0.0, 1.0]).is_ok());
+}
+
+#[test]
+fn material_rules_are_absolute_whatever_the_height_range() {
+    // Splat ids of a node of a plane at `z0` tilted by `slope_deg` east.
+    let splat = |range: [f32; 2], z0: f64, slope_deg: f64, rules: MaterialRules| {
+        let w = WorldDesc { height_range_m: range, ..test_world() };
+        let gx = slope_deg.to_radians().tan();
+        let src = Surface::Tilted { z0, gx, gy: 0.0 };
+        let settings = BakeSettings { materials: rules, ..BakeSettings::default() };
+        // An inner node: at the world's edge the source clamps, flattening
+        // the first samples' slope.
+        let node = bake_node_with(&src, &w, &[], &settings, NodeId::new(0, 1, 1));
+        let mut ids = node.splat.clone();
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    };
+    let alps = MaterialRules::default();
+    let id = |m: Material| vec![m as u8];
+    // A gentle 1 km hill in a world that tops out at 1.1 km: grass (a rule
+    // relative to the range put snow on its top 28 %). Heights climb 128 m
+    // to the node's start and 11 m across it at 5 degrees.
+    assert_eq!(splat([0.0, 1100.0], 850.0, 5.0, alps), id(Material::Grass));
+    // The same slope at 3 km, above the 2 800 m snow line: snow.
+    assert_eq!(splat([0.0, 4000.0], 3000.0, 5.0, alps), id(Material::Snow));
+    // 50 degrees is rock at any altitude; 35 degrees is scree below the
+    // snow line.
+    assert_eq!(splat([0.0, 4000.0], 3000.0, 50.0, alps), id(Material::Rock));
+    assert_eq!(splat([-500.0, 1100.0], 200.0, 35.0, alps), id(Material::Scree));
+    // A sea floor at -40 m is sand, not grass; so is a beach 1 m above sea.
+    assert_eq!(splat([-100.0, 100.0], -40.0, 0.0, alps), id(Material::Sand));
+    assert_eq!(splat([-100.0, 100.0], 50.0, 0.0, alps), id(Material::Grass));
+    assert_eq!(splat([-100.0, 100.0], 1.0, 0.0, alps), id(Material::Sand));
+    // A scene's own snow line moves it.
+    let low_snow = MaterialRules { snow_line_m: 800.0, ..alps };
+    assert_eq!(splat([0.0, 1100.0], 850.0, 5.0, low_snow), id(Material::Snow));
 }

@@ -28,6 +28,11 @@
 #define MAX_LEVELS 16u
 // Node texture mips the quadtree_update pass can write (world MAX_LOD_COUNT).
 #define MAX_NODE_LODS 10u
+// Normal and albedo atlas layers: texel t holds node sample t - ATLAS_BORDER
+// (samples -2..129), so bilinear filtering anywhere in a node reads only
+// its own layer and the side is a whole number of 4x4 BC blocks.
+#define ATLAS_TEXTURE_SIDE 132u
+#define ATLAS_BORDER 2u
 // Up to this many cameras refine one node list.
 #define MAX_CAMERAS 4u
 // Entries of each shared-memory list of traverse.comp: every entry is a

@@ -31,6 +31,7 @@ struct VistaTerrain {
 #if !defined(VISTA_TERRAIN_DECLARE_ONLY) && !defined(VISTA_TERRAIN_SAMPLE_GLSL)
 #define VISTA_TERRAIN_SAMPLE_GLSL
 #include "constants.glsl"
+#include "atlas_texels.glsl"
 
 struct VistaNodeHit {
     uint slot;   // 0 = nothing resident covers the point
@@ -77,7 +78,8 @@ vec3 vista_terrain_normal(vec2 p) {
     if (h.slot == 0u) {
         return vec3(0.0, 0.0, 1.0);
     }
-    vec2 xy = texelFetch(sampler2DArray(VISTA_NORMAL_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(ivec2(round(h.local)), int(h.slot)), 0).xy * 2.0 - 1.0;
+    vec4 t = texelFetch(sampler2DArray(VISTA_NORMAL_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(atlas_texel(ivec2(round(h.local))), int(h.slot)), 0);
+    vec2 xy = atlas_normal_xy(t);
     return vec3(xy, sqrt(max(1.0 - dot(xy, xy), 0.0)));
 }
 

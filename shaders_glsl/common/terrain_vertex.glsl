@@ -10,6 +10,7 @@
 #include "node_list.glsl"
 #include "terrain_view.glsl"
 #include "patch_list.glsl"
+#include "atlas_texels.glsl"
 
 // Patches per node side and quads per patch side (world layout).
 layout(constant_id = 1) const uint PATCHES_PER_SIDE = 8u;
@@ -77,12 +78,11 @@ void main() {
     gl_Position = view.v.view_proj * vec4(rel, 1.0);
     rel_pos = rel;
 #ifdef TERRAIN_HOLES
-    if (texelFetch(sampler2DArray(albedo_atlas, nearest), ivec3(local, int(slot)), 0).a < 0.5) {
+    if (texelFetch(sampler2DArray(albedo_atlas, nearest), ivec3(atlas_texel(local), int(slot)), 0).a < 0.5) {
         gl_Position = vec4(runtime_nan(pc.nan_bits));
     }
 #endif
-    float samples = float(per_side * quads + 1u);
-    atlas_uv = (vec2(local) + 0.5) / samples;
+    atlas_uv = atlas_texel_uv(vec2(local));
     atlas_layer = slot;
 }
 

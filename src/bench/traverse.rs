@@ -10,7 +10,7 @@ use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree};
 use crate::terrain::selection::{TraverseCamera, TraverseParams};
-use crate::world::{bake_node, HeightSource, NodeId, WorldDesc};
+use crate::world::{bake_node, HeightSource, NodeId, PayloadFormat, WorldDesc};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -78,7 +78,7 @@ pub fn bench_traverse(
         let ids = resident_set(world, cfg.camera_m, requested);
         log::info!("baking {} nodes for the {requested}-node resident set", ids.len());
         let nodes: Vec<_> = ids.par_iter().map(|id| bake_node(source, world, &[], *id)).collect();
-        let mut tree = GpuQuadtree::new(ctx, world, max, 1, AtlasSet::CORE)?;
+        let mut tree = GpuQuadtree::new(ctx, world, max, 1, AtlasSet::CORE, PayloadFormat::Bc)?;
         for n in nodes {
             tree.add(n, 0);
         }

@@ -152,7 +152,8 @@ pub(crate) fn required_features() -> FeatureChain {
         core: vk::PhysicalDeviceFeatures::default()
             .multi_draw_indirect(true)
             .draw_indirect_first_instance(true)
-            .shader_storage_image_extended_formats(true),
+            .shader_storage_image_extended_formats(true)
+            .texture_compression_bc(true),
         v12: vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
             .draw_indirect_count(true)
@@ -173,6 +174,8 @@ fn missing_features(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
         ("drawIndirectFirstInstance", core.draw_indirect_first_instance),
         // R16_UINT storage writes to the quadtree node texture.
         ("shaderStorageImageExtendedFormats", core.shader_storage_image_extended_formats),
+        // The normal (BC3) and albedo (BC1) payload atlases.
+        ("textureCompressionBC", core.texture_compression_bc),
         ("timelineSemaphore", v12.timeline_semaphore),
         ("drawIndirectCount", v12.draw_indirect_count),
         ("hostQueryReset", v12.host_query_reset),

@@ -454,12 +454,17 @@ impl Context {
 
     /// Reads one mip of one layer, tightly packed; the image returns to its
     /// tracked layout afterwards. Reading an image nothing was recorded into
-    /// is a programmer error.
+    /// is a programmer error. For a block-compressed image `bytes_per_texel`
+    /// is the bytes of one 4x4 block, and the blocks come back row by row.
     pub fn read_image(&self, img: &Image, mip: u32, layer: u32, bytes_per_texel: u64) -> Result<Vec<u8>> {
         let layout = img.layout();
         assert_ne!(layout, vk::ImageLayout::UNDEFINED, "read of {}, which holds nothing yet", img.name);
-        let w = (img.extent[0] >> mip).max(1) as u64;
-        let h = (img.extent[1] >> mip).max(1) as u64;
+        let mut w = (img.extent[0] >> mip).max(1) as u64;
+        let mut h = (img.extent[1] >> mip).max(1) as u64;
+        if let Some(block) = block_bytes(img.format) {
+            assert_eq!(bytes_per_texel, block, "{}: pass the bytes of one 4x4 block", img.name);
+            (w, h) = (w.div_ceil(4), h.div_ceil(4));
+        }
         let staging = Buffer::new(
             self,
             &BufferDesc {
@@ -476,5 +481,14 @@ impl Context {
             Ok(())
         })?;
         Ok(staging.mapped().expect("GpuToCpu buffers are mapped").to_vec())
+    }
+}
+
+/// Bytes of one 4x4 block of a block-compressed format vista uses.
+fn block_bytes(format: vk::Format) -> Option<u64> {
+    match format {
+        vk::Format::BC1_RGBA_UNORM_BLOCK | vk::Format::BC1_RGB_UNORM_BLOCK => Some(8),
+        vk::Format::BC3_UNORM_BLOCK => Some(16),
+        _ => None,
     }
 }

@@ -9,7 +9,9 @@
 use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
 use crate::terrain::quadtree::{texture_extent, NodeDesc, QuadtreeShadow, QuadtreeUpdate, FIRST_SLOT, MAX_SLOTS};
-use crate::world::{BakedNode, NodeId, WorldDesc, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, SPLAT_RES};
+use crate::world::{
+    BakedNode, NodeId, PayloadFormat, TexelKind, WorldDesc, ATLAS_SIDE, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, SPLAT_RES,
+};
 use std::collections::VecDeque;
 
 /// Most node payloads copied per frame; later arrivals wait a frame (a
@@ -20,30 +22,46 @@ struct AtlasKind {
     name: &'static str,
     format: vk::Format,
     side: u32,
-    texel_bytes: u32,
+    /// Bytes of one layer; `None` for the normal and albedo layers, whose
+    /// size depends on the payload format.
+    layer_bytes: Option<u32>,
+}
+
+const fn plain(name: &'static str, format: vk::Format, side: u32, texel_bytes: u32) -> AtlasKind {
+    AtlasKind { name, format, side, layer_bytes: Some(side * side * texel_bytes) }
+}
+
+const fn texels(name: &'static str) -> AtlasKind {
+    AtlasKind { name, format: vk::Format::UNDEFINED, side: ATLAS_SIDE as u32, layer_bytes: None }
 }
 
 /// Atlas formats, in the order of `payload_bytes`; the `ATLAS_*` indices
 /// name them.
 const ATLASES: [AtlasKind; 7] = [
-    AtlasKind { name: "atlas_height", format: vk::Format::R16_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 2 },
-    AtlasKind { name: "atlas_normal", format: vk::Format::R8G8B8A8_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 4 },
-    AtlasKind { name: "atlas_albedo", format: vk::Format::R8G8B8A8_UNORM, side: NODE_SAMPLES as u32, texel_bytes: 4 },
-    AtlasKind { name: "atlas_splat", format: vk::Format::R8_UINT, side: SPLAT_RES as u32, texel_bytes: 1 },
-    AtlasKind {
-        name: "atlas_patch_min_max",
-        format: vk::Format::R16G16_UINT,
-        side: PATCHES_PER_NODE_SIDE,
-        texel_bytes: 4,
-    },
-    AtlasKind {
-        name: "atlas_patch_cones",
-        format: vk::Format::R32G32B32A32_SFLOAT,
-        side: PATCHES_PER_NODE_SIDE,
-        texel_bytes: 16,
-    },
-    AtlasKind { name: "atlas_patch_holes", format: vk::Format::R8_UINT, side: PATCHES_PER_NODE_SIDE, texel_bytes: 1 },
+    plain("atlas_height", vk::Format::R16_UNORM, NODE_SAMPLES as u32, 2),
+    texels("atlas_normal"),
+    texels("atlas_albedo"),
+    plain("atlas_splat", vk::Format::R8_UINT, SPLAT_RES as u32, 1),
+    plain("atlas_patch_min_max", vk::Format::R16G16_UINT, PATCHES_PER_NODE_SIDE, 4),
+    plain("atlas_patch_cones", vk::Format::R32G32B32A32_SFLOAT, PATCHES_PER_NODE_SIDE, 16),
+    plain("atlas_patch_holes", vk::Format::R8_UINT, PATCHES_PER_NODE_SIDE, 1),
 ];
+
+/// Vulkan format and layer bytes of atlas `i` for payloads in `format`.
+fn atlas_format(i: usize, format: PayloadFormat) -> (vk::Format, u64) {
+    let a = &ATLASES[i];
+    if let Some(bytes) = a.layer_bytes {
+        return (a.format, u64::from(bytes));
+    }
+    let kind = if i == ATLAS_NORMAL { TexelKind::Normal } else { TexelKind::Albedo };
+    let vk_format = match (format, kind) {
+        (PayloadFormat::Rgba8, _) => vk::Format::R8G8B8A8_UNORM,
+        (PayloadFormat::Bc, TexelKind::Normal) => vk::Format::BC3_UNORM_BLOCK,
+        // RGBA: BC1's 1-bit alpha carries the holes.
+        (PayloadFormat::Bc, TexelKind::Albedo) => vk::Format::BC1_RGBA_UNORM_BLOCK,
+    };
+    (vk_format, format.layer_bytes(kind) as u64)
+}
 
 /// Index of each atlas in [`GpuQuadtree::atlases`].
 pub const ATLAS_HEIGHT: usize = 0;
@@ -92,8 +110,8 @@ pub fn atlas_name(i: usize) -> &'static str {
 fn payload_bytes(n: &BakedNode) -> [&[u8]; 7] {
     [
         bytemuck::cast_slice(&n.heights),
-        bytemuck::cast_slice(&n.normals),
-        bytemuck::cast_slice(&n.albedo),
+        &n.normals,
+        &n.albedo,
         &n.splat,
         bytemuck::cast_slice(&n.patch_min_max),
         bytemuck::cast_slice(&n.patch_cones),
@@ -101,15 +119,16 @@ fn payload_bytes(n: &BakedNode) -> [&[u8]; 7] {
     ]
 }
 
-/// Copy offsets must be multiples of the texel size (16 for RGBA32F).
+/// Copy offsets must be multiples of the texel or block size (16 for
+/// RGBA32F and BC3).
 const UPLOAD_ALIGN: u64 = 16;
 
-fn aligned_size(a: &AtlasKind) -> u64 {
-    u64::from(a.side * a.side * a.texel_bytes).next_multiple_of(UPLOAD_ALIGN)
+fn aligned_size(i: usize, format: PayloadFormat) -> u64 {
+    atlas_format(i, format).1.next_multiple_of(UPLOAD_ALIGN)
 }
 
-fn node_upload_bytes(set: AtlasSet) -> u64 {
-    ATLASES.iter().enumerate().filter(|(i, _)| set.contains(*i)).map(|(_, a)| aligned_size(a)).sum()
+fn node_upload_bytes(set: AtlasSet, format: PayloadFormat) -> u64 {
+    (0..ATLAS_COUNT).filter(|i| set.contains(*i)).map(|i| aligned_size(i, format)).sum()
 }
 
 /// Resting layout of the atlases.
@@ -129,6 +148,7 @@ pub struct GpuQuadtree {
     /// One per `ATLAS_*` index; `None` where the set leaves it out.
     atlases: Vec<Option<Image>>,
     set: AtlasSet,
+    format: PayloadFormat,
     ring: Vec<RingSlot>,
     /// The frame being recorded (`begin_frame`): picks the ring slot, so
     /// the ring advances with the frames, not with the uploads.
@@ -141,8 +161,15 @@ pub struct GpuQuadtree {
 impl GpuQuadtree {
     /// `slots` resident nodes at most; `frames_in_flight` upload buffers (the
     /// caller must not record more frames ahead than that); the atlases of
-    /// `set` only.
-    pub fn new(ctx: &Context, world: &WorldDesc, slots: u32, frames_in_flight: usize, set: AtlasSet) -> Result<Self> {
+    /// `set` only; every node added must be baked in `format`.
+    pub fn new(
+        ctx: &Context,
+        world: &WorldDesc,
+        slots: u32,
+        frames_in_flight: usize,
+        set: AtlasSet,
+        format: PayloadFormat,
+    ) -> Result<Self> {
         if !(1..=MAX_SLOTS).contains(&slots) {
             return Err(Error::BadInput(format!("slot budget {slots} outside 1..={MAX_SLOTS} (slots are 10-bit)")));
         }
@@ -200,7 +227,7 @@ impl GpuQuadtree {
                 ctx,
                 &ImageDesc {
                     name: a.name,
-                    format: a.format,
+                    format: atlas_format(i, format).0,
                     extent: [a.side, a.side],
                     mip_levels: 1,
                     array_layers: layers,
@@ -229,7 +256,7 @@ impl GpuQuadtree {
                 updates: host(&format!("quadtree_updates[{i}]"), u64::from(update_capacity) * 16)?,
                 payloads: host(
                     &format!("node_payload_uploads[{i}]"),
-                    node_upload_bytes(set) * MAX_UPLOADS_PER_FRAME as u64,
+                    node_upload_bytes(set, format) * MAX_UPLOADS_PER_FRAME as u64,
                 )?,
             });
         }
@@ -267,6 +294,7 @@ impl GpuQuadtree {
             node_errors,
             atlases,
             set,
+            format,
             ring,
             frame: 0,
             current: 0,
@@ -291,6 +319,11 @@ impl GpuQuadtree {
         self.set
     }
 
+    /// The normal and albedo atlases' format.
+    pub fn payload_format(&self) -> PayloadFormat {
+        self.format
+    }
+
     /// The atlases kept, with their names.
     pub fn kept_atlases(&self) -> impl Iterator<Item = (usize, &Image)> {
         self.atlases.iter().enumerate().filter_map(|(i, a)| a.as_ref().map(|a| (i, a)))
@@ -305,6 +338,7 @@ impl GpuQuadtree {
     /// Queues an arrived node; it becomes resident when its payload is
     /// uploaded by `record_updates` (at most MAX_UPLOADS_PER_FRAME a frame).
     pub fn add(&mut self, node: BakedNode, lod_bias: i8) {
+        assert_eq!(node.format, self.format, "{} baked for other atlases", node.id);
         self.waiting.push_back((node, lod_bias));
     }
 
@@ -326,10 +360,10 @@ impl GpuQuadtree {
             out.push((a.name.clone(), a.memory_bytes(), Some(i)));
         }
         let ring_payload: u64 = self.ring.iter().map(|r| r.payloads.memory_bytes()).sum();
-        let per_node = node_upload_bytes(self.set).max(1);
+        let per_node = node_upload_bytes(self.set, self.format).max(1);
         for (i, _) in self.kept_atlases() {
             // The payload ring holds each kept kind's bytes side by side.
-            let share = ring_payload * aligned_size(&ATLASES[i]) / per_node;
+            let share = ring_payload * aligned_size(i, self.format) / per_node;
             out.push((format!("node_payload_uploads ({})", ATLASES[i].name), share, Some(i)));
         }
         let updates: u64 = self.ring.iter().map(|r| r.updates.memory_bytes()).sum();
@@ -376,14 +410,14 @@ impl GpuQuadtree {
         }
         let ring = &mut self.ring[slot_index];
         let mapped = ring.payloads.mapped_mut().expect("mapped");
-        let per_node = node_upload_bytes(self.set) as usize;
+        let per_node = node_upload_bytes(self.set, self.format) as usize;
         let kept = |i: &usize| self.set.contains(*i);
         for (i, (node, _)) in uploaded.iter().enumerate() {
             let mut off = i * per_node;
-            for (k, (bytes, a)) in payload_bytes(node).into_iter().zip(&ATLASES).enumerate() {
+            for (k, bytes) in payload_bytes(node).into_iter().enumerate() {
                 if kept(&k) {
                     mapped[off..off + bytes.len()].copy_from_slice(bytes);
-                    off += aligned_size(a) as usize;
+                    off += aligned_size(k, self.format) as usize;
                 }
             }
         }
@@ -393,10 +427,10 @@ impl GpuQuadtree {
             }
             for (i, (_, slot)) in uploaded.iter().enumerate() {
                 let mut off = (i * per_node) as u64;
-                for (a, img) in ATLASES.iter().zip(&self.atlases) {
+                for (k, img) in self.atlases.iter().enumerate() {
                     if let Some(img) = img {
                         rec.copy_buffer_to_image(&ring.payloads, off, img, 0, *slot);
-                        off += aligned_size(a);
+                        off += aligned_size(k, self.format);
                     }
                 }
             }

@@ -19,8 +19,8 @@ use crate::gpu::Context;
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
 use crate::world::{
-    bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency, ResidencyConfig,
-    Streamer, WorldDesc,
+    bake_node_with, BakeSettings, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency,
+    ResidencyConfig, Streamer, WorldDesc,
 };
 use serde::Serialize;
 use std::path::PathBuf;
@@ -41,6 +41,8 @@ pub struct TerrainOptions {
     /// Payload atlases kept on the GPU (the renderer keeps only those its
     /// effects read).
     pub atlases: AtlasSet,
+    /// Texel formats and material rules of the bake.
+    pub bake: BakeSettings,
 }
 
 impl Default for TerrainOptions {
@@ -53,6 +55,7 @@ impl Default for TerrainOptions {
             cache_dir: None,
             ring_prefetch: true,
             atlases: AtlasSet::ALL,
+            bake: BakeSettings::default(),
         }
     }
 }
@@ -85,15 +88,26 @@ impl Terrain {
         options: &TerrainOptions,
     ) -> Result<Self> {
         world.validate()?;
-        let tree = GpuQuadtree::new(ctx, world, options.slots, options.frames_in_flight, options.atlases)?;
+        options.bake.materials.validate()?;
+        let tree = GpuQuadtree::new(
+            ctx,
+            world,
+            options.slots,
+            options.frames_in_flight,
+            options.atlases,
+            options.bake.format,
+        )?;
         let config = ResidencyConfig { budget: options.slots as usize, ..ResidencyConfig::default() };
         let residency = Residency::new(world, config)?;
         let threads = options.loader_threads.max(1);
         let loader = match &options.cache_dir {
-            Some(dir) => Loader::with_cache(threads, Arc::new(NodeCache::new(dir, *world, source, holes)?))?,
+            Some(dir) => Loader::with_cache(
+                threads,
+                Arc::new(NodeCache::with_settings(dir, *world, source, holes, options.bake)?),
+            )?,
             None => {
-                let w = *world;
-                let load: Arc<LoadFn> = Arc::new(move |id| Ok(bake_node(&*source, &w, &holes, id)));
+                let (w, settings) = (*world, options.bake);
+                let load: Arc<LoadFn> = Arc::new(move |id| Ok(bake_node_with(&*source, &w, &holes, &settings, id)));
                 Loader::new(threads, load)?
             }
         };
@@ -166,7 +180,7 @@ impl Terrain {
     /// Memory of the resident payloads, CPU and GPU side; payload kinds no
     /// effect reads are baked (CPU) but not kept on the GPU.
     pub fn memory_report(&self) -> MemoryReport {
-        let mut r = MemoryReport::new(self.stats.resident);
+        let mut r = MemoryReport::for_format(self.stats.resident, self.tree.payload_format());
         let set = self.tree.atlas_set();
         // The report lists the atlas kinds first, in `ATLAS_*` order.
         for (i, k) in r.kinds.iter_mut().enumerate().take(ATLAS_COUNT) {

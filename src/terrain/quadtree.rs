@@ -5,7 +5,7 @@
 //! No Vulkan here.
 
 use crate::shaders::consts as k;
-use crate::world::{BakedNode, NodeId, WorldDesc};
+use crate::world::{BakedNode, NodeId, WorldDesc, PATCH_HOLE_NONE};
 use std::collections::{BTreeMap, VecDeque};
 
 /// Node texture value: nothing loaded for this node.
@@ -67,7 +67,8 @@ impl NodeDesc {
             max_height: node.max_height,
             lod: node.id.lod,
             lod_bias,
-            has_holes: node.albedo.iter().any(|a| a[3] == 0),
+            // The patch summaries cover every sample of the node.
+            has_holes: node.patch_holes.iter().any(|&h| h != PATCH_HOLE_NONE),
             max_error_m: node.max_error_m,
         }
     }

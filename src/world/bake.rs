@@ -10,79 +10,118 @@ use rayon::prelude::*;
 use super::cache::{CacheOutcome, NodeCache};
 use super::cones::{fit_cone, patch_triangle_normals};
 use super::error::Result;
+use super::hash::Fnv64;
 use super::holes::Hole;
 use super::layout::{NodeId, WorldDesc, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES};
+use super::material_rules::MaterialRules;
 use super::payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 use super::source::HeightSource;
+use super::texels::{pack_normal, texel_index, PayloadFormat, TexelKind, ATLAS_BORDER, ATLAS_SIDE, ATLAS_TEXELS};
 
-/// Samples per side of the 2x finer grid used for the LOD error (257) plus
-/// a one-sample border on each side for central-difference normals.
-const FINE: usize = 2 * (NODE_SAMPLES - 1) + 1 + 2;
-/// Slope above which ground is bare rock (cliff), degrees.
-const ROCK_SLOPE_DEG: f32 = 45.0;
-/// Slope above which loose scree replaces grass, degrees.
-const SCREE_SLOPE_DEG: f32 = 30.0;
+/// The grid a node is sampled on: `sub` points per sample step (2 above
+/// LOD 0, for the refinement error against the next finer level; 1 at LOD
+/// 0, which has none), covering the normal layer's samples -2..=129 plus
+/// one grid point on either side for central differences.
+struct Grid {
+    sub: usize,
+    values: Vec<f32>,
+}
+
+impl Grid {
+    /// Grid index of texel `t` (sample `t - 2`) along one axis.
+    fn at(&self, t: usize) -> usize {
+        self.sub * t + 1
+    }
+}
 /// Blue channel of the normal map: specular occlusion, 255 = unoccluded
 /// (Far Cry 5 packs it there; nothing here computes occlusion yet).
 const NO_OCCLUSION: u8 = 255;
-/// Snow line as a fraction of the world's height range.
-const SNOW_LINE: f32 = 0.72;
+
+/// What a bake makes besides the geometry: the texel formats and the
+/// material rules. Part of the cache key.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BakeSettings {
+    pub format: PayloadFormat,
+    pub materials: MaterialRules,
+}
+
+impl BakeSettings {
+    pub fn hash(&self) -> u64 {
+        Fnv64::new().u64(u64::from(self.format.tag())).u64(self.materials.hash()).finish()
+    }
+}
+
+/// Bakes one node with the default [`BakeSettings`]; see [`bake_node_with`].
+pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], id: NodeId) -> BakedNode {
+    bake_node_with(source, world, holes, &BakeSettings::default(), id)
+}
 
 /// Bakes one node. `id` must be valid in `world` (programmer error
 /// otherwise). Samples beyond the world extent take the edge's height (so
 /// bounds and cones stay sane) and are holes, so a world whose extent is not
 /// a multiple of the node size ends cleanly at its edge.
-pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], id: NodeId) -> BakedNode {
+pub fn bake_node_with(
+    source: &dyn HeightSource,
+    world: &WorldDesc,
+    holes: &[Hole],
+    settings: &BakeSettings,
+    id: NodeId,
+) -> BakedNode {
     assert!(world.is_valid(id), "bake_node on invalid node {id}");
     let b = world.bounds_m(id);
     let step = world.node_spacing_m(id.lod);
-    let half = step / 2.0;
     let [ex, ey] = world.extent_m;
 
-    // f[(j + 1) * FINE + (i + 1)] is the source at min + (i, j) * half.
-    let mut f = vec![0f32; FINE * FINE];
+    let sub = if id.lod == 0 { 1 } else { 2 };
+    let width = sub * (ATLAS_SIDE - 1) + 3;
+    // Grid point (i, j) lies at min + (i - first, j - first) * step / sub.
+    let first = (sub * ATLAS_BORDER + 1) as f64;
+    let gstep = step / sub as f64;
+    let mut g = Grid { sub, values: vec![0f32; width * width] };
     // Sampling dominates the bake; rows in parallel cut a single node's
     // latency for the streaming loader too.
-    f.par_chunks_exact_mut(FINE).enumerate().for_each(|(j, row)| {
-        let y = (b[1] + (j as f64 - 1.0) * half).clamp(0.0, ey);
+    g.values.par_chunks_exact_mut(width).enumerate().for_each(|(j, row)| {
+        let y = (b[1] + (j as f64 - first) * gstep).clamp(0.0, ey);
         for (i, v) in row.iter_mut().enumerate() {
-            let x = (b[0] + (i as f64 - 1.0) * half).clamp(0.0, ex);
+            let x = (b[0] + (i as f64 - first) * gstep).clamp(0.0, ex);
             *v = source.sample(x, y);
         }
     });
-    let fine = |i: usize, j: usize| f[(j + 1) * FINE + (i + 1)];
-    let coarse = |i: usize, j: usize| fine(2 * i, 2 * j);
+    let f = &g.values;
+    // Sample (i, j), i and j from -2 on, counted from 0 here.
+    let texel_height = |t: usize, u: usize| f[g.at(u) * width + g.at(t)];
+    let coarse = |i: usize, j: usize| texel_height(i + ATLAS_BORDER, j + ATLAS_BORDER);
 
     let n = NODE_SAMPLES;
     let heights: Vec<u16> = (0..n * n).map(|k| world.encode_height(coarse(k % n, k / n))).collect();
 
     let hole_here = holes_near(holes, b, step);
-    let [lo, hi] = world.height_range_m;
-    let snow_m = lo + SNOW_LINE * (hi - lo);
-    let mut normals = Vec::with_capacity(n * n);
-    let mut albedo = Vec::with_capacity(n * n);
-    let mut materials = Vec::with_capacity(n * n);
-    for j in 0..n {
-        for i in 0..n {
-            // Central differences on the fine grid (spacing `half`).
-            let (fi, fj) = (2 * i + 1, 2 * j + 1);
-            let dx = (f[fj * FINE + fi + 1] - f[fj * FINE + fi - 1]) as f64 / step;
-            let dy = (f[(fj + 1) * FINE + fi] - f[(fj - 1) * FINE + fi]) as f64 / step;
+    let mut normals = Vec::with_capacity(ATLAS_TEXELS);
+    let mut albedo = Vec::with_capacity(ATLAS_TEXELS);
+    let mut materials = Vec::with_capacity(ATLAS_TEXELS);
+    for u in 0..ATLAS_SIDE {
+        for t in 0..ATLAS_SIDE {
+            // Texel (t, u) is sample (t - 2, u - 2).
+            let (fi, fj) = (g.at(t), g.at(u));
+            let dx = (f[fj * width + fi + 1] - f[fj * width + fi - 1]) as f64 / (2.0 * gstep);
+            let dy = (f[(fj + 1) * width + fi] - f[(fj - 1) * width + fi]) as f64 / (2.0 * gstep);
             let len = (dx * dx + dy * dy + 1.0).sqrt();
             let nrm = [-dx / len, -dy / len, 1.0 / len];
             let slope_deg = (nrm[2].clamp(-1.0, 1.0).acos() as f32).to_degrees();
-            let mat = material(slope_deg, coarse(i, j), snow_m);
-            let pos = [b[0] + i as f64 * step, b[1] + j as f64 * step];
+            let mat = settings.materials.material(slope_deg, f[fj * width + fi]);
+            let s = [t as f64 - ATLAS_BORDER as f64, u as f64 - ATLAS_BORDER as f64];
+            let pos = [b[0] + s[0] * step, b[1] + s[1] * step];
             let solid =
-                !beyond_extent(pos, world.extent_m, step) && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]));
+                !outside_extent(pos, world.extent_m, step) && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]));
             let (rgb, smooth) = material_look(mat, slope_deg);
-            normals.push([snorm8(nrm[0]), snorm8(nrm[1]), NO_OCCLUSION, smooth]);
+            normals.push(pack_normal(nrm, NO_OCCLUSION, smooth));
             albedo.push([rgb[0], rgb[1], rgb[2], if solid { 255 } else { 0 }]);
             materials.push(mat);
         }
     }
-    let splat =
-        (0..SPLAT_RES * SPLAT_RES).map(|k| materials[(2 * (k / SPLAT_RES)) * n + 2 * (k % SPLAT_RES)] as u8).collect();
+    let splat = (0..SPLAT_RES * SPLAT_RES)
+        .map(|k| materials[texel_index(2 * (k % SPLAT_RES) as isize, 2 * (k / SPLAT_RES) as isize)] as u8)
+        .collect();
 
     let decoded: Vec<f32> = heights.iter().map(|&v| world.decode_height(v)).collect();
     let mut patch_min_max = Vec::new();
@@ -93,10 +132,11 @@ pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], i
             let (mut mn, mut mx, mut holes_seen) = (u16::MAX, 0u16, 0usize);
             for j in 0..PATCH_SAMPLES {
                 for i in 0..PATCH_SAMPLES {
-                    let k = (py * PATCH_QUADS) as usize * n + j * n + (px * PATCH_QUADS) as usize + i;
+                    let (si, sj) = ((px * PATCH_QUADS) as usize + i, (py * PATCH_QUADS) as usize + j);
+                    let k = sj * n + si;
                     mn = mn.min(heights[k]);
                     mx = mx.max(heights[k]);
-                    holes_seen += usize::from(albedo[k][3] == 0);
+                    holes_seen += usize::from(albedo[texel_index(si as isize, sj as isize)][3] == 0);
                 }
             }
             patch_min_max.push([mn, mx]);
@@ -111,13 +151,20 @@ pub fn bake_node(source: &dyn HeightSource, world: &WorldDesc, holes: &[Hole], i
     }
     let min_height = heights.iter().copied().min().unwrap_or(0);
     let max_height = heights.iter().copied().max().unwrap_or(0);
-    let max_error_m = max_refinement_error(&fine);
+    // LOD 0 has no finer level: the traversal never refines it.
+    let max_error_m = if sub == 2 {
+        let base = g.at(ATLAS_BORDER);
+        max_refinement_error(&|i: usize, j: usize| f[(j + base) * width + i + base])
+    } else {
+        0.0
+    };
 
     BakedNode {
         id,
         heights,
-        normals,
-        albedo,
+        format: settings.format,
+        normals: settings.format.encode(TexelKind::Normal, &normals),
+        albedo: settings.format.encode(TexelKind::Albedo, &albedo),
         splat,
         patch_min_max,
         patch_cones,
@@ -148,11 +195,12 @@ fn max_refinement_error(fine: &impl Fn(usize, usize) -> f32) -> f32 {
     err as f32
 }
 
-/// A sample position past the world's extent (beyond rounding of the
-/// sample grid) has no terrain.
-fn beyond_extent(pos: [f64; 2], extent: [f64; 2], step: f64) -> bool {
+/// A sample position outside the world's extent (beyond rounding of the
+/// sample grid) has no terrain; border texels west or south of the world
+/// lie before 0.
+fn outside_extent(pos: [f64; 2], extent: [f64; 2], step: f64) -> bool {
     let slack = step * 1e-6;
-    pos[0] > extent[0] + slack || pos[1] > extent[1] + slack
+    pos[0] > extent[0] + slack || pos[1] > extent[1] + slack || pos[0] < -slack || pos[1] < -slack
 }
 
 /// Holes whose bounds come within a sample of the node; usually none.
@@ -166,22 +214,6 @@ fn holes_near(holes: &[Hole], b: [f64; 4], step: f64) -> Vec<&Hole> {
         .collect()
 }
 
-fn snorm8(v: f64) -> u8 {
-    (v * 127.5 + 127.5).round().clamp(0.0, 255.0) as u8
-}
-
-fn material(slope_deg: f32, h_m: f32, snow_m: f32) -> Material {
-    if slope_deg > ROCK_SLOPE_DEG {
-        Material::Rock
-    } else if h_m > snow_m {
-        Material::Snow
-    } else if slope_deg > SCREE_SLOPE_DEG {
-        Material::Scree
-    } else {
-        Material::Grass
-    }
-}
-
 /// Baked albedo and smoothness per material; steeper ground is a little
 /// darker so the far-away atlas keeps some relief.
 fn material_look(m: Material, slope_deg: f32) -> ([u8; 3], u8) {
@@ -190,6 +222,7 @@ fn material_look(m: Material, slope_deg: f32) -> ([u8; 3], u8) {
         Material::Rock => ([0.42, 0.40, 0.38], 60),
         Material::Snow => ([0.92, 0.94, 0.97], 150),
         Material::Scree => ([0.50, 0.45, 0.38], 40),
+        Material::Sand => ([0.76, 0.70, 0.50], 30),
     };
     let shade = 1.0 - 0.25 * (slope_deg / 90.0).clamp(0.0, 1.0);
     (rgb.map(|c| (c * shade * 255.0).round() as u8), smooth)
@@ -238,12 +271,13 @@ pub fn bake_world(
     source: Arc<dyn HeightSource>,
     world: &WorldDesc,
     holes: &[Hole],
+    settings: &BakeSettings,
     region: Option<[f64; 4]>,
     cache_dir: &Path,
     progress: bool,
 ) -> Result<BakeStats> {
     let start = Instant::now();
-    let cache = NodeCache::new(cache_dir, *world, source, holes.to_vec())?;
+    let cache = NodeCache::with_settings(cache_dir, *world, source, holes.to_vec(), *settings)?;
     let nodes = nodes_in_region(world, region);
     let bar = if progress {
         let bar = ProgressBar::new(nodes.len() as u64);

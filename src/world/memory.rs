@@ -4,6 +4,7 @@ use std::fmt;
 
 use super::layout::{NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
 use super::payload::BakedNode;
+use super::texels::{PayloadFormat, TexelKind};
 
 /// One payload kind's size per node.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -25,17 +26,23 @@ pub struct MemoryReport {
 }
 
 impl MemoryReport {
+    /// The report for the default payload format.
     pub fn new(nodes: usize) -> Self {
+        Self::for_format(nodes, PayloadFormat::default())
+    }
+
+    pub fn for_format(nodes: usize, format: PayloadFormat) -> Self {
         let s = NODE_SAMPLES * NODE_SAMPLES;
         let sp = SPLAT_RES * SPLAT_RES;
         let p = PATCHES_PER_NODE;
+        let (normal, albedo) = (TexelKind::Normal, TexelKind::Albedo);
         let kind = |name, gpu_format, cpu_bytes, gpu_bytes| PayloadSize { name, gpu_format, cpu_bytes, gpu_bytes };
         MemoryReport {
             nodes,
             kinds: vec![
                 kind("height", "R16_UNORM 129x129", s * 2, s * 2),
-                kind("normal", "RGBA8 129x129", s * 4, s * 4),
-                kind("albedo", "RGBA8 129x129", s * 4, s * 4),
+                kind("normal", format.describe(normal), format.layer_bytes(normal), format.layer_bytes(normal)),
+                kind("albedo", format.describe(albedo), format.layer_bytes(albedo), format.layer_bytes(albedo)),
                 kind("splat", "R8_UINT 65x65", sp, sp),
                 kind("patch min/max", "RG16_UINT 8x8", p * 4, p * 4),
                 kind("patch cones", "RGBA32F 8x8", p * 16, p * 16),
@@ -67,8 +74,8 @@ impl MemoryReport {
 /// Payload bytes actually held by a node (vector contents only).
 pub fn node_cpu_bytes(n: &BakedNode) -> usize {
     n.heights.len() * 2
-        + n.normals.len() * 4
-        + n.albedo.len() * 4
+        + n.normals.len()
+        + n.albedo.len()
         + n.splat.len()
         + n.patch_min_max.len() * 4
         + n.patch_cones.len() * 16

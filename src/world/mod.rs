@@ -11,6 +11,7 @@ mod hash;
 mod holes;
 mod layout;
 mod loader;
+mod material_rules;
 mod memory;
 mod payload;
 mod png16;
@@ -18,9 +19,10 @@ mod procedural;
 mod resample_bound;
 mod source;
 mod streaming;
+mod texels;
 
-pub use bake::{bake_node, bake_world, nodes_in_region, BakeStats};
-pub use cache::{CacheOutcome, MissReason, NodeCache};
+pub use bake::{bake_node, bake_node_with, bake_world, nodes_in_region, BakeSettings, BakeStats};
+pub use cache::{uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache};
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
 pub use exr_source::{write_height_exr, ExrSource};
@@ -31,6 +33,7 @@ pub use layout::{
     PATCH_SAMPLES, SPLAT_RES,
 };
 pub use loader::{LoadFn, Loader};
+pub use material_rules::MaterialRules;
 pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
 pub use payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 pub use png16::Png16Source;
@@ -38,3 +41,7 @@ pub use procedural::ProceduralSource;
 pub use resample_bound::RangeFit;
 pub use source::{GridSource, HeightSource};
 pub use streaming::{Arrival, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};
+pub use texels::{
+    pack_normal, texel_index, unpack_normal, PayloadFormat, TexelKind, ATLAS_BORDER, ATLAS_SIDE, ATLAS_TEXELS,
+    NORMAL_OCCLUSION, NORMAL_SMOOTHNESS, NORMAL_X, NORMAL_Y,
+};

@@ -1,6 +1,7 @@
 //! The baked payload of one quadtree node and its byte serialisation.
 
 use super::layout::{NodeId, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
+use super::texels::{texel_index, PayloadFormat, TexelKind};
 
 /// Splat material ids (index into the renderer's 256-entry palette).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -10,6 +11,8 @@ pub enum Material {
     Rock = 1,
     Snow = 2,
     Scree = 3,
+    /// Beach and sea floor.
+    Sand = 4,
 }
 
 /// Patch hole summary: no sample of the patch is a hole.
@@ -27,12 +30,14 @@ pub struct BakedNode {
     pub id: NodeId,
     /// 129x129 R16_UNORM heights over the world height range.
     pub heights: Vec<u16>,
-    /// 129x129 RGBA8: x, y of the unit normal as `n * 127.5 + 127.5` (z is
-    /// positive and implied), b = specular occlusion (255 = none),
-    /// a = smoothness.
-    pub normals: Vec<[u8; 4]>,
-    /// 129x129 RGBA8 albedo; a = 255 solid, 0 hole.
-    pub albedo: Vec<[u8; 4]>,
+    /// How `normals` and `albedo` are stored ([`super::texels`]).
+    pub format: PayloadFormat,
+    /// 132x132 normal layer (samples -2..=129): x, y of the unit normal as
+    /// `n * 127.5 + 127.5` in alpha and green (z is positive and implied),
+    /// red = smoothness, blue = specular occlusion (255 = none).
+    pub normals: Vec<u8>,
+    /// 132x132 albedo layer; alpha 255 solid, 0 hole.
+    pub albedo: Vec<u8>,
     /// 65x65 material ids ([`Material`]), texel (i, j) at sample (2i, 2j).
     pub splat: Vec<u8>,
     /// 8x8 exact (min, max) of each patch's 17x17 u16 heights.
@@ -54,14 +59,42 @@ const SAMPLES: usize = NODE_SAMPLES * NODE_SAMPLES;
 const SPLATS: usize = SPLAT_RES * SPLAT_RES;
 
 impl BakedNode {
-    /// Size of [`Self::to_bytes`]' output; payloads are fixed-size.
-    pub const SERIALIZED_BYTES: usize =
-        9 + 2 * 2 + 4 + SAMPLES * (2 + 4 + 4) + SPLATS + PATCHES_PER_NODE * (1 + 4 + 16);
+    /// Size of [`Self::to_bytes`]' output; payloads of one format are
+    /// fixed-size.
+    pub fn serialized_bytes(format: PayloadFormat) -> usize {
+        10 + 2 * 2
+            + 4
+            + SAMPLES * 2
+            + format.layer_bytes(TexelKind::Normal)
+            + format.layer_bytes(TexelKind::Albedo)
+            + SPLATS
+            + PATCHES_PER_NODE * (1 + 4 + 16)
+    }
+
+    /// The normal layer as RGBA8 texels, decoded as the GPU does.
+    pub fn normal_texels(&self) -> Vec<[u8; 4]> {
+        self.format.decode(TexelKind::Normal, &self.normals)
+    }
+
+    /// The albedo layer as RGBA8 texels, decoded as the GPU does.
+    pub fn albedo_texels(&self) -> Vec<[u8; 4]> {
+        self.format.decode(TexelKind::Albedo, &self.albedo)
+    }
+
+    /// 129x129 hole flags of the node's samples (row 0 south), from the
+    /// albedo alpha the vertex shader tests.
+    pub fn hole_mask(&self) -> Vec<bool> {
+        let a = self.albedo_texels();
+        (0..SAMPLES)
+            .map(|k| a[texel_index((k % NODE_SAMPLES) as isize, (k / NODE_SAMPLES) as isize)][3] < 128)
+            .collect()
+    }
 
     /// Little-endian serialisation, independent of the host.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(Self::SERIALIZED_BYTES);
+        let mut out = Vec::with_capacity(Self::serialized_bytes(self.format));
         out.push(self.id.lod);
+        out.push(self.format.tag());
         out.extend_from_slice(&self.id.x.to_le_bytes());
         out.extend_from_slice(&self.id.y.to_le_bytes());
         out.extend_from_slice(&self.min_height.to_le_bytes());
@@ -69,8 +102,8 @@ impl BakedNode {
         out.extend_from_slice(&self.max_error_m.to_le_bytes());
         out.extend_from_slice(&self.patch_holes);
         self.heights.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
-        self.normals.iter().for_each(|v| out.extend_from_slice(v));
-        self.albedo.iter().for_each(|v| out.extend_from_slice(v));
+        out.extend_from_slice(&self.normals);
+        out.extend_from_slice(&self.albedo);
         out.extend_from_slice(&self.splat);
         for mm in &self.patch_min_max {
             mm.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
@@ -78,17 +111,19 @@ impl BakedNode {
         for c in &self.patch_cones {
             c.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         }
-        debug_assert_eq!(out.len(), Self::SERIALIZED_BYTES);
+        debug_assert_eq!(out.len(), Self::serialized_bytes(self.format));
         out
     }
 
-    /// Inverse of [`Self::to_bytes`]; `None` when the length is wrong.
+    /// Inverse of [`Self::to_bytes`]; `None` when the format tag or the
+    /// length is wrong.
     pub fn from_bytes(bytes: &[u8]) -> Option<Self> {
-        if bytes.len() != Self::SERIALIZED_BYTES {
+        let format = PayloadFormat::from_tag(*bytes.get(1)?)?;
+        if bytes.len() != Self::serialized_bytes(format) {
             return None;
         }
         let mut r = Reader { bytes, pos: 0 };
-        let lod = r.take::<1>()[0];
+        let lod = r.take::<2>()[0];
         let x = u32::from_le_bytes(r.take());
         let y = u32::from_le_bytes(r.take());
         let min_height = u16::from_le_bytes(r.take());
@@ -96,8 +131,8 @@ impl BakedNode {
         let max_error_m = f32::from_le_bytes(r.take());
         let patch_holes = (0..PATCHES_PER_NODE).map(|_| r.take::<1>()[0]).collect();
         let heights = (0..SAMPLES).map(|_| u16::from_le_bytes(r.take())).collect();
-        let normals = (0..SAMPLES).map(|_| r.take()).collect();
-        let albedo = (0..SAMPLES).map(|_| r.take()).collect();
+        let normals = r.slice(format.layer_bytes(TexelKind::Normal)).to_vec();
+        let albedo = r.slice(format.layer_bytes(TexelKind::Albedo)).to_vec();
         let splat = (0..SPLATS).map(|_| r.take::<1>()[0]).collect();
         let patch_min_max =
             (0..PATCHES_PER_NODE).map(|_| [u16::from_le_bytes(r.take()), u16::from_le_bytes(r.take())]).collect();
@@ -105,6 +140,7 @@ impl BakedNode {
         Some(BakedNode {
             id: NodeId::new(lod, x, y),
             heights,
+            format,
             normals,
             albedo,
             splat,
@@ -130,5 +166,11 @@ impl Reader<'_> {
         a.copy_from_slice(&self.bytes[self.pos..self.pos + N]);
         self.pos += N;
         a
+    }
+
+    fn slice(&mut self, n: usize) -> &[u8] {
+        let s = &self.bytes[self.pos..self.pos + n];
+        self.pos += n;
+        s
     }
 }

@@ -88,7 +88,12 @@ impl ProceduralSource {
         let (wx, wy) = (x + WARP_M * warp[0], y + WARP_M * warp[1]);
         let continent = fbm(x / CONTINENT_WAVELENGTH_M, y / CONTINENT_WAVELENGTH_M, s ^ 0x33, 3);
         let mountain_mask = smoothstep(-0.35, 0.45, continent);
-        let ridges = ridged(wx / MOUNTAIN_WAVELENGTH_M, wy / MOUNTAIN_WAVELENGTH_M, s ^ 0x44, MOUNTAIN_OCTAVES);
+        // Lowlands have no mountains: skipping their ridges changes nothing.
+        let ridges = if mountain_mask > 0.0 {
+            ridged(wx / MOUNTAIN_WAVELENGTH_M, wy / MOUNTAIN_WAVELENGTH_M, s ^ 0x44, MOUNTAIN_OCTAVES)
+        } else {
+            0.0
+        };
         let mut h = 0.12 + 0.08 * continent + mountain_mask * 0.85 * ridges;
         // Valleys: where a warped noise crosses zero, carve a smooth trough.
         let v = fbm(wx / VALLEY_WAVELENGTH_M, wy / VALLEY_WAVELENGTH_M, s ^ 0x55, 2).abs();
@@ -127,6 +132,18 @@ impl HeightSource for ProceduralSource {
     }
 }
 
+/// `f64::floor` for the noise's coordinates (|v| far below 2^52): the same
+/// value, without the library call that baseline x86-64 makes of it (7 % of
+/// a bake's time).
+fn floor(v: f64) -> f64 {
+    let t = v as i64 as f64;
+    if t > v {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
 fn smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
     let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
@@ -143,7 +160,7 @@ fn hash2(ix: i64, iy: i64, seed: u64) -> u64 {
 
 /// Perlin-style gradient noise, roughly in -0.7..0.7.
 fn gradient_noise(x: f64, y: f64, seed: u64) -> f64 {
-    let (x0, y0) = (x.floor(), y.floor());
+    let (x0, y0) = (floor(x), floor(y));
     let (fx, fy) = (x - x0, y - y0);
     let (ix, iy) = (x0 as i64, y0 as i64);
     let dot = |dx: i64, dy: i64| {

@@ -5,7 +5,9 @@
 #![allow(dead_code)]
 
 use vista::gpu::{Context, ContextOptions};
-use vista::world::{BakedNode, NodeId, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
+use vista::world::{
+    texel_index, BakedNode, NodeId, PayloadFormat, TexelKind, ATLAS_TEXELS, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES,
+};
 
 /// (message id, why it is acceptable). Keep this list short and justified.
 pub const ALLOWLIST: &[(&str, &str)] = &[];
@@ -64,10 +66,14 @@ pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
     BakedNode {
         id,
         heights: (0..s).map(|i| (i as u16).wrapping_mul(31) ^ tag).collect(),
-        normals: vec![[127, 128, 255, tag as u8]; s],
-        albedo: (0..s)
-            .map(|i| [tag as u8, (i % 251) as u8, 7, if i == 5 && salt % 2 == 1 { 0 } else { 255 }])
-            .collect(),
+        format: PayloadFormat::Bc,
+        normals: PayloadFormat::Bc.encode(TexelKind::Normal, &vec![[tag as u8, 128, 255, 127]; ATLAS_TEXELS]),
+        albedo: PayloadFormat::Bc.encode(
+            TexelKind::Albedo,
+            &(0..ATLAS_TEXELS)
+                .map(|i| [tag as u8, (i % 251) as u8, 7, if i == texel_index(5, 0) && salt % 2 == 1 { 0 } else { 255 }])
+                .collect::<Vec<_>>(),
+        ),
         splat: (0..SPLAT_RES * SPLAT_RES).map(|i| (i % 4) as u8).collect(),
         patch_min_max: (0..PATCHES_PER_NODE).map(|i| [i as u16, tag]).collect(),
         patch_cones: (0..PATCHES_PER_NODE).map(|i| [0.0, 0.0, 1.0, i as f32 / 64.0]).collect(),

@@ -115,12 +115,12 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         crate::out_path::check_out_file(json, "--json")?;
     }
     let progress = !args.no_progress && std::io::stderr().is_terminal();
-    let stats = bake_world(w.source.clone(), &w.desc, &w.holes, args.region, &args.out, progress)
+    let stats = bake_world(w.source.clone(), &w.desc, &w.holes, &w.bake, args.region, &args.out, progress)
         .with_context(|| format!("baking into {}", args.out.display()))?;
     let nodes = stats.baked + stats.cached;
     let per_node = |v: f64| if nodes == 0 { 0.0 } else { v / nodes as f64 };
     let full_world_nodes = nodes_in_region(&w.desc, None).len();
-    let memory = MemoryReport::new(REPORT_SLOTS);
+    let memory = MemoryReport::for_format(REPORT_SLOTS, w.bake.format);
     let report = BakeReport {
         source: w.label.clone(),
         world: w.desc,

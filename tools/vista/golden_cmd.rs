@@ -15,6 +15,8 @@ use vista::gpu::Context;
 use vista::reference::{flip_magma, flip_map, flip_stats, FlipStats};
 use vista::render::offscreen::Offscreen;
 use vista::render::{overview_camera, Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
+use vista::terrain::TerrainOptions;
+use vista::world::PayloadFormat;
 
 /// Small, so the check stays cheap on lavapipe in CI.
 const SIZE: [u32; 2] = [256, 144];
@@ -49,7 +51,26 @@ pub struct GoldenArgs {
     /// Only these golden views (comma-separated): default, default-cliffs, montblanc.
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
+    /// Instead of the references: render each view with RGBA8 payloads too
+    /// and print what the BC3 / BC1 payloads change (FLIP), failing beyond
+    /// the stated tolerance. Writes both images and the FLIP map to --out.
+    #[arg(long, conflicts_with = "update")]
+    payload_diff: bool,
 }
+
+/// Tolerance of `--payload-diff`: mean and 99th-percentile FLIP between a
+/// view rendered from BC payloads and from RGBA8 ones. BC1 keeps albedo
+/// on a 4-colour line per 4x4 block and BC3 the normal's y on one too
+/// (tests/payload_formats.rs measures both per texel): the lit relief
+/// shifts a little everywhere, most at terrace risers, so the difference
+/// is thin and spread over the terrain, with no structure in the FLIP
+/// map. Measured when set: mean 0.055 / 0.018 / 0.061 and p99 0.17 /
+/// 0.09 / 0.21 (default, cliffs, Mont Blanc); the bounds are about 1.5x the
+/// worst. That is as large as the sun 2 degrees lower (mean 0.051): this
+/// check catches gross faults (a swizzle, a wrong layer or block size), not
+/// subtle ones; the per-texel bounds of the test are the precise guard.
+const PAYLOAD_MAX_MEAN: f32 = 0.09;
+const PAYLOAD_MAX_P99: f32 = 0.32;
 
 struct Golden {
     name: &'static str,
@@ -76,9 +97,12 @@ pub fn golden(ctx: &Context, args: &GoldenArgs) -> Result<()> {
         let names: Vec<&str> = GOLDENS.iter().map(|g| g.name).collect();
         return Err(crate::InputError(format!("no golden view {bad:?}; there are: {}", names.join(", "))).into());
     }
+    if args.payload_diff {
+        return payload_diff(ctx, args);
+    }
     let mut failed = Vec::new();
     for g in GOLDENS.iter().filter(|g| args.only.is_empty() || args.only.iter().any(|n| n == g.name)) {
-        let rgba = render(ctx, g)?;
+        let rgba = render(ctx, g, PayloadFormat::Bc)?;
         let path = args.dir.join(format!("{}.png", g.name));
         let old = read_reference(&path)?;
         let diff = old.as_ref().map(|old| {
@@ -121,18 +145,59 @@ pub fn golden(ctx: &Context, args: &GoldenArgs) -> Result<()> {
     Ok(())
 }
 
+/// Each view from BC and from RGBA8 payloads, and the FLIP between them.
+fn payload_diff(ctx: &Context, args: &GoldenArgs) -> Result<()> {
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let mut failed = Vec::new();
+    for g in GOLDENS.iter().filter(|g| args.only.is_empty() || args.only.iter().any(|n| n == g.name)) {
+        let bc = render(ctx, g, PayloadFormat::Bc)?;
+        let rgba8 = render(ctx, g, PayloadFormat::Rgba8)?;
+        let errors = flip_map(&rgba8, &bc, SIZE);
+        let s = flip_stats(errors.iter().copied());
+        let ok = s.mean <= PAYLOAD_MAX_MEAN && s.p99 <= PAYLOAD_MAX_P99;
+        println!(
+            "{:<16} {}: BC against RGBA8 payloads: FLIP mean {:.5}, p99 {:.4}, max {:.3} (bounds {PAYLOAD_MAX_MEAN}, {PAYLOAD_MAX_P99})",
+            g.name,
+            if ok { "ok" } else { "FAILED" },
+            s.mean,
+            s.p99,
+            s.max
+        );
+        save_rgba(&args.out.join(format!("{}.bc.png", g.name)), &bc)?;
+        save_rgba(&args.out.join(format!("{}.rgba8.png", g.name)), &rgba8)?;
+        let map = args.out.join(format!("{}.payload-flip.png", g.name));
+        image::save_buffer(&map, &flip_magma(&errors, SIZE), SIZE[0], SIZE[1], image::ExtendedColorType::Rgb8)
+            .with_context(|| format!("writing {}", map.display()))?;
+        if !ok {
+            failed.push(g.name);
+        }
+    }
+    if !failed.is_empty() {
+        bail!(
+            "BC payloads change {} beyond the tolerance; the images are in {}",
+            failed.join(", "),
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
 fn describe(s: &FlipStats) -> String {
     format!("FLIP mean {:.5}, p99 {:.4}, max {:.3} against the reference", s.mean, s.p99, s.max)
 }
 
-fn render(ctx: &Context, g: &Golden) -> Result<Vec<u8>> {
-    let world = WorldArgs { scene: Some(g.scene.into()), ..WorldArgs::default() }.load()?;
+fn render(ctx: &Context, g: &Golden, payload: PayloadFormat) -> Result<Vec<u8>> {
+    let world = WorldArgs { scene: Some(g.scene.into()), payload, ..WorldArgs::default() }.load()?;
     let camera = match g.camera {
         Some([x, y, z, yaw_deg, pitch_deg]) => Camera { position_m: [x, y, z], yaw_deg, pitch_deg },
         None => overview_camera(&world.desc, &*world.source),
     };
     let view = View { camera, fov_y_deg: 60.0, size: SIZE, target_error_px: 1.0, near_m: DEFAULT_NEAR_M };
-    let options = RendererOptions { effects: world.effects.clone(), ..RendererOptions::default() };
+    let options = RendererOptions {
+        effects: world.effects.clone(),
+        terrain: TerrainOptions { bake: world.bake, ..TerrainOptions::default() },
+        ..RendererOptions::default()
+    };
     let mut r = TerrainRenderer::new(ctx, &world.desc, world.source.clone(), world.holes.clone(), &options)?;
     let mut off = Offscreen::new(ctx, SIZE, 2, crate::render_cmd::SKY_CLEAR)?;
     let settle = off.settle(ctx, &mut r, &view, Duration::from_secs(300))?;

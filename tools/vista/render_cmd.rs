@@ -207,7 +207,12 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
 
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
     let options = RendererOptions {
-        terrain: TerrainOptions { slots: args.slots, cache_dir: args.cache.clone(), ..TerrainOptions::default() },
+        terrain: TerrainOptions {
+            slots: args.slots,
+            cache_dir: args.cache.clone(),
+            bake: world.bake,
+            ..TerrainOptions::default()
+        },
         stages: args.cull,
         effects: world.effects.clone(),
         origin_m: world.origin_m,

@@ -21,6 +21,13 @@
 //! [effects]                    # each: true / false, or a table of parameters
 //! holes = true
 //! lighting = { sun_elevation_deg = 25 }
+//!
+//! [material_rules]             # where the bake puts each material (defaults: the Alps)
+//! rock_slope_deg = 40          # steeper is bare rock
+//! scree_slope_deg = 30         # steeper (and not rock) is scree
+//! snow_line_m = 2800           # higher (and not rock) is snow
+//! sea_level_m = 0              # lower is sand (sea floor)
+//! beach_height_m = 2           # gentle ground this far above the sea is sand
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -28,13 +35,14 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 use serde::Deserialize;
 use vista::render::Effects;
-use vista::world::Hole;
+use vista::world::{Hole, MaterialRules};
 
 #[derive(Debug, Default)]
 pub struct Scene {
     pub world: SceneWorld,
     holes: Vec<SceneHole>,
     pub effects: Effects,
+    pub material_rules: MaterialRules,
     /// For error messages.
     path: PathBuf,
 }
@@ -49,6 +57,8 @@ struct RawScene {
     holes: Vec<SceneHole>,
     #[serde(default)]
     effects: toml::Table,
+    #[serde(default)]
+    material_rules: MaterialRules,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -132,7 +142,8 @@ impl Scene {
         let dir = path.parent().unwrap_or(Path::new("."));
         let effects =
             Effects::from_toml(&raw.effects, dir).map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
-        Ok(Scene { world, holes: raw.holes, effects, path: path.to_path_buf() })
+        raw.material_rules.validate().map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
+        Ok(Scene { world, holes: raw.holes, effects, material_rules: raw.material_rules, path: path.to_path_buf() })
     }
 
     /// The holes, each checked: exactly one shape, finite numbers, a
@@ -172,6 +183,24 @@ mod tests {
         let p = dir.join(format!("s{}.toml", text.len()));
         std::fs::write(&p, text)?;
         Scene::load(&p)
+    }
+
+    #[test]
+    fn material_rules_override_the_defaults_and_typos_fail() {
+        let dir = std::env::temp_dir().join(format!("vista-scene-rules-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("s.toml");
+        std::fs::write(&path, "[material_rules]\nsnow_line_m = 1200\nrock_slope_deg = 50\n").unwrap();
+        let s = Scene::load(&path).unwrap();
+        let expect = MaterialRules { snow_line_m: 1200.0, rock_slope_deg: 50.0, ..MaterialRules::default() };
+        assert_eq!(s.material_rules, expect);
+        std::fs::write(&path, "[material_rules]\nsnowline_m = 1200\n").unwrap();
+        let e = format!("{:#}", Scene::load(&path).unwrap_err());
+        assert!(e.contains("unknown field `snowline_m`") && e.lines().count() == 1, "{e}");
+        std::fs::write(&path, "[material_rules]\nscree_slope_deg = 60\n").unwrap();
+        let e = format!("{:#}", Scene::load(&path).unwrap_err());
+        assert!(e.contains("scree_slope_deg (60) must not exceed rock_slope_deg (40)"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -8,7 +8,9 @@ use std::sync::Arc;
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use vista::render::Effects;
-use vista::world::{ExrSource, GridSource, HeightSource, Hole, Png16Source, ProceduralSource, WorldDesc};
+use vista::world::{
+    BakeSettings, ExrSource, GridSource, HeightSource, Hole, PayloadFormat, Png16Source, ProceduralSource, WorldDesc,
+};
 
 use crate::scene::{Scene, SceneSource};
 
@@ -61,6 +63,10 @@ pub struct WorldArgs {
     /// cameras and holes are then given in these coordinates [default: 0,0].
     #[arg(long, value_name = "E,N", value_parser = parse_origin, allow_hyphen_values = true, help_heading = "World")]
     pub origin: Option<[f64; 2]>,
+    /// Normal and albedo payloads: bc (the talk's BC3 + BC1) or rgba8 (the
+    /// uncompressed reference, to measure what compression costs).
+    #[arg(long, value_name = "bc|rgba8", default_value_t = PayloadFormat::Bc, help_heading = "World")]
+    pub payload: PayloadFormat,
 }
 
 /// A resolved world, ready to bake or render.
@@ -75,6 +81,8 @@ pub struct LoadedWorld {
     /// Where the world's south-west corner lies in the user's coordinates
     /// (`--origin`, the scene's `origin`); `holes` are already relative to it.
     pub origin_m: [f64; 2],
+    /// Payload format and the scene's material rules.
+    pub bake: BakeSettings,
 }
 
 impl LoadedWorld {
@@ -149,7 +157,8 @@ impl WorldArgs {
                 (desc, source, path.display().to_string())
             }
         };
-        Ok(LoadedWorld { desc, source, holes, effects: scene.effects, label, origin_m })
+        let bake = BakeSettings { format: self.payload, materials: scene.material_rules };
+        Ok(LoadedWorld { desc, source, holes, effects: scene.effects, label, origin_m, bake })
     }
 }
 
