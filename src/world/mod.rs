@@ -37,4 +37,7 @@ pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
 pub use resample_bound::RangeFit;
 pub use source::{GridSource, HeightSource};
-pub use streaming::{Arrival, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};
+pub use streaming::{
+    Arrival, FailureCounts, LoadFate, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer,
+    MAX_LOAD_ATTEMPTS,
+};
