@@ -30,7 +30,7 @@ layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } vie
 layout(set = 0, binding = 2) uniform texture2D depth_target;
 layout(set = 0, binding = 3) uniform utexture2D classification;
 layout(set = 0, binding = 4) uniform utexture2D normals;
-layout(set = 0, binding = 5, std430) readonly buffer SectorData { uvec2 sectors[]; } sector_data;
+layout(set = 0, binding = 5, std430) readonly buffer SectorData { uint words[]; } sector_data;
 layout(set = 0, binding = 6) uniform texture2DArray albedo_atlas;
 layout(set = 0, binding = 7) uniform texture2DArray normal_atlas;
 #ifdef MATERIALS
@@ -48,7 +48,7 @@ layout(set = 0, binding = 13) uniform sampler nearest;
 layout(set = 0, binding = 14) uniform sampler linear_clamp;
 layout(set = 0, binding = 16) uniform texture2DArray height_atlas;
 
-#define VISTA_SECTOR(i) sector_data.sectors[i]
+#define VISTA_SECTOR_WORD(i) sector_data.words[i]
 #define VISTA_HEIGHT_ATLAS height_atlas
 #define VISTA_NORMAL_ATLAS normal_atlas
 #define VISTA_ATLAS_SAMPLER nearest
@@ -87,7 +87,7 @@ struct Texel {
 // The four splat texels around `xy` and their bilinear weights.
 void splat_texels(vec2 xy, out uint ids[4], out vec4 weights) {
     VistaNodeHit hit = vista_find_node(xy);
-    if (hit.slot == 0u) {
+    if (!hit.found) {
         ids = uint[4](0u, 0u, 0u, 0u);
         weights = vec4(1.0, 0.0, 0.0, 0.0);
         return;
@@ -128,7 +128,7 @@ Texel sample_material(uint id, vec2 plane, vec2 dx, vec2 dy, float scale) {
 
 Surface far_atlas(vec3 world, vec3 ng) {
     VistaNodeHit hit = vista_find_node(world.xy);
-    if (hit.slot == 0u) {
+    if (!hit.found) {
         return Surface(vec3(0.3), ng, 0.8);
     }
     vec3 uvw = vec3(atlas_texel_uv(hit.local), float(hit.slot));

@@ -1,20 +1,21 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Terrain queries for an engine (and the test of terrain_sample.glsl):
-// height, normal and material at a list of world points.
+// height, normal and material at a list of world points, and whether
+// terrain was found there at all.
 layout(local_size_x = 64) in;
 
-layout(set = 0, binding = 0, std430) readonly buffer SectorData { uvec2 sectors[]; } sector_data;
+layout(set = 0, binding = 0, std430) readonly buffer SectorData { uint words[]; } sector_data;
 layout(set = 0, binding = 1) uniform texture2DArray height_atlas;
 layout(set = 0, binding = 2) uniform texture2DArray normal_atlas;
 layout(set = 0, binding = 3) uniform utexture2DArray splat_atlas;
 layout(set = 0, binding = 4) uniform sampler atlas_sampler;
 layout(set = 0, binding = 5, std430) readonly buffer QueryPoints { vec2 points[]; } query_points;
-// x: height (m), yzw: normal; material id in the separate array.
+// x: height (m), yzw: normal; material id and found (1/0) in the separate array.
 layout(set = 0, binding = 6, std430) buffer QueryResults { vec4 results[]; } query_results;
-layout(set = 0, binding = 7, std430) buffer QueryMaterials { uint materials[]; } query_materials;
+layout(set = 0, binding = 7, std430) buffer QueryMaterials { uvec2 materials[]; } query_materials;
 
-#define VISTA_SECTOR(i) sector_data.sectors[i]
+#define VISTA_SECTOR_WORD(i) sector_data.words[i]
 #define VISTA_HEIGHT_ATLAS height_atlas
 #define VISTA_NORMAL_ATLAS normal_atlas
 #define VISTA_SPLAT_ATLAS splat_atlas
@@ -34,6 +35,12 @@ void main() {
         return;
     }
     vec2 p = query_points.points[i];
-    query_results.results[i] = vec4(vista_terrain_height(p), vista_terrain_normal(p));
-    query_materials.materials[i] = vista_terrain_material(p);
+    float height;
+    vec3 normal;
+    uint material;
+    bool found = vista_terrain_height(p, height);
+    vista_terrain_normal(p, normal);
+    vista_terrain_material(p, material);
+    query_results.results[i] = vec4(height, normal);
+    query_materials.materials[i] = uvec2(material, found ? 1u : 0u);
 }

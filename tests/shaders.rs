@@ -124,7 +124,8 @@ fn rust_twins_match_reflected_layouts() {
     );
     check_layout(
         "VistaTerrain",
-        fields!(VistaTerrain: sector_size_m, spacing_m, sectors_x, sectors_y, lod_count, height_lo, height_range, pad),
+        fields!(VistaTerrain: sector_size_m, spacing_m, sectors_x, sectors_y, lod_count, height_lo, height_range,
+            extent_x_m, extent_y_m, pad),
         layouts::VISTA_TERRAIN,
         structs::VISTA_TERRAIN,
     );
@@ -205,7 +206,11 @@ fn shared_constants_have_one_source() {
     assert_eq!(k::MAX_SLOTS, (1 << k::SLOT_BITS) - 1, "slots fill the 10-bit fields");
     const { assert!(k::SHARED_LIST_CAPACITY > k::MAX_SLOTS, "a shared list holds every resident node") };
     assert_eq!(k::NODE_EMPTY, u32::from(u16::MAX), "R16 node texture");
-    assert_eq!(k::SECTOR_DATA_LODS, 2 * k::SECTOR_LODS_PER_WORD, "two u32 words per sector");
+    assert_eq!(
+        k::SECTOR_DATA_WORDS,
+        k::MAX_NODE_LODS.div_ceil(k::SECTOR_LODS_PER_WORD),
+        "sector data holds every LOD a world can have, in as few words as fit"
+    );
     const { assert!(k::SECTOR_LODS_PER_WORD * k::SLOT_BITS <= 32) };
     assert_eq!(k::PATCH_DELTA_SHIFT + 4 * k::PATCH_DELTA_BITS, 32, "four deltas end the word");
     assert_eq!(1u32 << k::MAX_LOD_DELTA, vista::world::PATCH_QUADS);

@@ -281,7 +281,8 @@ fn sector_data_include_samples_the_same_height_as_the_cpu() {
         let mut compared = 0;
         for (p, a) in points.iter().zip(&answers) {
             let cpu = sample_height_cpu(&scene.tree.shadow, &w, |s| &by_slot[&s], [f64::from(p[0]), f64::from(p[1])]);
-            if let Some(h) = cpu {
+            assert_eq!(a.is_some(), cpu.is_some(), "at {p:?}: GPU {a:?} vs CPU {cpu:?}");
+            if let (Some(a), Some(h)) = (a, cpu) {
                 assert!(
                     (a.height_m - h).abs() <= step,
                     "at {p:?}: GPU {} vs CPU {h} (one R16 step = {step})",
@@ -291,5 +292,98 @@ fn sector_data_include_samples_the_same_height_as_the_cpu() {
             }
         }
         assert!(compared > 3000, "most points must hit resident nodes ({compared})");
+    });
+}
+
+/// 10 LODs (MAX_NODE_LODS), 64 m sectors, 32 768 m roots: a 2 x 1 root
+/// grid of which only root (0, 0) is resident, with one node of every finer
+/// LOD at the origin and a few scattered ones. Most of the world is covered by
+/// the root alone, the second root's half by nothing.
+#[test]
+fn sector_data_reaches_every_lod_of_a_10_lod_world_and_reports_uncovered_points() {
+    gpu_test(|ctx| {
+        let w =
+            WorldDesc { extent_m: [50_000.0, 30_000.0], height_range_m: [-50.0, 950.0], spacing_m: 0.5, lod_count: 10 };
+        assert_eq!(w.lod_count, vista::shaders::consts::MAX_NODE_LODS);
+        let root_m = w.node_size_m(w.root_lod());
+        assert_eq!(w.roots(), [NodeId::new(9, 0, 0), NodeId::new(9, 1, 0)]);
+        let mut tree = GpuQuadtree::new(ctx, &w, 64, 1, AtlasSet::ALL, PayloadFormat::Bc).unwrap();
+        tree.shadow.set_reuse_delay(0);
+        let update = QuadtreeUpdatePass::new(ctx, false).unwrap();
+        let mut rng = Rng(1010);
+        let mut resident = vec![NodeId::new(9, 0, 0)];
+        // One node per LOD at the origin (sampling needs no whole families).
+        resident.extend((0..9u8).map(|lod| NodeId::new(lod, 0, 0)));
+        for lod in 1..7u8 {
+            let cells = w.nodes_at(lod).into_iter().filter(|n| w.bounds_m(*n)[0] < root_m).collect::<Vec<_>>();
+            let n = cells[rng.index(cells.len())];
+            if !resident.contains(&n) {
+                resident.push(n);
+            }
+        }
+        // Smooth heights (a few R16 steps per sample), so f32 rounding of
+        // the sample position moves the result by far less than a step.
+        let mut heights = std::collections::HashMap::new();
+        for (i, id) in resident.iter().enumerate() {
+            let mut node = fake_node(*id, 0);
+            let base = (i as u32 * 997) % 30_000;
+            for (k, h) in node.heights.iter_mut().enumerate() {
+                let (x, y) = ((k % vista::world::NODE_SAMPLES) as u32, (k / vista::world::NODE_SAMPLES) as u32);
+                *h = (base + x * 97 + y * 61) as u16;
+            }
+            heights.insert(*id, node.heights.clone());
+            tree.add(node, 0);
+        }
+        while tree.waiting() > 0 || tree.has_work() {
+            ctx.submit_and_wait(|rec| update.record(rec, &mut tree, None).map(drop)).unwrap();
+        }
+        let sectors = SectorData::new(ctx, &w).unwrap();
+        // Points over the whole world and beyond it, and densely where the
+        // fine LODs are.
+        let mut points: Vec<[f32; 2]> = Vec::new();
+        for _ in 0..2000 {
+            let u = [rng.unit(), rng.unit()];
+            points.push([(u[0] * 60_000.0 - 5000.0) as f32, (u[1] * 40_000.0 - 5000.0) as f32]);
+        }
+        for span in [300.0, 5000.0, 30_000.0] {
+            for _ in 0..500 {
+                points.push([(rng.unit() * span) as f32, (rng.unit() * span) as f32]);
+            }
+        }
+        let mut query = TerrainQuery::new(ctx, points.len() as u32).unwrap();
+        ctx.submit_and_wait(|rec| {
+            sectors.record(rec, &tree);
+            query.record(rec, VistaTerrain::new(&w, &sectors), &tree, &sectors, &points)
+        })
+        .unwrap();
+        let sd = ctx.read_buffer(&sectors.buffer).unwrap();
+        let sd_expect: Vec<u32> = sector_data_cpu(&tree.shadow, &w).into_iter().flatten().collect();
+        assert_eq!(bytemuck::cast_slice::<u8, u32>(&sd), &sd_expect[..], "sector data");
+        let by_slot: std::collections::HashMap<u32, Vec<u16>> =
+            resident.iter().map(|id| (tree.shadow.slot_of(*id).expect("uploaded"), heights[id].clone())).collect();
+        let step = (w.height_range_m[1] - w.height_range_m[0]) / 65535.0;
+        let mut finest_used = [0usize; 10];
+        let answers = query.answers(points.len());
+        for (p, a) in points.iter().zip(&answers) {
+            let q = [f64::from(p[0]), f64::from(p[1])];
+            // Derived from the layout alone: terrain only inside the extent
+            // and under the resident root.
+            let covered = (0.0..w.extent_m[0]).contains(&q[0]) && (0.0..w.extent_m[1]).contains(&q[1]) && q[0] < root_m;
+            assert_eq!(a.is_some(), covered, "at {p:?}: GPU answer {a:?}");
+            let cpu = sample_height_cpu(&tree.shadow, &w, |s| &by_slot[&s], q);
+            assert_eq!(cpu.is_some(), covered, "at {p:?}: CPU reference {cpu:?}");
+            if let (Some(a), Some(h)) = (a, cpu) {
+                assert!(
+                    (a.height_m - h).abs() <= step,
+                    "at {p:?}: GPU {} vs CPU {h} (one R16 step = {step})",
+                    a.height_m
+                );
+                let finest = (0..10u8).find(|l| w.node_at(*l, q[0], q[1]).is_some_and(|n| resident.contains(&n)));
+                finest_used[finest.unwrap() as usize] += 1;
+            }
+        }
+        assert!(finest_used[9] > 500, "points only the root covers: {finest_used:?}");
+        assert!(finest_used.iter().all(|n| *n > 0), "every LOD answers some point: {finest_used:?}");
+        assert!(answers.iter().filter(|a| a.is_none()).count() > 500, "points outside or uncovered");
     });
 }

@@ -183,6 +183,61 @@ fn bad_residency_configs() {
     }
 }
 
+/// The retry schedule of the defaults (4 attempts, backoff 2 frames
+/// doubling): a node failing every time is asked for at frames 1, 3, 7 and
+/// 15, then never again; a root given up is reported.
+#[test]
+fn failed_loads_are_retried_with_doubling_backoff_then_given_up() {
+    let world = WorldDesc { extent_m: [512.0, 512.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 2 };
+    let config = ResidencyConfig::default();
+    assert_eq!((config.max_load_attempts, config.retry_frames), (4, 2));
+    let mut r = Residency::new(&world, config).unwrap();
+    let cam = [60.0, 60.0, 10.0];
+    let bad = world.node_at(0, cam[0], cam[1]).unwrap();
+    let mut asked = Vec::new();
+    let mut fates = Vec::new();
+    for frame in 1..=40u64 {
+        let changes = r.update(cam);
+        for id in changes.adds {
+            if id == bad {
+                asked.push(frame);
+                fates.push(r.on_failed(id));
+            } else {
+                assert_eq!(r.on_loaded(id), Arrival::Accept, "{id}");
+            }
+        }
+        let waiting = fates.last().is_some_and(|f| matches!(f, LoadFate::Retry { .. }));
+        assert_eq!(r.retry_waiting(), usize::from(waiting && !r.is_pending(bad)), "frame {frame}");
+    }
+    assert_eq!(asked, [1, 3, 7, 15]);
+    assert_eq!(
+        fates,
+        [
+            LoadFate::Retry { attempts: 1, at_frame: 3 },
+            LoadFate::Retry { attempts: 2, at_frame: 7 },
+            LoadFate::Retry { attempts: 3, at_frame: 15 },
+            LoadFate::GaveUp { attempts: 4 },
+        ]
+    );
+    assert!(r.gave_up(bad) && r.is_failed(bad) && r.root_given_up().is_none());
+    assert_eq!(r.failure_counts(), FailureCounts { failures: 4, retries: 3, gave_up: 1 });
+    // Its siblings are resident all along: the family minus the lost node.
+    for sib in world.valid_children(bad.parent()).into_iter().filter(|s| *s != bad) {
+        assert!(r.is_resident(sib), "{sib}");
+    }
+
+    // A root: one attempt, then it is given up and reported.
+    let one = ResidencyConfig { max_load_attempts: 1, ..ResidencyConfig::default() };
+    let mut r = Residency::new(&world, one).unwrap();
+    let root = world.roots()[0];
+    assert!(r.update(cam).adds.contains(&root));
+    assert_eq!(r.on_failed(root), LoadFate::GaveUp { attempts: 1 });
+    assert_eq!(r.root_given_up(), Some(root));
+    assert!(r.update(cam).adds.is_empty(), "nothing below a lost root is wanted");
+    let zero = ResidencyConfig { max_load_attempts: 0, ..ResidencyConfig::default() };
+    assert!(matches!(Residency::new(&world, zero), Err(WorldError::InvalidConfig(_))));
+}
+
 #[test]
 fn streamer_with_loader_threads() {
     let world = WorldDesc { extent_m: [4096.0, 4096.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 4 };

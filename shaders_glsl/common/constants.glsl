@@ -40,9 +40,10 @@
 #define SHARED_LIST_CAPACITY 1024u
 // `current_lod` of traverse_level's finalize dispatch.
 #define LEVEL_FINALIZE 0xFFu
-// LODs whose slots sector data holds: 3 per u32 word, 10 bits each.
-#define SECTOR_DATA_LODS 6u
+// Sector data holds the slot of every LOD (up to MAX_NODE_LODS), 3 per
+// u32 word at 10 bits each: ceil(MAX_NODE_LODS / 3) words per sector.
 #define SECTOR_LODS_PER_WORD 3u
+#define SECTOR_DATA_WORDS 4u
 // quadtree_update targets beside a node-texture mip.
 #define UPDATE_TARGET_DESC 0xFFu
 #define UPDATE_TARGET_ERROR 0xFEu

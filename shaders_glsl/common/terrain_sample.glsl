@@ -1,9 +1,13 @@
 // Sample vista's terrain at any world position, from any shader (ours or an
 // engine's), through the sector data: the finest resident LOD covering the
-// point, bilinear over that node's R16 height samples.
+// point, bilinear over that node's R16 height samples. Every query says
+// whether terrain was found: outside the world extent, or where no resident
+// node covers the point, it returns false and a neutral value, never a
+// plausible-looking 0 m.
 //
 // Before including, define:
-//   VISTA_SECTOR(i)          -> uvec2: sector data entry i (row-major)
+//   VISTA_SECTOR_WORD(i)     -> uint: word i of the sector data (sector s
+//                               holds words s * SECTOR_DATA_WORDS onwards)
 //   VISTA_HEIGHT_ATLAS       -> a texture2DArray of R16_UNORM heights (layer = slot)
 //   VISTA_NORMAL_ATLAS       -> a texture2DArray of RGBA8 normals
 //   VISTA_SPLAT_ATLAS        -> a utexture2DArray of R8_UINT material ids
@@ -21,9 +25,11 @@ struct VistaTerrain {
     float spacing_m;       // LOD-0 sample spacing (node side / 128)
     uint sectors_x;        // sector-data row length
     uint sectors_y;
-    uint lod_count;        // min(world LODs, 6)
+    uint lod_count;        // world LODs (<= MAX_NODE_LODS)
     float height_lo;
     float height_range;    // hi - lo
+    float extent_x_m;      // world extent: outside it nothing is found
+    float extent_y_m;
     uint pad;
 };
 #endif
@@ -34,21 +40,26 @@ struct VistaTerrain {
 #include "atlas_texels.glsl"
 
 struct VistaNodeHit {
-    uint slot;   // 0 = nothing resident covers the point
+    bool found;  // false: outside the extent or nothing resident covers the point
+    uint slot;
     uint lod;
     vec2 local;  // sample coordinates inside the node, 0..128
 };
 
 VistaNodeHit vista_find_node(vec2 p) {
-    ivec2 s = clamp(ivec2(floor(p / VISTA_TERRAIN.sector_size_m)), ivec2(0), ivec2(VISTA_TERRAIN.sectors_x - 1u, VISTA_TERRAIN.sectors_y - 1u));
-    uvec2 d = VISTA_SECTOR(uint(s.y) * VISTA_TERRAIN.sectors_x + uint(s.x));
-    VistaNodeHit hit = VistaNodeHit(0u, 0u, vec2(0.0));
-    for (uint k = 0u; k < VISTA_TERRAIN.lod_count; ++k) {
-        uint slot = bitfieldExtract(k < SECTOR_LODS_PER_WORD ? d.x : d.y, int(SLOT_BITS * (k % SECTOR_LODS_PER_WORD)), int(SLOT_BITS));
+    VistaNodeHit hit = VistaNodeHit(false, 0u, 0u, vec2(0.0));
+    if (!(all(greaterThanEqual(p, vec2(0.0))) && p.x < VISTA_TERRAIN.extent_x_m && p.y < VISTA_TERRAIN.extent_y_m)) {
+        return hit;
+    }
+    uvec2 s = min(uvec2(floor(p / VISTA_TERRAIN.sector_size_m)), uvec2(VISTA_TERRAIN.sectors_x - 1u, VISTA_TERRAIN.sectors_y - 1u));
+    uint base = (s.y * VISTA_TERRAIN.sectors_x + s.x) * SECTOR_DATA_WORDS;
+    for (uint k = 0u; k < min(VISTA_TERRAIN.lod_count, MAX_NODE_LODS); ++k) {
+        uint word = VISTA_SECTOR_WORD(base + k / SECTOR_LODS_PER_WORD);
+        uint slot = bitfieldExtract(word, int(SLOT_BITS * (k % SECTOR_LODS_PER_WORD)), int(SLOT_BITS));
         if (slot != 0u) {
             float node = VISTA_TERRAIN.sector_size_m * float(1u << k);
             vec2 origin = floor(p / node) * node;
-            hit = VistaNodeHit(slot, k, clamp((p - origin) / (VISTA_TERRAIN.spacing_m * float(1u << k)), vec2(0.0), vec2(128.0)));
+            hit = VistaNodeHit(true, slot, k, clamp((p - origin) / (VISTA_TERRAIN.spacing_m * float(1u << k)), vec2(0.0), vec2(128.0)));
             break;
         }
     }
@@ -59,40 +70,48 @@ float vista_height_texel(uint slot, ivec2 i) {
     return texelFetch(sampler2DArray(VISTA_HEIGHT_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(i, int(slot)), 0).r;
 }
 
-// Height in metres (NaN-free: 0 when nothing is resident).
-float vista_terrain_height(vec2 p) {
+// Whether terrain covers `p`; its height in metres there (0 where not).
+bool vista_terrain_height(vec2 p, out float height_m) {
+    height_m = 0.0;
     VistaNodeHit h = vista_find_node(p);
-    if (h.slot == 0u) {
-        return 0.0;
+    if (!h.found) {
+        return false;
     }
     ivec2 i0 = min(ivec2(floor(h.local)), ivec2(127));
     vec2 f = h.local - vec2(i0);
     float a = mix(vista_height_texel(h.slot, i0), vista_height_texel(h.slot, i0 + ivec2(1, 0)), f.x);
     float b = mix(vista_height_texel(h.slot, i0 + ivec2(0, 1)), vista_height_texel(h.slot, i0 + ivec2(1, 1)), f.x);
-    return VISTA_TERRAIN.height_lo + mix(a, b, f.y) * VISTA_TERRAIN.height_range;
+    height_m = VISTA_TERRAIN.height_lo + mix(a, b, f.y) * VISTA_TERRAIN.height_range;
+    return true;
 }
 
-// Unit normal (z up) at the nearest sample.
-vec3 vista_terrain_normal(vec2 p) {
+// Whether terrain covers `p`; its unit normal (z up) at the nearest sample
+// (straight up where not).
+bool vista_terrain_normal(vec2 p, out vec3 normal) {
+    normal = vec3(0.0, 0.0, 1.0);
     VistaNodeHit h = vista_find_node(p);
-    if (h.slot == 0u) {
-        return vec3(0.0, 0.0, 1.0);
+    if (!h.found) {
+        return false;
     }
     vec4 t = texelFetch(sampler2DArray(VISTA_NORMAL_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(atlas_texel(ivec2(round(h.local))), int(h.slot)), 0);
     vec2 xy = atlas_normal_xy(t);
-    return vec3(xy, sqrt(max(1.0 - dot(xy, xy), 0.0)));
+    normal = vec3(xy, sqrt(max(1.0 - dot(xy, xy), 0.0)));
+    return true;
 }
 
 #ifndef VISTA_NO_MATERIAL_QUERY
-// Material id at the nearest splat texel (65x65 per node). Define
-// VISTA_NO_MATERIAL_QUERY where no splat atlas is bound.
-uint vista_terrain_material(vec2 p) {
+// Whether terrain covers `p`; its material id at the nearest splat texel
+// (65x65 per node; 0 where not). Define VISTA_NO_MATERIAL_QUERY where no
+// splat atlas is bound.
+bool vista_terrain_material(vec2 p, out uint id) {
+    id = 0u;
     VistaNodeHit h = vista_find_node(p);
-    if (h.slot == 0u) {
-        return 0u;
+    if (!h.found) {
+        return false;
     }
     ivec2 i = ivec2(round(h.local * 0.5));
-    return texelFetch(usampler2DArray(VISTA_SPLAT_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(i, int(h.slot)), 0).r;
+    id = texelFetch(usampler2DArray(VISTA_SPLAT_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(i, int(h.slot)), 0).r;
+    return true;
 }
 
 #endif

@@ -1,6 +1,7 @@
 //! `sector_data`: per sector, the atlas slot of the resident node covering it
-//! at each LOD (10 bits each, 0 = none), rebuilt from the node texture, so
-//! any shader can sample the terrain through terrain_sample.glsl.
+//! at each LOD (10 bits each, 0 = none; every LOD a world can have), rebuilt
+//! from the node texture, so any shader can sample the terrain through
+//! terrain_sample.glsl.
 
 use crate::error::Result;
 use crate::gpu::{
@@ -12,9 +13,8 @@ use crate::terrain::gpu_quadtree::GpuQuadtree;
 use crate::terrain::quadtree::texture_extent;
 use crate::world::WorldDesc;
 
-/// LODs whose slots fit two u32 at 10 bits (sector_data.comp SECTOR_DATA_LODS);
-/// coarser LODs of a deeper world are not reachable through sector data.
-pub const SECTOR_DATA_LODS: u32 = crate::shaders::consts::SECTOR_DATA_LODS;
+/// u32 words per sector: room for the slot of each of `MAX_NODE_LODS` LODs.
+pub const SECTOR_DATA_WORDS: u32 = crate::shaders::consts::SECTOR_DATA_WORDS;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -28,7 +28,7 @@ pub struct SectorDataPush {
 pub struct SectorData {
     pipeline: Pipeline,
     sampler: Sampler,
-    /// uvec2 per sector, row-major over the padded extent.
+    /// `SECTOR_DATA_WORDS` u32 per sector, row-major over the padded extent.
     pub buffer: Buffer,
     pub extent: [u32; 2],
     lod_count: u32,
@@ -43,7 +43,7 @@ impl SectorData {
             ctx,
             &BufferDesc {
                 name: "sector_data",
-                size: u64::from(extent[0] * extent[1]) * 8,
+                size: u64::from(extent[0] * extent[1]) * u64::from(SECTOR_DATA_WORDS) * 4,
                 usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
                 location: MemoryLocation::GpuOnly,
             },
@@ -57,13 +57,7 @@ impl SectorData {
             },
         )?;
         let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &[] };
-        Ok(SectorData {
-            pipeline: Pipeline::compute(ctx, &desc)?,
-            sampler,
-            buffer,
-            extent,
-            lod_count: world.lod_count.min(SECTOR_DATA_LODS),
-        })
+        Ok(SectorData { pipeline: Pipeline::compute(ctx, &desc)?, sampler, buffer, extent, lod_count: world.lod_count })
     }
 
     pub fn pipeline_label(&self) -> &str {

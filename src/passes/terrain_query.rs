@@ -1,12 +1,14 @@
 //! `terrain_query`: height, normal and material at world points, through the
-//! sector data and terrain_sample.glsl (what an engine's own shaders do).
+//! sector data and terrain_sample.glsl (what an engine's own shaders do);
+//! a point outside the world or not covered by any resident node has no
+//! answer.
 
 use crate::error::{Error, Result};
 use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
     SamplerDesc,
 };
-use crate::passes::sector_data::{SectorData, SECTOR_DATA_LODS};
+use crate::passes::sector_data::SectorData;
 use crate::shaders::terrain_query as sh;
 use crate::terrain::gpu_quadtree::{atlas_name, GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT};
 use crate::world::{WorldDesc, NODE_QUADS};
@@ -22,6 +24,8 @@ pub struct VistaTerrain {
     pub lod_count: u32,
     pub height_lo: f32,
     pub height_range: f32,
+    pub extent_x_m: f32,
+    pub extent_y_m: f32,
     pub pad: u32,
 }
 
@@ -34,9 +38,11 @@ impl VistaTerrain {
             spacing_m: sector / NODE_QUADS as f32,
             sectors_x: sector_data.extent[0],
             sectors_y: sector_data.extent[1],
-            lod_count: world.lod_count.min(SECTOR_DATA_LODS),
+            lod_count: world.lod_count,
             height_lo: lo,
             height_range: hi - lo,
+            extent_x_m: world.extent_m[0] as f32,
+            extent_y_m: world.extent_m[1] as f32,
             pad: 0,
         }
     }
@@ -101,7 +107,7 @@ impl TerrainQuery {
             )?,
             points: buf("terrain_query_points", n * 8, MemoryLocation::CpuToGpu)?,
             results: buf("terrain_query_results", n * 16, MemoryLocation::GpuToCpu)?,
-            materials: buf("terrain_query_materials", n * 4, MemoryLocation::GpuToCpu)?,
+            materials: buf("terrain_query_materials", n * 8, MemoryLocation::GpuToCpu)?,
             capacity,
         })
     }
@@ -150,12 +156,17 @@ impl TerrainQuery {
         Ok(())
     }
 
-    /// The first `n` answers of the last query, once its frame has completed.
-    pub fn answers(&self, n: usize) -> Vec<QueryAnswer> {
+    /// The first `n` answers of the last query, once its frame has completed:
+    /// `None` where no terrain was found (outside the world, or no resident
+    /// node covers the point).
+    pub fn answers(&self, n: usize) -> Vec<Option<QueryAnswer>> {
         let r: &[[f32; 4]] = bytemuck::cast_slice(self.results.mapped().expect("mapped"));
-        let m: &[u32] = bytemuck::cast_slice(self.materials.mapped().expect("mapped"));
+        let m: &[[u32; 2]] = bytemuck::cast_slice(self.materials.mapped().expect("mapped"));
         (0..n.min(self.capacity as usize))
-            .map(|i| QueryAnswer { height_m: r[i][0], normal: [r[i][1], r[i][2], r[i][3]], material: m[i] })
+            .map(|i| {
+                let [material, found] = m[i];
+                (found != 0).then(|| QueryAnswer { height_m: r[i][0], normal: [r[i][1], r[i][2], r[i][3]], material })
+            })
             .collect()
     }
 }

@@ -2,16 +2,19 @@
 //! LOD) and of the height lookup `terrain_sample.glsl` makes through it.
 //! No Vulkan.
 
-use crate::shaders::consts::{SECTOR_DATA_LODS, SECTOR_LODS_PER_WORD, SLOT_BITS};
+use crate::shaders::consts::{SECTOR_DATA_WORDS, SECTOR_LODS_PER_WORD, SLOT_BITS};
 use crate::terrain::quadtree::{QuadtreeShadow, EMPTY, INVALID};
 use crate::world::{WorldDesc, NODE_QUADS, NODE_SAMPLES};
 
-/// Sector data: per sector of the padded extent, 10 bits per LOD (0-2 in
-/// word 0, 3-5 in word 1) = the slot of the resident node covering it.
-pub fn sector_data_cpu(tree: &QuadtreeShadow, world: &WorldDesc) -> Vec<[u32; 2]> {
+/// One sector's words of sector data.
+pub type SectorWords = [u32; SECTOR_DATA_WORDS as usize];
+
+/// Sector data: per sector of the padded extent, 10 bits per LOD (LOD k in
+/// word k / 3) = the slot of the resident node covering it.
+pub fn sector_data_cpu(tree: &QuadtreeShadow, world: &WorldDesc) -> Vec<SectorWords> {
     let [w, h] = tree.extent();
-    let lods = world.lod_count.min(SECTOR_DATA_LODS) as u8;
-    let mut out = vec![[0u32; 2]; (w * h) as usize];
+    let lods = world.lod_count as u8;
+    let mut out = vec![[0u32; SECTOR_DATA_WORDS as usize]; (w * h) as usize];
     for y in 0..h {
         for x in 0..w {
             let e = &mut out[(y * w + x) as usize];
@@ -27,19 +30,24 @@ pub fn sector_data_cpu(tree: &QuadtreeShadow, world: &WorldDesc) -> Vec<[u32; 2]
 }
 
 /// Height (m) at `p` from the finest resident node, bilinear over its R16
-/// samples (what terrain_sample.glsl computes), or None where nothing is
-/// resident. `heights(slot)` gives a resident node's 129x129 samples.
+/// samples (what terrain_sample.glsl computes), or None outside the world
+/// extent or where nothing is resident. `heights(slot)` gives a resident
+/// node's 129x129 samples.
 pub fn sample_height_cpu<'a>(
     tree: &QuadtreeShadow,
     world: &WorldDesc,
     heights: impl Fn(u32) -> &'a [u16],
     p: [f64; 2],
 ) -> Option<f32> {
+    let inside = |v: f64, e: f64| (0.0..e).contains(&v);
+    if !(inside(p[0], world.extent_m[0]) && inside(p[1], world.extent_m[1])) {
+        return None;
+    }
     let sector = world.sector_size_m();
     let [w, h] = tree.extent();
-    let sx = ((p[0] / sector).floor().max(0.0) as u32).min(w - 1);
-    let sy = ((p[1] / sector).floor().max(0.0) as u32).min(h - 1);
-    let lods = world.lod_count.min(SECTOR_DATA_LODS) as u8;
+    let sx = ((p[0] / sector).floor() as u32).min(w - 1);
+    let sy = ((p[1] / sector).floor() as u32).min(h - 1);
+    let lods = world.lod_count as u8;
     let (k, slot) = (0..lods).find_map(|k| {
         let v = tree.texel(k, sx >> k, sy >> k);
         (v != EMPTY && v != INVALID).then_some((k, u32::from(v)))

@@ -339,7 +339,7 @@ impl TerrainRenderer {
         let world = self.terrain.world;
         let gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting, &self.shade);
         let params = view.traverse_params();
-        self.terrain.stream(&params);
+        self.terrain.stream(&params)?;
         let mut frame = self.exec.begin(cmds, mode);
         let number = frame.number();
         self.terrain.tree.begin_frame(number);

@@ -1,6 +1,7 @@
 //! What one frame drew: patch counts per culling stage, triangles, nodes per
-//! LOD against what the camera wanted. Read back after the frames (waits):
-//! for tools and tests, not for an engine's frame loop.
+//! LOD against what the camera wanted, and the streaming counters. Read back
+//! after the frames (waits): for tools and tests, not for an engine's frame
+//! loop.
 
 use crate::error::Result;
 use crate::gpu::Context;
@@ -8,6 +9,7 @@ use crate::passes::cull_patches::CullCounters;
 use crate::reference::wanted_finer_cpu;
 use crate::render::renderer::TerrainRenderer;
 use crate::render::view::View;
+use crate::terrain::TerrainStats;
 use crate::world::PATCH_QUADS;
 use serde::Serialize;
 
@@ -27,6 +29,9 @@ pub struct RenderStats {
     pub wanted_finer_per_lod: Vec<u32>,
     pub overflow: u32,
     pub missing_roots: u32,
+    /// Streaming after the frame: residency, failed loads, retries, nodes
+    /// given up.
+    pub streaming: TerrainStats,
 }
 
 /// The last recorded frame's numbers; waits for the GPU.
@@ -43,5 +48,6 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
         wanted_finer_per_lod: wanted[..lods].to_vec(),
         overflow: c.traverse.overflow,
         missing_roots: c.traverse.missing_roots,
+        streaming: terrain.stats(),
     })
 }

@@ -19,8 +19,8 @@ use crate::gpu::Context;
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
 use crate::world::{
-    bake_node_with, BakeSettings, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency,
-    ResidencyConfig, Streamer, WorldDesc,
+    bake_node_with, BakeSettings, HeightSource, Hole, LoadFate, LoadFn, Loader, MemoryReport, NodeCache, NodeId,
+    RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError,
 };
 use serde::Serialize;
 use std::path::PathBuf;
@@ -43,6 +43,24 @@ pub struct TerrainOptions {
     pub atlases: AtlasSet,
     /// Texel formats and material rules of the bake.
     pub bake: BakeSettings,
+    /// Produces the payloads instead of baking from the source (and the
+    /// cache): an engine's own asset pipeline, or a test's failing loads.
+    /// Its nodes must be baked with `bake`'s payload format.
+    pub load: Option<CustomLoad>,
+    /// Loads of a node before it is given up, and the retry backoff
+    /// ([`ResidencyConfig`]).
+    pub max_load_attempts: u32,
+    pub retry_frames: u64,
+}
+
+/// A caller's node loader (see [`TerrainOptions::load`]).
+#[derive(Clone)]
+pub struct CustomLoad(pub Arc<LoadFn>);
+
+impl std::fmt::Debug for CustomLoad {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("CustomLoad(..)")
+    }
 }
 
 impl Default for TerrainOptions {
@@ -56,6 +74,9 @@ impl Default for TerrainOptions {
             ring_prefetch: true,
             atlases: AtlasSet::ALL,
             bake: BakeSettings::default(),
+            load: None,
+            max_load_attempts: ResidencyConfig::default().max_load_attempts,
+            retry_frames: ResidencyConfig::default().retry_frames,
         }
     }
 }
@@ -66,7 +87,14 @@ pub struct TerrainStats {
     pub resident: usize,
     pub loading: usize,
     pub waiting_upload: usize,
+    /// Loads that failed (each attempt counts).
     pub failed: usize,
+    /// Loads requested again after a failure.
+    pub retried: usize,
+    /// Nodes whose every attempt failed: their parents draw instead.
+    pub gave_up: usize,
+    /// Failed nodes waiting for their retry's backoff.
+    pub retry_waiting: usize,
     pub arrived_total: usize,
 }
 
@@ -77,6 +105,8 @@ pub struct Terrain {
     stats: TerrainStats,
     ring_prefetch: bool,
     paused: bool,
+    /// A root given up: every later frame reports it.
+    root_failure: Option<(NodeId, u32, String)>,
 }
 
 impl Terrain {
@@ -97,15 +127,21 @@ impl Terrain {
             options.atlases,
             options.bake.format,
         )?;
-        let config = ResidencyConfig { budget: options.slots as usize, ..ResidencyConfig::default() };
+        let config = ResidencyConfig {
+            budget: options.slots as usize,
+            max_load_attempts: options.max_load_attempts,
+            retry_frames: options.retry_frames,
+            ..ResidencyConfig::default()
+        };
         let residency = Residency::new(world, config)?;
         let threads = options.loader_threads.max(1);
-        let loader = match &options.cache_dir {
-            Some(dir) => Loader::with_cache(
+        let loader = match (&options.load, &options.cache_dir) {
+            (Some(load), _) => Loader::new(threads, Arc::clone(&load.0))?,
+            (None, Some(dir)) => Loader::with_cache(
                 threads,
                 Arc::new(NodeCache::with_settings(dir, *world, source, holes, options.bake)?),
             )?,
-            None => {
+            (None, None) => {
                 let (w, settings) = (*world, options.bake);
                 let load: Arc<LoadFn> = Arc::new(move |id| Ok(bake_node_with(&*source, &w, &holes, &settings, id)));
                 Loader::new(threads, load)?
@@ -118,6 +154,7 @@ impl Terrain {
             stats: TerrainStats::default(),
             ring_prefetch: options.ring_prefetch,
             paused: false,
+            root_failure: None,
         })
     }
 
@@ -137,9 +174,13 @@ impl Terrain {
 
     /// Streams around the first camera: evicted nodes leave the GPU
     /// quadtree, arrived ones are queued for upload by `quadtree_update`.
-    pub fn stream(&mut self, params: &TraverseParams) {
+    /// Fails (this frame and every later one) once a root is given up.
+    pub fn stream(&mut self, params: &TraverseParams) -> Result<(), WorldError> {
+        if let Some((node, attempts, cause)) = &self.root_failure {
+            return Err(WorldError::RootUnavailable { node: *node, attempts: *attempts, cause: cause.clone() });
+        }
         if self.paused {
-            return;
+            return Ok(());
         }
         let cam = &params.cameras[0];
         // Load a family a little before the traversal would refine into it.
@@ -157,13 +198,29 @@ impl Terrain {
         for node in s.arrived {
             self.tree.add(node, 0);
         }
-        for (id, e) in &s.failed {
-            log::error!("node {id} failed to load: {e}");
+        let root_lod = self.world.root_lod();
+        for ((id, e), fate) in s.failed.iter().zip(&s.fates) {
+            log::error!("node {id} failed to load ({fate:?}): {e}");
+            if let LoadFate::GaveUp { attempts } = *fate {
+                if id.lod == root_lod && self.root_failure.is_none() {
+                    self.root_failure = Some((*id, attempts, e.to_string()));
+                }
+            }
         }
-        self.stats.failed += s.failed.len();
         let r = self.streamer.residency();
+        let counts = r.failure_counts();
+        self.stats.failed = counts.failures;
+        self.stats.retried = counts.retries;
+        self.stats.gave_up = counts.gave_up;
+        self.stats.retry_waiting = r.retry_waiting();
         self.stats.loading = r.pending_count();
         self.stats.resident = r.slots_used() - self.stats.loading;
+        match &self.root_failure {
+            Some((node, attempts, cause)) => {
+                Err(WorldError::RootUnavailable { node: *node, attempts: *attempts, cause: cause.clone() })
+            }
+            None => Ok(()),
+        }
     }
 
     /// Streaming counters; `waiting_upload` is what `quadtree_update` has
@@ -172,9 +229,14 @@ impl Terrain {
         TerrainStats { waiting_upload: self.tree.waiting(), ..self.stats.clone() }
     }
 
-    /// True once nothing is loading or waiting for upload.
+    /// True once nothing is loading, waiting for a retry or for upload
+    /// (nodes given up do not hold it back; a root given up is an error
+    /// from [`Terrain::stream`], and never settles).
     pub fn settled(&self) -> bool {
-        self.stats.loading == 0 && self.tree.waiting() == 0
+        self.stats.loading == 0
+            && self.stats.retry_waiting == 0
+            && self.tree.waiting() == 0
+            && self.root_failure.is_none()
     }
 
     /// Memory of the resident payloads, CPU and GPU side; payload kinds no

@@ -37,6 +37,9 @@ pub enum WorldError {
     CacheMiss { path: PathBuf, detail: String },
     #[error("loader worker failed while producing node {0}")]
     LoaderFailed(NodeId),
+    /// A root is always resident; without it nothing draws where it lies.
+    #[error("root node {node} could not be loaded ({attempts} attempts); last error: {cause}")]
+    RootUnavailable { node: NodeId, attempts: u32, cause: String },
 }
 
 pub type Result<T> = std::result::Result<T, WorldError>;

@@ -40,7 +40,10 @@ pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
 pub use resample_bound::RangeFit;
 pub use source::{GridSource, HeightSource};
-pub use streaming::{Arrival, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};
+pub use streaming::{
+    Arrival, FailureCounts, LoadFate, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer,
+    MAX_LOAD_ATTEMPTS,
+};
 pub use texels::{
     pack_normal, texel_index, unpack_normal, PayloadFormat, TexelKind, ATLAS_BORDER, ATLAS_SIDE, ATLAS_TEXELS,
     NORMAL_OCCLUSION, NORMAL_SMOOTHNESS, NORMAL_X, NORMAL_Y,

@@ -6,6 +6,11 @@
 //! projected error exceeds the renderer's target ([`RefineWant`]), so every
 //! refinement the camera asks for becomes possible within the budget.
 //!
+//! A failed load is retried after a backoff counted in frames (so the
+//! schedule is deterministic), up to [`ResidencyConfig::max_load_attempts`];
+//! then the node is given up: its parent keeps drawing, or, for a root,
+//! the caller gets an error (nothing could draw there).
+//!
 //! [`Residency`] is the bookkeeping (what is wanted, pending, resident);
 //! [`Streamer`] ties it to a [`Loader`] and tells the GPU side, per frame,
 //! which payloads arrived and which resident nodes to remove.
@@ -27,11 +32,18 @@ pub struct ResidencyConfig {
     pub ring_factor: f64,
     /// A held node is dropped only beyond `hysteresis * ring`.
     pub hysteresis: f64,
+    /// Loads of one node, the first included, before it is given up.
+    pub max_load_attempts: u32,
+    /// Backoff after the n-th failed load of a node: it is not wanted again
+    /// for `retry_frames << (n - 1)` frames (updates). With the defaults (4
+    /// attempts, 2 frames) the retries come 2, 4 and 8 frames after the
+    /// failures, and the fourth failure gives the node up.
+    pub retry_frames: u64,
 }
 
 impl Default for ResidencyConfig {
     fn default() -> Self {
-        ResidencyConfig { budget: 512, ring_factor: 1.75, hysteresis: 1.25 }
+        ResidencyConfig { budget: 512, ring_factor: 1.75, hysteresis: 1.25, max_load_attempts: 4, retry_frames: 2 }
     }
 }
 
@@ -77,6 +89,10 @@ pub struct ResidencyChanges {
     pub cancels: Vec<NodeId>,
 }
 
+/// Most loads of one node (the backoff doubles per failure: 2^31 frames
+/// is already "never").
+pub const MAX_LOAD_ATTEMPTS: u32 = 32;
+
 /// What to do with a payload that finished loading.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Arrival {
@@ -88,6 +104,35 @@ pub enum Arrival {
     Discard,
 }
 
+/// A node whose last load failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct FailedNode {
+    /// Failed loads so far.
+    attempts: u32,
+    /// Frame from which it may be wanted again; `None`: given up.
+    retry_at: Option<u64>,
+}
+
+/// What became of a failed load.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LoadFate {
+    /// Wanted again from frame `at_frame` (the `attempts`-th load failed).
+    Retry { attempts: u32, at_frame: u64 },
+    /// `attempts` loads failed: never wanted again.
+    GaveUp { attempts: u32 },
+}
+
+/// Failed loads so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FailureCounts {
+    /// Loads that failed (every attempt).
+    pub failures: usize,
+    /// Loads requested again after a failure.
+    pub retries: usize,
+    /// Nodes given up after `max_load_attempts` failures.
+    pub gave_up: usize,
+}
+
 /// Which nodes hold slots. Invariants after every call: slots used
 /// (pending and resident) never exceed the budget; the resident set
 /// contains each resident node's parent; once loaded, roots stay resident.
@@ -96,7 +141,10 @@ pub struct Residency {
     config: ResidencyConfig,
     roots: Vec<NodeId>,
     slots: HashMap<NodeId, Slot>,
-    failed: HashSet<NodeId>,
+    failed: HashMap<NodeId, FailedNode>,
+    counts: FailureCounts,
+    /// Updates so far: the clock of the retry backoff.
+    frame: u64,
     bounds: HashMap<NodeId, NodeBounds>,
 }
 
@@ -114,6 +162,12 @@ impl Residency {
         if !(c.hysteresis.is_finite() && c.hysteresis >= 1.0) {
             return Err(WorldError::InvalidConfig(format!("hysteresis must be finite and >= 1, got {}", c.hysteresis)));
         }
+        if !(1..=MAX_LOAD_ATTEMPTS).contains(&c.max_load_attempts) {
+            return Err(WorldError::InvalidConfig(format!(
+                "max load attempts must be 1..={MAX_LOAD_ATTEMPTS}, got {}",
+                c.max_load_attempts
+            )));
+        }
         let roots = world.roots();
         if roots.len() > c.budget {
             return Err(WorldError::BudgetTooSmall { roots: roots.len(), budget: c.budget });
@@ -123,7 +177,9 @@ impl Residency {
             config,
             roots,
             slots: HashMap::new(),
-            failed: HashSet::new(),
+            failed: HashMap::new(),
+            counts: FailureCounts::default(),
+            frame: 0,
             bounds: HashMap::new(),
         })
     }
@@ -154,9 +210,29 @@ impl Residency {
         self.slots.get(&id) == Some(&Slot::Resident)
     }
 
-    /// A load of `id` failed: it is never wanted again.
+    /// A load of `id` failed and it is not wanted now: waiting for its
+    /// retry, or given up (then with its subtree, never again).
     pub fn is_failed(&self, id: NodeId) -> bool {
-        self.failed.contains(&id)
+        self.failed.get(&id).is_some_and(|f| f.retry_at.is_none_or(|t| t > self.frame))
+    }
+
+    /// `id` failed `max_load_attempts` times and is never wanted again.
+    pub fn gave_up(&self, id: NodeId) -> bool {
+        self.failed.get(&id).is_some_and(|f| f.retry_at.is_none())
+    }
+
+    /// Nodes waiting for the backoff before their retry.
+    pub fn retry_waiting(&self) -> usize {
+        self.failed.values().filter(|f| f.retry_at.is_some_and(|t| t > self.frame)).count()
+    }
+
+    /// A root given up, if any: nothing can draw where it lies.
+    pub fn root_given_up(&self) -> Option<NodeId> {
+        self.roots.iter().copied().find(|r| self.gave_up(*r))
+    }
+
+    pub fn failure_counts(&self) -> FailureCounts {
+        self.counts
     }
 
     pub fn is_pending(&self, id: NodeId) -> bool {
@@ -178,16 +254,17 @@ impl Residency {
     /// node whose projected error `want` finds too large. Families come
     /// whole or not at all, nearest first.
     pub fn update_with(&mut self, camera_pos_m: [f64; 3], want: Option<&RefineWant>) -> ResidencyChanges {
+        self.frame += 1;
         let cam = [camera_pos_m[0], camera_pos_m[1]];
         // Top-down: a family is a candidate only if its parent's is one.
         let mut candidates: Vec<(f64, NodeId, Vec<NodeId>)> = Vec::new();
         let mut stack = self.roots.clone();
         while let Some(n) = stack.pop() {
-            if self.failed.contains(&n) {
+            if self.is_failed(n) {
                 continue;
             }
             let family: Vec<NodeId> =
-                self.world.valid_children(n).into_iter().filter(|c| !self.failed.contains(c)).collect();
+                self.world.valid_children(n).into_iter().filter(|c| !self.is_failed(*c)).collect();
             if family.is_empty() {
                 continue;
             }
@@ -210,7 +287,7 @@ impl Residency {
         // than its child, so a family comes after its parent's family.
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.lod.cmp(&a.1.lod)));
         let mut selected: HashSet<NodeId> = self.roots.iter().copied().collect();
-        let mut order = self.roots.clone();
+        let mut order: Vec<NodeId> = self.roots.iter().copied().filter(|r| !self.is_failed(*r)).collect();
         for (_, parent, family) in candidates {
             if selected.len() + family.len() > self.config.budget {
                 continue;
@@ -237,6 +314,7 @@ impl Residency {
             if let std::collections::hash_map::Entry::Vacant(e) = self.slots.entry(id) {
                 e.insert(Slot::Pending);
                 changes.adds.push(id);
+                self.counts.retries += usize::from(self.failed.contains_key(&id));
             }
         }
         changes
@@ -275,16 +353,29 @@ impl Residency {
             return Arrival::Defer;
         }
         self.slots.insert(id, Slot::Resident);
+        self.failed.remove(&id);
         Arrival::Accept
     }
 
-    /// A requested load failed: free its slot and never ask for it again
-    /// (its subtree is then never wanted either).
-    pub fn on_failed(&mut self, id: NodeId) {
+    /// A requested load failed: free its slot; it (and its subtree) is not
+    /// wanted until its backoff ends, or never again once it has failed
+    /// `max_load_attempts` times.
+    pub fn on_failed(&mut self, id: NodeId) -> LoadFate {
         if self.slots.get(&id) == Some(&Slot::Pending) {
             self.slots.remove(&id);
         }
-        self.failed.insert(id);
+        self.counts.failures += 1;
+        let f = self.failed.entry(id).or_insert(FailedNode { attempts: 0, retry_at: None });
+        f.attempts += 1;
+        if f.attempts >= self.config.max_load_attempts {
+            f.retry_at = None;
+            self.counts.gave_up += 1;
+            return LoadFate::GaveUp { attempts: f.attempts };
+        }
+        let backoff = self.config.retry_frames.saturating_mul(1 << (f.attempts - 1));
+        let at_frame = self.frame.saturating_add(backoff);
+        f.retry_at = Some(at_frame);
+        LoadFate::Retry { attempts: f.attempts, at_frame }
     }
 }
 
@@ -304,7 +395,9 @@ fn dist_to_box(p: [f64; 2], b: [f64; 4]) -> f64 {
 pub struct StreamFrame {
     pub arrived: Vec<BakedNode>,
     pub removed: Vec<NodeId>,
+    /// Loads that failed this frame, and what becomes of each node.
     pub failed: Vec<(NodeId, WorldError)>,
+    pub fates: Vec<LoadFate>,
 }
 
 /// Residency driven by a loader.
@@ -343,7 +436,7 @@ impl Streamer {
                     self.parked.insert(id, node);
                 }
                 Err(e) => {
-                    self.residency.on_failed(id);
+                    frame.fates.push(self.residency.on_failed(id));
                     frame.failed.push((id, e));
                 }
             }

@@ -268,12 +268,14 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     );
     let st = renderer.terrain.stats();
     println!(
-        "stream: {} resident of {} slots, {} loading, {} waiting upload, {} failed; {} after {} frames, {:.2} s (lazy bake)",
+        "stream: {} resident of {} slots, {} loading, {} waiting upload, {} failed loads ({} retried, {} nodes given up); {} after {} frames, {:.2} s (lazy bake)",
         st.resident,
         args.slots,
         st.loading,
         st.waiting_upload,
         st.failed,
+        st.retried,
+        st.gave_up,
         if settle.settled { "settled" } else { "NOT settled (--settle-seconds ran out)" },
         settle.frames,
         settle.seconds
