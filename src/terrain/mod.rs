@@ -19,8 +19,8 @@ use crate::gpu::Context;
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
 use crate::world::{
-    bake_node, HeightSource, Hole, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency, ResidencyConfig,
-    Streamer, WorldDesc,
+    bake_node, HeightSource, Hole, Limits, LoadFn, Loader, MemoryReport, NodeCache, RefineWant, Residency,
+    ResidencyConfig, Streamer, WorldDesc, WorldPlan,
 };
 use serde::Serialize;
 use std::path::PathBuf;
@@ -41,6 +41,9 @@ pub struct TerrainOptions {
     /// Payload atlases kept on the GPU (the renderer keeps only those its
     /// effects read).
     pub atlases: AtlasSet,
+    /// What a world may cost ([`WorldPlan`]); the device's own limits are
+    /// added from the context.
+    pub limits: Limits,
 }
 
 impl Default for TerrainOptions {
@@ -53,8 +56,24 @@ impl Default for TerrainOptions {
             cache_dir: None,
             ring_prefetch: true,
             atlases: AtlasSet::ALL,
+            limits: Limits::default(),
         }
     }
+}
+
+/// Refuses a world over `options.limits` or the device's limits, before
+/// the quadtree's shadow and texture (sized by the world) are allocated.
+pub fn check_plan(ctx: &Context, world: &WorldDesc, options: &TerrainOptions) -> Result<()> {
+    world.validate()?;
+    let device = &ctx.info().limits;
+    let limits = Limits {
+        max_image_dimension_2d: Some(device.max_image_dimension_2d),
+        max_image_array_layers: Some(device.max_image_array_layers),
+        ..options.limits.clone()
+    };
+    let plan = WorldPlan::new(world, None).with_slots(options.slots);
+    plan.check(&limits).map_err(crate::world::WorldError::from)?;
+    Ok(())
 }
 
 /// Streaming counters after the last frame.
@@ -84,7 +103,7 @@ impl Terrain {
         holes: Vec<Hole>,
         options: &TerrainOptions,
     ) -> Result<Self> {
-        world.validate()?;
+        check_plan(ctx, world, options)?;
         let tree = GpuQuadtree::new(ctx, world, options.slots, options.frames_in_flight, options.atlases)?;
         let config = ResidencyConfig { budget: options.slots as usize, ..ResidencyConfig::default() };
         let residency = Residency::new(world, config)?;

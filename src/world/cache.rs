@@ -26,6 +26,11 @@ const CRC_BYTES: usize = 4;
 /// Distinguishes temp files of concurrent writers in one process.
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
+/// Bytes of one node file, for plans made before anything is baked.
+pub fn estimated_file_bytes() -> u64 {
+    (HEADER_BYTES + BakedNode::SERIALIZED_BYTES + CRC_BYTES) as u64
+}
+
 /// Why a node was (re)baked instead of read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CacheOutcome {

@@ -13,14 +13,16 @@ mod layout;
 mod loader;
 mod memory;
 mod payload;
+mod plan;
 mod png16;
 mod procedural;
+mod progress;
 mod resample_bound;
 mod source;
 mod streaming;
 
 pub use bake::{bake_node, bake_world, nodes_in_region, BakeStats};
-pub use cache::{CacheOutcome, MissReason, NodeCache};
+pub use cache::{estimated_file_bytes, CacheOutcome, MissReason, NodeCache};
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
 pub use exr_source::{write_height_exr, ExrSource};
@@ -33,8 +35,13 @@ pub use layout::{
 pub use loader::{LoadFn, Loader};
 pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
 pub use payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
+pub use plan::{
+    Limits, PlanError, TimeBasis, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES, DEFAULT_MAX_SECTORS_PER_SIDE, DEFAULT_SLOTS,
+    NODE_BAKE_THREAD_SECONDS,
+};
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
+pub use progress::Progress;
 pub use resample_bound::RangeFit;
 pub use source::{GridSource, HeightSource};
 pub use streaming::{Arrival, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer};

@@ -207,14 +207,20 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
 
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
     let options = RendererOptions {
-        terrain: TerrainOptions { slots: args.slots, cache_dir: args.cache.clone(), ..TerrainOptions::default() },
+        terrain: TerrainOptions {
+            slots: args.slots,
+            cache_dir: args.cache.clone(),
+            limits: world.limits.clone(),
+            ..TerrainOptions::default()
+        },
         stages: args.cull,
         effects: world.effects.clone(),
         origin_m: world.origin_m,
         ..RendererOptions::default()
     };
     let d = &world.desc;
-    let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)?;
+    let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
+        .map_err(crate::world_args::plan_error_is_input)?;
     let mode = match args.queues {
         QueuesArg::Auto => QueueMode::auto(ctx.info()),
         QueuesArg::Mode(m) => m,
