@@ -181,10 +181,16 @@ fn negative_camera_coordinates_are_numbers() {
 
 #[test]
 fn a_world_too_large_for_the_device_says_so_in_world_terms() {
-    // 62 500 sectors of 64 m per side: wider than any device's 2D images.
+    // 62 500 sectors of 64 m per side: over the default --max-sectors, and
+    // with it raised, wider than any device's 2D images (the plan's device
+    // check in the library, before the quadtree is allocated).
     let (ok, _, err) = vista(&["render", "--extent", "4000000", "--size", "8x8", "--frames", "1"]);
+    assert!(!ok && err.contains("62500 x 62500 sectors of 64 m") && err.contains("--max-sectors"), "{err}");
+    let args = ["render", "--extent", "4000000", "--max-sectors", "100000", "--size", "8x8", "--frames", "1"];
+    let (ok, _, err) = vista(&args);
     assert!(!ok);
-    for n in ["the world's quadtree", "62500 x 62500 sectors of 64 m", "MiB of GPU memory", "larger spacing"] {
+    for n in ["node texture would be 62528 x 62528 texels", "62500 x 62500 sectors", "this device allows", "--spacing"]
+    {
         assert!(err.contains(n), "{n:?} missing from: {err}");
     }
     assert!(!err.contains("quadtree_nodes") && !err.contains("image \""), "{err}");

@@ -167,6 +167,8 @@ impl TerrainRenderer {
         holes: Vec<Hole>,
         options: &RendererOptions,
     ) -> Result<Self> {
+        // Before any pass allocates: a world over its limits fails alone.
+        crate::terrain::check_plan(ctx, world, &options.terrain)?;
         let decisions = decide(&options.effects, &world_content(world, &holes), options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         // The geometry pass classifies by the baked normal.

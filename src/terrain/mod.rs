@@ -19,8 +19,8 @@ use crate::gpu::Context;
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
 use crate::world::{
-    bake_node_with, BakeSettings, HeightSource, Hole, LoadFate, LoadFn, Loader, MemoryReport, NodeCache, NodeId,
-    RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError,
+    bake_node_with, BakeSettings, HeightSource, Hole, Limits, LoadFate, LoadFn, Loader, MemoryReport, NodeCache,
+    NodeId, RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError, WorldPlan,
 };
 use serde::Serialize;
 use std::path::PathBuf;
@@ -41,6 +41,9 @@ pub struct TerrainOptions {
     /// Payload atlases kept on the GPU (the renderer keeps only those its
     /// effects read).
     pub atlases: AtlasSet,
+    /// What a world may cost ([`WorldPlan`]); the device's own limits are
+    /// added from the context.
+    pub limits: Limits,
     /// Texel formats and material rules of the bake.
     pub bake: BakeSettings,
     /// Produces the payloads instead of baking from the source (and the
@@ -77,8 +80,24 @@ impl Default for TerrainOptions {
             load: None,
             max_load_attempts: ResidencyConfig::default().max_load_attempts,
             retry_frames: ResidencyConfig::default().retry_frames,
+            limits: Limits::default(),
         }
     }
+}
+
+/// Refuses a world over `options.limits` or the device's limits, before
+/// the quadtree's shadow and texture (sized by the world) are allocated.
+pub fn check_plan(ctx: &Context, world: &WorldDesc, options: &TerrainOptions) -> Result<()> {
+    world.validate()?;
+    let device = &ctx.info().limits;
+    let limits = Limits {
+        max_image_dimension_2d: Some(device.max_image_dimension_2d),
+        max_image_array_layers: Some(device.max_image_array_layers),
+        ..options.limits.clone()
+    };
+    let plan = WorldPlan::new(world, None).with_format(options.bake.format).with_slots(options.slots);
+    plan.check(&limits).map_err(crate::world::WorldError::from)?;
+    Ok(())
 }
 
 /// Streaming counters after the last frame.
@@ -117,7 +136,7 @@ impl Terrain {
         holes: Vec<Hole>,
         options: &TerrainOptions,
     ) -> Result<Self> {
-        world.validate()?;
+        check_plan(ctx, world, options)?;
         options.bake.materials.validate()?;
         let tree = GpuQuadtree::new(
             ctx,

@@ -4,7 +4,6 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use super::cache::{CacheOutcome, NodeCache};
@@ -15,6 +14,8 @@ use super::holes::Hole;
 use super::layout::{NodeId, WorldDesc, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES};
 use super::material_rules::MaterialRules;
 use super::payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
+use super::plan::{Limits, WorldPlan};
+use super::progress::{Progress, Reporter};
 use super::source::HeightSource;
 use super::texels::{pack_normal, texel_index, PayloadFormat, TexelKind, ATLAS_BORDER, ATLAS_SIDE, ATLAS_TEXELS};
 
@@ -274,30 +275,24 @@ pub fn bake_world(
     settings: &BakeSettings,
     region: Option<[f64; 4]>,
     cache_dir: &Path,
-    progress: bool,
+    progress: impl Into<Progress>,
 ) -> Result<BakeStats> {
     let start = Instant::now();
     let cache = NodeCache::with_settings(cache_dir, *world, source, holes.to_vec(), *settings)?;
+    // Before the node list, which grows with the world.
+    WorldPlan::new(world, region).check(&Limits::default())?;
     let nodes = nodes_in_region(world, region);
-    let bar = if progress {
-        let bar = ProgressBar::new(nodes.len() as u64);
-        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} nodes {per_sec} eta {eta}") {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let bar = Reporter::new(progress.into(), nodes.len() as u64);
     let outcomes = nodes
         .par_iter()
         .map(|&id| {
             let (_, outcome) = cache.get_or_bake(id)?;
-            bar.inc(1);
+            bar.inc();
             let bytes = std::fs::metadata(cache.path(id)).map(|m| m.len()).unwrap_or(0);
             Ok((id, outcome, bytes))
         })
         .collect::<Result<Vec<_>>>()?;
-    bar.finish_and_clear();
+    bar.finish();
     let mut stats = BakeStats { nodes_per_lod: vec![0; world.lod_count as usize], ..BakeStats::default() };
     for (id, outcome, bytes) in outcomes {
         stats.nodes_per_lod[id.lod as usize] += 1;

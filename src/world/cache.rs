@@ -43,6 +43,15 @@ pub fn uncompressed_file_bytes(format: PayloadFormat) -> u64 {
     (HEADER_BYTES + BakedNode::serialized_bytes(format) + CRC_BYTES) as u64
 }
 
+/// zstd's ratio over the node files of the whole default world (1.49:1,
+/// `vista bake` with BC payloads); plans use it before anything is baked.
+const PLANNED_ZSTD_RATIO: f64 = 1.49;
+
+/// Bytes of one node file, for plans made before anything is baked.
+pub fn estimated_file_bytes(format: PayloadFormat) -> u64 {
+    (uncompressed_file_bytes(format) as f64 / PLANNED_ZSTD_RATIO) as u64
+}
+
 /// Why a node was (re)baked instead of read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CacheOutcome {

@@ -35,6 +35,9 @@ pub enum WorldError {
     InvalidConfig(String),
     #[error("cache file {}: {detail}", path.display())]
     CacheMiss { path: PathBuf, detail: String },
+    /// The world is over a limit of its plan; the message names the option.
+    #[error(transparent)]
+    Plan(#[from] super::plan::PlanError),
     #[error("loader worker failed while producing node {0}")]
     LoaderFailed(NodeId),
     /// A root is always resident; without it nothing draws where it lies.

@@ -14,15 +14,17 @@ mod loader;
 mod material_rules;
 mod memory;
 mod payload;
+mod plan;
 mod png16;
 mod procedural;
+mod progress;
 mod resample_bound;
 mod source;
 mod streaming;
 mod texels;
 
 pub use bake::{bake_node, bake_node_with, bake_world, nodes_in_region, BakeSettings, BakeStats};
-pub use cache::{uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache};
+pub use cache::{estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache};
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
 pub use exr_source::{write_height_exr, ExrSource};
@@ -36,8 +38,13 @@ pub use loader::{LoadFn, Loader};
 pub use material_rules::MaterialRules;
 pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
 pub use payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
+pub use plan::{
+    Limits, PlanError, TimeBasis, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES, DEFAULT_MAX_SECTORS_PER_SIDE, DEFAULT_SLOTS,
+    NODE_BAKE_THREAD_SECONDS,
+};
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
+pub use progress::Progress;
 pub use resample_bound::RangeFit;
 pub use source::{GridSource, HeightSource};
 pub use streaming::{

@@ -2,15 +2,15 @@
 //! needed to size a whole world from a small region.
 
 use std::fmt::Write as _;
-use std::io::{IsTerminal as _, Write as _};
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use serde::Serialize;
-use vista::world::{bake_world, nodes_in_region, MemoryReport, WorldDesc};
+use vista::world::{bake_world, Limits, MemoryReport, Progress, WorldDesc, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES};
 
-use crate::world_args::{parse_list, LoadedWorld, WorldArgs};
+use crate::world_args::{parse_f64, parse_list, LoadedWorld, WorldArgs};
 
 /// Resident slots the bake's memory report assumes (the streamer's default
 /// budget order of magnitude).
@@ -18,6 +18,11 @@ const REPORT_SLOTS: usize = 512;
 /// Upper bound for `--slots`: far beyond any GPU, and keeps byte totals
 /// from overflowing.
 const MAX_SLOTS: u64 = 1 << 24;
+/// Nodes a dry run bakes (in memory) to time the source: about a tenth of a
+/// second for the procedural world on two cores.
+const DRY_RUN_SAMPLES: usize = 8;
+// `--max-disk`'s default, in GiB as the option takes it.
+const _: () = assert!(DEFAULT_MAX_BAKE_DISK_BYTES == 64 << 30);
 
 #[derive(Args)]
 pub struct BakeArgs {
@@ -31,9 +36,25 @@ pub struct BakeArgs {
     /// the report then extrapolates time and disk size to the whole world.
     #[arg(long, value_name = "MINX,MINY,MAXX,MAXY", value_parser = parse_region, allow_hyphen_values = true)]
     pub region: Option<[f64; 4]>,
-    /// No progress bar (it is shown only when stderr is a terminal anyway).
+    /// No progress: neither the bar (on a terminal) nor the plain line
+    /// printed every few seconds otherwise.
     #[arg(long)]
     pub no_progress: bool,
+    /// Print the plan (sectors, nodes per LOD, disk and GPU bytes, the
+    /// estimated time) and exit without baking; exits 2 if the bake would
+    /// be refused.
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Bake even if the estimated disk size is over --max-disk.
+    #[arg(long)]
+    pub yes: bool,
+    /// Largest estimated disk size a bake may have without --yes, GiB.
+    #[arg(long, value_name = "GIB", value_parser = parse_gib, default_value = "64")]
+    pub max_disk: u64,
+    /// Seconds between plain progress lines when stderr is not a terminal
+    /// (also forces them on a terminal); for tests and logs.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, hide = true)]
+    pub progress_every: Option<f64>,
     /// Also write the figures as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -46,6 +67,24 @@ pub struct MemoryArgs {
     /// Resident node slots to account for.
     #[arg(long, default_value_t = REPORT_SLOTS as u64, value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS))]
     pub slots: u64,
+}
+
+fn parse_gib(s: &str) -> Result<u64, String> {
+    let v = parse_f64(s, "--max-disk")?;
+    if v < 0.0 {
+        return Err(format!("--max-disk {s:?} must not be negative"));
+    }
+    Ok((v * f64::from(1u32 << 30)) as u64)
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    parse_f64(s, "--progress-every").and_then(|v| {
+        if v < 0.0 {
+            Err(format!("--progress-every {s:?} must not be negative"))
+        } else {
+            Ok(v)
+        }
+    })
 }
 
 fn parse_region(s: &str) -> Result<[f64; 4], String> {
@@ -103,23 +142,51 @@ impl MemoryJson {
 }
 
 pub fn bake(args: BakeArgs) -> Result<()> {
-    let w = args.world.load()?;
+    let spec = args.world.resolve()?;
     if let Some(r) = args.region {
-        let [ex, ey] = w.desc.extent_m;
+        let [ex, ey] = spec.desc.extent_m;
         if r[2] <= 0.0 || r[3] <= 0.0 || r[0] >= ex || r[1] >= ey {
             bail!("--region {},{},{},{} does not overlap the world (0..{ex} x 0..{ey} m)", r[0], r[1], r[2], r[3]);
         }
     }
+    let mut plan = spec.plan(args.region).with_slots(REPORT_SLOTS as u32);
+    let cap = (!args.yes).then_some(args.max_disk);
+    let limits = Limits { max_bake_disk_bytes: cap, ..spec.limits.clone() };
+    if args.dry_run {
+        // The plan even of a refused world: what it would cost is the point.
+        let mut out = format!("world:    {}\n", spec.label());
+        if let Err(e) = spec.check(&plan, &limits) {
+            write!(out, "{plan}")?;
+            emit(&out)?;
+            return Err(e);
+        }
+        let w = spec.open()?;
+        plan.measure_bake(&*w.source, &w.holes, &w.bake, DRY_RUN_SAMPLES);
+        let mut out = String::new();
+        writeln!(out, "{}", world_line(&w))?;
+        write!(out, "{plan}")?;
+        writeln!(out, "dry run: nothing baked")?;
+        return emit(&out);
+    }
+    spec.check(&plan, &limits)?;
     crate::out_path::prepare_out_dir(&args.out, "--out", "the node cache: lod{k}/{x}_{y}.vnode")?;
     if let Some(json) = &args.json {
         crate::out_path::check_out_file(json, "--json")?;
     }
-    let progress = !args.no_progress && std::io::stderr().is_terminal();
+    let w = spec.open()?;
+    let progress = match (args.no_progress, args.progress_every) {
+        (true, _) => Progress::Hidden,
+        (false, Some(s)) => Progress::Lines { every: std::time::Duration::from_secs_f64(s) },
+        (false, None) => Progress::auto(),
+    };
+    if progress != Progress::Hidden {
+        eprintln!("baking {} (`vista bake --dry-run` prints the plan)", plan.summary());
+    }
     let stats = bake_world(w.source.clone(), &w.desc, &w.holes, &w.bake, args.region, &args.out, progress)
         .with_context(|| format!("baking into {}", args.out.display()))?;
     let nodes = stats.baked + stats.cached;
     let per_node = |v: f64| if nodes == 0 { 0.0 } else { v / nodes as f64 };
-    let full_world_nodes = nodes_in_region(&w.desc, None).len();
+    let full_world_nodes = plan.world_nodes as usize;
     let memory = MemoryReport::for_format(REPORT_SLOTS, w.bake.format);
     let report = BakeReport {
         source: w.label.clone(),
@@ -161,10 +228,10 @@ fn emit(text: &str) -> Result<()> {
     }
 }
 
-fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
+/// `world:` and what it is, for the reports.
+fn world_line(w: &LoadedWorld) -> String {
     let d = &w.desc;
-    writeln!(
-        out,
+    format!(
         "world:    {} ({} x {} m, heights {}..{} m, spacing {} m, {} LODs, {} holes)",
         w.label,
         d.extent_m[0],
@@ -174,7 +241,11 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
         d.spacing_m,
         d.lod_count,
         w.holes.len()
-    )?;
+    )
+}
+
+fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
+    writeln!(out, "{}", world_line(w))?;
     match r.region {
         Some(g) => writeln!(out, "region:   {},{} .. {},{} m", g[0], g[1], g[2], g[3]),
         None => writeln!(out, "region:   whole world"),
@@ -228,7 +299,8 @@ fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 pub fn memory(args: MemoryArgs) -> Result<()> {
     let w = args.world.load()?;
     let mut out = String::new();
-    let full = nodes_in_region(&w.desc, None).len();
+    // Counted, not listed: a huge world costs no memory to account for.
+    let full = WorldPlan::new(&w.desc, None).world_nodes as usize;
     // Bounded by MAX_SLOTS, so it fits usize everywhere clap runs.
     let slots = args.slots as usize;
     writeln!(out, "world:    {} ({} nodes over {} LODs)", w.label, full, w.desc.lod_count)?;

@@ -67,11 +67,25 @@ fn main() {
         Ok(cli) => cli,
         Err(e) => exit_on_usage_error(e),
     };
-    if let Err(e) = run(cli) {
+    let result = run(cli);
+    write_peak_rss();
+    if let Err(e) = result {
         eprintln!("error: {e:#}");
         // Bad input (a scene, a height map, a view) is the caller's to fix:
         // exit 2 like a usage error; 1 is a failure while running.
         std::process::exit(if e.chain().any(|c| c.is::<InputError>()) { 2 } else { 1 });
+    }
+}
+
+/// Tests read the process's peak memory here (`VISTA_PEAK_RSS_FILE=PATH`):
+/// the kernel's high-water mark, VmHWM of /proc/self/status (Linux), which
+/// unlike a sample taken from outside cannot miss a short-lived peak.
+fn write_peak_rss() {
+    let Some(path) = std::env::var_os("VISTA_PEAK_RSS_FILE") else { return };
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let line = status.lines().find(|l| l.starts_with("VmHWM:")).unwrap_or("VmHWM: unknown");
+    if let Err(e) = std::fs::write(&path, format!("{line}\n")) {
+        eprintln!("warning: cannot write VISTA_PEAK_RSS_FILE {}: {e}", std::path::Path::new(&path).display());
     }
 }
 

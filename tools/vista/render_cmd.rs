@@ -211,6 +211,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
             slots: args.slots,
             cache_dir: args.cache.clone(),
             bake: world.bake,
+            limits: world.limits.clone(),
             ..TerrainOptions::default()
         },
         stages: args.cull,
@@ -219,7 +220,8 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         ..RendererOptions::default()
     };
     let d = &world.desc;
-    let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)?;
+    let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
+        .map_err(crate::world_args::plan_error_is_input)?;
     let mode = match args.queues {
         QueuesArg::Auto => QueueMode::auto(ctx.info()),
         QueuesArg::Mode(m) => m,

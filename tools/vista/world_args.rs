@@ -9,7 +9,8 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use vista::render::Effects;
 use vista::world::{
-    BakeSettings, ExrSource, GridSource, HeightSource, Hole, PayloadFormat, Png16Source, ProceduralSource, WorldDesc,
+    BakeSettings, ExrSource, GridSource, HeightSource, Hole, Limits, PayloadFormat, Png16Source, ProceduralSource,
+    WorldDesc, WorldError, WorldPlan, DEFAULT_MAX_SECTORS_PER_SIDE,
 };
 
 use crate::scene::{Scene, SceneSource};
@@ -67,6 +68,10 @@ pub struct WorldArgs {
     /// uncompressed reference, to measure what compression costs).
     #[arg(long, value_name = "bc|rgba8", default_value_t = PayloadFormat::Bc, help_heading = "World")]
     pub payload: PayloadFormat,
+    /// Refuse worlds with more LOD-0 sectors than this along either side,
+    /// checked before anything is read or allocated [default: 16384].
+    #[arg(long, value_name = "N", help_heading = "World")]
+    pub max_sectors: Option<u64>,
 }
 
 /// A resolved world, ready to bake or render.
@@ -83,6 +88,9 @@ pub struct LoadedWorld {
     pub origin_m: [f64; 2],
     /// Payload format and the scene's material rules.
     pub bake: BakeSettings,
+    /// The limits it was planned against (the library checks them again
+    /// with the device's).
+    pub limits: Limits,
 }
 
 impl LoadedWorld {
@@ -98,15 +106,43 @@ impl LoadedWorld {
     }
 }
 
+/// A world resolved from the arguments, its height map not yet read: enough
+/// for the plan; nothing but the scene file has been read.
+pub struct WorldSpec {
+    /// Geometry; a height map's height range is settled when it is opened.
+    pub desc: WorldDesc,
+    source: SpecSource,
+    holes: Vec<Hole>,
+    effects: Effects,
+    origin_m: [f64; 2],
+    pub limits: Limits,
+    /// Payload format and the scene's material rules.
+    pub bake: BakeSettings,
+}
+
+enum SpecSource {
+    Procedural { seed: u64 },
+    Heightmap { path: PathBuf, kind: MapKind, height_range: Option<GivenRange>, clamp: bool },
+}
+
 impl WorldArgs {
     /// Resolves the arguments (and the scene file, if any) into a validated
-    /// world. Every failure is a one-line message naming the culprit, marked
-    /// as the user's input (exit code 2).
+    /// world, refused before its source is read if its plan breaks a limit.
+    /// Every failure is a one-line message naming the culprit, marked as the
+    /// user's input (exit code 2).
     pub fn load(&self) -> Result<LoadedWorld> {
-        self.load_inner().map_err(|e| anyhow::Error::new(crate::InputError(format!("{e:#}"))))
+        let spec = self.resolve()?;
+        spec.check(&spec.plan(None), &spec.limits)?;
+        spec.open()
     }
 
-    fn load_inner(&self) -> Result<LoadedWorld> {
+    /// The world's geometry and where its heights come from, without
+    /// reading them.
+    pub fn resolve(&self) -> Result<WorldSpec> {
+        self.resolve_inner().map_err(input_error)
+    }
+
+    fn resolve_inner(&self) -> Result<WorldSpec> {
         if let (Some(s), Some(h)) = (&self.scene, &self.heightmap) {
             bail!("--scene {} and --heightmap {} both choose the world; give one", s.display(), h.display());
         }
@@ -139,27 +175,83 @@ impl WorldArgs {
         holes.extend(self.hole_circle.iter().cloned());
         let holes = holes.iter().map(|h| h.relative_to(origin_m)).collect();
 
-        let (desc, source, label): (WorldDesc, Arc<dyn HeightSource>, String) = match heightmap {
+        let (desc, source) = match heightmap {
             None => {
                 let extent_m = extent.unwrap_or(defaults.extent_m);
                 let height_range_m = height_range.map_or(defaults.height_range_m, |r| r.range);
                 let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count };
                 check_desc(&desc)?;
-                let source = ProceduralSource::new(seed, extent_m, height_range_m)?;
-                (desc, Arc::new(source), format!("procedural (seed {seed})"))
+                (desc, SpecSource::Procedural { seed })
             }
             Some((path, what)) => {
                 let Some(extent_m) = extent else {
                     bail!("{what} {} needs --extent METRES (the world size it covers)", path.display());
                 };
-                let geometry = WorldDesc { extent_m, height_range_m: [0.0, 1.0], spacing_m, lod_count };
-                let (desc, source) = open_heightmap(&path, what, geometry, height_range, clamp)?;
+                let height_range_m = height_range.map_or([0.0, 1.0], |r| r.range);
+                let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count };
+                // An absurd world fails before the file is opened.
+                check_desc(&desc)?;
+                let kind = heightmap_kind(&path, what, height_range)?;
+                (desc, SpecSource::Heightmap { path, kind, height_range, clamp })
+            }
+        };
+        let max_sectors_per_side = self.max_sectors.unwrap_or(DEFAULT_MAX_SECTORS_PER_SIDE);
+        let limits = Limits { max_sectors_per_side, ..Limits::default() };
+        let bake = BakeSettings { format: self.payload, materials: scene.material_rules };
+        Ok(WorldSpec { desc, source, holes, effects: scene.effects, origin_m, limits, bake })
+    }
+}
+
+impl WorldSpec {
+    /// What the terrain comes from, before it is read.
+    pub fn label(&self) -> String {
+        match &self.source {
+            SpecSource::Procedural { seed } => format!("procedural (seed {seed})"),
+            SpecSource::Heightmap { path, .. } => path.display().to_string(),
+        }
+    }
+
+    /// The plan of `region` (`None`: the whole world).
+    pub fn plan(&self, region: Option<[f64; 4]>) -> WorldPlan {
+        WorldPlan::new(&self.desc, region).with_format(self.bake.format)
+    }
+
+    /// The plan against `limits`, as the user's input error.
+    pub fn check(&self, plan: &WorldPlan, limits: &Limits) -> Result<()> {
+        plan.check(limits).map_err(|e| anyhow::Error::new(crate::InputError(e.to_string())))
+    }
+
+    /// Reads the height map (or makes the procedural source).
+    pub fn open(self) -> Result<LoadedWorld> {
+        let (desc, source, label): (WorldDesc, Arc<dyn HeightSource>, String) = match self.source {
+            SpecSource::Procedural { seed } => {
+                let d = self.desc;
+                let source = ProceduralSource::new(seed, d.extent_m, d.height_range_m).map_err(input_error)?;
+                (d, Arc::new(source), format!("procedural (seed {seed})"))
+            }
+            SpecSource::Heightmap { path, kind, height_range, clamp } => {
+                let (desc, source) =
+                    open_heightmap(&path, kind, self.desc, height_range, clamp).map_err(input_error)?;
                 (desc, source, path.display().to_string())
             }
         };
-        let bake = BakeSettings { format: self.payload, materials: scene.material_rules };
-        Ok(LoadedWorld { desc, source, holes, effects: scene.effects, label, origin_m, bake })
+        let (holes, effects, origin_m, limits, bake) =
+            (self.holes, self.effects, self.origin_m, self.limits, self.bake);
+        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake })
     }
+}
+
+/// A library error; a world over the device's limits (found when the
+/// renderer is made) is the user's to fix, like any other plan refusal.
+pub fn plan_error_is_input(e: vista::Error) -> anyhow::Error {
+    match e {
+        vista::Error::World(WorldError::Plan(p)) => anyhow::Error::new(crate::InputError(p.to_string())),
+        e => e.into(),
+    }
+}
+
+fn input_error(e: impl Into<anyhow::Error>) -> anyhow::Error {
+    anyhow::Error::new(crate::InputError(format!("{:#}", e.into())))
 }
 
 /// Validates before any file is read, so an absurd size fails at once.
@@ -194,17 +286,16 @@ impl std::fmt::Display for GivenRange {
     }
 }
 
-/// `geometry`'s height range is a placeholder: the file decides it.
-fn open_heightmap(
-    path: &Path,
-    what: &str,
-    geometry: WorldDesc,
-    height_range: Option<GivenRange>,
-    clamp: bool,
-) -> Result<(WorldDesc, Arc<dyn HeightSource>)> {
-    // Geometry first, so an absurd world fails before any file is read.
-    let probe = WorldDesc { height_range_m: height_range.map_or([0.0, 1.0], |r| r.range), ..geometry };
-    check_desc(&probe)?;
+/// A height map's kind, by its first bytes.
+#[derive(Clone, Copy, PartialEq)]
+enum MapKind {
+    Png,
+    Exr,
+}
+
+/// Reads the first bytes only: a wrong file or a missing argument is told
+/// before the plan, and no pixel is read.
+fn heightmap_kind(path: &Path, what: &str, height_range: Option<GivenRange>) -> Result<MapKind> {
     if path.is_dir() {
         bail!("{what} {} is a directory, expected a PNG or EXR height map file", path.display());
     }
@@ -216,23 +307,41 @@ fn open_heightmap(
         }
         return Err(e).with_context(|| format!("reading {what} {}", path.display()));
     }
-    if magic == PNG_MAGIC {
-        let Some(given) = height_range else {
-            bail!("{what} {} is a PNG: give --height-range LO HI (metres of 0 and 65535)", path.display());
-        };
-        let source = Png16Source::open(path, geometry.extent_m, given.range)?;
-        Ok((probe, Arc::new(source)))
-    } else if magic == EXR_MAGIC {
-        let source = ExrSource::open(path, geometry.extent_m)?;
-        let range = match height_range {
-            Some(given) => checked_range(&source, path, given, clamp)?,
-            None => auto_range(source.grid()),
-        };
-        let desc = WorldDesc { height_range_m: range, ..probe };
-        check_desc(&desc)?;
-        Ok((desc, Arc::new(source)))
-    } else {
-        bail!("{what} {} is neither a PNG nor an OpenEXR file (by its first bytes)", path.display())
+    match magic {
+        PNG_MAGIC if height_range.is_none() => {
+            bail!("{what} {} is a PNG: give --height-range LO HI (metres of 0 and 65535)", path.display())
+        }
+        PNG_MAGIC => Ok(MapKind::Png),
+        EXR_MAGIC => Ok(MapKind::Exr),
+        _ => bail!("{what} {} is neither a PNG nor an OpenEXR file (by its first bytes)", path.display()),
+    }
+}
+
+/// `geometry` was checked and planned; its height range is the given one
+/// (a placeholder without one: an EXR's data decides it).
+fn open_heightmap(
+    path: &Path,
+    kind: MapKind,
+    geometry: WorldDesc,
+    height_range: Option<GivenRange>,
+    clamp: bool,
+) -> Result<(WorldDesc, Arc<dyn HeightSource>)> {
+    match (kind, height_range) {
+        (MapKind::Png, Some(given)) => {
+            let source = Png16Source::open(path, geometry.extent_m, given.range)?;
+            Ok((geometry, Arc::new(source)))
+        }
+        (MapKind::Png, None) => unreachable!("heightmap_kind refuses a PNG without a height range"),
+        (MapKind::Exr, _) => {
+            let source = ExrSource::open(path, geometry.extent_m)?;
+            let range = match height_range {
+                Some(given) => checked_range(&source, path, given, clamp)?,
+                None => auto_range(source.grid()),
+            };
+            let desc = WorldDesc { height_range_m: range, ..geometry };
+            check_desc(&desc)?;
+            Ok((desc, Arc::new(source)))
+        }
     }
 }
 

@@ -1,0 +1,453 @@
+//! The plan of a world, computed before any work: sectors, nodes per LOD,
+//! bytes on disk and on the GPU, and the estimated bake time; checked
+//! against [`Limits`] so an absurd world is refused before anything sized by
+//! it is allocated. Everything here is arithmetic on the [`WorldDesc`]: no
+//! allocation grows with the node count.
+
+use std::fmt;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::bake::{bake_node_with, BakeSettings};
+use super::cache::estimated_file_bytes;
+use super::holes::Hole;
+use super::layout::{NodeId, WorldDesc};
+use super::memory::MemoryReport;
+use super::source::HeightSource;
+use super::texels::PayloadFormat;
+
+/// Default for [`Limits::max_sectors_per_side`]: the largest node texture
+/// most GPUs allow (16384 texels a side), and a CPU quadtree shadow of
+/// about 700 MiB at that size.
+pub const DEFAULT_MAX_SECTORS_PER_SIDE: u64 = 16384;
+/// Default cap on a bake's estimated disk size without `--yes`.
+pub const DEFAULT_MAX_BAKE_DISK_BYTES: u64 = 64 << 30;
+/// Resident slots a plan assumes when none are given (the renderer's
+/// default budget).
+pub const DEFAULT_SLOTS: u32 = 512;
+/// Single-thread seconds to bake one node when no sample was timed: the
+/// whole default procedural world baked and written (`vista bake`, 34 125
+/// nodes, BC payloads, zstd) on the 2-core development VM took 513 thread
+/// seconds, 15 ms a node. Image sources are cheaper; where the source is
+/// at hand, [`WorldPlan::measure_bake`] times it instead.
+pub const NODE_BAKE_THREAD_SECONDS: f64 = 0.015;
+
+/// What a world may cost. `None` fields are not checked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limits {
+    /// Most LOD-0 sectors along either side.
+    pub max_sectors_per_side: u64,
+    /// Most estimated bytes a bake may write; `None` outside bakes or when
+    /// the user accepted the size.
+    pub max_bake_disk_bytes: Option<u64>,
+    /// The device's `maxImageDimension2D`: the node texture's side.
+    pub max_image_dimension_2d: Option<u32>,
+    /// The device's `maxImageArrayLayers`: one atlas layer per slot.
+    pub max_image_array_layers: Option<u32>,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_sectors_per_side: DEFAULT_MAX_SECTORS_PER_SIDE,
+            max_bake_disk_bytes: None,
+            max_image_dimension_2d: None,
+            max_image_array_layers: None,
+        }
+    }
+}
+
+/// Why a plan was refused. Each message is one line naming the limit and
+/// the option that changes it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    #[error(
+        "the world would have {x} x {y} sectors of {sector_m} m; the limit is {limit} a side: raise --spacing or \
+         lower --extent (or raise --max-sectors)"
+    )]
+    TooManySectors { x: u64, y: u64, sector_m: f64, limit: u64 },
+    #[error(
+        "the bake would write about {} to disk ({nodes} nodes, about {} to bake); the cap is {}: raise --spacing, \
+         bake a --region, raise --max-disk GIB or pass --yes",
+        bytes(*disk as f64), duration(*seconds), bytes(*cap as f64)
+    )]
+    BakeTooLarge { disk: u64, nodes: u64, seconds: f64, cap: u64 },
+    #[error(
+        "the node texture would be {w} x {h} texels ({x} x {y} sectors, {lods} LODs); this device allows {max} a side: \
+         raise --spacing, lower --extent or lower --lods"
+    )]
+    NodeTextureTooLarge { w: u64, h: u64, x: u64, y: u64, lods: u32, max: u32 },
+    #[error("{slots} resident slots need {layers} atlas layers; this device allows {max}: lower --slots")]
+    TooManyLayers { slots: u32, layers: u64, max: u32 },
+}
+
+/// Where a plan's bake time comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TimeBasis {
+    /// [`NODE_BAKE_THREAD_SECONDS`].
+    Constant,
+    /// This many nodes baked and timed.
+    Measured(usize),
+}
+
+/// The cost of a world (or of a region of it), before any of it is made.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldPlan {
+    pub world: WorldDesc,
+    /// Nodes overlapping this rectangle, metres; `None` = the whole world.
+    pub region: Option<[f64; 4]>,
+    /// LOD-0 sectors per side of the whole world.
+    pub sectors: [u64; 2],
+    /// Cells per side of the whole world at each LOD.
+    pub grid_per_lod: Vec<[u64; 2]>,
+    /// Nodes in the region at each LOD.
+    pub nodes_per_lod: Vec<u64>,
+    /// Nodes of the whole world.
+    pub world_nodes: u64,
+    /// Payload format the byte figures are for.
+    pub format: PayloadFormat,
+    /// Estimated node file bytes of the region (zstd-compressed).
+    pub disk_bytes: u64,
+    /// Resident slots the GPU and CPU figures are for.
+    pub slots: u32,
+    /// Payload atlases of the resident slots.
+    pub gpu_slot_bytes: u64,
+    /// Node texture side (mip 0), as `terrain::quadtree::texture_extent`.
+    pub node_texture: [u64; 2],
+    /// Node texture with every mip; its CPU shadow is as large.
+    pub node_texture_bytes: u64,
+    /// Single-thread seconds per baked node, and where that comes from.
+    pub node_seconds: f64,
+    pub time_basis: TimeBasis,
+    /// Bake threads (rayon's pool).
+    pub threads: usize,
+}
+
+impl WorldPlan {
+    /// `world` must be valid ([`WorldDesc::validate`]): its sector count is
+    /// then below 2^20 a side, so every figure fits u64.
+    pub fn new(world: &WorldDesc, region: Option<[f64; 4]>) -> Self {
+        let sectors = world.sectors().map(u64::from);
+        let lods = 0..world.lod_count as u8;
+        let grid_per_lod: Vec<[u64; 2]> = lods.clone().map(|l| world.grid(l).map(u64::from)).collect();
+        let nodes_per_lod: Vec<u64> = lods
+            .map(|l| {
+                let [x0, y0, x1, y1] = region_cells(world, l, region);
+                (x1 - x0) * (y1 - y0)
+            })
+            .collect();
+        let world_nodes = grid_per_lod.iter().map(|g| g[0] * g[1]).sum();
+        let format = PayloadFormat::default();
+        let disk_bytes = nodes_per_lod.iter().sum::<u64>() * estimated_file_bytes(format);
+        // Mip 0 padded to whole roots, as the renderer sizes it.
+        let root = world.root_lod();
+        let node_texture = world.grid(root).map(|g| u64::from(g) << root);
+        let node_texture_bytes =
+            (0..world.lod_count).map(|l| (node_texture[0] >> l) * (node_texture[1] >> l) * 2).sum();
+        let mut plan = WorldPlan {
+            world: *world,
+            region,
+            sectors,
+            grid_per_lod,
+            nodes_per_lod,
+            world_nodes,
+            format,
+            disk_bytes,
+            slots: 0,
+            gpu_slot_bytes: 0,
+            node_texture,
+            node_texture_bytes,
+            node_seconds: NODE_BAKE_THREAD_SECONDS,
+            time_basis: TimeBasis::Constant,
+            threads: rayon::current_num_threads().max(1),
+        };
+        plan.set_slots(DEFAULT_SLOTS);
+        plan
+    }
+
+    /// The GPU and CPU figures for `slots` resident nodes.
+    pub fn with_slots(mut self, slots: u32) -> Self {
+        self.set_slots(slots);
+        self
+    }
+
+    fn set_slots(&mut self, slots: u32) {
+        self.slots = slots;
+        self.gpu_slot_bytes = MemoryReport::for_format(slots as usize, self.format).gpu_total() as u64;
+    }
+
+    /// The disk and GPU figures for payloads in `format`.
+    pub fn with_format(mut self, format: PayloadFormat) -> Self {
+        self.format = format;
+        self.disk_bytes = self.nodes() * estimated_file_bytes(format);
+        self.set_slots(self.slots);
+        self
+    }
+
+    /// Nodes in the region, every LOD.
+    pub fn nodes(&self) -> u64 {
+        self.nodes_per_lod.iter().sum()
+    }
+
+    /// Estimated wall-clock seconds to bake the region from scratch (cached
+    /// nodes only cost a read).
+    pub fn bake_seconds(&self) -> f64 {
+        self.nodes() as f64 * self.node_seconds / self.threads as f64
+    }
+
+    /// One line: nodes, disk size, time.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} nodes, about {} on disk, about {} on {} threads",
+            self.nodes(),
+            bytes(self.disk_bytes as f64),
+            duration(self.bake_seconds()),
+            self.threads
+        )
+    }
+
+    /// GPU bytes: resident payload atlases plus the node texture.
+    pub fn gpu_bytes(&self) -> u64 {
+        self.gpu_slot_bytes + self.node_texture_bytes
+    }
+
+    /// Times the bake of up to `samples` nodes of the region, half at LOD 0
+    /// and half above it (a LOD-0 node samples a quarter of the points a
+    /// coarser one does), spread over it and baked in parallel as
+    /// [`super::bake_world`] does, and weighs the two costs by the region's
+    /// node counts. Writes nothing to disk.
+    pub fn measure_bake(&mut self, source: &dyn HeightSource, holes: &[Hole], settings: &BakeSettings, samples: usize) {
+        let coarse_nodes: u64 = self.nodes_per_lod.iter().skip(1).sum();
+        let per_level = if coarse_nodes > 0 { samples / 2 } else { samples };
+        let mut measured = Vec::new();
+        for lod in [0u8, 1] {
+            if lod == 1 && coarse_nodes == 0 {
+                break;
+            }
+            let [x0, y0, x1, y1] = region_cells(&self.world, lod, self.region);
+            if x0 == x1 || y0 == y1 || per_level == 0 {
+                return;
+            }
+            let n = (per_level as u64).min((x1 - x0).max(y1 - y0)).max(1);
+            // Along the diagonal: coast and mountains cost alike, but an
+            // image source's edge clamps do not.
+            let ids: Vec<NodeId> = (0..n)
+                .map(|k| {
+                    let (x, y) = (x0 + (x1 - x0) * (2 * k + 1) / (2 * n), y0 + (y1 - y0) * (2 * k + 1) / (2 * n));
+                    NodeId::new(lod, x as u32, y as u32)
+                })
+                .collect();
+            let start = Instant::now();
+            ids.par_iter().for_each(|&id| {
+                std::hint::black_box(bake_node_with(source, &self.world, holes, settings, id));
+            });
+            let wall = start.elapsed().as_secs_f64();
+            // Busy threads: fewer nodes than threads leave some idle.
+            let busy = self.threads.min(ids.len()) as f64;
+            measured.push((wall * busy / ids.len() as f64, ids.len()));
+        }
+        let lod0 = self.nodes_per_lod.first().copied().unwrap_or(0) as f64;
+        let total = self.nodes().max(1) as f64;
+        let coarse_cost = measured.get(1).map_or(measured[0].0, |m| m.0);
+        self.node_seconds = (measured[0].0 * lod0 + coarse_cost * coarse_nodes as f64) / total;
+        self.time_basis = TimeBasis::Measured(measured.iter().map(|m| m.1).sum());
+    }
+
+    /// The first limit this plan breaks, if any.
+    pub fn check(&self, limits: &Limits) -> Result<(), PlanError> {
+        let [x, y] = self.sectors;
+        if x.max(y) > limits.max_sectors_per_side {
+            let (sector_m, limit) = (self.world.sector_size_m(), limits.max_sectors_per_side);
+            return Err(PlanError::TooManySectors { x, y, sector_m, limit });
+        }
+        if let Some(max) = limits.max_image_dimension_2d {
+            let [w, h] = self.node_texture;
+            if w.max(h) > u64::from(max) {
+                let lods = self.world.lod_count;
+                return Err(PlanError::NodeTextureTooLarge { w, h, x, y, lods, max });
+            }
+        }
+        if let Some(max) = limits.max_image_array_layers {
+            // Slot 0 is reserved: one layer more than slots.
+            let layers = u64::from(self.slots) + 1;
+            if layers > u64::from(max) {
+                return Err(PlanError::TooManyLayers { slots: self.slots, layers, max });
+            }
+        }
+        if let Some(cap) = limits.max_bake_disk_bytes {
+            if self.disk_bytes > cap {
+                let (disk, nodes, seconds) = (self.disk_bytes, self.nodes(), self.bake_seconds());
+                return Err(PlanError::BakeTooLarge { disk, nodes, seconds, cap });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Cell range [x0, y0, x1, y1) at `lod` overlapping `region`, with the
+/// arithmetic of [`super::nodes_in_region`] (which lists them).
+fn region_cells(world: &WorldDesc, lod: u8, region: Option<[f64; 4]>) -> [u64; 4] {
+    let [gx, gy] = world.grid(lod);
+    let [x0, y0, x1, y1] = match region {
+        None => [0, 0, gx, gy],
+        Some(r) => {
+            let s = world.node_size_m(lod);
+            let cell = |v: f64, g: u32| ((v / s).floor().max(0.0) as u32).min(g);
+            let end = |v: f64, g: u32| ((v / s).ceil().max(0.0) as u32).min(g);
+            [cell(r[0], gx), cell(r[1], gy), end(r[2], gx), end(r[3], gy)]
+        }
+    };
+    // An empty range where the region misses the world.
+    [x0, y0, x1.max(x0), y1.max(y0)].map(u64::from)
+}
+
+/// Human byte count in binary units.
+pub(super) fn bytes(b: f64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = b;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{v:.0} B")
+    } else {
+        format!("{v:.2} {}", UNITS[u])
+    }
+}
+
+/// Seconds as the unit a person reads at a glance.
+pub(super) fn duration(s: f64) -> String {
+    if s < 90.0 {
+        format!("{s:.0} s")
+    } else if s < 90.0 * 60.0 {
+        format!("{:.0} min", s / 60.0)
+    } else if s < 48.0 * 3600.0 {
+        format!("{:.1} h", s / 3600.0)
+    } else {
+        format!("{:.1} days", s / 86400.0)
+    }
+}
+
+impl fmt::Display for WorldPlan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let w = &self.world;
+        let [sx, sy] = self.sectors;
+        writeln!(
+            f,
+            "sectors:  {sx} x {sy} of {} m ({} x {} m at {} m spacing, {} LODs)",
+            w.sector_size_m(),
+            w.extent_m[0],
+            w.extent_m[1],
+            w.spacing_m,
+            w.lod_count
+        )?;
+        match self.region {
+            Some(r) => writeln!(f, "region:   {},{} .. {},{} m", r[0], r[1], r[2], r[3])?,
+            None => writeln!(f, "region:   whole world")?,
+        }
+        writeln!(f, "{:>5} {:>19} {:>14} {:>14}", "LOD", "grid", "nodes", "world nodes")?;
+        for (lod, (g, n)) in self.grid_per_lod.iter().zip(&self.nodes_per_lod).enumerate() {
+            let grid = format!("{} x {}", g[0], g[1]);
+            writeln!(f, "{lod:>5} {grid:>19} {n:>14} {:>14}", g[0] * g[1])?;
+        }
+        writeln!(f, "{:>5} {:>19} {:>14} {:>14}", "total", "", self.nodes(), self.world_nodes)?;
+        writeln!(
+            f,
+            "disk:     {} ({} per node file: {} payloads, zstd at the default world's ratio)",
+            bytes(self.disk_bytes as f64),
+            bytes(estimated_file_bytes(self.format) as f64),
+            self.format
+        )?;
+        let [tw, th] = self.node_texture;
+        writeln!(
+            f,
+            "GPU:      {} ({} resident slots {}, node texture {tw} x {th} {}); CPU shadow of the node texture {}",
+            bytes(self.gpu_bytes() as f64),
+            self.slots,
+            bytes(self.gpu_slot_bytes as f64),
+            bytes(self.node_texture_bytes as f64),
+            bytes(self.node_texture_bytes as f64)
+        )?;
+        let basis = match self.time_basis {
+            TimeBasis::Constant => "the built-in per-node constant".to_string(),
+            TimeBasis::Measured(n) => format!("{n} sample nodes baked now"),
+        };
+        writeln!(
+            f,
+            "bake:     about {} on {} threads ({:.1} ms per node per thread, from {basis}; cached nodes are faster)",
+            duration(self.bake_seconds()),
+            self.threads,
+            1000.0 * self.node_seconds
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::nodes_in_region;
+
+    fn world(extent: f64, spacing: f64, lods: u32) -> WorldDesc {
+        WorldDesc { extent_m: [extent, extent], spacing_m: spacing, lod_count: lods, ..WorldDesc::default() }
+    }
+
+    #[test]
+    fn counts_match_the_node_lists() {
+        let regions =
+            [None, Some([0.0, 0.0, 64.0, 64.0]), Some([100.0, -50.0, 900.0, 333.0]), Some([5e3, 5e3, 6e3, 6e3])];
+        for w in [world(2048.0, 2.0, 4), world(1000.0, 1.0, 6), WorldDesc::default()] {
+            for region in regions {
+                let plan = WorldPlan::new(&w, region);
+                let listed = nodes_in_region(&w, region);
+                for lod in 0..w.lod_count as u8 {
+                    let n = listed.iter().filter(|id| id.lod == lod).count() as u64;
+                    assert_eq!(plan.nodes_per_lod[lod as usize], n, "{w:?} {region:?} lod {lod}");
+                }
+                assert_eq!(plan.world_nodes, nodes_in_region(&w, None).len() as u64);
+            }
+        }
+        // 2048 m at 2 m: 256 m sectors, 8 x 8; LOD k is ceil(8 / 2^k) a side.
+        let plan = WorldPlan::new(&world(2048.0, 2.0, 4), None);
+        assert_eq!(plan.nodes_per_lod, [64, 16, 4, 1]);
+        assert_eq!(plan.disk_bytes, 85 * estimated_file_bytes(PayloadFormat::Bc));
+    }
+
+    #[test]
+    fn each_limit_is_refused_naming_its_option() {
+        let fine = WorldPlan::new(&WorldDesc::default(), None);
+        let device = Limits {
+            max_bake_disk_bytes: Some(DEFAULT_MAX_BAKE_DISK_BYTES),
+            max_image_dimension_2d: Some(16384),
+            max_image_array_layers: Some(2048),
+            ..Limits::default()
+        };
+        assert_eq!(fine.check(&device), Ok(()));
+        // 0.001 m spacing: 80 000 sectors a side; no allocation to find out.
+        let tiny = WorldPlan::new(&WorldDesc { spacing_m: 0.001, ..WorldDesc::default() }, None);
+        let e = tiny.check(&Limits::default()).unwrap_err();
+        assert!(matches!(e, PlanError::TooManySectors { x: 80000, .. }), "{e}");
+        let raised = Limits { max_sectors_per_side: 1 << 20, ..device.clone() };
+        let e = tiny.check(&raised).unwrap_err();
+        assert!(matches!(e, PlanError::NodeTextureTooLarge { .. }) && e.to_string().contains("--spacing"), "{e}");
+        let big = WorldPlan::new(&world(100_000.0, 0.5, 6), None);
+        let e = big.check(&device).unwrap_err();
+        assert!(e.to_string().contains("--yes") && e.to_string().contains("--region"), "{e}");
+        assert_eq!(big.check(&Limits { max_bake_disk_bytes: None, ..device.clone() }), Ok(()));
+        let e = fine.clone().with_slots(4000).check(&device).unwrap_err();
+        assert!(e.to_string().contains("--slots"), "{e}");
+        for e in [tiny.check(&Limits::default()).unwrap_err(), big.check(&device).unwrap_err()] {
+            assert_eq!(e.to_string().lines().count(), 1, "{e}");
+        }
+    }
+
+    #[test]
+    fn the_node_texture_matches_the_renderer() {
+        for w in [world(2048.0, 2.0, 4), world(1000.0, 1.0, 6), WorldDesc::default()] {
+            let t = crate::terrain::quadtree::texture_extent(&w);
+            assert_eq!(WorldPlan::new(&w, None).node_texture, t.map(u64::from));
+        }
+    }
+}

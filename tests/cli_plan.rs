@@ -1,0 +1,204 @@
+//! Plans before work: `vista bake --dry-run` prints the plan; a world over a
+//! limit is refused with one line naming the option to change, before
+//! anything sized by the world is allocated; a bake whose stderr is not a
+//! terminal prints plain progress lines.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Peak resident memory a refused command may reach, KiB. The refusals
+/// happen before anything sized by the world exists, so what remains is the
+/// process itself: about 7 MiB for `bake`/`memory` here; `render` refused
+/// by the device's limits has started Vulkan (lavapipe: about 70 MiB, a
+/// real driver more). What they would allocate otherwise is gigabytes:
+/// `memory --extent 60000000` grew to 24 GB before the change and was
+/// killed; the node texture shadow of a 16500-sector world is 700 MiB.
+/// 256 MiB lies far from both.
+const PEAK_KIB: u64 = 256 * 1024;
+
+struct Run {
+    ok: bool,
+    out: String,
+    err: String,
+    /// VmHWM of the process at exit, KiB.
+    peak_kib: u64,
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vista-cli-plan-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+/// Runs `vista`, which writes its VmHWM to the file named by
+/// VISTA_PEAK_RSS_FILE as it exits (the kernel's high-water mark: a peak,
+/// however short, is never missed as a sample from outside could miss it).
+fn vista(args: &[&str]) -> Run {
+    static RUNS: AtomicUsize = AtomicUsize::new(0);
+    let rss = temp_dir(&format!("rss-{}", RUNS.fetch_add(1, Ordering::Relaxed)));
+    let rss_file = rss.join("peak");
+    let out = Command::new(env!("CARGO_BIN_EXE_vista"))
+        .args(args)
+        .env("VISTA_PEAK_RSS_FILE", &rss_file)
+        .output()
+        .expect("run vista");
+    let status = std::fs::read_to_string(&rss_file).unwrap_or_default();
+    let _ = std::fs::remove_dir_all(&rss);
+    // "VmHWM:	    5724 kB"; absent off Linux, where 0 passes.
+    let peak_kib = status.split_whitespace().nth(1).and_then(|v| v.parse().ok()).unwrap_or(0);
+    Run {
+        ok: out.status.success(),
+        out: String::from_utf8_lossy(&out.stdout).into(),
+        err: String::from_utf8_lossy(&out.stderr).into(),
+        peak_kib,
+    }
+}
+
+/// The command fails with exit code 2 and one stderr line holding every
+/// needle, having stayed under [`PEAK_KIB`].
+fn assert_refused(args: &[&str], needles: &[&str]) -> Run {
+    let run = vista(args);
+    assert!(!run.ok, "{args:?} should be refused:\n{}", run.out);
+    assert_eq!(run.err.trim_end().lines().count(), 1, "{args:?}: not one line:\n{}", run.err);
+    for n in needles {
+        assert!(run.err.contains(n), "{args:?}: {n:?} missing from: {}", run.err);
+    }
+    assert!(run.peak_kib < PEAK_KIB, "{args:?}: peak {} KiB before refusing", run.peak_kib);
+    run
+}
+
+/// The LOD rows of a printed plan: (lod, nodes, world nodes).
+fn plan_rows(text: &str) -> Vec<(u32, u64, u64)> {
+    text.lines()
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            // "3    20 x 20    400    400"
+            match f[..] {
+                [lod, _, "x", _, nodes, world] => Some((lod.parse().ok()?, nodes.parse().ok()?, world.parse().ok()?)),
+                _ => None,
+            }
+        })
+        .collect()
+}
+
+fn node_files(dir: &Path) -> usize {
+    let Ok(lods) = std::fs::read_dir(dir) else { return 0 };
+    lods.flatten().filter_map(|l| std::fs::read_dir(l.path()).ok()).map(|f| f.count()).sum()
+}
+
+#[test]
+fn dry_run_prints_the_plan_and_bakes_nothing() {
+    let dir = temp_dir("dry");
+    let out = dir.join("nodes");
+    let o = out.to_str().unwrap();
+    let world = ["--extent", "2048", "--spacing", "2", "--lods", "4"];
+    let run = vista(&[&["bake", "--out", o, "--dry-run"][..], &world[..]].concat());
+    assert!(run.ok, "{}", run.err);
+    // 256 m sectors: 8 x 8; LOD k is ceil(8 / 2^k) a side.
+    let side = |k: u32| 8u64.div_ceil(1 << k);
+    let expected: Vec<(u32, u64, u64)> = (0..4).map(|k| (k, side(k) * side(k), side(k) * side(k))).collect();
+    assert_eq!(plan_rows(&run.out), expected, "{}", run.out);
+    assert!(run.out.contains("sectors:  8 x 8 of 256 m"), "{}", run.out);
+    let total: u64 = expected.iter().map(|r| r.1).sum();
+    assert!(run.out.lines().any(|l| l.split_whitespace().collect::<Vec<_>>() == ["total", "85", "85"]), "{}", run.out);
+    assert_eq!(total, 85);
+    for key in ["disk:", "GPU:", "512 resident slots", "bake:", "sample nodes baked now", "dry run: nothing baked"] {
+        assert!(run.out.contains(key), "{key:?} missing:\n{}", run.out);
+    }
+    assert!(!out.exists(), "a dry run creates no cache folder");
+
+    // A region: cells of LOD k overlapping 0..300 m.
+    let run = vista(&[&["bake", "--out", o, "--dry-run", "--region", "0,0,300,300"][..], &world[..]].concat());
+    assert!(run.ok, "{}", run.err);
+    let cells = |k: u32| (300.0f64 / (256.0 * f64::from(1u32 << k))).ceil() as u64;
+    let rows = plan_rows(&run.out);
+    for (k, nodes, world_nodes) in &rows {
+        assert_eq!(*nodes, cells(*k) * cells(*k), "lod {k}:\n{}", run.out);
+        assert_eq!(*world_nodes, side(*k) * side(*k));
+    }
+    assert_eq!(rows.len(), 4);
+    assert_eq!(node_files(&out), 0);
+}
+
+#[test]
+fn each_limit_is_refused_before_allocating() {
+    let dir = temp_dir("limits");
+    let o = dir.join("nodes");
+    let o = o.to_str().unwrap();
+    // Sectors a side: 0.128 m sectors over the default 10 km.
+    let sectors = ["80000 x 80000 sectors", "16384", "--spacing", "--max-sectors"];
+    assert_refused(&["bake", "--out", o, "--spacing", "0.001"], &sectors);
+    assert_refused(&["memory", "--extent", "60000000"], &["937500 x 937500 sectors", "--extent"]);
+    // Refused before Vulkan starts, too.
+    assert_refused(&["render", "--spacing", "0.001", "--size", "64x48", "--frames", "1"], &sectors);
+    // The limit is an option.
+    assert_refused(&["memory", "--max-sectors", "100"], &["160 x 160 sectors", "limit is 100"]);
+
+    // The disk cap: 1563 sectors a side at 0.5 m, 3.3 million nodes of about
+    // 43 KiB (compressed BC payloads): over 130 GiB.
+    let big = ["bake", "--out", o, "--extent", "100000"];
+    let run = assert_refused(&big, &["GiB", "3257795 nodes", "64.00 GiB", "--yes", "--max-disk", "--region"]);
+    assert!(run.out.is_empty(), "{}", run.out);
+    // Its dry run prints the plan, then the same refusal.
+    let run = assert_refused(&[&big[..], &["--dry-run"]].concat(), &["--yes"]);
+    assert!(run.out.contains("1563 x 1563"), "{}", run.out);
+    // A lower cap refuses what the default takes: 34 125 node files of
+    // 65 062 bytes uncompressed, at zstd's 1.49:1 of the default world.
+    let expect = format!("{:.2} GiB", 34125.0 * (65062.0 / 1.49f64).floor() / f64::from(1 << 30));
+    assert_refused(&["bake", "--out", o, "--max-disk", "1"], &[&expect, "the cap is 1.00 GiB"]);
+    assert_eq!(node_files(Path::new(o)), 0, "nothing baked");
+
+    // The device's node texture, checked by the library as the renderer is
+    // made: sectors beyond the device's image size, --max-sectors raised.
+    let info = vista(&["info"]);
+    assert!(info.ok, "{}", info.err);
+    let max: u64 = info
+        .out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("image 2D / layers:"))
+        .and_then(|v| v.split('/').next()?.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no image size in:\n{}", info.out));
+    let sectors = max + 100;
+    let (extent, raised) = ((sectors * 64).to_string(), (sectors + 1).to_string());
+    let args = ["render", "--extent", &extent, "--max-sectors", &raised, "--size", "64x48", "--frames", "1"];
+    assert_refused(&args, &["node texture", &format!("allows {max} a side"), "--spacing"]);
+}
+
+#[test]
+fn bakes_print_plain_progress_without_a_terminal() {
+    let dir = temp_dir("progress");
+    let o = dir.join("nodes");
+    let args = [
+        "bake",
+        "--out",
+        o.to_str().unwrap(),
+        "--extent",
+        "2048",
+        "--spacing",
+        "2",
+        "--lods",
+        "4",
+        "--progress-every",
+        "0",
+    ];
+    let run = vista(&args);
+    assert!(run.ok, "{}", run.err);
+    assert!(run.err.starts_with("baking 85 nodes, about "), "{}", run.err);
+    // "baked 12/85 nodes (14.1 %), 40.2 nodes/s, eta 2 s"
+    let lines: Vec<&str> = run.err.lines().filter(|l| l.starts_with("baked ")).collect();
+    assert!(!lines.is_empty(), "no progress line:\n{}", run.err);
+    for l in lines {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        let (done, total) = f[1].split_once('/').unwrap();
+        assert_eq!(total, "85", "{l}");
+        let done: f64 = done.parse().unwrap();
+        assert_eq!(f[3], format!("({:.1}", 100.0 * done / 85.0), "{l}");
+        assert!(f[5].parse::<f64>().is_ok() && f[6] == "nodes/s," && f[7] == "eta", "{l}");
+    }
+    assert_eq!(node_files(&o), 85);
+    // --no-progress: not a word.
+    let run = vista(&[&args[..], &["--no-progress"]].concat());
+    assert!(run.ok && run.err.is_empty(), "{}", run.err);
+}
