@@ -339,3 +339,31 @@ fn repeated_single_valued_options_are_errors() {
         assert_fails_naming(args, &[option, "multiple times"]);
     }
 }
+
+#[test]
+fn memory_json_gives_the_bytes_per_node_of_each_payload_format() {
+    let dir = temp_dir("memory-json");
+    let small = ["--extent", "2048", "--spacing", "2", "--lods", "4"];
+    let per_node = |payload: &str| {
+        let json = dir.join(format!("{payload}.json"));
+        let args = [&["memory", "--payload", payload, "--json", json.to_str().unwrap()][..], &small[..]].concat();
+        let (ok, out, err) = vista(&args);
+        assert!(ok, "{out}{err}");
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let kinds = v["kinds"].as_array().unwrap();
+        let sum = |key: &str| kinds.iter().map(|k| k[key].as_u64().unwrap()).sum::<u64>();
+        assert_eq!(v["cpu_bytes_per_node"].as_u64(), Some(sum("cpu_bytes")));
+        assert_eq!(v["gpu_bytes_per_node"].as_u64(), Some(sum("gpu_bytes")));
+        (v["cpu_bytes_per_node"].as_u64().unwrap(), v["gpu_bytes_per_node"].as_u64().unwrap())
+    };
+    // Derived by hand: heights 129 * 129 * 2, normal BC3 33 * 33 blocks of
+    // 16 bytes, albedo BC1 of 8, splat 65 * 65, patch min/max, cones and
+    // holes 64 * (4 + 16 + 1), node desc + error 12.
+    let bc_gpu = 129 * 129 * 2 + 33 * 33 * 16 + 33 * 33 * 8 + 65 * 65 + 64 * 21 + 12;
+    assert_eq!(per_node("bc").1, bc_gpu);
+    // The floor: at most 70 KB a resident node on the GPU.
+    assert!(bc_gpu <= 70_000);
+    // RGBA8 layers: 132 * 132 * 4 each.
+    assert_eq!(per_node("rgba8").1, bc_gpu - 33 * 33 * 24 + 2 * 132 * 132 * 4);
+    let _ = std::fs::remove_dir_all(&dir);
+}

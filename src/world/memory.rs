@@ -7,7 +7,7 @@ use super::payload::BakedNode;
 use super::texels::{PayloadFormat, TexelKind};
 
 /// One payload kind's size per node.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PayloadSize {
     pub name: &'static str,
     /// GPU atlas format and layer size.

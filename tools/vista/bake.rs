@@ -8,7 +8,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use serde::Serialize;
-use vista::world::{bake_world, Limits, MemoryReport, Progress, WorldDesc, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES};
+use vista::world::{
+    bake_world, uncompressed_file_bytes, Limits, MemoryReport, PayloadFormat, PayloadSize, Progress, WorldDesc,
+    WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES,
+};
 
 use crate::world_args::{parse_f64, parse_list, LoadedWorld, WorldArgs};
 
@@ -67,6 +70,20 @@ pub struct MemoryArgs {
     /// Resident node slots to account for.
     #[arg(long, default_value_t = REPORT_SLOTS as u64, value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS))]
     pub slots: u64,
+    /// Also write the figures as JSON to this file (`cpu_bytes_per_node`,
+    /// `gpu_bytes_per_node`, totals, and every payload kind).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct MemoryFile<'a> {
+    world_nodes: usize,
+    payload_format: PayloadFormat,
+    #[serde(flatten)]
+    resident: MemoryJson,
+    kinds: &'a [PayloadSize],
+    every_node_resident: MemoryJson,
 }
 
 fn parse_gib(s: &str) -> Result<u64, String> {
@@ -108,6 +125,8 @@ struct BakeReport {
     seconds: f64,
     bytes_on_disk: u64,
     bytes_per_node: f64,
+    /// Uncompressed node files over the bytes on disk (zstd's ratio).
+    compression_ratio: f64,
     full_world_nodes: usize,
     /// Only for a region: per-node figures times the full node count.
     extrapolated: Option<Extrapolation>,
@@ -200,6 +219,8 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         seconds: stats.seconds,
         bytes_on_disk: stats.bytes_on_disk,
         bytes_per_node: per_node(stats.bytes_on_disk as f64),
+        compression_ratio: (nodes as u64 * uncompressed_file_bytes(w.bake.format)) as f64
+            / (stats.bytes_on_disk.max(1) as f64),
         full_world_nodes,
         extrapolated: args.region.map(|_| Extrapolation {
             seconds: per_node(stats.seconds) * full_world_nodes as f64,
@@ -256,10 +277,11 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
     writeln!(out, "time:     {:.2} s ({:.2} ms per node)", r.seconds, 1000.0 * r.seconds / r.nodes.max(1) as f64)?;
     writeln!(
         out,
-        "disk:     {} in {} ({} per node)",
+        "disk:     {} in {} ({} per node; zstd {:.2}:1)",
         bytes(r.bytes_on_disk as f64),
         r.out.display(),
-        bytes(r.bytes_per_node)
+        bytes(r.bytes_per_node),
+        r.compression_ratio
     )?;
     if let Some(x) = &r.extrapolated {
         // Cached nodes only measure validation, so say which time this is.
@@ -297,6 +319,9 @@ fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 }
 
 pub fn memory(args: MemoryArgs) -> Result<()> {
+    if let Some(json) = &args.json {
+        crate::out_path::check_out_file(json, "--json")?;
+    }
     let w = args.world.load()?;
     let mut out = String::new();
     // Counted, not listed: a huge world costs no memory to account for.
@@ -305,13 +330,25 @@ pub fn memory(args: MemoryArgs) -> Result<()> {
     let slots = args.slots as usize;
     writeln!(out, "world:    {} ({} nodes over {} LODs)", w.label, full, w.desc.lod_count)?;
     writeln!(out, "memory for {slots} resident nodes:")?;
-    write!(out, "{}", MemoryReport::new(slots))?;
-    let all = MemoryReport::new(full);
+    let report = MemoryReport::for_format(slots, w.bake.format);
+    write!(out, "{report}")?;
+    let all = MemoryReport::for_format(full, w.bake.format);
     writeln!(
         out,
         "every node resident would take {} CPU / {} GPU",
         bytes(all.cpu_total() as f64),
         bytes(all.gpu_total() as f64)
     )?;
+    if let Some(path) = &args.json {
+        let file = MemoryFile {
+            world_nodes: full,
+            payload_format: w.bake.format,
+            resident: MemoryJson::new(&report),
+            kinds: &report.kinds,
+            every_node_resident: MemoryJson::new(&all),
+        };
+        write_json(path, &file)?;
+        writeln!(out, "wrote {}", path.display())?;
+    }
     emit(&out)
 }
