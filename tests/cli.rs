@@ -180,6 +180,67 @@ fn negative_camera_coordinates_are_numbers() {
 }
 
 #[test]
+fn negative_numbers_reach_their_option_check() {
+    // Each is refused by its option's own check (exit 2, one line naming
+    // the option), not taken for an unknown flag '-1'.
+    for (args, needle) in [
+        (&["render", "--target-error", "-1"][..], "--target-error"),
+        (&["render", "--fov", "-5"][..], "--fov"),
+        (&["render", "--frames", "-1"][..], "--frames"),
+        (&["render", "--spacing", "-1"][..], "--spacing -1"),
+        (&["render", "--lods", "-2"][..], "--lods"),
+        (&["bake", "--out", "unused", "--max-disk", "-1"][..], "--max-disk"),
+        (&["memory", "--slots", "-3"][..], "--slots"),
+        (&["bench", "cull", "--target-error", "-2"][..], "--target-error"),
+    ] {
+        let (code, _, err) = vista_code(args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert!(err.contains(needle) && !err.contains("unexpected argument"), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn world_fields_are_named_as_the_user_gave_them() {
+    let scene = std::env::temp_dir().join(format!("vista-lods12-{}.toml", std::process::id()));
+    std::fs::write(&scene, "[world]\nlods = 12\n").unwrap();
+    for (args, needles) in [
+        (&["render", "--lods", "11"][..], &["--lods 11", "1 to 10 LODs"][..]),
+        (&["render", "--scene", scene.to_str().unwrap()][..], &["the scene's lods 12"][..]),
+        (&["render", "--spacing", "nan"][..], &["--spacing NaN"][..]),
+        (&["render", "--height-range", "5", "1"][..], &["--height-range 5 1", "LO must be below HI"][..]),
+        // Beyond what any --max-sectors allows (2^20 a side, the GPU's fields).
+        (&["memory", "--extent", "1e30"][..], &["1.56e28 sectors of 64 m", "raise --spacing", "lower --extent"][..]),
+    ] {
+        let (code, _, err) = vista_code(args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{n:?} missing for {args:?}: {err}");
+        }
+        assert!(!err.contains("invalid world description") && err.trim().lines().count() == 1, "{err}");
+    }
+    let _ = std::fs::remove_file(&scene);
+}
+
+#[test]
+fn bench_options_a_kind_does_not_use_are_errors() {
+    for (args, needles) in [
+        (&["bench", "cull", "--camera", "1,2,3"][..], &["bench cull does not use --camera"][..]),
+        (&["bench", "traverse", "--size", "10x10", "--target-error", "2"][..], &["--size, --target-error", "them"][..]),
+        (&["bench", "shade", "--sets", "64", "--views", "ground"][..], &["--sets, --views"][..]),
+        (&["bench", "effects", "--plot", "p.png", "--slots", "64"][..], &["--plot, --slots"][..]),
+        (&["bench", "cull", "--frames", "0"][..], &["--frames must be at least 1"][..]),
+    ] {
+        let (code, stdout, err) = vista_code(args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert!(stdout.is_empty(), "nothing measured: {stdout}");
+        for n in needles {
+            assert!(err.contains(n), "{n:?} missing for {args:?}: {err}");
+        }
+    }
+}
+
+#[test]
 fn a_world_too_large_for_the_device_says_so_in_world_terms() {
     // 62 500 sectors of 64 m per side: over the default --max-sectors, and
     // with it raised, wider than any device's 2D images (the plan's device

@@ -120,6 +120,12 @@ fn dry_run_prints_the_plan_and_bakes_nothing() {
     }
     assert_eq!(rows.len(), 4);
     assert_eq!(node_files(&out), 0);
+
+    // A dry run needs no --out; a bake does.
+    let run = vista(&[&["bake", "--dry-run"][..], &world[..]].concat());
+    assert!(run.ok && run.out.contains("dry run: nothing baked"), "{}", run.err);
+    let run = vista(&[&["bake"][..], &world[..]].concat());
+    assert!(!run.ok && run.err.contains("--out") && run.err.trim().lines().count() == 1, "{}", run.err);
 }
 
 #[test]

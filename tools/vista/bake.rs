@@ -33,8 +33,9 @@ pub struct BakeArgs {
     pub world: WorldArgs,
     /// Cache folder for the node files (DIR/lod{k}/{x}_{y}.vnode); files
     /// already there and valid for this world are reused, not rebaked.
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
+    /// Not needed with --dry-run.
+    #[arg(long, value_name = "DIR", required_unless_present = "dry_run")]
+    pub out: Option<PathBuf>,
     /// Bake only nodes (of every LOD) overlapping this rectangle, metres;
     /// the report then extrapolates time and disk size to the whole world.
     #[arg(long, value_name = "MINX,MINY,MAXX,MAXY", value_parser = parse_region, allow_hyphen_values = true)]
@@ -52,11 +53,11 @@ pub struct BakeArgs {
     #[arg(long)]
     pub yes: bool,
     /// Largest estimated disk size a bake may have without --yes, GiB.
-    #[arg(long, value_name = "GIB", value_parser = parse_gib, default_value = "64")]
+    #[arg(long, value_name = "GIB", value_parser = parse_gib, default_value = "64", allow_negative_numbers = true)]
     pub max_disk: u64,
     /// Seconds between plain progress lines when stderr is not a terminal
     /// (also forces them on a terminal); for tests and logs.
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, hide = true)]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, hide = true, allow_negative_numbers = true)]
     pub progress_every: Option<f64>,
     /// Also write the figures as JSON to this file.
     #[arg(long, value_name = "FILE")]
@@ -68,7 +69,7 @@ pub struct MemoryArgs {
     #[command(flatten)]
     pub world: WorldArgs,
     /// Resident node slots to account for.
-    #[arg(long, default_value_t = REPORT_SLOTS as u64, value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS))]
+    #[arg(long, default_value_t = REPORT_SLOTS as u64, value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS), allow_negative_numbers = true)]
     pub slots: u64,
     /// Also write the figures as JSON to this file (`cpu_bytes_per_node`,
     /// `gpu_bytes_per_node`, totals, and every payload kind).
@@ -188,7 +189,9 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         return emit(&out);
     }
     spec.check(&plan, &limits)?;
-    crate::out_path::prepare_out_dir(&args.out, "--out", "the node cache: lod{k}/{x}_{y}.vnode")?;
+    // clap asks for --out unless --dry-run.
+    let dir = args.out.clone().context("--out DIR is needed to bake")?;
+    crate::out_path::prepare_out_dir(&dir, "--out", "the node cache: lod{k}/{x}_{y}.vnode")?;
     if let Some(json) = &args.json {
         crate::out_path::check_out_file(json, "--json")?;
     }
@@ -201,8 +204,8 @@ pub fn bake(args: BakeArgs) -> Result<()> {
     if progress != Progress::Hidden {
         eprintln!("baking {} (`vista bake --dry-run` prints the plan)", plan.summary());
     }
-    let stats = bake_world(w.source.clone(), &w.desc, &w.holes, &w.bake, args.region, &args.out, progress)
-        .with_context(|| format!("baking into {}", args.out.display()))?;
+    let stats = bake_world(w.source.clone(), &w.desc, &w.holes, &w.bake, args.region, &dir, progress)
+        .with_context(|| format!("baking into {}", dir.display()))?;
     let nodes = stats.baked + stats.cached;
     let per_node = |v: f64| if nodes == 0 { 0.0 } else { v / nodes as f64 };
     let full_world_nodes = plan.world_nodes as usize;
@@ -210,7 +213,7 @@ pub fn bake(args: BakeArgs) -> Result<()> {
     let report = BakeReport {
         source: w.label.clone(),
         world: w.desc,
-        out: args.out.clone(),
+        out: dir,
         region: args.region,
         nodes_per_lod: stats.nodes_per_lod.clone(),
         nodes,

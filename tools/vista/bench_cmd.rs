@@ -1,13 +1,13 @@
 //! `vista bench`: GPU-time benchmarks with medians after warm-up.
 
 use crate::world_args::WorldArgs;
-use anyhow::{bail, Context as _, Result};
+use anyhow::{Context as _, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use vista::bench::{bench_traverse, TraverseBenchConfig};
 use vista::gpu::Context;
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
 pub enum BenchKind {
     /// One-dispatch vs per-level traversal over resident sets and error targets.
     Traverse,
@@ -35,12 +35,14 @@ pub struct BenchArgs {
     /// Write the table as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Resident-set sizes (nodes; at most 1023: slots are 10-bit).
-    #[arg(long, value_delimiter = ',', default_value = "64,256,512,1000")]
-    sets: Vec<u32>,
-    /// Target projected errors in pixels [default: 0.5,1,2,4,8 for
-    /// traverse; 0.25,0.5,1,2,4,8,16 for accuracy].
-    #[arg(long, value_delimiter = ',')]
+    /// `bench traverse`: resident-set sizes (nodes; at most 1023: slots are
+    /// 10-bit) [default: 64,256,512,1000].
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    sets: Option<Vec<u32>>,
+    /// `bench traverse` and `bench accuracy`: target projected errors in
+    /// pixels [default: 0.5,1,2,4,8 for traverse; 0.25,0.5,1,2,4,8,16 for
+    /// accuracy].
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     targets: Option<Vec<f32>>,
     /// `bench accuracy`: only these views (ground, low-flight, high-flight,
     /// facing-ridge) [default: all four].
@@ -55,19 +57,20 @@ pub struct BenchArgs {
     images: Option<PathBuf>,
     /// `bench accuracy`: resident node slots of the renderers (at most
     /// 1023) [default: the renderer's default].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     slots: Option<u32>,
     /// Measured frames per row (after warm-up); the median is reported
     /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects, 3 per block (3 rounds) for shade].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     frames: Option<u32>,
-    /// Target size of `bench cull`, `bench effects` and `bench shade`.
-    #[arg(long, default_value = "1280x720", value_parser = crate::render_cmd::parse_size)]
-    size: [u32; 2],
-    /// Target projected error of `bench cull`, `bench effects` and `bench shade`, pixels.
-    #[arg(long, default_value_t = 1.0)]
-    target_error: f32,
-    /// Camera position (x,y,z metres); default: 60 m above the world's centre at mid height.
+    /// Target size of every kind but traverse [default: 1280x720].
+    #[arg(long, value_parser = crate::render_cmd::parse_size)]
+    size: Option<[u32; 2]>,
+    /// Target projected error of every kind but traverse, pixels [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    target_error: Option<f32>,
+    /// `bench traverse`: camera position (x,y,z metres); default: 60 m above
+    /// the world's centre at mid height.
     #[arg(long, value_parser = crate::render_cmd::parse_position, allow_hyphen_values = true)]
     camera: Option<[f64; 3]>,
     #[command(flatten)]
@@ -86,14 +89,15 @@ pub struct ViewBench<'a> {
 impl<'a> ViewBench<'a> {
     fn new(args: &'a BenchArgs, default_frames: u32) -> Result<Self> {
         let frames = args.frames.unwrap_or(default_frames);
-        if frames == 0 || !(args.target_error.is_finite() && args.target_error > 0.0) {
-            bail!("--frames must be at least 1 and --target-error a positive number of pixels");
+        let target_error_px = args.target_error.unwrap_or(1.0);
+        if frames == 0 || !(target_error_px.is_finite() && target_error_px > 0.0) {
+            input_error("--frames must be at least 1 and --target-error a positive number of pixels")?;
         }
         Ok(ViewBench {
             world: &args.world,
             frames,
-            size: args.size,
-            target_error_px: args.target_error,
+            size: args.size.unwrap_or([1280, 720]),
+            target_error_px,
             json: args.json.as_deref(),
         })
     }
@@ -106,7 +110,43 @@ pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
     Ok(())
 }
 
+/// The options a kind does not read, given anyway: each would be silently
+/// ignored, so it is an error naming the kinds that take it.
+fn unused_options(args: &BenchArgs) -> Vec<&'static str> {
+    use BenchKind::*;
+    let kind = args.kind;
+    let given: [(&str, bool, &[BenchKind]); 8] = [
+        ("--sets", args.sets.is_some(), &[Traverse]),
+        ("--camera", args.camera.is_some(), &[Traverse]),
+        ("--targets", args.targets.is_some(), &[Traverse, Accuracy]),
+        ("--size", args.size.is_some(), &[Cull, Effects, Shade, Accuracy]),
+        ("--target-error", args.target_error.is_some(), &[Cull, Effects, Shade, Accuracy]),
+        ("--views", args.views.is_some(), &[Accuracy]),
+        ("--plot", args.plot.is_some(), &[Accuracy]),
+        ("--images", args.images.is_some(), &[Accuracy]),
+    ];
+    let mut unused: Vec<&str> =
+        given.iter().filter(|(_, on, kinds)| *on && !kinds.contains(&kind)).map(|g| g.0).collect();
+    if args.slots.is_some() && !matches!(kind, Accuracy) {
+        unused.push("--slots");
+    }
+    unused
+}
+
+fn input_error(message: impl Into<String>) -> Result<()> {
+    Err(anyhow::Error::new(crate::InputError(message.into())))
+}
+
 pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
+    let unused = unused_options(&args);
+    if !unused.is_empty() {
+        let name = args.kind.to_possible_value().map_or(String::new(), |v| v.get_name().to_string());
+        input_error(format!(
+            "vista bench {name} does not use {}: drop {} (`vista bench --help` says which kind takes what)",
+            unused.join(", "),
+            if unused.len() == 1 { "it" } else { "them" }
+        ))?;
+    }
     if let Some(path) = &args.json {
         crate::out_path::check_out_file(path, "--json")?;
     }
@@ -134,11 +174,9 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
 fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
     let frames = args.frames.unwrap_or(15);
     let targets = args.targets.clone().unwrap_or(vec![0.5, 1.0, 2.0, 4.0, 8.0]);
-    if args.sets.iter().any(|&n| n == 0 || n > 1023)
-        || targets.iter().any(|t| !(t.is_finite() && *t > 0.0))
-        || frames == 0
-    {
-        bail!("--sets must be 1..=1023 nodes, --targets positive pixels, --frames at least 1");
+    let sets = args.sets.clone().unwrap_or(vec![64, 256, 512, 1000]);
+    if sets.iter().any(|&n| n == 0 || n > 1023) || targets.iter().any(|t| !(t.is_finite() && *t > 0.0)) || frames == 0 {
+        input_error("--sets must be 1..=1023 nodes, --targets positive pixels, --frames at least 1")?;
     }
     let world = args.world.load()?;
     world.require_unplaced("vista bench traverse")?;
@@ -146,7 +184,7 @@ fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
     let mid = f64::from(d.height_range_m[0] + d.height_range_m[1]) / 2.0;
     let camera = args.camera.unwrap_or([d.extent_m[0] / 2.0, d.extent_m[1] / 2.0, mid + 60.0]);
     let cfg = TraverseBenchConfig {
-        resident_sets: args.sets,
+        resident_sets: sets,
         targets_px: targets,
         warmup_frames: 3,
         frames,

@@ -28,7 +28,7 @@ pub struct RenderArgs {
     pub size: [u32; 2],
     /// Frames rendered after streaming settled; the first 2 are warm-up and
     /// left out of the medians and timings.json.
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = 12, allow_negative_numbers = true)]
     pub frames: u32,
     /// Folder (created if needed) for image.png, lit.exr, depth.exr,
     /// classification.png, timings.json (the timed frames), trace.json
@@ -47,10 +47,10 @@ pub struct RenderArgs {
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub camera: Option<CameraArg>,
     /// Vertical field of view in degrees.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
     pub fov: f64,
     /// Largest accepted projected vertical error in pixels (the accuracy knob).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub target_error: f32,
     /// How frames are submitted: auto (async where the device has a
     /// compute-only queue family, else single), single (one command buffer),
@@ -62,13 +62,13 @@ pub struct RenderArgs {
     #[arg(long, default_value = "frustum,cone,hole,occlusion", value_parser = parse_stages)]
     pub cull: CullStages,
     /// Resident node slots (at most 1023: slots are 10-bit).
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, allow_negative_numbers = true)]
     pub slots: u32,
     /// Cache baked nodes here across runs (default: bake in memory only).
     #[arg(long)]
     pub cache: Option<PathBuf>,
     /// Longest wait for the streamed set to become resident before the measured frames.
-    #[arg(long, default_value_t = 120.0)]
+    #[arg(long, default_value_t = 120.0, allow_negative_numbers = true)]
     pub settle_seconds: f64,
     /// The world to render (default: the procedural world, baked lazily).
     #[command(flatten)]

@@ -10,7 +10,7 @@ use clap::Args;
 use vista::render::Effects;
 use vista::world::{
     BakeSettings, ExrSource, GridSource, HeightSource, Hole, Limits, PayloadFormat, Png16Source, ProceduralSource,
-    WorldDesc, WorldError, WorldPlan, DEFAULT_MAX_SECTORS_PER_SIDE,
+    WorldDesc, WorldError, WorldPlan, DEFAULT_MAX_SECTORS_PER_SIDE, MAX_LOD_COUNT, MAX_SECTORS_PER_SIDE,
 };
 
 use crate::scene::{Scene, SceneSource};
@@ -51,10 +51,10 @@ pub struct WorldArgs {
     #[arg(long, value_name = "METRES", allow_negative_numbers = true, help_heading = "World")]
     pub spacing: Option<f64>,
     /// Number of quadtree levels (1..=10) [default: 6].
-    #[arg(long, value_name = "N", help_heading = "World")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, help_heading = "World")]
     pub lods: Option<u32>,
     /// Seed of the procedural world [default: 1].
-    #[arg(long, value_name = "N", help_heading = "World")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, help_heading = "World")]
     pub seed: Option<u64>,
     /// Cut a circular hole into the terrain (repeatable): centre X,Y and
     /// radius R, metres.
@@ -70,7 +70,7 @@ pub struct WorldArgs {
     pub payload: PayloadFormat,
     /// Refuse worlds with more LOD-0 sectors than this along either side,
     /// checked before anything is read or allocated [default: 16384].
-    #[arg(long, value_name = "N", help_heading = "World")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, help_heading = "World")]
     pub max_sectors: Option<u64>,
 }
 
@@ -171,6 +171,12 @@ impl WorldArgs {
         if !origin_m.iter().all(|v| v.is_finite()) {
             bail!("the scene's origin {origin_m:?} must be two finite numbers");
         }
+        let names = FieldNames {
+            extent: given_as(self.extent.is_none() && w.extent.is_some(), "--extent", "extent"),
+            spacing: given_as(self.spacing.is_none() && w.spacing.is_some(), "--spacing", "spacing"),
+            lods: given_as(self.lods.is_none() && w.lods.is_some(), "--lods", "lods"),
+            height_range: height_range.map(|r| r.to_string()),
+        };
         let mut holes = scene.holes()?;
         holes.extend(self.hole_circle.iter().cloned());
         let holes = holes.iter().map(|h| h.relative_to(origin_m)).collect();
@@ -180,7 +186,7 @@ impl WorldArgs {
                 let extent_m = extent.unwrap_or(defaults.extent_m);
                 let height_range_m = height_range.map_or(defaults.height_range_m, |r| r.range);
                 let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count };
-                check_desc(&desc)?;
+                check_desc(&desc, &names)?;
                 (desc, SpecSource::Procedural { seed })
             }
             Some((path, what)) => {
@@ -190,7 +196,7 @@ impl WorldArgs {
                 let height_range_m = height_range.map_or([0.0, 1.0], |r| r.range);
                 let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count };
                 // An absurd world fails before the file is opened.
-                check_desc(&desc)?;
+                check_desc(&desc, &names)?;
                 let kind = heightmap_kind(&path, what, height_range)?;
                 (desc, SpecSource::Heightmap { path, kind, height_range, clamp })
             }
@@ -254,11 +260,54 @@ fn input_error(e: impl Into<anyhow::Error>) -> anyhow::Error {
     anyhow::Error::new(crate::InputError(format!("{:#}", e.into())))
 }
 
-/// Validates before any file is read, so an absurd size fails at once.
-fn check_desc(desc: &WorldDesc) -> Result<()> {
+/// How the user gave each world field: a command-line option or a scene
+/// key, so a refusal names what to change.
+struct FieldNames {
+    extent: String,
+    spacing: String,
+    lods: String,
+    /// `None`: the default range.
+    height_range: Option<String>,
+}
+
+fn given_as(from_scene: bool, option: &str, key: &str) -> String {
+    if from_scene {
+        format!("the scene's {key}")
+    } else {
+        option.to_string()
+    }
+}
+
+/// Validates before any file is read, so an absurd size fails at once;
+/// what `WorldDesc::validate` refuses is said in the options' terms.
+fn check_desc(desc: &WorldDesc, names: &FieldNames) -> Result<()> {
+    let s = desc.spacing_m;
+    if !(s.is_finite() && s > 0.0) {
+        bail!("{} {s} must be a positive number of metres", names.spacing);
+    }
+    if !(1..=MAX_LOD_COUNT).contains(&desc.lod_count) {
+        bail!("{} {}: a world has 1 to {MAX_LOD_COUNT} LODs", names.lods, desc.lod_count);
+    }
+    let [lo, hi] = desc.height_range_m;
+    if let (Some(range), false) = (&names.height_range, lo < hi) {
+        bail!("{range}: LO must be below HI");
+    }
     let [x, y] = desc.extent_m;
-    desc.validate()
-        .with_context(|| format!("world of {x} x {y} m at {} m spacing with {} LODs", desc.spacing_m, desc.lod_count))
+    if !(x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0) {
+        bail!("{} {x},{y} must be positive metres", names.extent);
+    }
+    let sectors = x.max(y) / desc.sector_size_m();
+    if sectors.ceil() > MAX_SECTORS_PER_SIDE as f64 {
+        let count = if sectors < 1e15 { format!("{:.0}", sectors.ceil()) } else { format!("{sectors:.2e}") };
+        bail!(
+            "the world would have {count} sectors of {} m a side; vista addresses at most {MAX_SECTORS_PER_SIDE} \
+             (--max-sectors cannot raise that): raise {} or lower {}",
+            desc.sector_size_m(),
+            names.spacing,
+            names.extent
+        );
+    }
+    desc.validate().with_context(|| format!("world of {x} x {y} m at {s} m spacing with {} LODs", desc.lod_count))
 }
 
 /// A height range the user chose, and where: `--height-range` or the scene.
@@ -339,7 +388,8 @@ fn open_heightmap(
                 None => auto_range(source.grid()),
             };
             let desc = WorldDesc { height_range_m: range, ..geometry };
-            check_desc(&desc)?;
+            // The geometry was checked; only the range is new here.
+            desc.validate().with_context(|| format!("height range of {}", path.display()))?;
             Ok((desc, Arc::new(source)))
         }
     }
