@@ -144,7 +144,7 @@ fn bad_inputs_fail_with_one_line_naming_the_problem() {
     assert_fails_naming(&["bake", "--out", o, "--spacing", "0"], &["spacing"]);
     assert_fails_naming(&["bake", "--out", o, "--spacing", "-1"], &["spacing"]);
     assert_fails_naming(&["bake", "--out", o, "--region", "-9,-9,-1,-1"], &["region", "overlap"]);
-    assert_fails_naming(&["bake", "--out", o, "--lods", "11"], &["lod count"]);
+    assert_fails_naming(&["bake", "--out", o, "--lods", "11"], &["--lods 11"]);
     assert_fails_naming(&["bake", "--out", o, "--hole-circle", "1,2,-1"], &["hole circle"]);
     assert_fails_naming(&["bake"], &["--out"]);
     assert_fails_naming(&["memory", "--slots", "0"], &["--slots"]);

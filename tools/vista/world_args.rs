@@ -298,10 +298,12 @@ fn check_desc(desc: &WorldDesc, names: &FieldNames) -> Result<()> {
     }
     let sectors = x.max(y) / desc.sector_size_m();
     if sectors.ceil() > MAX_SECTORS_PER_SIDE as f64 {
-        let count = if sectors < 1e15 { format!("{:.0}", sectors.ceil()) } else { format!("{sectors:.2e}") };
+        // Plain digits up to what a person reads at a glance.
+        let short = |v: f64| if v < 1e15 { format!("{v}") } else { format!("{v:.2e}") };
+        let (count, x, y) = (short(sectors.ceil()), short(x), short(y));
         bail!(
-            "the world would have {count} sectors of {} m a side; vista addresses at most {MAX_SECTORS_PER_SIDE} \
-             (--max-sectors cannot raise that): raise {} or lower {}",
+            "a world of {x} x {y} m would have {count} sectors of {} m a side; vista addresses at most \
+             {MAX_SECTORS_PER_SIDE} (--max-sectors cannot raise that): raise {} or lower {}",
             desc.sector_size_m(),
             names.spacing,
             names.extent
