@@ -229,12 +229,14 @@ impl WorldPlan {
             if x0 == x1 || y0 == y1 || per_level == 0 {
                 return;
             }
-            let n = (per_level as u64).min((x1 - x0).max(y1 - y0)).max(1);
-            // Along the diagonal: coast and mountains cost alike, but an
-            // image source's edge clamps do not.
-            let ids: Vec<NodeId> = (0..n)
+            let n = (per_level as u64).min((x1 - x0) * (y1 - y0)).max(1);
+            // Spread over the region's area (Halton 2, 3): a node's cost
+            // depends on its ground (lowlands skip the procedural world's
+            // mountain octaves), which a diagonal samples poorly.
+            let ids: Vec<NodeId> = (1..=n)
                 .map(|k| {
-                    let (x, y) = (x0 + (x1 - x0) * (2 * k + 1) / (2 * n), y0 + (y1 - y0) * (2 * k + 1) / (2 * n));
+                    let at = |v: f64, lo: u64, hi: u64| lo + ((hi - lo) as f64 * v) as u64;
+                    let (x, y) = (at(halton(k, 2), x0, x1), at(halton(k, 3), y0, y1));
                     NodeId::new(lod, x as u32, y as u32)
                 })
                 .collect();
@@ -283,6 +285,17 @@ impl WorldPlan {
         }
         Ok(())
     }
+}
+
+/// Element `k` of the Halton sequence in `base`: in 0..1, evenly spread.
+fn halton(mut k: u64, base: u64) -> f64 {
+    let (mut r, mut f) = (0.0, 1.0);
+    while k > 0 {
+        f /= base as f64;
+        r += f * (k % base) as f64;
+        k /= base;
+    }
+    r
 }
 
 /// Cell range [x0, y0, x1, y1) at `lod` overlapping `region`, with the
