@@ -17,6 +17,13 @@ use super::memory::MemoryReport;
 use super::source::HeightSource;
 use super::texels::PayloadFormat;
 
+/// Wall time each level of [`WorldPlan::measure_bake`] bakes for at least
+/// (unless its batches run out): below about 50 ms, thread start-up and
+/// scheduling jitter moved the estimate of Mont Blanc at 1 m (2.5 ms a node)
+/// between 12 and 18 minutes.
+pub const MIN_TIMED_SECONDS: f64 = 0.05;
+/// Most batches per level in [`WorldPlan::measure_bake`].
+pub const MAX_SAMPLE_BATCHES: u64 = 8;
 /// Default for [`Limits::max_sectors_per_side`]: the largest node texture
 /// most GPUs allow (16384 texels a side), and a CPU quadtree shadow of
 /// about 700 MiB at that size.
@@ -212,48 +219,58 @@ impl WorldPlan {
         self.gpu_slot_bytes + self.node_texture_bytes
     }
 
-    /// Times the bake of up to `samples` nodes of the region, half at LOD 0
-    /// and half above it (a LOD-0 node samples a quarter of the points a
-    /// coarser one does), spread over it and baked in parallel as
-    /// [`super::bake_world`] does, and weighs the two costs by the region's
-    /// node counts. Writes nothing to disk.
+    /// Times the bake of nodes of the region, half at LOD 0 and half above
+    /// it (a LOD-0 node samples a quarter of the points a coarser one
+    /// does), spread over it and baked in parallel as [`super::bake_world`]
+    /// does, and weighs the two costs by the region's node counts. Each
+    /// level bakes batches of `samples / 2` nodes until [`MIN_TIMED_SECONDS`]
+    /// have passed (cheap nodes jitter) or [`MAX_SAMPLE_BATCHES`] batches.
+    /// Writes nothing to disk.
     pub fn measure_bake(&mut self, source: &dyn HeightSource, holes: &[Hole], settings: &BakeSettings, samples: usize) {
         let coarse_nodes: u64 = self.nodes_per_lod.iter().skip(1).sum();
-        let per_level = if coarse_nodes > 0 { samples / 2 } else { samples };
+        let per_batch = if coarse_nodes > 0 { samples / 2 } else { samples } as u64;
         let mut measured = Vec::new();
         for lod in [0u8, 1] {
             if lod == 1 && coarse_nodes == 0 {
                 break;
             }
             let [x0, y0, x1, y1] = region_cells(&self.world, lod, self.region);
-            if x0 == x1 || y0 == y1 || per_level == 0 {
+            if x0 == x1 || y0 == y1 || per_batch == 0 {
                 return;
             }
-            let n = (per_level as u64).min((x1 - x0) * (y1 - y0)).max(1);
             // Spread over the region's area (Halton 2, 3): a node's cost
             // depends on its ground (lowlands skip the procedural world's
             // mountain octaves), which a diagonal samples poorly.
-            let ids: Vec<NodeId> = (1..=n)
-                .map(|k| {
-                    let at = |v: f64, lo: u64, hi: u64| lo + ((hi - lo) as f64 * v) as u64;
-                    let (x, y) = (at(halton(k, 2), x0, x1), at(halton(k, 3), y0, y1));
-                    NodeId::new(lod, x as u32, y as u32)
-                })
-                .collect();
-            let start = Instant::now();
-            ids.par_iter().for_each(|&id| {
-                std::hint::black_box(bake_node_with(source, &self.world, holes, settings, id));
-            });
-            let wall = start.elapsed().as_secs_f64();
-            // Busy threads: fewer nodes than threads leave some idle.
-            let busy = self.threads.min(ids.len()) as f64;
-            measured.push((wall * busy / ids.len() as f64, ids.len()));
+            let node = |k: u64| {
+                let at = |v: f64, lo: u64, hi: u64| lo + ((hi - lo) as f64 * v) as u64;
+                NodeId::new(lod, at(halton(k, 2), x0, x1) as u32, at(halton(k, 3), y0, y1) as u32)
+            };
+            let bake = |id| std::hint::black_box(bake_node_with(source, &self.world, holes, settings, id));
+            // One node untimed first: the first touch of a source (an
+            // image's pixels, the thread pool) made timings 40 % high.
+            bake(node(1));
+            let (mut thread_seconds, mut count) = (0.0, 0u64);
+            let cells = (x1 - x0) * (y1 - y0);
+            while count < cells.min(per_batch * MAX_SAMPLE_BATCHES) {
+                let ids: Vec<NodeId> = (count + 1..=(count + per_batch).min(cells)).map(node).collect();
+                let start = Instant::now();
+                ids.par_iter().for_each(|&id| {
+                    bake(id);
+                });
+                // Busy threads: fewer nodes than threads leave some idle.
+                thread_seconds += start.elapsed().as_secs_f64() * self.threads.min(ids.len()) as f64;
+                count += ids.len() as u64;
+                if thread_seconds >= MIN_TIMED_SECONDS * self.threads as f64 {
+                    break;
+                }
+            }
+            measured.push((thread_seconds / count as f64, count));
         }
         let lod0 = self.nodes_per_lod.first().copied().unwrap_or(0) as f64;
         let total = self.nodes().max(1) as f64;
         let coarse_cost = measured.get(1).map_or(measured[0].0, |m| m.0);
         self.node_seconds = (measured[0].0 * lod0 + coarse_cost * coarse_nodes as f64) / total;
-        self.time_basis = TimeBasis::Measured(measured.iter().map(|m| m.1).sum());
+        self.time_basis = TimeBasis::Measured(measured.iter().map(|m| m.1 as usize).sum());
     }
 
     /// The first limit this plan breaks, if any.
