@@ -474,6 +474,23 @@ mod tests {
     }
 
     #[test]
+    fn the_bake_time_comes_from_nodes_of_both_kinds() {
+        let w = world(2048.0, 2.0, 4);
+        let source = crate::world::ProceduralSource::new(1, w.extent_m, w.height_range_m).unwrap();
+        let mut plan = WorldPlan::new(&w, None);
+        plan.measure_bake(&source, &[], &BakeSettings::default(), 16);
+        // A batch of 8 at LOD 0 and at LOD 1 at least; at most every cell
+        // of LOD 1 (16) and 8 batches at LOD 0.
+        let TimeBasis::Measured(n) = plan.time_basis else { panic!("not measured: {plan:?}") };
+        assert!((16..=64 + 16).contains(&n), "{n} sample nodes");
+        assert!(plan.node_seconds.is_finite() && plan.node_seconds > 0.0, "{}", plan.node_seconds);
+        // Halton points cover the region: 8 of them hit 8 different cells.
+        let cells: std::collections::HashSet<_> =
+            (1..=8u64).map(|k| ((8.0 * halton(k, 2)) as u64, (8.0 * halton(k, 3)) as u64)).collect();
+        assert_eq!(cells.len(), 8);
+    }
+
+    #[test]
     fn the_node_texture_matches_the_renderer() {
         for w in [world(2048.0, 2.0, 4), world(1000.0, 1.0, 6), WorldDesc::default()] {
             let t = crate::terrain::quadtree::texture_extent(&w);
