@@ -111,7 +111,7 @@ pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
 }
 
 /// The options a kind does not read, given anyway: each would be silently
-/// ignored, so it is an error naming the kinds that take it.
+/// ignored, so giving one is an error (each option's help names its kinds).
 fn unused_options(args: &BenchArgs) -> Vec<&'static str> {
     use BenchKind::*;
     let kind = args.kind;
