@@ -21,9 +21,10 @@ const REPORT_SLOTS: usize = 512;
 /// Upper bound for `--slots`: far beyond any GPU, and keeps byte totals
 /// from overflowing.
 const MAX_SLOTS: u64 = 1 << 24;
-/// Nodes a plan bakes (in memory) to time the source: 0.16 s for the
-/// procedural world on two cores. With 16, the default world's estimate
-/// came within 3 % of its full bake (8 along the diagonal: 35 % high).
+/// Nodes per timed batch of a plan (half at LOD 0, half at LOD 1); levels
+/// bake batches until 50 ms have passed (`WorldPlan::measure_bake`): about
+/// 0.25 s in all, and the default world's estimate within about 10 % of its
+/// full bake (8 nodes along the diagonal were 35 % high).
 const PLAN_SAMPLES: usize = 16;
 // `--max-disk`'s default, in GiB as the option takes it.
 const _: () = assert!(DEFAULT_MAX_BAKE_DISK_BYTES == 64 << 30);
