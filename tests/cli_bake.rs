@@ -356,10 +356,10 @@ fn memory_json_gives_the_bytes_per_node_of_each_payload_format() {
         assert_eq!(v["gpu_bytes_per_node"].as_u64(), Some(sum("gpu_bytes")));
         (v["cpu_bytes_per_node"].as_u64().unwrap(), v["gpu_bytes_per_node"].as_u64().unwrap())
     };
-    // Derived by hand: heights 129 * 129 * 2, normal BC3 33 * 33 blocks of
+    // Derived by hand: heights 132 * 132 * 2 (a 2-sample border), normal BC3 33 * 33 blocks of
     // 16 bytes, albedo BC1 of 8, splat 65 * 65, patch min/max, cones and
     // holes 64 * (4 + 16 + 1), node desc + error 12.
-    let bc_gpu = 129 * 129 * 2 + 33 * 33 * 16 + 33 * 33 * 8 + 65 * 65 + 64 * 21 + 12;
+    let bc_gpu = 132 * 132 * 2 + 33 * 33 * 16 + 33 * 33 * 8 + 65 * 65 + 64 * 21 + 12;
     assert_eq!(per_node("bc").1, bc_gpu);
     // The floor: at most 70 KB a resident node on the GPU.
     assert!(bc_gpu <= 70_000);

@@ -155,8 +155,10 @@ fn each_limit_is_refused_before_allocating() {
     let run = assert_refused(&[&big[..], &["--dry-run"]].concat(), &["--yes"]);
     assert!(run.out.contains("1563 x 1563"), "{}", run.out);
     // A lower cap refuses what the default takes: 34 125 node files of
-    // 65 062 bytes uncompressed, at zstd's 1.49:1 of the default world.
-    let expect = format!("{:.2} GiB", 34125.0 * (65062.0 / 1.49f64).floor() / f64::from(1 << 30));
+    // 65 062 bytes uncompressed before the height layer's 2-sample border
+    // ((132^2 - 129^2) * 2 bytes more), at zstd's 1.49:1 of the default world.
+    let file = 65062.0 + f64::from(132 * 132 - 129 * 129) * 2.0;
+    let expect = format!("{:.2} GiB", 34125.0 * (file / 1.49f64).floor() / f64::from(1 << 30));
     assert_refused(&["bake", "--out", o, "--max-disk", "1"], &[&expect, "the cap is 1.00 GiB"]);
     assert_eq!(node_files(Path::new(o)), 0, "nothing baked");
 

@@ -13,7 +13,7 @@ use std::collections::BTreeSet;
 use vista::passes::cull_patches::{CullStages, PatchRecord};
 use vista::render::offscreen::Capture;
 use vista::render::View;
-use vista::world::{bake_node, Hole, NodeId, WorldDesc, NODE_SAMPLES, PATCH_HOLE_ALL, PATCH_QUADS};
+use vista::world::{bake_node, Hole, NodeId, WorldDesc, PATCH_HOLE_ALL, PATCH_QUADS};
 
 fn magenta(c: &Capture, x: u32, y: u32) -> bool {
     c.pixel(x, y) == MAGENTA_RGBA
@@ -294,7 +294,7 @@ fn patch_triangles(world: &WorldDesc, surface: &Surface, p: &PatchRecord) -> Vec
     let s = world.node_spacing_m(p.lod);
     let (px, py) = (p.patch % 8 * PATCH_QUADS, p.patch / 8 * PATCH_QUADS);
     let v = |i: u32, j: u32| {
-        let h = world.decode_height(node.heights[j as usize * NODE_SAMPLES + i as usize]);
+        let h = world.decode_height(node.height(i as isize, j as isize));
         DVec3::new(b[0] + f64::from(i) * s, b[1] + f64::from(j) * s, f64::from(h))
     };
     let mut out = Vec::new();

@@ -328,7 +328,7 @@ fn sector_data_reaches_every_lod_of_a_10_lod_world_and_reports_uncovered_points(
             let mut node = fake_node(*id, 0);
             let base = (i as u32 * 997) % 30_000;
             for (k, h) in node.heights.iter_mut().enumerate() {
-                let (x, y) = ((k % vista::world::NODE_SAMPLES) as u32, (k / vista::world::NODE_SAMPLES) as u32);
+                let (x, y) = ((k % vista::world::ATLAS_SIDE) as u32, (k / vista::world::ATLAS_SIDE) as u32);
                 *h = (base + x * 97 + y * 61) as u16;
             }
             heights.insert(*id, node.heights.clone());

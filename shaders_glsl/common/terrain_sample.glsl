@@ -66,8 +66,9 @@ VistaNodeHit vista_find_node(vec2 p) {
     return hit;
 }
 
+// R16 height of node sample `i` (the layer has a 2-sample border).
 float vista_height_texel(uint slot, ivec2 i) {
-    return texelFetch(sampler2DArray(VISTA_HEIGHT_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(i, int(slot)), 0).r;
+    return texelFetch(sampler2DArray(VISTA_HEIGHT_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(atlas_texel(i), int(slot)), 0).r;
 }
 
 // Whether terrain covers `p`; its height in metres there (0 where not).

@@ -72,7 +72,7 @@ void main() {
     ivec2 local = ivec2(pxy * quads + uvec2(si, sj));
     uint lod = node_lod(n);
     ivec2 g = (ivec2(node_x(n), node_y(n)) * int(per_side * quads) + local) << lod;
-    float h = texelFetch(sampler2DArray(height_atlas, nearest), ivec3(local, int(slot)), 0).r;
+    float h = texelFetch(sampler2DArray(height_atlas, nearest), ivec3(atlas_texel(local), int(slot)), 0).r;
     precise float z = view.v.height_lo + h * view.v.height_range - view.v.camera_z;
     vec3 rel = vec3(view_rel_xy(g, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m), z);
     gl_Position = view.v.view_proj * vec4(rel, 1.0);

@@ -4,7 +4,7 @@
 
 use crate::shaders::consts::{SECTOR_DATA_WORDS, SECTOR_LODS_PER_WORD, SLOT_BITS};
 use crate::terrain::quadtree::{QuadtreeShadow, EMPTY, INVALID};
-use crate::world::{WorldDesc, NODE_QUADS, NODE_SAMPLES};
+use crate::world::{texel_index, WorldDesc, NODE_QUADS};
 
 /// One sector's words of sector data.
 pub type SectorWords = [u32; SECTOR_DATA_WORDS as usize];
@@ -32,7 +32,7 @@ pub fn sector_data_cpu(tree: &QuadtreeShadow, world: &WorldDesc) -> Vec<SectorWo
 /// Height (m) at `p` from the finest resident node, bilinear over its R16
 /// samples (what terrain_sample.glsl computes), or None outside the world
 /// extent or where nothing is resident. `heights(slot)` gives a resident
-/// node's 129x129 samples.
+/// node's 132x132 height layer (texel = sample + 2, [`texel_index`]).
 pub fn sample_height_cpu<'a>(
     tree: &QuadtreeShadow,
     world: &WorldDesc,
@@ -58,7 +58,7 @@ pub fn sample_height_cpu<'a>(
     let i0 = local.map(|l| (l.floor() as usize).min(127));
     let f = [local[0] - i0[0] as f64, local[1] - i0[1] as f64];
     let hs = heights(slot);
-    let s = |x: usize, y: usize| f64::from(hs[y * NODE_SAMPLES + x]) / 65535.0;
+    let s = |x: usize, y: usize| f64::from(hs[texel_index(x as isize, y as isize)]) / 65535.0;
     let a = s(i0[0], i0[1]) * (1.0 - f[0]) + s(i0[0] + 1, i0[1]) * f[0];
     let b = s(i0[0], i0[1] + 1) * (1.0 - f[0]) + s(i0[0] + 1, i0[1] + 1) * f[0];
     let [lo, hi] = world.height_range_m;

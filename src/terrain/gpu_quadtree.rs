@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
 use crate::terrain::quadtree::{texture_extent, NodeDesc, QuadtreeShadow, QuadtreeUpdate, FIRST_SLOT, MAX_SLOTS};
 use crate::world::{
-    BakedNode, NodeId, PayloadFormat, TexelKind, WorldDesc, ATLAS_SIDE, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, SPLAT_RES,
+    BakedNode, NodeId, PayloadFormat, TexelKind, WorldDesc, ATLAS_SIDE, PATCHES_PER_NODE_SIDE, SPLAT_RES,
 };
 use std::collections::VecDeque;
 
@@ -38,7 +38,7 @@ const fn texels(name: &'static str) -> AtlasKind {
 /// Atlas formats, in the order of `payload_bytes`; the `ATLAS_*` indices
 /// name them.
 const ATLASES: [AtlasKind; 7] = [
-    plain("atlas_height", vk::Format::R16_UNORM, NODE_SAMPLES as u32, 2),
+    plain("atlas_height", vk::Format::R16_UNORM, ATLAS_SIDE as u32, 2),
     texels("atlas_normal"),
     texels("atlas_albedo"),
     plain("atlas_splat", vk::Format::R8_UINT, SPLAT_RES as u32, 1),

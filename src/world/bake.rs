@@ -94,7 +94,9 @@ pub fn bake_node_with(
     let coarse = |i: usize, j: usize| texel_height(i + ATLAS_BORDER, j + ATLAS_BORDER);
 
     let n = NODE_SAMPLES;
-    let heights: Vec<u16> = (0..n * n).map(|k| world.encode_height(coarse(k % n, k / n))).collect();
+    let samples: Vec<u16> = (0..n * n).map(|k| world.encode_height(coarse(k % n, k / n))).collect();
+    let heights: Vec<u16> =
+        (0..ATLAS_TEXELS).map(|k| world.encode_height(texel_height(k % ATLAS_SIDE, k / ATLAS_SIDE))).collect();
 
     let hole_here = holes_near(holes, b, step);
     let mut normals = Vec::with_capacity(ATLAS_TEXELS);
@@ -124,7 +126,7 @@ pub fn bake_node_with(
         .map(|k| materials[texel_index(2 * (k % SPLAT_RES) as isize, 2 * (k / SPLAT_RES) as isize)] as u8)
         .collect();
 
-    let decoded: Vec<f32> = heights.iter().map(|&v| world.decode_height(v)).collect();
+    let decoded: Vec<f32> = samples.iter().map(|&v| world.decode_height(v)).collect();
     let mut patch_min_max = Vec::new();
     let mut patch_cones = Vec::new();
     let mut patch_holes = Vec::new();
@@ -135,8 +137,8 @@ pub fn bake_node_with(
                 for i in 0..PATCH_SAMPLES {
                     let (si, sj) = ((px * PATCH_QUADS) as usize + i, (py * PATCH_QUADS) as usize + j);
                     let k = sj * n + si;
-                    mn = mn.min(heights[k]);
-                    mx = mx.max(heights[k]);
+                    mn = mn.min(samples[k]);
+                    mx = mx.max(samples[k]);
                     holes_seen += usize::from(albedo[texel_index(si as isize, sj as isize)][3] == 0);
                 }
             }
@@ -150,8 +152,8 @@ pub fn bake_node_with(
             patch_cones.push(fit_cone(&tri).to_gpu());
         }
     }
-    let min_height = heights.iter().copied().min().unwrap_or(0);
-    let max_height = heights.iter().copied().max().unwrap_or(0);
+    let min_height = samples.iter().copied().min().unwrap_or(0);
+    let max_height = samples.iter().copied().max().unwrap_or(0);
     // LOD 0 has no finer level: the traversal never refines it.
     let max_error_m = if sub == 2 {
         let base = g.at(ATLAS_BORDER);

@@ -2,9 +2,9 @@
 
 use std::fmt;
 
-use super::layout::{NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
+use super::layout::{PATCHES_PER_NODE, SPLAT_RES};
 use super::payload::BakedNode;
-use super::texels::{PayloadFormat, TexelKind};
+use super::texels::{PayloadFormat, TexelKind, ATLAS_TEXELS};
 
 /// One payload kind's size per node.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
@@ -32,7 +32,7 @@ impl MemoryReport {
     }
 
     pub fn for_format(nodes: usize, format: PayloadFormat) -> Self {
-        let s = NODE_SAMPLES * NODE_SAMPLES;
+        let h = ATLAS_TEXELS;
         let sp = SPLAT_RES * SPLAT_RES;
         let p = PATCHES_PER_NODE;
         let (normal, albedo) = (TexelKind::Normal, TexelKind::Albedo);
@@ -40,7 +40,7 @@ impl MemoryReport {
         MemoryReport {
             nodes,
             kinds: vec![
-                kind("height", "R16_UNORM 129x129", s * 2, s * 2),
+                kind("height", "R16_UNORM 132x132", h * 2, h * 2),
                 kind("normal", format.describe(normal), format.layer_bytes(normal), format.layer_bytes(normal)),
                 kind("albedo", format.describe(albedo), format.layer_bytes(albedo), format.layer_bytes(albedo)),
                 kind("splat", "R8_UINT 65x65", sp, sp),

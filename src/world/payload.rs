@@ -1,7 +1,7 @@
 //! The baked payload of one quadtree node and its byte serialisation.
 
 use super::layout::{NodeId, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
-use super::texels::{texel_index, PayloadFormat, TexelKind};
+use super::texels::{texel_index, PayloadFormat, TexelKind, ATLAS_TEXELS};
 
 /// Splat material ids (index into the renderer's 256-entry palette).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,7 +28,10 @@ pub const PATCH_HOLE_ALL: u8 = crate::shaders::consts::PATCH_HOLE_ALL as u8;
 #[derive(Clone, Debug, PartialEq)]
 pub struct BakedNode {
     pub id: NodeId,
-    /// 129x129 R16_UNORM heights over the world height range.
+    /// 132x132 R16_UNORM heights over the world height range, laid out as
+    /// the normal and albedo layers: texel (t, u) holds sample (t - 2, u - 2)
+    /// ([`texel_index`]), so the vertex shader's Catmull-Rom refinement
+    /// below the samples reads its 4x4 taps inside the node's own layer.
     pub heights: Vec<u16>,
     /// How `normals` and `albedo` are stored ([`super::texels`]).
     pub format: PayloadFormat,
@@ -56,6 +59,7 @@ pub struct BakedNode {
 }
 
 const SAMPLES: usize = NODE_SAMPLES * NODE_SAMPLES;
+const HEIGHT_TEXELS: usize = ATLAS_TEXELS;
 const SPLATS: usize = SPLAT_RES * SPLAT_RES;
 
 impl BakedNode {
@@ -64,11 +68,21 @@ impl BakedNode {
     pub fn serialized_bytes(format: PayloadFormat) -> usize {
         10 + 2 * 2
             + 4
-            + SAMPLES * 2
+            + HEIGHT_TEXELS * 2
             + format.layer_bytes(TexelKind::Normal)
             + format.layer_bytes(TexelKind::Albedo)
             + SPLATS
             + PATCHES_PER_NODE * (1 + 4 + 16)
+    }
+
+    /// R16 height of node sample (i, j), i and j in -2..=129.
+    pub fn height(&self, i: isize, j: isize) -> u16 {
+        self.heights[texel_index(i, j)]
+    }
+
+    /// The 129x129 heights of the node's own samples, row 0 south.
+    pub fn sample_heights(&self) -> Vec<u16> {
+        (0..SAMPLES).map(|k| self.height((k % NODE_SAMPLES) as isize, (k / NODE_SAMPLES) as isize)).collect()
     }
 
     /// The normal layer as RGBA8 texels, decoded as the GPU does.
@@ -130,7 +144,7 @@ impl BakedNode {
         let max_height = u16::from_le_bytes(r.take());
         let max_error_m = f32::from_le_bytes(r.take());
         let patch_holes = (0..PATCHES_PER_NODE).map(|_| r.take::<1>()[0]).collect();
-        let heights = (0..SAMPLES).map(|_| u16::from_le_bytes(r.take())).collect();
+        let heights = (0..HEIGHT_TEXELS).map(|_| u16::from_le_bytes(r.take())).collect();
         let normals = r.slice(format.layer_bytes(TexelKind::Normal)).to_vec();
         let albedo = r.slice(format.layer_bytes(TexelKind::Albedo)).to_vec();
         let splat = (0..SPLATS).map(|_| r.take::<1>()[0]).collect();

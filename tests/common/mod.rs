@@ -6,7 +6,7 @@
 
 use vista::gpu::{Context, ContextOptions};
 use vista::world::{
-    texel_index, BakedNode, NodeId, PayloadFormat, TexelKind, ATLAS_TEXELS, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES,
+    texel_index, BakedNode, NodeId, PayloadFormat, TexelKind, ATLAS_TEXELS, PATCHES_PER_NODE, SPLAT_RES,
 };
 
 /// (message id, why it is acceptable). Keep this list short and justified.
@@ -62,10 +62,9 @@ impl Rng {
 /// A synthetic node whose payload bytes identify it (no bake needed).
 pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
     let tag = (id.lod as u16) << 12 ^ (id.x as u16) << 6 ^ id.y as u16 ^ salt;
-    let s = NODE_SAMPLES * NODE_SAMPLES;
     BakedNode {
         id,
-        heights: (0..s).map(|i| (i as u16).wrapping_mul(31) ^ tag).collect(),
+        heights: (0..ATLAS_TEXELS).map(|i| (i as u16).wrapping_mul(31) ^ tag).collect(),
         format: PayloadFormat::Bc,
         normals: PayloadFormat::Bc.encode(TexelKind::Normal, &vec![[tag as u8, 128, 255, 127]; ATLAS_TEXELS]),
         albedo: PayloadFormat::Bc.encode(
