@@ -15,7 +15,13 @@ use vista::render::stats::collect;
 use vista::world::WorldDesc;
 
 fn world(spacing_m: f64) -> WorldDesc {
-    WorldDesc { extent_m: [2048.0, 2048.0], height_range_m: [0.0, 600.0], spacing_m, lod_count: 5 }
+    WorldDesc {
+        extent_m: [2048.0, 2048.0],
+        height_range_m: [0.0, 600.0],
+        spacing_m,
+        lod_count: 5,
+        ..WorldDesc::default()
+    }
 }
 
 const CAP: Surface = Surface::SphereCap { z0: 50.0, c: [1024.0, 1100.0, -250.0], r: 600.0 };

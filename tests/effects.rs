@@ -16,7 +16,13 @@ use vista::world::{Hole, WorldDesc};
 /// 1024 m at 1 m spacing with 4 LODs: the 1024 m root node tiles it exactly,
 /// so without hole regions the world has nothing for the hole path to cut.
 fn world() -> WorldDesc {
-    WorldDesc { extent_m: [1024.0, 1024.0], height_range_m: [100.0, 500.0], spacing_m: 1.0, lod_count: 4 }
+    WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [100.0, 500.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    }
 }
 
 const SIZE: [u32; 2] = [96, 64];

@@ -79,8 +79,13 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
         let device = engine.device();
         let size = [64, 64];
         {
-            let world =
-                WorldDesc { extent_m: [512.0, 512.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 3 };
+            let world = WorldDesc {
+                extent_m: [512.0, 512.0],
+                height_range_m: [0.0, 100.0],
+                spacing_m: 1.0,
+                lod_count: 3,
+                ..WorldDesc::default()
+            };
             let source = std::sync::Arc::new(Surface::Tilted { z0: 10.0, gx: 0.05, gy: 0.02 });
             let mut renderer =
                 TerrainRenderer::new(&wrapped, &world, source, Vec::new(), &RendererOptions::default()).unwrap();

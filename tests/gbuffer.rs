@@ -18,7 +18,13 @@ use vista::shaders::consts::{
 use vista::world::WorldDesc;
 
 fn world() -> WorldDesc {
-    WorldDesc { extent_m: [1024.0, 1024.0], height_range_m: [100.0, 500.0], spacing_m: 1.0, lod_count: 4 }
+    WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [100.0, 500.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    }
 }
 
 /// Not a multiple of the tile size: the last tile column and row are partial.

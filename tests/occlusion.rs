@@ -22,7 +22,13 @@ use vista::world::WorldDesc;
 /// 1024 m at 1 m spacing, 4 LODs: small enough to keep every wanted node
 /// resident, so two renderers can share one resident set.
 fn world() -> WorldDesc {
-    WorldDesc { extent_m: [1024.0, 1024.0], height_range_m: [100.0, 500.0], spacing_m: 1.0, lod_count: 4 }
+    WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [100.0, 500.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    }
 }
 
 fn effects(occlusion: bool) -> RendererOptions {

@@ -110,7 +110,13 @@ fn the_layers_start_two_texels_before_the_node() {
             7
         }
     }
-    let w = WorldDesc { extent_m: [512.0, 512.0], height_range_m: [0.0, 800.0], spacing_m: 1.0, lod_count: 2 };
+    let w = WorldDesc {
+        extent_m: [512.0, 512.0],
+        height_range_m: [0.0, 800.0],
+        spacing_m: 1.0,
+        lod_count: 2,
+        ..WorldDesc::default()
+    };
     let node = bake_node_with(
         &Tilt,
         &w,

@@ -12,7 +12,13 @@ use vista::world::{NodeId, PayloadFormat, WorldDesc};
 /// 8 x 6 sectors of 128 m, 4 LODs: a 1x1 root grid, texture padded to 8x8,
 /// with invalid cells along the top rows.
 fn small_world() -> WorldDesc {
-    WorldDesc { extent_m: [1000.0, 700.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 4 }
+    WorldDesc {
+        extent_m: [1000.0, 700.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    }
 }
 
 fn all_valid(world: &WorldDesc) -> Vec<NodeId> {

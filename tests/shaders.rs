@@ -125,7 +125,7 @@ fn rust_twins_match_reflected_layouts() {
     check_layout(
         "VistaTerrain",
         fields!(VistaTerrain: sector_size_m, spacing_m, sectors_x, sectors_y, lod_count, height_lo, height_range,
-            extent_x_m, extent_y_m, pad),
+            extent_x_m, extent_y_m, grid_origin_x_m, grid_origin_y_m, pad),
         layouts::VISTA_TERRAIN,
         structs::VISTA_TERRAIN,
     );

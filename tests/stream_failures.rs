@@ -17,7 +17,13 @@ use vista::Error;
 
 /// 512 m, 3 LODs: one root (LOD 2, 512 m), 4 x 4 LOD-0 nodes of 128 m.
 fn world() -> WorldDesc {
-    WorldDesc { extent_m: [512.0, 512.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 3 }
+    WorldDesc {
+        extent_m: [512.0, 512.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 3,
+        ..WorldDesc::default()
+    }
 }
 
 const ATTEMPTS: u32 = 3;

@@ -40,7 +40,13 @@ fn pixel_all(x: u32, y: u32, f: impl Fn([f64; 2]) -> bool) -> bool {
 /// beside the unrefined LOD-4 root to the west, and every delta 0..4 occurs.
 #[test]
 fn seams_are_watertight_for_every_lod_delta() {
-    let world = WorldDesc { extent_m: [4096.0, 2048.0], height_range_m: [0.0, 200.0], spacing_m: 1.0, lod_count: 5 };
+    let world = WorldDesc {
+        extent_m: [4096.0, 2048.0],
+        height_range_m: [0.0, 200.0],
+        spacing_m: 1.0,
+        lod_count: 5,
+        ..WorldDesc::default()
+    };
     let bump = Surface::Bump { z0: 100.0, c: [2300.0, 1100.0], r: 200.0, h: 60.0 };
     let size = [96, 96];
     gpu_test(|ctx| {
@@ -97,7 +103,13 @@ fn depth_tolerance(surface: &Surface, v: &View, ray: DVec3, t: f64, range: f64) 
 
 #[test]
 fn depth_matches_closed_form_ray_casts() {
-    let world = WorldDesc { extent_m: [1024.0, 1024.0], height_range_m: [-100.0, 900.0], spacing_m: 1.0, lod_count: 4 };
+    let world = WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [-100.0, 900.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    };
     let size = [64, 64];
     let surfaces = [
         Surface::Plane(50.0),
@@ -153,7 +165,13 @@ fn coarsest_spacing(rig: &Rig, ctx: &vista::gpu::Context) -> f64 {
 
 #[test]
 fn holes_show_background_exactly_where_the_holes_are() {
-    let world = WorldDesc { extent_m: [1024.0, 1024.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 4 };
+    let world = WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    };
     // The circle contains the whole root patch [256, 384] x [320, 448].
     let circle = Hole::Circle { center_m: [320.0, 384.0], radius_m: 150.0 };
     let square = Hole::Polygon(vec![[600.0, 600.0], [700.0, 600.0], [700.0, 700.0], [600.0, 700.0]]);
@@ -209,7 +227,13 @@ fn holes_show_background_exactly_where_the_holes_are() {
 
 #[test]
 fn a_world_ends_cleanly_at_an_extent_that_is_not_a_multiple_of_the_node_size() {
-    let world = WorldDesc { extent_m: [1000.0, 700.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 4 };
+    let world = WorldDesc {
+        extent_m: [1000.0, 700.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    };
     let size = [128, 128];
     gpu_test(|ctx| {
         let mut rig = Rig::new(ctx, world, Surface::Plane(50.0), Vec::new(), size, true);
@@ -260,7 +284,13 @@ fn hill_poses(n: usize, size: [u32; 2]) -> Vec<View> {
 }
 
 fn hills_world() -> WorldDesc {
-    WorldDesc { extent_m: [1024.0, 1024.0], height_range_m: [100.0, 500.0], spacing_m: 1.0, lod_count: 4 }
+    WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [100.0, 500.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    }
 }
 
 #[test]

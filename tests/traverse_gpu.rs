@@ -20,7 +20,13 @@ use vista::world::{NodeId, PayloadFormat, WorldDesc};
 
 /// 32 x 31 sectors of 128 m, 5 LODs: a 2x2 root grid with a partial row.
 fn world() -> WorldDesc {
-    WorldDesc { extent_m: [4096.0, 3900.0], height_range_m: [-50.0, 950.0], spacing_m: 1.0, lod_count: 5 }
+    WorldDesc {
+        extent_m: [4096.0, 3900.0],
+        height_range_m: [-50.0, 950.0],
+        spacing_m: 1.0,
+        lod_count: 5,
+        ..WorldDesc::default()
+    }
 }
 
 const SLOTS: u32 = 400;
@@ -302,8 +308,13 @@ fn sector_data_include_samples_the_same_height_as_the_cpu() {
 #[test]
 fn sector_data_reaches_every_lod_of_a_10_lod_world_and_reports_uncovered_points() {
     gpu_test(|ctx| {
-        let w =
-            WorldDesc { extent_m: [50_000.0, 30_000.0], height_range_m: [-50.0, 950.0], spacing_m: 0.5, lod_count: 10 };
+        let w = WorldDesc {
+            extent_m: [50_000.0, 30_000.0],
+            height_range_m: [-50.0, 950.0],
+            spacing_m: 0.5,
+            lod_count: 10,
+            ..WorldDesc::default()
+        };
         assert_eq!(w.lod_count, vista::shaders::consts::MAX_NODE_LODS);
         let root_m = w.node_size_m(w.root_lod());
         assert_eq!(w.roots(), [NodeId::new(9, 0, 0), NodeId::new(9, 1, 0)]);

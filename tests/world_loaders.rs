@@ -74,8 +74,13 @@ const RANGE: [f32; 2] = [0.0, 100.0];
 fn montblanc_loads_and_reproduces_pixels() {
     let path = montblanc_path();
     let src = Png16Source::open(&path, [60_000.0, 60_000.0], [454.0, 4810.0]).unwrap();
-    let world =
-        WorldDesc { extent_m: [60_000.0, 60_000.0], height_range_m: [454.0, 4810.0], spacing_m: 8.0, lod_count: 6 };
+    let world = WorldDesc {
+        extent_m: [60_000.0, 60_000.0],
+        height_range_m: [454.0, 4810.0],
+        spacing_m: 8.0,
+        lod_count: 6,
+        ..WorldDesc::default()
+    };
     world.validate().unwrap();
     assert_eq!((src.grid().width(), src.grid().height()), (647, 647));
     let roots = world.roots();
@@ -101,8 +106,10 @@ fn montblanc_loads_and_reproduces_pixels() {
 
     // A root bakes with sane numbers.
     let node = bake_node(&src, &world, &[], roots[0]);
-    assert!(node.max_error_m > 1.0 && node.max_error_m < 2000.0, "{}", node.max_error_m);
     assert!(node.max_height > node.min_height);
+    let src: std::sync::Arc<dyn HeightSource> = std::sync::Arc::new(src);
+    let e = vista::world::ErrorTree::new(&world, src, None).unwrap().node(roots[0]).unwrap();
+    assert!(e.node_m > 1.0 && e.node_m < 2000.0, "{}", e.node_m);
 }
 
 #[test]

@@ -188,7 +188,13 @@ fn bad_residency_configs() {
 /// 15, then never again; a root given up is reported.
 #[test]
 fn failed_loads_are_retried_with_doubling_backoff_then_given_up() {
-    let world = WorldDesc { extent_m: [512.0, 512.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 2 };
+    let world = WorldDesc {
+        extent_m: [512.0, 512.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 2,
+        ..WorldDesc::default()
+    };
     let config = ResidencyConfig::default();
     assert_eq!((config.max_load_attempts, config.retry_frames), (4, 2));
     let mut r = Residency::new(&world, config).unwrap();
@@ -240,7 +246,13 @@ fn failed_loads_are_retried_with_doubling_backoff_then_given_up() {
 
 #[test]
 fn streamer_with_loader_threads() {
-    let world = WorldDesc { extent_m: [4096.0, 4096.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 4 };
+    let world = WorldDesc {
+        extent_m: [4096.0, 4096.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    };
     // Next to the path's end, so it is still wanted when its load fails.
     let bad = NodeId::new(0, 29, 25);
     let w2 = world;
@@ -301,7 +313,13 @@ fn streamer_with_loader_threads() {
 fn frames_never_wait_for_loads() {
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::sync::{Condvar, Mutex};
-    let world = WorldDesc { extent_m: [2048.0, 2048.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 3 };
+    let world = WorldDesc {
+        extent_m: [2048.0, 2048.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 3,
+        ..WorldDesc::default()
+    };
     let gate = Arc::new((Mutex::new(false), Condvar::new()));
     let started = Arc::new(AtomicUsize::new(0));
     let (g, st, w2) = (Arc::clone(&gate), Arc::clone(&started), world);
@@ -350,12 +368,20 @@ fn frames_never_wait_for_loads() {
 #[test]
 fn cache_roundtrip_corruption_and_staleness() {
     let dir = temp_dir("cache");
-    let world = WorldDesc { extent_m: [512.0, 512.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 3 };
+    let world = WorldDesc {
+        extent_m: [512.0, 512.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 3,
+        ..WorldDesc::default()
+    };
     let id = NodeId::new(1, 1, 0);
     let cache = NodeCache::new(&dir, world, Arc::new(Flat(42.0)), vec![]).unwrap();
     let (baked, o) = cache.get_or_bake(id).unwrap();
     assert_eq!(o, CacheOutcome::Baked(MissReason::Missing));
-    assert_eq!(baked, bake_node(&Flat(42.0), &world, &[], id));
+    let mut expected = bake_node(&Flat(42.0), &world, &[], id);
+    ErrorTree::new(&world, Arc::new(Flat(42.0)), None).unwrap().attach(&mut expected).unwrap();
+    assert_eq!(baked, expected);
     let (read, o) = cache.get_or_bake(id).unwrap();
     assert_eq!(o, CacheOutcome::Hit);
     assert_eq!(read, baked);
@@ -415,9 +441,8 @@ fn bake_world_region_and_timings() {
     let t = Instant::now();
     let node = bake_node(src.as_ref(), &world, &[], NodeId::new(0, 80, 80));
     let one = t.elapsed();
-    // LOD 0 has no finer level; LOD 1 misses some of LOD 0's detail.
-    assert_eq!(node.max_error_m, 0.0);
-    assert!(bake_node(src.as_ref(), &world, &[], NodeId::new(1, 40, 40)).max_error_m > 0.0);
+    // Errors come from the error tree, not the node's own bake.
+    assert_eq!(node.max_error_m, f32::INFINITY);
 
     let dir = temp_dir("bake_world");
     let region = Some([5000.0, 5000.0, 5128.0, 5128.0]);

@@ -30,6 +30,8 @@ struct VistaTerrain {
     float height_range;    // hi - lo
     float extent_x_m;      // world extent: outside it nothing is found
     float extent_y_m;
+    float grid_origin_x_m; // where LOD-0 sample (0, 0) lies (a height map's first post, or 0)
+    float grid_origin_y_m;
     uint pad;
 };
 #endif
@@ -49,6 +51,11 @@ struct VistaNodeHit {
 VistaNodeHit vista_find_node(vec2 p) {
     VistaNodeHit hit = VistaNodeHit(false, 0u, 0u, vec2(0.0));
     if (!(all(greaterThanEqual(p, vec2(0.0))) && p.x < VISTA_TERRAIN.extent_x_m && p.y < VISTA_TERRAIN.extent_y_m)) {
+        return hit;
+    }
+    // Grid coordinates: metres from LOD-0 sample (0, 0).
+    p -= vec2(VISTA_TERRAIN.grid_origin_x_m, VISTA_TERRAIN.grid_origin_y_m);
+    if (any(lessThan(p, vec2(0.0)))) {
         return hit;
     }
     uvec2 s = min(uvec2(floor(p / VISTA_TERRAIN.sector_size_m)), uvec2(VISTA_TERRAIN.sectors_x - 1u, VISTA_TERRAIN.sectors_y - 1u));

@@ -26,6 +26,9 @@ pub struct VistaTerrain {
     pub height_range: f32,
     pub extent_x_m: f32,
     pub extent_y_m: f32,
+    /// Where LOD-0 sample (0, 0) lies ([`WorldDesc::grid_origin_m`]).
+    pub grid_origin_x_m: f32,
+    pub grid_origin_y_m: f32,
     pub pad: u32,
 }
 
@@ -43,6 +46,8 @@ impl VistaTerrain {
             height_range: hi - lo,
             extent_x_m: world.extent_m[0] as f32,
             extent_y_m: world.extent_m[1] as f32,
+            grid_origin_x_m: world.grid_origin_m[0] as f32,
+            grid_origin_y_m: world.grid_origin_m[1] as f32,
             pad: 0,
         }
     }

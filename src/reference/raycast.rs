@@ -372,7 +372,13 @@ mod tests {
     use crate::world::ProceduralSource;
 
     fn world(extent: f64, spacing: f64) -> WorldDesc {
-        WorldDesc { extent_m: [extent, extent], height_range_m: [0.0, 400.0], spacing_m: spacing, lod_count: 4 }
+        WorldDesc {
+            extent_m: [extent, extent],
+            height_range_m: [0.0, 400.0],
+            spacing_m: spacing,
+            lod_count: 4,
+            ..WorldDesc::default()
+        }
     }
 
     /// Rays from a few cameras in a fan of directions, all at least 5

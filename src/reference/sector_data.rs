@@ -44,6 +44,11 @@ pub fn sample_height_cpu<'a>(
         return None;
     }
     let sector = world.sector_size_m();
+    // Grid coordinates: metres from LOD-0 sample (0, 0).
+    let p = [p[0] - world.grid_origin_m[0], p[1] - world.grid_origin_m[1]];
+    if p[0] < 0.0 || p[1] < 0.0 {
+        return None;
+    }
     let [w, h] = tree.extent();
     let sx = ((p[0] / sector).floor() as u32).min(w - 1);
     let sy = ((p[1] / sector).floor() as u32).min(h - 1);

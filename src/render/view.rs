@@ -169,8 +169,11 @@ impl View {
         shade: &ShadeRules,
     ) -> TerrainViewGpu {
         let p = self.camera.position_m;
+        // Grid coordinates (metres from LOD-0 sample (0, 0)) for positions;
+        // the world position stays in camera_world.
+        let g = [p[0] - world.grid_origin_m[0], p[1] - world.grid_origin_m[1]];
         let s = world.spacing_m;
-        let anchor = [(p[0] / s).floor(), (p[1] / s).floor()];
+        let anchor = [(g[0] / s).floor(), (g[1] / s).floor()];
         let [lo, hi] = world.height_range_m;
         let vp = self.view_proj().as_mat4();
         let inv = self.view_proj().inverse().as_mat4();
@@ -186,7 +189,7 @@ impl View {
             sun_color: [light.sun_color[0], light.sun_color[1], light.sun_color[2], 0.0],
             sky_color: [light.sky_color[0], light.sky_color[1], light.sky_color[2], 0.0],
             camera_sample: anchor.map(|a| a as i32),
-            camera_frac: [(p[0] - anchor[0] * s) as f32, (p[1] - anchor[1] * s) as f32],
+            camera_frac: [(g[0] - anchor[0] * s) as f32, (g[1] - anchor[1] * s) as f32],
             camera_z: p[2] as f32,
             spacing_m: s as f32,
             height_lo: lo,

@@ -80,8 +80,13 @@ fn height_maps(r: &mut CaseReport) -> Result<usize> {
             }
             Ok(source) => {
                 let range = source.grid().resampled_range();
-                let desc =
-                    WorldDesc { height_range_m: range, extent_m: [1000.0, 1000.0], spacing_m: 1.0, lod_count: 4 };
+                let desc = WorldDesc {
+                    height_range_m: range,
+                    extent_m: [1000.0, 1000.0],
+                    spacing_m: 1.0,
+                    lod_count: 4,
+                    ..WorldDesc::default()
+                };
                 match desc.validate() {
                     Err(e) => format!("refused: {e}"),
                     Ok(()) if range.iter().all(|v| v.is_finite()) && range[0] < range[1] => {

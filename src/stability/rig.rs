@@ -18,7 +18,13 @@ pub const MAGENTA: [f32; 4] = [1.0, 0.0, 1.0, 1.0];
 const SETTLE_TIMEOUT: Duration = Duration::from_secs(300);
 
 pub fn small_world() -> WorldDesc {
-    WorldDesc { extent_m: [2048.0, 2048.0], height_range_m: [0.0, 400.0], spacing_m: 2.0, lod_count: 4 }
+    WorldDesc {
+        extent_m: [2048.0, 2048.0],
+        height_range_m: [0.0, 400.0],
+        spacing_m: 2.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    }
 }
 
 pub struct Rig {

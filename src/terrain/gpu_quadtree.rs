@@ -37,7 +37,7 @@ const fn texels(name: &'static str) -> AtlasKind {
 
 /// Atlas formats, in the order of `payload_bytes`; the `ATLAS_*` indices
 /// name them.
-const ATLASES: [AtlasKind; 7] = [
+const ATLASES: [AtlasKind; 8] = [
     plain("atlas_height", vk::Format::R16_UNORM, ATLAS_SIDE as u32, 2),
     texels("atlas_normal"),
     texels("atlas_albedo"),
@@ -45,6 +45,7 @@ const ATLASES: [AtlasKind; 7] = [
     plain("atlas_patch_min_max", vk::Format::R16G16_UINT, PATCHES_PER_NODE_SIDE, 4),
     plain("atlas_patch_cones", vk::Format::R32G32B32A32_SFLOAT, PATCHES_PER_NODE_SIDE, 16),
     plain("atlas_patch_holes", vk::Format::R8_UINT, PATCHES_PER_NODE_SIDE, 1),
+    plain("atlas_patch_errors", vk::Format::R32G32_SFLOAT, PATCHES_PER_NODE_SIDE, 8),
 ];
 
 /// Vulkan format and layer bytes of atlas `i` for payloads in `format`.
@@ -71,17 +72,20 @@ pub const ATLAS_SPLAT: usize = 3;
 pub const ATLAS_PATCH_MIN_MAX: usize = 4;
 pub const ATLAS_PATCH_CONES: usize = 5;
 pub const ATLAS_PATCH_HOLES: usize = 6;
+pub const ATLAS_PATCH_ERRORS: usize = 7;
 
 /// Which payload atlases live on the GPU: one bit per `ATLAS_*` index. An
 /// effect that is off keeps none of the atlases only it reads (no image, no
 /// upload bytes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct AtlasSet(u8);
+pub struct AtlasSet(u16);
 
 impl AtlasSet {
     pub const ALL: AtlasSet = AtlasSet((1 << ATLAS_COUNT) - 1);
-    /// What drawing needs in any case: heights, albedo, patch bounds.
-    pub const CORE: AtlasSet = AtlasSet((1 << ATLAS_HEIGHT) | (1 << ATLAS_ALBEDO) | (1 << ATLAS_PATCH_MIN_MAX));
+    /// What drawing needs in any case: heights, albedo, patch bounds and
+    /// errors (the per-patch LOD selection).
+    pub const CORE: AtlasSet =
+        AtlasSet((1 << ATLAS_HEIGHT) | (1 << ATLAS_ALBEDO) | (1 << ATLAS_PATCH_MIN_MAX) | (1 << ATLAS_PATCH_ERRORS));
 
     pub fn with(self, atlas: usize) -> AtlasSet {
         assert!(atlas < ATLAS_COUNT);
@@ -107,7 +111,7 @@ pub fn atlas_name(i: usize) -> &'static str {
     ATLASES[i].name
 }
 
-fn payload_bytes(n: &BakedNode) -> [&[u8]; 7] {
+fn payload_bytes(n: &BakedNode) -> [&[u8]; ATLAS_COUNT] {
     [
         bytemuck::cast_slice(&n.heights),
         &n.normals,
@@ -116,6 +120,7 @@ fn payload_bytes(n: &BakedNode) -> [&[u8]; 7] {
         bytemuck::cast_slice(&n.patch_min_max),
         bytemuck::cast_slice(&n.patch_cones),
         &n.patch_holes,
+        bytemuck::cast_slice(&n.patch_errors),
     ]
 }
 

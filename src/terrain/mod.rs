@@ -19,8 +19,8 @@ use crate::gpu::Context;
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
 use crate::world::{
-    bake_node_with, BakeSettings, HeightSource, Hole, Limits, LoadFate, LoadFn, Loader, MemoryReport, NodeCache,
-    NodeId, RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError, WorldPlan,
+    bake_node_with, BakeSettings, ErrorTree, HeightSource, Hole, Limits, LoadFate, LoadFn, Loader, MemoryReport,
+    NodeCache, NodeId, RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError, WorldPlan,
 };
 use serde::Serialize;
 use std::path::PathBuf;
@@ -155,14 +155,32 @@ impl Terrain {
         let residency = Residency::new(world, config)?;
         let threads = options.loader_threads.max(1);
         let loader = match (&options.load, &options.cache_dir) {
-            (Some(load), _) => Loader::new(threads, Arc::clone(&load.0))?,
+            (Some(load), _) => {
+                // A caller's payloads without errors get the world's.
+                let (load, errors) = (Arc::clone(&load.0), ErrorTree::new(world, source, None)?);
+                Loader::new(
+                    threads,
+                    Arc::new(move |id| {
+                        let mut node = load(id)?;
+                        if node.max_error_m.is_infinite() {
+                            errors.attach(&mut node)?;
+                        }
+                        Ok(node)
+                    }),
+                )?
+            }
             (None, Some(dir)) => Loader::with_cache(
                 threads,
                 Arc::new(NodeCache::with_settings(dir, *world, source, holes, options.bake)?),
             )?,
             (None, None) => {
                 let (w, settings) = (*world, options.bake);
-                let load: Arc<LoadFn> = Arc::new(move |id| Ok(bake_node_with(&*source, &w, &holes, &settings, id)));
+                let errors = ErrorTree::new(world, Arc::clone(&source), None)?;
+                let load: Arc<LoadFn> = Arc::new(move |id| {
+                    let mut node = bake_node_with(&*source, &w, &holes, &settings, id);
+                    errors.attach(&mut node)?;
+                    Ok(node)
+                });
                 Loader::new(threads, load)?
             }
         };

@@ -291,8 +291,13 @@ mod tests {
     }
 
     fn small_tree(slots: u32) -> (QuadtreeShadow, Vec<NodeId>) {
-        let world =
-            WorldDesc { extent_m: [2048.0, 2048.0], height_range_m: [0.0, 100.0], spacing_m: 1.0, lod_count: 2 };
+        let world = WorldDesc {
+            extent_m: [2048.0, 2048.0],
+            height_range_m: [0.0, 100.0],
+            spacing_m: 1.0,
+            lod_count: 2,
+            ..WorldDesc::default()
+        };
         (QuadtreeShadow::new(&world, slots), world.nodes_at(0))
     }
 
@@ -358,8 +363,13 @@ mod tests {
 
     #[test]
     fn padded_extent_halves_exactly() {
-        let world =
-            WorldDesc { extent_m: [60000.0, 60000.0], height_range_m: [454.0, 4810.0], spacing_m: 8.0, lod_count: 6 };
+        let world = WorldDesc {
+            extent_m: [60000.0, 60000.0],
+            height_range_m: [454.0, 4810.0],
+            spacing_m: 8.0,
+            lod_count: 6,
+            ..WorldDesc::default()
+        };
         let [w, h] = texture_extent(&world);
         assert_eq!([w, h], [64, 64]);
         for lod in 0..6u8 {

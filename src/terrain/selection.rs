@@ -46,9 +46,11 @@ impl GpuInputs {
     pub fn new(world: &WorldDesc, params: &TraverseParams) -> Self {
         assert!((1..=MAX_CAMERAS).contains(&params.cameras.len()), "1..={MAX_CAMERAS} cameras");
         let mut cameras = [[0.0; 4]; MAX_CAMERAS];
+        // Node boxes are in grid coordinates (metres from LOD-0 sample (0, 0)).
+        let [ox, oy] = world.grid_origin_m;
         for (c, cam) in cameras.iter_mut().zip(&params.cameras) {
             let p = cam.position_m;
-            *c = [p[0] as f32, p[1] as f32, p[2] as f32, cam.pixels_per_tan as f32];
+            *c = [(p[0] - ox) as f32, (p[1] - oy) as f32, p[2] as f32, cam.pixels_per_tan as f32];
         }
         let [lo, hi] = world.height_range_m;
         GpuInputs {

@@ -11,7 +11,10 @@ use super::cones::{fit_cone, patch_triangle_normals};
 use super::error::Result;
 use super::hash::Fnv64;
 use super::holes::Hole;
-use super::layout::{NodeId, WorldDesc, NODE_SAMPLES, PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES};
+use super::layout::{
+    NodeId, WorldDesc, NODE_QUADS, NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES,
+    SPLAT_RES,
+};
 use super::material_rules::MaterialRules;
 use super::payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 use super::plan::{Limits, WorldPlan};
@@ -75,18 +78,19 @@ pub fn bake_node_with(
 
     let sub = if id.lod == 0 { 1 } else { 2 };
     let width = sub * (ATLAS_SIDE - 1) + 3;
-    // Grid point (i, j) lies at min + (i - first, j - first) * step / sub.
-    let first = (sub * ATLAS_BORDER + 1) as f64;
+    // Grid point (i, j) is grid line (origin + i - first, origin + j - first)
+    // of the world's grid of step / sub metres (WorldDesc::grid_pos).
+    let first = (sub * ATLAS_BORDER + 1) as i64;
     let gstep = step / sub as f64;
+    let per_node = i64::from(NODE_QUADS) * sub as i64;
+    let origin = [i64::from(id.x) * per_node - first, i64::from(id.y) * per_node - first];
     let mut g = Grid { sub, values: vec![0f32; width * width] };
     // Sampling dominates the bake; rows in parallel cut a single node's
     // latency for the streaming loader too.
+    let xs: Vec<f64> = (0..width).map(|i| world.grid_pos(0, origin[0] + i as i64, gstep).clamp(0.0, ex)).collect();
     g.values.par_chunks_exact_mut(width).enumerate().for_each(|(j, row)| {
-        let y = (b[1] + (j as f64 - first) * gstep).clamp(0.0, ey);
-        for (i, v) in row.iter_mut().enumerate() {
-            let x = (b[0] + (i as f64 - first) * gstep).clamp(0.0, ex);
-            *v = source.sample(x, y);
-        }
+        let y = world.grid_pos(1, origin[1] + j as i64, gstep).clamp(0.0, ey);
+        source.sample_row(&xs, y, row);
     });
     let f = &g.values;
     // Sample (i, j), i and j from -2 on, counted from 0 here.
@@ -112,8 +116,9 @@ pub fn bake_node_with(
             let nrm = [-dx / len, -dy / len, 1.0 / len];
             let slope_deg = (nrm[2].clamp(-1.0, 1.0).acos() as f32).to_degrees();
             let mat = settings.materials.material(slope_deg, f[fj * width + fi]);
-            let s = [t as f64 - ATLAS_BORDER as f64, u as f64 - ATLAS_BORDER as f64];
-            let pos = [b[0] + s[0] * step, b[1] + s[1] * step];
+            let s = [t as i64 - ATLAS_BORDER as i64, u as i64 - ATLAS_BORDER as i64];
+            let n0 = [i64::from(id.x), i64::from(id.y)].map(|c| c * i64::from(NODE_QUADS));
+            let pos = [world.grid_pos(0, n0[0] + s[0], step), world.grid_pos(1, n0[1] + s[1], step)];
             let solid =
                 !outside_extent(pos, world.extent_m, step) && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]));
             let (rgb, smooth) = material_look(mat, slope_deg);
@@ -154,14 +159,6 @@ pub fn bake_node_with(
     }
     let min_height = samples.iter().copied().min().unwrap_or(0);
     let max_height = samples.iter().copied().max().unwrap_or(0);
-    // LOD 0 has no finer level: the traversal never refines it.
-    let max_error_m = if sub == 2 {
-        let base = g.at(ATLAS_BORDER);
-        max_refinement_error(&|i: usize, j: usize| f[(j + base) * width + i + base])
-    } else {
-        0.0
-    };
-
     BakedNode {
         id,
         heights,
@@ -174,28 +171,11 @@ pub fn bake_node_with(
         patch_holes,
         min_height,
         max_height,
-        max_error_m,
+        // Errors need every LOD-0 sample under the node: ErrorTree::attach.
+        max_error_m: f32::INFINITY,
+        patch_errors: vec![[f32::INFINITY; 2]; PATCHES_PER_NODE],
+        repr_error_m: f32::INFINITY,
     }
-}
-
-/// Max |finer surface - bilinear(this node's grid)| over the 257x257 finer
-/// grid points. Unquantised heights, so a plane gives 0.
-fn max_refinement_error(fine: &impl Fn(usize, usize) -> f32) -> f32 {
-    let last = 2 * (NODE_SAMPLES - 1);
-    let mut err = 0f64;
-    for b in 0..=last {
-        let (j0, j1) = (b / 2 * 2, b.div_ceil(2) * 2);
-        for a in 0..=last {
-            let (i0, i1) = (a / 2 * 2, a.div_ceil(2) * 2);
-            let c = 0.25
-                * (f64::from(fine(i0, j0))
-                    + f64::from(fine(i1, j0))
-                    + f64::from(fine(i0, j1))
-                    + f64::from(fine(i1, j1)));
-            err = err.max((f64::from(fine(a, b)) - c).abs());
-        }
-    }
-    err as f32
 }
 
 /// A sample position outside the world's extent (beyond rounding of the
@@ -241,9 +221,10 @@ pub fn nodes_in_region(world: &WorldDesc, region: Option<[f64; 4]>) -> Vec<NodeI
         let (x0, y0, x1, y1) = match region {
             None => (0, 0, gx, gy),
             Some(r) => {
-                let cell = |v: f64, g: u32| ((v / s).floor().max(0.0) as u32).min(g);
-                let end = |v: f64, g: u32| ((v / s).ceil().max(0.0) as u32).min(g);
-                (cell(r[0], gx), cell(r[1], gy), end(r[2], gx), end(r[3], gy))
+                let [ox, oy] = world.grid_origin_m;
+                let cell = |v: f64, o: f64, g: u32| (((v - o) / s).floor().max(0.0) as u32).min(g);
+                let end = |v: f64, o: f64, g: u32| (((v - o) / s).ceil().max(0.0) as u32).min(g);
+                (cell(r[0], ox, gx), cell(r[1], oy, gy), end(r[2], ox, gx), end(r[3], oy, gy))
             }
         };
         for y in y0..y1 {
@@ -284,6 +265,11 @@ pub fn bake_world(
     // Before the node list, which grows with the world.
     WorldPlan::new(world, region).check(&Limits::default())?;
     let nodes = nodes_in_region(world, region);
+    // Each root's error tile first (parallel inside), so node bakes never
+    // wait for one.
+    for root in nodes.iter().filter(|n| n.lod == world.root_lod()) {
+        cache.errors().node(*root)?;
+    }
     let bar = Reporter::new(progress.into(), nodes.len() as u64);
     let outcomes = nodes
         .par_iter()

@@ -16,6 +16,7 @@ use std::sync::Arc;
 
 use super::bake::{bake_node_with, BakeSettings};
 use super::error::{Result, WorldError};
+use super::errors::ErrorTree;
 use super::holes::{holes_hash, Hole};
 use super::layout::{NodeId, WorldDesc};
 use super::payload::BakedNode;
@@ -25,7 +26,7 @@ use super::texels::PayloadFormat;
 /// File magic: identifies a vista node file.
 const MAGIC: [u8; 4] = *b"VNOD";
 /// Bumped whenever the file layout or the bake's output changes.
-const FORMAT_VERSION: u32 = 4;
+const FORMAT_VERSION: u32 = 5;
 /// Bytes before the payload.
 const HEADER_BYTES: usize = 4 + 4 + 8 * 4 + 1 + 4 + 4 + 4;
 /// zstd level: 3 (zstd's default) measured within 1 % of level 9's size on
@@ -77,6 +78,7 @@ pub struct NodeCache {
     holes: Vec<Hole>,
     settings: BakeSettings,
     keys: [u64; 4],
+    errors: ErrorTree,
 }
 
 impl NodeCache {
@@ -98,11 +100,17 @@ impl NodeCache {
         settings.materials.validate()?;
         std::fs::create_dir_all(dir).map_err(|e| WorldError::create_dir(dir, e))?;
         let keys = [world.hash(), source.id_hash(), holes_hash(&holes), settings.hash()];
-        Ok(NodeCache { dir: dir.to_path_buf(), world, source, holes, settings, keys })
+        let errors = ErrorTree::new(&world, Arc::clone(&source), Some(dir))?;
+        Ok(NodeCache { dir: dir.to_path_buf(), world, source, holes, settings, keys, errors })
     }
 
     pub fn world(&self) -> &WorldDesc {
         &self.world
+    }
+
+    /// The world's error tree (tiles cached under `DIR/errors`).
+    pub fn errors(&self) -> &ErrorTree {
+        &self.errors
     }
 
     /// `DIR/lod{k}/{x}_{y}.vnode`.
@@ -199,7 +207,8 @@ impl NodeCache {
                 if reason != MissReason::Missing {
                     log::debug!("rebaking {id}: cache file {reason:?}");
                 }
-                let node = bake_node_with(self.source.as_ref(), &self.world, &self.holes, &self.settings, id);
+                let mut node = bake_node_with(self.source.as_ref(), &self.world, &self.holes, &self.settings, id);
+                self.errors.attach(&mut node)?;
                 self.write(&node)?;
                 Ok((node, CacheOutcome::Baked(reason)))
             }

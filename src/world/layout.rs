@@ -1,9 +1,14 @@
 //! World geometry: the sector grid, the node quadtree and height encoding.
 //!
 //! Conventions: the world's min corner is the origin, x grows east, y grows
-//! north, z is height. Node sample (i, j) lies at
-//! `bounds.min + (i, j) * node_spacing`, stored at index `j * 129 + i`, so
-//! row 0 of every payload is the node's south edge.
+//! north, z is height. LOD-0 sample (i, j) of the whole world lies at
+//! `grid_origin + (i, j) * spacing` ([`WorldDesc::sample_pos`]); node sample
+//! (i, j) at `bounds.min + (i, j) * node_spacing`, stored at texel
+//! `texel_index(i, j)`, so row 0 of every payload is the node's south edge.
+//! The grid origin is 0 except for a height map whose pixel size is a whole
+//! multiple of the spacing: then the vertices sit on the map's posts (its
+//! pixel centres, half a pixel in from the world's edge) and the drawn
+//! surface passes through every sample of the data ([`WorldDesc::with_posts`]).
 
 use std::fmt;
 
@@ -45,6 +50,12 @@ pub struct WorldDesc {
     pub spacing_m: f64,
     /// Number of quadtree levels; LOD `lod_count - 1` nodes are the roots.
     pub lod_count: u32,
+    /// Where LOD-0 sample (0, 0) lies, metres from the world's south-west
+    /// corner along x and y: 0 in general, less than one spacing; half a
+    /// pixel (modulo the spacing) where the vertices sit on a height map's
+    /// posts.
+    #[serde(default)]
+    pub grid_origin_m: [f64; 2],
 }
 
 /// Heights beyond this many metres are refused: 100 times Mount Everest, so
@@ -55,7 +66,13 @@ pub const MAX_ABS_HEIGHT_M: f32 = 1e6;
 impl Default for WorldDesc {
     /// The default procedural world: Far Cry 5's 10 km map at 0.5 m.
     fn default() -> Self {
-        WorldDesc { extent_m: [10_240.0, 10_240.0], height_range_m: [0.0, 1600.0], spacing_m: 0.5, lod_count: 6 }
+        WorldDesc {
+            extent_m: [10_240.0, 10_240.0],
+            height_range_m: [0.0, 1600.0],
+            spacing_m: 0.5,
+            lod_count: 6,
+            grid_origin_m: [0.0, 0.0],
+        }
     }
 }
 
@@ -138,6 +155,11 @@ impl WorldDesc {
         if !(1..=MAX_LOD_COUNT).contains(&self.lod_count) {
             return bad(format!("lod count must be 1..={MAX_LOD_COUNT}, got {}", self.lod_count));
         }
+        for (axis, o) in ["x", "y"].iter().zip(self.grid_origin_m) {
+            if !(o.is_finite() && (0.0..s).contains(&o)) {
+                return bad(format!("grid origin {axis} must lie within one spacing of the corner, got {o}"));
+            }
+        }
         for e in self.extent_m {
             let sectors = (e / self.sector_size_m()).ceil();
             if sectors.is_nan() || sectors > MAX_SECTORS_PER_SIDE as f64 {
@@ -162,9 +184,49 @@ impl WorldDesc {
         self.spacing_m * f64::from(1u32 << lod)
     }
 
-    /// LOD-0 nodes per side (x, y).
+    /// LOD-0 nodes per side (x, y): enough for the samples from the grid
+    /// origin to cover the extent.
     pub fn sectors(&self) -> [u32; 2] {
-        self.extent_m.map(|e| (e / self.sector_size_m()).ceil().max(1.0) as u32)
+        let s = self.sector_size_m();
+        [0, 1].map(|a| ((self.extent_m[a] - self.grid_origin_m[a]) / s).ceil().max(1.0) as u32)
+    }
+
+    /// The world with its LOD-0 vertices on the posts (pixel centres) of a
+    /// height map of `pixel_m` metres per pixel, where that is a whole
+    /// multiple of the spacing (within 1e-9); otherwise unchanged (the map
+    /// is resampled between its posts).
+    pub fn with_posts(self, pixel_m: [f64; 2]) -> Self {
+        let s = self.spacing_m;
+        let origin = pixel_m.map(|p| {
+            let ratio = p / s;
+            if (ratio - ratio.round()).abs() < 1e-9 && ratio.round() >= 1.0 {
+                (0.5 * p).rem_euclid(s)
+            } else {
+                f64::NAN
+            }
+        });
+        if origin.iter().any(|o| o.is_nan()) {
+            return self;
+        }
+        WorldDesc { grid_origin_m: origin, ..self }
+    }
+
+    /// Whether the LOD-0 vertices sit on a height map's posts.
+    pub fn on_posts(&self) -> bool {
+        self.grid_origin_m != [0.0, 0.0]
+    }
+
+    /// World position (x or y, metres) of grid line `index` of a grid of
+    /// `step` metres anchored at the grid origin: the one formula the bake,
+    /// the error tree and the references use, so a sample lies at the same
+    /// bits whichever of them asks.
+    pub fn grid_pos(&self, axis: usize, index: i64, step: f64) -> f64 {
+        self.grid_origin_m[axis] + index as f64 * step
+    }
+
+    /// World position of LOD-0 sample (i, j).
+    pub fn sample_pos(&self, i: i64, j: i64) -> [f64; 2] {
+        [self.grid_pos(0, i, self.spacing_m), self.grid_pos(1, j, self.spacing_m)]
     }
 
     /// Cells per side at `lod`: ceil(sectors / 2^lod).
@@ -207,7 +269,8 @@ impl WorldDesc {
     /// extend past the extent; their samples there clamp to the edge.
     pub fn bounds_m(&self, node: NodeId) -> [f64; 4] {
         let s = self.node_size_m(node.lod);
-        let (x0, y0) = (f64::from(node.x) * s, f64::from(node.y) * s);
+        let [ox, oy] = self.grid_origin_m;
+        let (x0, y0) = (ox + f64::from(node.x) * s, oy + f64::from(node.y) * s);
         [x0, y0, x0 + s, y0 + s]
     }
 
@@ -220,8 +283,9 @@ impl WorldDesc {
         }
         let s = self.node_size_m(lod);
         let [gx, gy] = self.grid(lod);
-        let x = ((x_m / s) as u32).min(gx - 1);
-        let y = ((y_m / s) as u32).min(gy - 1);
+        let [ox, oy] = self.grid_origin_m;
+        let x = (((x_m - ox) / s).max(0.0) as u32).min(gx - 1);
+        let y = (((y_m - oy) / s).max(0.0) as u32).min(gy - 1);
         Some(NodeId::new(lod, x, y))
     }
 
@@ -234,6 +298,8 @@ impl WorldDesc {
             .f64(f64::from(self.height_range_m[1]))
             .f64(self.spacing_m)
             .u64(u64::from(self.lod_count))
+            .f64(self.grid_origin_m[0])
+            .f64(self.grid_origin_m[1])
             .finish()
     }
 
@@ -285,9 +351,33 @@ mod tests {
             bytes.extend(v.to_bits().to_le_bytes());
         }
         bytes.extend(6u64.to_le_bytes());
+        bytes.extend([0u8; 16]);
         let fnv = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
         assert_eq!(w.hash(), fnv);
         assert!(NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 1)));
+    }
+
+    #[test]
+    fn posts_put_the_vertices_on_pixel_centres() {
+        let w = WorldDesc { extent_m: [640.0, 320.0], spacing_m: 2.0, lod_count: 3, ..WorldDesc::default() };
+        // 2 m pixels: half a pixel in; 4 m pixels: 2 m = one spacing = 0.
+        let p = w.with_posts([2.0, 2.0]);
+        assert_eq!(p.grid_origin_m, [1.0, 1.0]);
+        assert_eq!(w.with_posts([6.0, 6.0]).grid_origin_m, [1.0, 1.0]);
+        assert_eq!(w.with_posts([4.0, 4.0]), w);
+        // Not a whole multiple of the spacing: resampled, unchanged.
+        assert_eq!(w.with_posts([3.0, 2.0]), w);
+        assert_eq!(w.with_posts([1.0, 1.0]), w);
+        // Pixel (i, j) of a 320 x 160 map is centred at (2i + 1, 320 - 2j - 1): sample (i, 159 - j).
+        assert_eq!(p.sample_pos(0, 0), [1.0, 1.0]);
+        assert_eq!(p.sample_pos(319, 159), [639.0, 319.0]);
+        // 319 quads of 2 m from the first post to the last: 3 sectors of 256 m.
+        assert_eq!(p.sectors(), [3, 2]);
+        assert_eq!(p.node_at(0, 0.5, 0.5), Some(NodeId::new(0, 0, 0)));
+        assert_eq!(p.node_at(0, 257.5, 1.0), Some(NodeId::new(0, 1, 0)));
+        assert_eq!(p.node_at(0, 513.5, 1.0), Some(NodeId::new(0, 2, 0)));
+        p.validate().unwrap();
+        assert!(WorldDesc { grid_origin_m: [2.0, 0.0], ..w }.validate().is_err());
         assert!(!NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 0)));
     }
 }

@@ -47,9 +47,10 @@ impl MemoryReport {
                 kind("patch min/max", "RG16_UINT 8x8", p * 4, p * 4),
                 kind("patch cones", "RGBA32F 8x8", p * 16, p * 16),
                 kind("patch holes", "R8_UINT 8x8", p, p),
-                // id, min/max, error; on the GPU these live in the 2 x u32
-                // node description, plus the f32 LOD error.
-                kind("node scalars", "2 x u32 desc + f32 error", 9 + 4 + 4, 12),
+                kind("patch errors", "RG32F 8x8", p * 8, p * 8),
+                // id, min/max, error, representation error; on the GPU the
+                // 2 x u32 node description and the f32 LOD error.
+                kind("node scalars", "2 x u32 desc + f32 error", 9 + 4 + 4 + 4, 12),
             ],
         }
     }
@@ -80,6 +81,7 @@ pub fn node_cpu_bytes(n: &BakedNode) -> usize {
         + n.patch_min_max.len() * 4
         + n.patch_cones.len() * 16
         + n.patch_holes.len()
+        + n.patch_errors.len() * 8
 }
 
 fn mib(b: usize) -> f64 {

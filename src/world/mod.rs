@@ -6,6 +6,8 @@ mod bake;
 mod cache;
 mod cones;
 mod error;
+mod error_tile;
+mod errors;
 mod exr_source;
 mod hash;
 mod holes;
@@ -27,6 +29,8 @@ pub use bake::{bake_node, bake_node_with, bake_world, nodes_in_region, BakeSetti
 pub use cache::{estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache};
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
+pub use error_tile::diamond;
+pub use errors::{ErrorTree, NodeErrors};
 pub use exr_source::{write_height_exr, ExrSource};
 pub use holes::{holes_hash, Hole};
 pub use layout::{

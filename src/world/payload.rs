@@ -43,7 +43,10 @@ pub struct BakedNode {
     pub albedo: Vec<u8>,
     /// 65x65 material ids ([`Material`]), texel (i, j) at sample (2i, 2j).
     pub splat: Vec<u8>,
-    /// 8x8 exact (min, max) of each patch's 17x17 u16 heights.
+    /// 8x8 (min, max) R16 heights of each patch: the finest surface's
+    /// range over the patch's area ([`super::ErrorTree`]), which holds the
+    /// node's own samples, every finer level's and the refinement's; until
+    /// errors are attached, the range of the patch's own 17x17 samples.
     pub patch_min_max: Vec<[u16; 2]>,
     /// 8x8 normal cones: axis xyz + sin(half-angle); axis 0 and sin 1 mean
     /// "never cull" (half-angle of 90 degrees or more).
@@ -51,11 +54,19 @@ pub struct BakedNode {
     /// 8x8 hole summary per patch ([`PATCH_HOLE_NONE`], [`PATCH_HOLE_SOME`],
     /// [`PATCH_HOLE_ALL`]): the cull pass drops all-hole patches outright.
     pub patch_holes: Vec<u8>,
+    /// The union of the patch ranges.
     pub min_height: u16,
     pub max_height: u16,
-    /// Largest vertical distance (metres) between this node's surface and
-    /// the next finer level's over the node: the error of not refining.
+    /// Largest patch error (metres): this node's surface against the finest
+    /// surface vista can draw ([`super::ErrorTree`]); infinite until
+    /// attached, so a node without errors is always refined.
     pub max_error_m: f32,
+    /// 8x8 [error drawn at this node's level, error drawn 2x refined below
+    /// the samples (LOD 0 only)], metres; infinite until attached.
+    pub patch_errors: Vec<[f32; 2]>,
+    /// The largest LOD-0 representation error under the node (LOD 0's
+    /// triangles against the finest surface), metres.
+    pub repr_error_m: f32,
 }
 
 const SAMPLES: usize = NODE_SAMPLES * NODE_SAMPLES;
@@ -72,7 +83,8 @@ impl BakedNode {
             + format.layer_bytes(TexelKind::Normal)
             + format.layer_bytes(TexelKind::Albedo)
             + SPLATS
-            + PATCHES_PER_NODE * (1 + 4 + 16)
+            + PATCHES_PER_NODE * (1 + 4 + 16 + 8)
+            + 4
     }
 
     /// R16 height of node sample (i, j), i and j in -2..=129.
@@ -125,6 +137,10 @@ impl BakedNode {
         for c in &self.patch_cones {
             c.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         }
+        for e in &self.patch_errors {
+            e.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+        }
+        out.extend_from_slice(&self.repr_error_m.to_le_bytes());
         debug_assert_eq!(out.len(), Self::serialized_bytes(self.format));
         out
     }
@@ -151,6 +167,8 @@ impl BakedNode {
         let patch_min_max =
             (0..PATCHES_PER_NODE).map(|_| [u16::from_le_bytes(r.take()), u16::from_le_bytes(r.take())]).collect();
         let patch_cones = (0..PATCHES_PER_NODE).map(|_| [0; 4].map(|_: i32| f32::from_le_bytes(r.take()))).collect();
+        let patch_errors = (0..PATCHES_PER_NODE).map(|_| [0; 2].map(|_: i32| f32::from_le_bytes(r.take()))).collect();
+        let repr_error_m = f32::from_le_bytes(r.take());
         Some(BakedNode {
             id: NodeId::new(lod, x, y),
             heights,
@@ -164,6 +182,8 @@ impl BakedNode {
             min_height,
             max_height,
             max_error_m,
+            patch_errors,
+            repr_error_m,
         })
     }
 }

@@ -13,6 +13,14 @@ pub trait HeightSource: Send + Sync {
     /// Changes whenever the content or parameters change; part of the
     /// cache key, so stale baked nodes are never reused.
     fn id_hash(&self) -> u64;
+
+    /// `out[i] = sample(xs[i], y_m)`, bit for bit; a source may share work
+    /// between the neighbouring points of a row.
+    fn sample_row(&self, xs: &[f64], y_m: f64, out: &mut [f32]) {
+        for (x, o) in xs.iter().zip(out) {
+            *o = self.sample(*x, y_m);
+        }
+    }
 }
 
 /// A grid of heights covering a world rectangle, sampled with Catmull-Rom
@@ -58,12 +66,13 @@ impl GridSource {
 
     /// World position of the centre of pixel (i, j).
     pub fn pixel_center_m(&self, i: usize, j: usize) -> [f64; 2] {
-        let (dx, dy) = self.pixel_size_m();
+        let [dx, dy] = self.pixel_size_m();
         [(i as f64 + 0.5) * dx, self.extent_m[1] - (j as f64 + 0.5) * dy]
     }
 
-    fn pixel_size_m(&self) -> (f64, f64) {
-        (self.extent_m[0] / self.width as f64, self.extent_m[1] / self.height as f64)
+    /// Metres per pixel along x and y: the distance between posts.
+    pub fn pixel_size_m(&self) -> [f64; 2] {
+        [self.extent_m[0] / self.width as f64, self.extent_m[1] / self.height as f64]
     }
 
     fn at(&self, i: isize, j: isize) -> f32 {
@@ -82,7 +91,7 @@ pub(super) fn catmull_rom(t: f64) -> [f64; 4] {
 
 impl HeightSource for GridSource {
     fn sample(&self, x_m: f64, y_m: f64) -> f32 {
-        let (dx, dy) = self.pixel_size_m();
+        let [dx, dy] = self.pixel_size_m();
         // Continuous pixel coordinates, clamped to the outermost centres so
         // outside points take the edge value.
         let u = (x_m / dx - 0.5).clamp(0.0, (self.width - 1) as f64);

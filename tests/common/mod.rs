@@ -80,6 +80,8 @@ pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
         min_height: tag & 0x7FFF,
         max_height: tag | 0x8000,
         max_error_m: f32::from(tag) * 0.01,
+        patch_errors: (0..PATCHES_PER_NODE).map(|i| [f32::from(tag) * 0.01, i as f32 * 0.001]).collect(),
+        repr_error_m: 0.0,
     }
 }
 pub mod diamond_patch;

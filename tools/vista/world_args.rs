@@ -185,7 +185,7 @@ impl WorldArgs {
             None => {
                 let extent_m = extent.unwrap_or(defaults.extent_m);
                 let height_range_m = height_range.map_or(defaults.height_range_m, |r| r.range);
-                let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count };
+                let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count, ..WorldDesc::default() };
                 check_desc(&desc, &names)?;
                 (desc, SpecSource::Procedural { seed })
             }
@@ -194,7 +194,7 @@ impl WorldArgs {
                     bail!("{what} {} needs --extent METRES (the world size it covers)", path.display());
                 };
                 let height_range_m = height_range.map_or([0.0, 1.0], |r| r.range);
-                let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count };
+                let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count, ..WorldDesc::default() };
                 // An absurd world fails before the file is opened.
                 check_desc(&desc, &names)?;
                 let kind = heightmap_kind(&path, what, height_range)?;
@@ -380,7 +380,7 @@ fn open_heightmap(
     match (kind, height_range) {
         (MapKind::Png, Some(given)) => {
             let source = Png16Source::open(path, geometry.extent_m, given.range)?;
-            Ok((geometry, Arc::new(source)))
+            Ok((geometry.with_posts(source.grid().pixel_size_m()), Arc::new(source)))
         }
         (MapKind::Png, None) => unreachable!("heightmap_kind refuses a PNG without a height range"),
         (MapKind::Exr, _) => {
@@ -389,7 +389,7 @@ fn open_heightmap(
                 Some(given) => checked_range(&source, path, given, clamp)?,
                 None => auto_range(source.grid()),
             };
-            let desc = WorldDesc { height_range_m: range, ..geometry };
+            let desc = WorldDesc { height_range_m: range, ..geometry }.with_posts(source.grid().pixel_size_m());
             // The geometry was checked; only the range is new here.
             desc.validate().with_context(|| format!("height range of {}", path.display()))?;
             Ok((desc, Arc::new(source)))

@@ -1,0 +1,217 @@
+//! The error tree: for every node and each of its 8 x 8 patches, the
+//! largest vertical distance between the surface the GPU draws for it (the
+//! diamond-split triangles of its own samples) and the finest surface vista
+//! can draw (the Catmull-Rom surface of the LOD-0 samples, tessellated 4x
+//! denser than LOD 0: where the refinement below the samples stops), over
+//! the patch's whole area. Conservative (an upper bound, from exact
+//! per-sample gaps and the triangle inequality; [`super::error_tile`]) and
+//! monotone by construction: a patch's error and height range cover those
+//! of every finer patch under it, so a test that passes for a patch passes
+//! for all its descendants.
+//!
+//! A root's numbers need every LOD-0 sample under it, so they are computed
+//! a root at a time (in parallel blocks), kept in memory and, with a cache
+//! folder, written to `DIR/errors/lod{k}/{x}_{y}.verr` (zstd, crc32,
+//! versioned and keyed like the node files). A node gets its numbers when
+//! it is baked or loaded ([`ErrorTree::attach`]): the first node of a root
+//! waits for that root's computation.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, OnceLock};
+
+use super::error::{Result, WorldError};
+use super::error_tile::{compute_root, node_patches, LevelPatches};
+use super::hash::Fnv64;
+use super::layout::{NodeId, WorldDesc, PATCHES_PER_NODE};
+use super::payload::BakedNode;
+use super::source::HeightSource;
+
+const MAGIC: [u8; 4] = *b"VERR";
+/// Bumped whenever the tile layout or the error definition changes.
+const TILE_VERSION: u32 = 1;
+
+/// One node's numbers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeErrors {
+    /// Largest patch error (m).
+    pub node_m: f32,
+    /// Per patch: [error drawn at this node's level, error drawn 2x
+    /// refined below the samples (LOD 0 only, else 0)], metres.
+    pub patch_m: Vec<[f32; 2]>,
+    /// Per patch: the finest surface's height range, R16 (rounded outwards
+    /// by one step for the GPU's f32 evaluation).
+    pub bounds: Vec<[u16; 2]>,
+    /// The largest LOD-0 representation error under the node: LOD 0's
+    /// triangles against the finest surface (what the refinement removes).
+    pub repr_m: f32,
+}
+
+/// Per-root error data of one world, computed on first use.
+pub struct ErrorTree {
+    world: WorldDesc,
+    source: Arc<dyn HeightSource>,
+    dir: Option<PathBuf>,
+    keys: [u64; 2],
+    roots: Mutex<HashMap<NodeId, Arc<OnceLock<Arc<Vec<LevelPatches>>>>>>,
+}
+
+impl ErrorTree {
+    /// Errors of `world` sampled from `source`; tiles are read from and
+    /// written to `cache_dir/errors` when given.
+    pub fn new(world: &WorldDesc, source: Arc<dyn HeightSource>, cache_dir: Option<&Path>) -> Result<Self> {
+        world.validate()?;
+        let keys = [world.hash(), source.id_hash()];
+        let dir = cache_dir.map(|d| d.join("errors"));
+        Ok(ErrorTree { world: *world, source, dir, keys, roots: Mutex::new(HashMap::new()) })
+    }
+
+    pub fn world(&self) -> &WorldDesc {
+        &self.world
+    }
+
+    /// The numbers of node `id` (valid in the world); the first call for a
+    /// root computes (or reads) that root's tile.
+    pub fn node(&self, id: NodeId) -> Result<NodeErrors> {
+        if !self.world.is_valid(id) {
+            return Err(WorldError::InvalidNode(id));
+        }
+        let root = self.root_of(id);
+        let tile = self.tile(root);
+        let range = self.world.height_range_m;
+        let step = f64::from(range[1] - range[0]) / 65535.0;
+        let (mut node_m, mut repr_m) = (0f32, 0f32);
+        let l = &tile[usize::from(id.lod)];
+        let mut patch_m = Vec::with_capacity(PATCHES_PER_NODE);
+        let mut bounds = Vec::with_capacity(PATCHES_PER_NODE);
+        for p in node_patches(&tile, root, id) {
+            patch_m.push([l.error[p], if id.lod == 0 { l.refine[p] } else { 0.0 }]);
+            node_m = node_m.max(l.error[p]);
+            repr_m = repr_m.max(l.repr[p]);
+            let steps = |z: f64| (z - f64::from(range[0])) / step;
+            let lo = (steps(l.lo[p]).floor() - 1.0).clamp(0.0, 65535.0) as u16;
+            let hi = (steps(l.hi[p]).ceil() + 1.0).clamp(0.0, 65535.0) as u16;
+            bounds.push([lo, hi]);
+        }
+        Ok(NodeErrors { node_m, patch_m, bounds, repr_m })
+    }
+
+    /// Writes `node`'s errors and bounds into it: `max_error_m`,
+    /// `patch_errors`, `patch_min_max`, `min_height` / `max_height` (the
+    /// union of the patch ranges) and `repr_error_m`.
+    pub fn attach(&self, node: &mut BakedNode) -> Result<()> {
+        let e = self.node(node.id)?;
+        node.max_error_m = e.node_m;
+        node.repr_error_m = e.repr_m;
+        node.min_height = e.bounds.iter().map(|b| b[0]).min().unwrap_or(0);
+        node.max_height = e.bounds.iter().map(|b| b[1]).max().unwrap_or(0);
+        node.patch_min_max = e.bounds;
+        node.patch_errors = e.patch_m;
+        Ok(())
+    }
+
+    fn root_of(&self, id: NodeId) -> NodeId {
+        let shift = self.world.root_lod() - id.lod;
+        NodeId::new(self.world.root_lod(), id.x >> shift, id.y >> shift)
+    }
+
+    /// The root's tile: from memory, the cache folder, or computed now
+    /// (other threads asking for the same root wait for it).
+    fn tile(&self, root: NodeId) -> Arc<Vec<LevelPatches>> {
+        let cell = Arc::clone(self.roots.lock().unwrap_or_else(|e| e.into_inner()).entry(root).or_default());
+        Arc::clone(cell.get_or_init(|| {
+            if let Some(tile) = self.read(root) {
+                return Arc::new(tile);
+            }
+            let tile = compute_root(&self.world, self.source.as_ref(), root);
+            if let Err(e) = self.write(root, &tile) {
+                log::warn!("error tree of {root} not cached: {e}");
+            }
+            Arc::new(tile)
+        }))
+    }
+
+    fn path(&self, root: NodeId) -> Option<PathBuf> {
+        let dir = self.dir.as_ref()?;
+        Some(dir.join(format!("lod{}", root.lod)).join(format!("{}_{}.verr", root.x, root.y)))
+    }
+
+    fn read(&self, root: NodeId) -> Option<Vec<LevelPatches>> {
+        let bytes = std::fs::read(self.path(root)?).ok()?;
+        let (body, crc) = bytes.split_at(bytes.len().checked_sub(4)?);
+        if crc32fast::hash(body) != u32::from_le_bytes(crc.try_into().ok()?) || body.get(..4)? != MAGIC {
+            return None;
+        }
+        let u64_at = |o: usize| body.get(o..o + 8).map(|b| u64::from_le_bytes(b.try_into().unwrap()));
+        let version = body.get(4..8).map(|b| u32::from_le_bytes(b.try_into().unwrap()))?;
+        if version != TILE_VERSION || [u64_at(8)?, u64_at(16)?] != self.keys || u64_at(24)? != node_key(root) {
+            return None;
+        }
+        let raw = zstd::stream::decode_all(&body[32..]).ok()?;
+        decode_levels(&raw, root)
+    }
+
+    fn write(&self, root: NodeId, tile: &[LevelPatches]) -> Result<()> {
+        let Some(path) = self.path(root) else { return Ok(()) };
+        let dir = path.parent().expect("tile path has a folder");
+        std::fs::create_dir_all(dir).map_err(|e| WorldError::create_dir(dir, e))?;
+        let packed = zstd::bulk::compress(&encode_levels(tile), 3).map_err(|e| WorldError::io_write(&path, e))?;
+        let mut out = Vec::with_capacity(packed.len() + 36);
+        out.extend_from_slice(&MAGIC);
+        out.extend_from_slice(&TILE_VERSION.to_le_bytes());
+        for k in self.keys.into_iter().chain([node_key(root)]) {
+            out.extend_from_slice(&k.to_le_bytes());
+        }
+        out.extend_from_slice(&packed);
+        out.extend_from_slice(&crc32fast::hash(&out).to_le_bytes());
+        let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+        std::fs::write(&tmp, &out).map_err(|e| WorldError::io_write(&tmp, e))?;
+        std::fs::rename(&tmp, &path).map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            WorldError::io_write(&path, e)
+        })
+    }
+}
+
+fn node_key(id: NodeId) -> u64 {
+    Fnv64::new().u64(u64::from(id.lod)).u64(u64::from(id.x)).u64(u64::from(id.y)).finish()
+}
+
+/// Little-endian: per level, every patch's error, refine, repr (f32) and
+/// lo, hi (f64).
+fn encode_levels(levels: &[LevelPatches]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for l in levels {
+        for v in l.error.iter().chain(&l.refine).chain(&l.repr) {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in l.lo.iter().chain(&l.hi) {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out
+}
+
+fn decode_levels(raw: &[u8], root: NodeId) -> Option<Vec<LevelPatches>> {
+    let mut pos = 0;
+    let mut take = |n: usize| {
+        let s = raw.get(pos..pos + n)?;
+        pos += n;
+        Some(s)
+    };
+    let mut levels = Vec::new();
+    for k in 0..=root.lod {
+        let side = (super::layout::PATCHES_PER_NODE_SIDE as usize) << (root.lod - k);
+        let n = side * side;
+        let mut f32s = || -> Option<Vec<f32>> {
+            Some(take(4 * n)?.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect())
+        };
+        let (error, refine, repr) = (f32s()?, f32s()?, f32s()?);
+        let mut f64s = || -> Option<Vec<f64>> {
+            Some(take(8 * n)?.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect())
+        };
+        let (lo, hi) = (f64s()?, f64s()?);
+        levels.push(LevelPatches { side, error, refine, repr, lo, hi });
+    }
+    (pos == raw.len()).then_some(levels)
+}
