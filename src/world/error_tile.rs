@@ -253,7 +253,7 @@ impl Block {
                 let (u, v) = ((i - i0) as f64 / step as f64, (j - j0) as f64 / step as f64);
                 // Global level-k quad parity (the block origin is a multiple of 2^k).
                 let g = (self.origin[0] >> k) + ci + (self.origin[1] >> k) + cj;
-                let p = diamond(corners, u, v, g % 2 == 0);
+                let p = diamond(corners, u, v, g.is_multiple_of(2));
                 dev[j * n + i] = (p - self.at(i, j)).abs() as f32;
             }
         }
@@ -279,7 +279,7 @@ impl Block {
         }
         let g = [self.origin[0] + qx, self.origin[1] + qy];
         let lod0 = [self.at(qx, qy), self.at(qx + 1, qy), self.at(qx, qy + 1), self.at(qx + 1, qy + 1)];
-        let slash0 = (g[0] + g[1]) % 2 == 0;
+        let slash0 = (g[0] + g[1]).is_multiple_of(2);
         let mut s = QuadStats { gap0: 0.0, gap1: 0.0, lo: f64::INFINITY, hi: f64::NEG_INFINITY };
         for (fy, row) in fine.iter().enumerate() {
             for (fx, &z) in row.iter().enumerate() {
@@ -290,7 +290,7 @@ impl Block {
                 let c = |a: usize, b: usize| fine[2 * hy + 2 * b][2 * hx + 2 * a];
                 let corners = [c(0, 0), c(1, 0), c(0, 1), c(1, 1)];
                 let (u1, v1) = ((fx - 2 * hx) as f64 / 2.0, (fy - 2 * hy) as f64 / 2.0);
-                let slash1 = (2 * g[0] + hx + 2 * g[1] + hy) % 2 == 0;
+                let slash1 = (2 * g[0] + hx + 2 * g[1] + hy).is_multiple_of(2);
                 s.gap1 = s.gap1.max((diamond(corners, u1, v1, slash1) - z).abs());
                 s.lo = s.lo.min(z);
                 s.hi = s.hi.max(z);

@@ -31,6 +31,9 @@ const MAGIC: [u8; 4] = *b"VERR";
 /// Bumped whenever the tile layout or the error definition changes.
 const TILE_VERSION: u32 = 1;
 
+/// One root's patches of every level (index = LOD).
+type Tile = Arc<Vec<LevelPatches>>;
+
 /// One node's numbers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeErrors {
@@ -53,7 +56,7 @@ pub struct ErrorTree {
     source: Arc<dyn HeightSource>,
     dir: Option<PathBuf>,
     keys: [u64; 2],
-    roots: Mutex<HashMap<NodeId, Arc<OnceLock<Arc<Vec<LevelPatches>>>>>>,
+    roots: Mutex<HashMap<NodeId, Arc<OnceLock<Tile>>>>,
 }
 
 impl ErrorTree {
@@ -117,7 +120,7 @@ impl ErrorTree {
 
     /// The root's tile: from memory, the cache folder, or computed now
     /// (other threads asking for the same root wait for it).
-    fn tile(&self, root: NodeId) -> Arc<Vec<LevelPatches>> {
+    fn tile(&self, root: NodeId) -> Tile {
         let cell = Arc::clone(self.roots.lock().unwrap_or_else(|e| e.into_inner()).entry(root).or_default());
         Arc::clone(cell.get_or_init(|| {
             if let Some(tile) = self.read(root) {
