@@ -2,28 +2,19 @@
 #extension GL_GOOGLE_include_directive : require
 // variants: CONE_CULL HOLE_CULL
 // Phase 2 of two-phase occlusion culling (niagara; Haar and Aaltonen): the
-// same nodes and stages as cull_patches, then every survivor is tested
-// against the depth pyramid of what phase 1 drew. Survivors phase 1 did
-// not draw (not visible last frame) that the pyramid leaves visible are
+// same nodes, selection and stages as cull_patches, then every survivor is
+// tested against the depth pyramid of what phase 1 drew. Survivors phase 1
+// did not draw (not visible last frame) that the pyramid leaves visible are
 // listed for the second draw; every patch's visibility bit is rewritten
 // for the next frame's phase 1.
 layout(local_size_x = 64) in;
 #include "patch_cull.glsl"
 
-layout(set = 0, binding = 7, std430) buffer PatchList {
-    PatchListHeader header;
-    uvec2 patches[];
-} patch_list;
-#ifdef HOLE_CULL
-layout(set = 0, binding = 8, std430) buffer HolePatchList {
-    PatchListHeader header;
-    uvec2 patches[];
-} hole_list;
-#endif
 layout(set = 0, binding = 9, std430) buffer Visibility { uint words[]; } visibility;
 layout(set = 0, binding = 10) uniform texture2D hiz;
 #include "hiz_test.glsl"
 
+shared uint s_in;
 shared uint s_visible[VISIBILITY_WORDS_PER_SLOT];
 shared uint s_tested;
 shared uint s_listed;
@@ -34,11 +25,15 @@ void main() {
         s_visible[t] = 0u;
     }
     if (t == 0u) {
+        s_in = 0u;
         s_tested = 0u;
         s_listed = 0u;
     }
     barrier();
     PatchCull c = cull_patch(t);
+    if (c.drawn) {
+        atomicAdd(s_in, 1u);
+    }
     uint bit = 1u << (t & 31u);
     // Read before the barrier below; the words are rewritten after it.
     bool drawn_in_phase1 = c.hole && (visibility.words[c.slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] & bit) != 0u;
@@ -54,20 +49,7 @@ void main() {
         atomicAdd(s_tested, 1u);
         if (visible) {
             atomicAdd(s_listed, 1u);
-#ifdef HOLE_CULL
-            if (c.holey) {
-                uint i = atomicAdd(hole_list.header.instance_count, 1u);
-                if (i < pc.capacity) {
-                    hole_list.patches[i] = c.record;
-                }
-            }
-#endif
-            if (!c.holey) {
-                uint i = atomicAdd(patch_list.header.instance_count, 1u);
-                if (i < pc.capacity) {
-                    patch_list.patches[i] = c.record;
-                }
-            }
+            emit_patch(c);
         }
     }
     barrier();
@@ -75,7 +57,7 @@ void main() {
         visibility.words[c.slot * VISIBILITY_WORDS_PER_SLOT + t] = s_visible[t];
     }
     if (t == 0u) {
-        atomicAdd(patch_list.header.patches_in, gl_WorkGroupSize.x);
+        atomicAdd(patch_list.header.patches_in, s_in);
         atomicAdd(patch_list.header.after_hole, s_tested);
         atomicAdd(patch_list.header.after_occlusion, s_listed);
     }

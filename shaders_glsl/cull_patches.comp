@@ -2,32 +2,24 @@
 #extension GL_GOOGLE_include_directive : require
 // variants: CONE_CULL HOLE_CULL OCCLUSION
 // Far Cry 5's patch culling: one workgroup per listed node (indirect, from
-// traverse), one thread per patch (8x8). Stages (common/patch_cull.glsl):
-// frustum, backface (variant CONE_CULL), holes (variant HOLE_CULL:
-// all-hole patches removed, partly-holed ones sent to the hole list drawn
-// by terrain_holes). Built stages can still be switched off per frame.
-// With OCCLUSION this is phase 1 of two-phase occlusion culling: only the
-// survivors that were visible last frame are listed; cull_occluded tests
-// the rest against the depth pyramid of what phase 1 drew.
+// traverse), one thread per patch (8x8), each drawing what select_patches
+// chose for it (an ancestor's patch, its own, or its sub-patches below LOD
+// 0; common/patch_cull.glsl). Stages: frustum, backface (variant
+// CONE_CULL), holes (variant HOLE_CULL: all-hole patches removed,
+// partly-holed ones sent to the hole list drawn by terrain_holes). Built
+// stages can still be switched off per frame. With OCCLUSION this is phase
+// 1 of two-phase occlusion culling: only the survivors that were visible
+// last frame are listed; cull_occluded tests the rest against the depth
+// pyramid of what phase 1 drew.
 layout(local_size_x = 64) in;
 #include "patch_cull.glsl"
 
-#ifdef HOLE_CULL
-// Patches with some holes: drawn by terrain_holes (header: its draw args).
-layout(set = 0, binding = 8, std430) buffer HolePatchList {
-    PatchListHeader header;
-    uvec2 patches[];
-} hole_list;
-#endif
-layout(set = 0, binding = 7, std430) buffer PatchList {
-    PatchListHeader header;
-    uvec2 patches[];
-} patch_list;
 #ifdef OCCLUSION
 // One bit per patch and slot: visible when cull_occluded last ran.
 layout(set = 0, binding = 9, std430) readonly buffer Visibility { uint words[]; } visibility;
 #endif
 
+shared uint s_in;
 shared uint s_frustum;
 shared uint s_cone;
 shared uint s_hole;
@@ -35,12 +27,16 @@ shared uint s_hole;
 void main() {
     uint t = gl_LocalInvocationID.x;
     if (t == 0u) {
+        s_in = 0u;
         s_frustum = 0u;
         s_cone = 0u;
         s_hole = 0u;
     }
     barrier();
     PatchCull c = cull_patch(t);
+    if (c.drawn) {
+        atomicAdd(s_in, 1u);
+    }
     if (c.frustum) {
         atomicAdd(s_frustum, 1u);
     }
@@ -58,24 +54,11 @@ void main() {
     }
 #endif
     if (keep) {
-#ifdef HOLE_CULL
-        if (c.holey) {
-            uint i = atomicAdd(hole_list.header.instance_count, 1u);
-            if (i < pc.capacity) {
-                hole_list.patches[i] = c.record;
-            }
-        }
-#endif
-        if (!c.holey) {
-            uint i = atomicAdd(patch_list.header.instance_count, 1u);
-            if (i < pc.capacity) {
-                patch_list.patches[i] = c.record;
-            }
-        }
+        emit_patch(c);
     }
     barrier();
     if (t == 0u) {
-        atomicAdd(patch_list.header.patches_in, gl_WorkGroupSize.x);
+        atomicAdd(patch_list.header.patches_in, s_in);
         atomicAdd(patch_list.header.after_frustum, s_frustum);
         atomicAdd(patch_list.header.after_cone, s_cone);
         atomicAdd(patch_list.header.after_hole, s_hole);

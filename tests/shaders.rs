@@ -83,6 +83,7 @@ fn rust_twins_match_reflected_layouts() {
     use vista::passes::prefix_sum::PrefixSumPush;
     use vista::passes::quadtree_update::QuadtreeUpdatePush;
     use vista::passes::sector_data::SectorDataPush;
+    use vista::passes::select_patches::{SelectHeader, SelectPush};
     use vista::passes::terrain_holes::HolesPush;
     use vista::passes::terrain_query::{TerrainQueryPush, VistaTerrain};
     use vista::passes::traverse::{LevelArgs, TraverseHeader, TraversePush};
@@ -104,7 +105,7 @@ fn rust_twins_match_reflected_layouts() {
     );
     check_layout(
         "TraversePush",
-        fields!(TraversePush: cameras, camera_count, target_error_px, sector_size_m, lod_count, root_grid_x,
+        fields!(TraversePush: cameras, forwards, camera_count, target_error_px, sector_size_m, lod_count, root_grid_x,
             root_grid_y, height_lo, height_scale, list_capacity, final_capacity, current_lod, pad),
         layouts::TRAVERSE_PUSH,
         structs::TRAVERSE_PUSH,
@@ -144,19 +145,26 @@ fn rust_twins_match_reflected_layouts() {
     check_layout(
         "PatchListHeader",
         fields!(PatchListHeader: index_count, instance_count, first_index, vertex_offset, first_instance, patches_in,
-            after_frustum, after_cone, after_hole, after_occlusion, pad),
+            after_frustum, after_cone, after_hole, after_occlusion, bound_bits, seam_overflow),
         layouts::PATCH_LIST_HEADER,
         structs::PATCH_LIST_HEADER,
     );
     // The header leads with a VkDrawIndexedIndirectCommand.
     assert_eq!(offset_of!(PatchListHeader, first_instance) + 4, 20);
+    check_layout(
+        "SelectHeader",
+        fields!(SelectHeader: conflicts, refined, refine_capped, coarsened),
+        layouts::SELECT_HEADER,
+        structs::SELECT_HEADER,
+    );
+    check_layout("SelectPush", fields!(SelectPush: phase, lod_count, pad), layouts::SELECT_PUSH, structs::SELECT_PUSH);
     check_layout("HolesPush", fields!(HolesPush: nan_bits, pad), layouts::HOLES_PUSH, structs::HOLES_PUSH);
     check_layout("HizPush", fields!(HizPush: src_size, dst_size, level, pad), layouts::HIZ_PUSH, structs::HIZ_PUSH);
     check_layout(
         "TerrainViewGpu",
         fields!(TerrainViewGpu: view_proj, frustum, sun_dir, sun_color, sky_color, camera_sample, camera_frac,
             camera_z, spacing_m, height_lo, height_scale, height_range, lod_map_w, lod_map_h, pad, inv_view_proj,
-            viewport, camera_world, shade_bands, shade_slope, shade_flags),
+            viewport, camera_world, shade_bands, shade_slope, shade_flags, lod_forward, lod_params),
         layouts::TERRAIN_VIEW,
         structs::TERRAIN_VIEW,
     );
@@ -164,6 +172,7 @@ fn rust_twins_match_reflected_layouts() {
     assert_eq!(size_of::<TraversePush>() as u32, shaders::traverse::PUSH_CONSTANT_SIZE);
     assert_eq!(shaders::traverse::PUSH_CONSTANT_SIZE, shaders::traverse_level::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<CullPush>() as u32, shaders::cull_patches::PUSH_CONSTANT_SIZE);
+    assert_eq!(size_of::<SelectPush>() as u32, shaders::select_patches::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<HolesPush>() as u32, shaders::terrain_holes_vert::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<SectorDataPush>() as u32, shaders::sector_data::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<TerrainQueryPush>() as u32, shaders::terrain_query::PUSH_CONSTANT_SIZE);

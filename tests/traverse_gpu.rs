@@ -108,7 +108,7 @@ impl Scene {
 
     fn random_params(&mut self) -> TraverseParams {
         let w = world();
-        let cams = 1 + self.rng.below(3) as usize;
+        let cams = 1 + self.rng.below(vista::terrain::selection::MAX_CAMERAS as u32) as usize;
         let cameras = (0..cams)
             .map(|_| {
                 let p = [
@@ -116,7 +116,13 @@ impl Scene {
                     self.rng.below(5000) as f64 - 450.0 + 0.61,
                     self.rng.below(2000) as f64 - 100.0,
                 ];
-                TraverseCamera::perspective(p, 30.0 + self.rng.below(60) as f64, 256 + self.rng.below(1800))
+                // Any heading, any pitch (straight down and up included).
+                let yaw = self.rng.unit() * std::f64::consts::TAU;
+                let pitch = (self.rng.unit() - 0.5) * std::f64::consts::PI;
+                let forward = [yaw.sin() * pitch.cos(), yaw.cos() * pitch.cos(), pitch.sin()];
+                let h = 256 + self.rng.below(1800);
+                let size = [h * (1 + self.rng.below(3)) / 2, h];
+                TraverseCamera::perspective(p, forward, 30.0 + self.rng.below(60) as f64, size)
             })
             .collect();
         let target = [0.5, 1.0, 2.0, 4.0, 8.0][self.rng.below(5) as usize];
@@ -208,7 +214,7 @@ fn overflow_keeps_coarser_nodes_and_is_counted() {
         }
         scene.mutate(ctx);
         let params = TraverseParams {
-            cameras: vec![TraverseCamera::perspective([2000.0, 2000.0, 100.0], 60.0, 2000)],
+            cameras: vec![TraverseCamera::perspective([2000.0, 2000.0, 100.0], [0.0, 1.0, 0.0], 60.0, [2000, 2000])],
             target_error_px: 0.1,
         };
         let mut traverse = Traverse::with_per_level(ctx, &w, SLOTS).unwrap();
@@ -238,7 +244,7 @@ fn roots_that_overflow_the_first_list_are_still_drawn() {
         scene.flush(ctx);
         assert_eq!(scene.resident.len(), ROOTS as usize);
         let params = TraverseParams {
-            cameras: vec![TraverseCamera::perspective([2000.0, 2000.0, 100.0], 60.0, 2000)],
+            cameras: vec![TraverseCamera::perspective([2000.0, 2000.0, 100.0], [0.0, 1.0, 0.0], 60.0, [2000, 2000])],
             target_error_px: 1.0,
         };
         let mut traverse = Traverse::new(ctx, &world(), SLOTS).unwrap();

@@ -126,7 +126,16 @@ fn error_criterion_wants_the_families_the_camera_refines() {
     let world = WorldDesc::default();
     let mut r = Residency::new(&world, ResidencyConfig::default()).unwrap();
     let cam = [5000.0, 5000.0, 20_000.0];
-    let want = RefineWant { pixels_per_tan: 1000.0, target_error_px: 1.0, prefetch: 1.0, ring_factor: 0.75 };
+    // Looking straight down, with the off-axis factor capped at 1 (widest),
+    // so the projection is error * 1000 / distance.
+    let camera = TraverseCamera {
+        position_m: cam,
+        pixels_per_tan: 1000.0,
+        forward: [0.0, 0.0, -1.0],
+        widest: 1.0,
+        frustum: None,
+    };
+    let want = RefineWant { camera, target_error_px: 1.0, prefetch: 1.0, ring_factor: 0.75 };
     for id in r.update_with(cam, Some(&want)).adds {
         assert_eq!(r.on_loaded(id), Arrival::Accept);
     }

@@ -33,8 +33,9 @@
 // its own layer and the side is a whole number of 4x4 BC blocks.
 #define ATLAS_TEXTURE_SIDE 132u
 #define ATLAS_BORDER 2u
-// Up to this many cameras refine one node list.
-#define MAX_CAMERAS 4u
+// Up to this many cameras refine one node list (two keep the traversal's
+// push constants, with each camera's forward axis, within 128 bytes).
+#define MAX_CAMERAS 2u
 // Entries of each shared-memory list of traverse.comp: every entry is a
 // distinct resident node, so the slot budget (<= MAX_SLOTS) bounds it.
 #define SHARED_LIST_CAPACITY 1024u
@@ -65,6 +66,23 @@
 #define PATCH_DELTA_BITS 4u
 // Largest stitched LOD delta: a patch edge has 16 = 2^4 quads.
 #define MAX_LOD_DELTA 4u
+// Per-patch LOD selection (select_patches): a listed node's patch may be
+// drawn from an ancestor up to this many levels coarser (its patch covers
+// 2^a x 2^a of the node's patches; 3 = the whole node).
+#define MAX_COARSEN 3u
+// Refinement below LOD 0: 2x and 4x denser vertices on the Catmull-Rom
+// surface of the samples, as 4 or 16 sub-patches of the same 16x16 grid.
+#define REFINE_LEVELS 2u
+// Patch record word 2: refinement level (2 bits) | sub-patch index << 2.
+#define PATCH_REFINE_MASK 3u
+#define PATCH_SUB_SHIFT 2u
+// LOD-0 patches refined per frame at most (the patch lists are sized for
+// them); beyond, a patch is drawn at LOD 0 and counted.
+#define MAX_REFINED_PATCHES 2048u
+// Counters before the per-slot levels in the selection buffer.
+#define SELECT_HEADER_WORDS 4u
+// A region no listed node covers (outside the world, or no root yet).
+#define NO_LEVEL 0x7FFFu
 // Edge order of the patch deltas.
 #define EDGE_WEST 0u
 #define EDGE_EAST 1u

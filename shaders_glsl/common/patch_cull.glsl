@@ -1,33 +1,32 @@
 // Patch culling shared by cull_patches (phase 1) and cull_occluded (phase
-// 2): one workgroup per listed node, one thread per patch (8x8). Both
-// phases run the same frustum / cone / hole stages on the same inputs, so
-// they agree on which patches survive them; only the occlusion decision
+// 2): one workgroup per listed node, one thread per patch (8x8). Each
+// thread draws what select_patches decided for its patch (lod_select.glsl):
+// nothing, when another patch of its block draws their common ancestor;
+// the ancestor's patch; its own; or its 4 or 16 sub-patches below LOD 0.
+// Both phases run the same frustum / cone / hole stages on the same inputs,
+// so they agree on which patches survive them; only the occlusion decision
 // differs (last frame's visibility bit, or the depth pyramid).
 #ifndef VISTA_PATCH_CULL_GLSL
 #define VISTA_PATCH_CULL_GLSL
 
-#include "node_list.glsl"
-#include "terrain_view.glsl"
+#include "lod_select.glsl"
 #include "patch_list.glsl"
 
-// Patches per node side (world PATCHES_PER_NODE_SIDE) and quads per patch side.
-layout(constant_id = 1) const uint PATCHES_PER_SIDE = 8u;
-layout(constant_id = 2) const uint PATCH_QUADS = 16u;
-
-layout(set = 0, binding = 0, std430) readonly buffer TraverseOutput {
-    TraverseHeader header;
-    uvec2 nodes[];
-} traverse_out;
-layout(set = 0, binding = 1, std430) readonly buffer View { TerrainView v; } view;
-layout(set = 0, binding = 2, r8ui) uniform readonly uimage2D lod_map;
-layout(set = 0, binding = 3) uniform utexture2DArray patch_min_max;
 #ifdef CONE_CULL
 layout(set = 0, binding = 4) uniform texture2DArray patch_cones;
 #endif
 #ifdef HOLE_CULL
 layout(set = 0, binding = 5) uniform utexture2DArray patch_holes;
+// Patches with some holes: drawn by terrain_holes (header: its draw args).
+layout(set = 0, binding = 8, std430) buffer HolePatchList {
+    PatchListHeader header;
+    uvec4 patches[];
+} hole_list;
 #endif
-layout(set = 0, binding = 6) uniform sampler nearest;
+layout(set = 0, binding = 7, std430) buffer PatchList {
+    PatchListHeader header;
+    uvec4 patches[];
+} patch_list;
 
 layout(push_constant, std430) uniform CullPush {
     uint stages;
@@ -67,95 +66,151 @@ bool cone_faces_away(vec4 cone, vec3 lo, vec3 hi) {
 }
 #endif
 
-// LOD delta toward a neighbour sector: how many LODs coarser it is, 0 for
-// finer, equal, unlisted or outside sectors, at most MAX_LOD_DELTA.
-uint edge_delta(ivec2 sector, uint lod) {
-    if (any(lessThan(sector, ivec2(0))) || sector.x >= int(view.v.lod_map_w) || sector.y >= int(view.v.lod_map_h)) {
-        return 0u;
+// LOD deltas (EDGE_* order, 4 bits each) of a square of `size` LOD-0
+// samples at `o` drawn at `level`, from the drawn levels just across the
+// middle of each edge (a coarser neighbour covers the whole edge). A delta
+// past MAX_LOD_DELTA (select_patches prevents it) is clamped and counted.
+uint edge_deltas(ivec2 o, int size, int level, inout uint overflow) {
+    int h = size / 2;
+    ivec2 across[4] = ivec2[4](ivec2(o.x - 1, o.y + h), ivec2(o.x + size, o.y + h), ivec2(o.x + h, o.y - 1), ivec2(o.x + h, o.y + size));
+    uint deltas = 0u;
+    for (uint e = 0u; e < 4u; ++e) {
+        int l = level_at(across[e], true);
+        if (l != int(NO_LEVEL) && l > level) {
+            int d = l - level;
+            if (d > int(MAX_LOD_DELTA)) {
+                overflow += 1u;
+                d = int(MAX_LOD_DELTA);
+            }
+            deltas |= uint(d) << (PATCH_DELTA_BITS * e);
+        }
     }
-    uint n = imageLoad(lod_map, sector).r;
-    if (n == NO_LOD || n <= lod) {
-        return 0u;
-    }
-    return min(n - lod, MAX_LOD_DELTA);
+    return deltas;
 }
 
-// One patch after the frustum, cone and hole stages.
+// One listed patch after selection and the frustum, cone and hole stages.
 struct PatchCull {
-    vec3 lo;          // camera-relative box, padded
+    bool drawn;       // this thread draws for its block (select_patches)
+    vec3 lo;          // camera-relative box of what it draws, padded
     vec3 hi;
     bool frustum;     // survived each stage so far
     bool cone;
     bool hole;
     bool holey;       // some holes: drawn by terrain_holes
-    uvec2 record;     // the patch-list entry
-    uint slot;
+    uvec4 record;     // the patch-list entry (z: no refinement yet)
+    uint slot;        // the listed node's slot (visibility bits)
+    uint refine;      // levels below LOD 0 (4^refine sub-patches)
+    ivec2 origin;     // LOD-0 sample of the drawn patch's corner
+    int level;        // drawn level (-refine below LOD 0)
+    float error;      // error of the drawn level (m)
+    uint overflow;    // edges clamped to MAX_LOD_DELTA
 };
 
 PatchCull cull_patch(uint t) {
-    // Spec constants read into variables: expressions of spec constants
-    // alone become OpSpecConstantOp, which naga cannot parse.
     uint per_side = PATCHES_PER_SIDE, quads = PATCH_QUADS;
     PatchCull c;
     uvec2 entry = traverse_out.nodes[gl_WorkGroupID.x];
-    uint n = entry.x, slot = entry.y;
-    c.slot = slot;
+    uint n = entry.x;
+    c.slot = entry.y;
     uint lod = node_lod(n);
     ivec2 node = ivec2(node_x(n), node_y(n));
     ivec2 pxy = ivec2(t % per_side, t / per_side);
-    int node_samples = int(per_side * quads);
+    int i = select_index(c.slot, t);
+    int coarse = select_levels.levels[2 * i];
+    uint a = uint(coarse) - lod;
+    c.drawn = ((pxy.x | pxy.y) & ((1 << a) - 1)) == 0;
+    ivec2 cell = node, dpxy = pxy;
+    uint dslot = c.slot;
+    c.refine = 0u;
+    if (a > 0u) {
+        ancestor_patch(node, pxy, a, cell, dpxy);
+        dslot = node_slot(uint(coarse), cell);
+    } else if (lod == 0u) {
+        c.refine = uint(-select_levels.levels[2 * i + 1]);
+    }
+    uint dlod = uint(coarse);
+    c.level = c.refine > 0u ? -int(c.refine) : coarse;
+    patch_box(dlod, cell, dpxy, dslot, c.lo, c.hi);
+    vec2 e = patch_error(dslot, dpxy);
+    c.error = c.refine == 0u ? e.x : c.refine == 1u ? e.y : 0.0;
+    c.origin = (cell * int(per_side * quads) + dpxy * int(quads)) << dlod;
+    c.overflow = 0u;
+    uint deltas = 0u;
+    if (c.refine == 0u) {
+        deltas = edge_deltas(c.origin, int(quads) << dlod, c.level, c.overflow);
+    }
 
-    // Camera-relative box from exact LOD-0 sample indices.
-    ivec2 s0 = (node * node_samples + pxy * int(quads)) << lod;
-    ivec2 s1 = s0 + (int(quads) << lod);
-    uvec2 mm = texelFetch(usampler2DArray(patch_min_max, nearest), ivec3(pxy, int(slot)), 0).xy;
-    vec3 lo = vec3(view_rel_xy(s0, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m),
-                   view.v.height_lo + float(mm.x) * view.v.height_scale - view.v.camera_z);
-    vec3 hi = vec3(view_rel_xy(s1, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m),
-                   view.v.height_lo + float(mm.y) * view.v.height_scale - view.v.camera_z);
-    // Rounding of the box (f32, relative to the camera) must never shrink it.
-    vec3 pad = 1e-4 * (abs(lo) + abs(hi)) + 1e-3;
-    c.lo = lo - pad;
-    c.hi = hi + pad;
-
-    // Edge LOD deltas from the neighbouring sectors (only border patches
-    // can have a neighbour of another node), looked up at the middle of the
-    // patch edge, in units of 1/(2 * PATCHES_PER_SIDE) sector so patches
-    // smaller than a sector (LOD < 3) find the right row or column.
-    int halves = 2 * int(per_side);
-    ivec2 sector0 = node << lod;
-    ivec2 sector1 = (node + 1) << lod;
-    ivec2 mid = (sector0 * halves + ((2 * pxy + 1) << lod)) / halves;
-    int row = mid.y, col = mid.x;
-    uint dw = pxy.x == 0 ? edge_delta(ivec2(sector0.x - 1, row), lod) : 0u;
-    uint de = pxy.x == int(per_side) - 1 ? edge_delta(ivec2(sector1.x, row), lod) : 0u;
-    uint ds = pxy.y == 0 ? edge_delta(ivec2(col, sector0.y - 1), lod) : 0u;
-    uint dn = pxy.y == int(per_side) - 1 ? edge_delta(ivec2(col, sector1.y), lod) : 0u;
-    uint b = PATCH_DELTA_BITS;
-    uint deltas = (dw << (b * EDGE_WEST)) | (de << (b * EDGE_EAST)) | (ds << (b * EDGE_SOUTH)) | (dn << (b * EDGE_NORTH));
-
-    bool keep = (pc.stages & CULL_STAGE_FRUSTUM) == 0u || !box_outside_frustum(c.lo, c.hi);
+    bool keep = c.drawn && ((pc.stages & CULL_STAGE_FRUSTUM) == 0u || !box_outside_frustum(c.lo, c.hi));
     c.frustum = keep;
-    // Stitched edges move vertices onto the coarser grid, making triangles
-    // the baked cone does not bound: only unstitched patches are cone-tested.
+    // Stitched edges and sub-patches make triangles the baked cone does
+    // not bound: only whole, unstitched patches are cone-tested.
 #ifdef CONE_CULL
-    if (keep && (pc.stages & CULL_STAGE_CONE) != 0u && deltas == 0u) {
-        vec4 cone = texelFetch(sampler2DArray(patch_cones, nearest), ivec3(pxy, int(slot)), 0);
+    if (keep && (pc.stages & CULL_STAGE_CONE) != 0u && deltas == 0u && c.refine == 0u) {
+        vec4 cone = texelFetch(sampler2DArray(patch_cones, nearest), ivec3(dpxy, int(dslot)), 0);
         keep = !cone_faces_away(cone, c.lo, c.hi);
     }
 #endif
     c.cone = keep;
     c.holey = false;
 #ifdef HOLE_CULL
-    uint holes = texelFetch(usampler2DArray(patch_holes, nearest), ivec3(pxy, int(slot)), 0).r;
+    uint holes = texelFetch(usampler2DArray(patch_holes, nearest), ivec3(dpxy, int(dslot)), 0).r;
     if (keep && (pc.stages & CULL_STAGE_HOLE) != 0u) {
         keep = holes != PATCH_HOLE_ALL;
     }
     c.holey = holes != PATCH_HOLE_NONE;
 #endif
     c.hole = keep;
-    c.record = uvec2(n, pack_patch(slot, uint(pxy.y) * per_side + uint(pxy.x), deltas));
+    uint index = uint(dpxy.y) * per_side + uint(dpxy.x);
+    c.record = uvec4(pack_node(dlod, uint(cell.x), uint(cell.y)), pack_patch(dslot, index, deltas), 0u, 0u);
     return c;
+}
+
+void append(bool holey, uvec4 record) {
+#ifdef HOLE_CULL
+    if (holey) {
+        uint i = atomicAdd(hole_list.header.instance_count, 1u);
+        if (i < pc.capacity) {
+            hole_list.patches[i] = record;
+        }
+        return;
+    }
+#endif
+    uint i = atomicAdd(patch_list.header.instance_count, 1u);
+    if (i < pc.capacity) {
+        patch_list.patches[i] = record;
+    }
+}
+
+// Lists what a surviving patch draws: itself, or its sub-patches (each
+// frustum-tested on its own xy and the patch's height range), and raises
+// the frame's error bound to its projected error.
+void emit_patch(PatchCull c) {
+    atomicMax(patch_list.header.bound_bits, floatBitsToUint(projected_px(c.error, c.lo, c.hi)));
+    if (c.overflow > 0u) {
+        atomicAdd(patch_list.header.seam_overflow, c.overflow);
+    }
+    if (c.refine == 0u) {
+        append(c.holey, c.record);
+        return;
+    }
+    uint quads = PATCH_QUADS;
+    uint subs = 1u << c.refine;
+    int size = int(quads >> c.refine);
+    for (uint s = 0u; s < subs * subs; ++s) {
+        ivec2 o = c.origin + ivec2(s % subs, s / subs) * size;
+        vec3 lo = c.lo, hi = c.hi;
+        lo.xy = view_rel_xy(o, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m) - vec2(1e-3);
+        hi.xy = view_rel_xy(o + size, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m) + vec2(1e-3);
+        if ((pc.stages & CULL_STAGE_FRUSTUM) != 0u && box_outside_frustum(lo, hi)) {
+            continue;
+        }
+        uint overflow = 0u;
+        uint deltas = edge_deltas(o, size, c.level, overflow);
+        uvec4 r = c.record;
+        r.y = (r.y & ~(0xFFFFu << PATCH_DELTA_SHIFT)) | (deltas << PATCH_DELTA_SHIFT);
+        r.z = pack_refine(c.refine, s);
+        append(c.holey, r);
+    }
 }
 
 #endif

@@ -1,9 +1,16 @@
 // The terrain vertex: one instanced indirect draw of a 17x17-vertex patch per
-// listed patch (instance = patch record). Edge vertices next to a coarser
-// neighbour snap to its grid and take the height there, so shared edges are
-// bit-identical. With TERRAIN_HOLES defined (terrain_holes.vert, the draw of
-// the patches that have holes) a hole vertex becomes NaN, made at run time,
-// and its triangles vanish; terrain_geometry.vert has no hole test at all.
+// listed patch (instance = patch record). A patch refined below LOD 0 is 4
+// or 16 sub-patches of the same grid whose vertices lie on the Catmull-Rom
+// surface of the node's samples (the finest surface the error tree
+// measures against). Edge vertices next to a coarser neighbour snap to its
+// grid and take the height there, so shared edges are bit-identical: every
+// step of the position, to gl_Position, is `precise`, so terrain_geometry
+// and terrain_holes (which include this same code) cannot be compiled into
+// different arithmetic (`invariant gl_Position` would say the same, but
+// lavapipe's SPIR-V reader warns about the decoration on gl_PerVertex). With TERRAIN_HOLES defined
+// (terrain_holes.vert, the draw of the patches that have holes) a hole
+// vertex becomes NaN, made at run time, and its triangles vanish;
+// terrain_geometry.vert has no hole test at all.
 #ifndef VISTA_TERRAIN_VERTEX_GLSL
 #define VISTA_TERRAIN_VERTEX_GLSL
 #include "common.glsl"
@@ -19,7 +26,7 @@ layout(constant_id = 2) const uint PATCH_QUADS = 16u;
 layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
 layout(set = 0, binding = 1, std430) readonly buffer PatchList {
     PatchListHeader header;
-    uvec2 patches[];
+    uvec4 patches[];
 } patch_list;
 layout(set = 0, binding = 2) uniform texture2DArray height_atlas;
 layout(set = 0, binding = 4) uniform sampler nearest;
@@ -49,12 +56,45 @@ uint snap(uint i, uint delta) {
     return ((i + half_step - 1u) >> delta) << delta;
 }
 
+// R16 height (0..1) of node sample `i` of layer `slot` (-2..129).
+float height_texel(uint slot, ivec2 i) {
+    return texelFetch(sampler2DArray(height_atlas, nearest), ivec3(atlas_texel(i), int(slot)), 0).r;
+}
+
+// Catmull-Rom weights at t in [0, 1]; exactly (0, 1, 0, 0) at 0 and
+// (0, 0, 1, 0) at 1, so a vertex on a sample takes its height bit for bit.
+vec4 catmull_rom(float t) {
+    precise float t2 = t * t;
+    precise float t3 = t2 * t;
+    precise vec4 w = 0.5 * vec4(-t3 + 2.0 * t2 - t, 3.0 * t3 - 5.0 * t2 + 2.0, -3.0 * t3 + 4.0 * t2 + t, t3 - t2);
+    return w;
+}
+
+// Height (R16 units) of the Catmull-Rom surface of a node's samples at
+// `fine`, node-local in units of 2^-r samples: along x over 4 rows, then
+// along y (src/world/error_tile.rs evaluates it the same way). The node's
+// far edge is cell 127 at t = 1, so the taps stay within samples -1..129.
+float refined_height(uint slot, ivec2 fine, uint r) {
+    ivec2 cell = min(fine >> int(r), ivec2(127));
+    vec2 t = vec2(fine - (cell << int(r))) / float(1u << r);
+    vec4 wx = catmull_rom(t.x), wy = catmull_rom(t.y);
+    precise float h = 0.0;
+    for (int j = 0; j < 4; ++j) {
+        ivec2 row = cell + ivec2(-1, j - 1);
+        precise float x = wx.x * height_texel(slot, row) + wx.y * height_texel(slot, row + ivec2(1, 0))
+                        + wx.z * height_texel(slot, row + ivec2(2, 0)) + wx.w * height_texel(slot, row + ivec2(3, 0));
+        h = h + wy[j] * x;
+    }
+    return h;
+}
+
 void main() {
     // Spec constants read into variables: expressions of spec constants
     // alone become OpSpecConstantOp, which naga cannot parse.
     uint per_side = PATCHES_PER_SIDE, quads = PATCH_QUADS;
-    uvec2 p = patch_list.patches[gl_InstanceIndex];
+    uvec4 p = patch_list.patches[gl_InstanceIndex];
     uint n = p.x, slot = patch_slot(p), index = patch_index(p);
+    uint r = patch_refine(p), sub = patch_sub(p);
     uint side = quads + 1u;
     uint i = uint(gl_VertexIndex) % side, j = uint(gl_VertexIndex) / side;
     uint si = i, sj = j;
@@ -69,20 +109,37 @@ void main() {
         sj = snap(j, patch_delta(p, EDGE_EAST));
     }
     uvec2 pxy = uvec2(index % per_side, index / per_side);
-    ivec2 local = ivec2(pxy * quads + uvec2(si, sj));
     uint lod = node_lod(n);
-    ivec2 g = (ivec2(node_x(n), node_y(n)) * int(per_side * quads) + local) << lod;
-    float h = texelFetch(sampler2DArray(height_atlas, nearest), ivec3(atlas_texel(local), int(slot)), 0).r;
+    ivec2 node = ivec2(node_x(n), node_y(n));
+    // Node-local vertex index in units of 2^-r samples (r = 0: samples).
+    uint subs = 1u << r;
+    ivec2 fine = ivec2((pxy * quads) << r) + ivec2(uvec2(sub % subs, sub / subs) * quads + uvec2(si, sj));
+    precise float h;
+    precise vec3 rel;
+    if (r == 0u) {
+        ivec2 g = (node * int(per_side * quads) + fine) << lod;
+        h = height_texel(slot, fine);
+        rel.xy = view_rel_xy(g, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
+    } else {
+        // Only LOD-0 nodes refine.
+        ivec2 g = ((node * int(per_side * quads)) << int(r)) + fine;
+        h = refined_height(slot, fine, r);
+        rel.xy = view_rel_xy_fine(g, r, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
+    }
     precise float z = view.v.height_lo + h * view.v.height_range - view.v.camera_z;
-    vec3 rel = vec3(view_rel_xy(g, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m), z);
-    gl_Position = view.v.view_proj * vec4(rel, 1.0);
+    rel.z = z;
+    precise vec4 clip = view.v.view_proj * vec4(rel, 1.0);
+    gl_Position = clip;
     rel_pos = rel;
+    vec2 local = vec2(fine) / float(subs);
 #ifdef TERRAIN_HOLES
-    if (texelFetch(sampler2DArray(albedo_atlas, nearest), ivec3(atlas_texel(local), int(slot)), 0).a < 0.5) {
+    // Below LOD 0 a vertex takes the hole flag of its nearest sample.
+    ivec2 near = ivec2(floor(local + 0.5));
+    if (texelFetch(sampler2DArray(albedo_atlas, nearest), ivec3(atlas_texel(near), int(slot)), 0).a < 0.5) {
         gl_Position = vec4(runtime_nan(pc.nan_bits));
     }
 #endif
-    atlas_uv = atlas_texel_uv(vec2(local));
+    atlas_uv = atlas_texel_uv(local);
     atlas_layer = slot;
 }
 

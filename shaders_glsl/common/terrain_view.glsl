@@ -31,6 +31,9 @@ struct TerrainView {
     vec4 shade_slope;       // x: normal z where cliff shading starts, y: where it is full;
                             // z: far cliff's second tiling scale; w: hash scale (Wyman-McGuire g)
     uvec4 shade_flags;      // x: flavours the scene can produce; y: hash seed; z: 1 = stochastic cliffs; w: clay albedo bits (0: G-buffer albedo)
+    // Per-patch LOD selection (lod_select.glsl).
+    vec4 lod_forward;       // xyz: the camera's forward axis (world); w: pixels per unit of tan (viewport_h / (2 tan(fov_y / 2)))
+    vec4 lod_params;        // x: target error (px); y: 1 / cos^2 of the frustum's widest angle to the forward axis; zw: unused
 };
 
 // LOD-0 sample index -> camera-relative metres (x, y). Takes fields, not
@@ -40,6 +43,15 @@ vec2 view_rel_xy(ivec2 sample_index, ivec2 camera_sample, vec2 camera_frac, floa
     precise vec2 d = vec2(sample_index - camera_sample) * spacing_m;
     precise vec2 r = d - camera_frac;
     return r;
+}
+
+// The same for an index in units of 2^-r LOD-0 samples (refinement level
+// r): spacing / 2^r is exact, and equal points give equal bits whatever r
+// names them (the integer differences scale by the same power of two).
+vec2 view_rel_xy_fine(ivec2 fine_index, uint r, ivec2 camera_sample, vec2 camera_frac, float spacing_m) {
+    precise vec2 d = vec2(fine_index - (camera_sample << int(r))) * (spacing_m / float(1u << r));
+    precise vec2 rel = d - camera_frac;
+    return rel;
 }
 
 #endif

@@ -16,7 +16,8 @@ layout(set = 0, binding = 4, std430) buffer TraverseOutput {
 } traverse_out;
 
 layout(push_constant, std430) uniform TraversePush {
-    vec4 cameras[MAX_CAMERAS];  // xyz: position (world m); w: pixels per unit of tan (viewport_h / (2 tan(fov_y/2)))
+    vec4 cameras[MAX_CAMERAS];   // xyz: position (grid metres); w: pixels per unit of tan (viewport_h / (2 tan(fov_y/2)))
+    vec4 forwards[MAX_CAMERAS];  // xyz: the camera's unit forward axis; w: 1 / cos^2 of its frustum's widest angle to it
     uint camera_count;
     float target_error_px;
     float sector_size_m;
@@ -35,8 +36,14 @@ uint node_value(uint lod, uint x, uint y) {
     return texelFetch(usampler2D(node_texture, node_sampler), ivec2(x, y), int(lod)).r;
 }
 
-// Projected vertical error in pixels against the target, for any camera:
-// err * w / dist > target, compared squared. Only correctly rounded
+// Projected vertical error in pixels against the target, for any camera.
+// A vertical error e at p projects to at most e f |p| / z(p)^2 pixels (the
+// largest singular value of the perspective Jacobian, z along the forward
+// axis), so over the node's box it is at most e f k / d: d the box's
+// distance, k = |v|^2 / z(v)^2 for the box's worst corner v (the angle to
+// the forward axis is quasi-convex), never above the frustum's widest (and
+// that for a corner behind the camera). Refine when e f k > t d for some
+// corner and e f k_frustum > t d, compared squared. Only correctly rounded
 // operations (add, mul, ldexp), no contraction, so the CPU reference
 // (src/reference/traverse.rs) makes bit-identical decisions.
 bool wants_refine(uint lod, uint x, uint y, uint slot) {
@@ -49,11 +56,24 @@ bool wants_refine(uint lod, uint x, uint y, uint slot) {
     precise float target_sq = pc.target_error_px * pc.target_error_px;
     for (uint c = 0; c < pc.camera_count; ++c) {
         precise vec3 p = pc.cameras[c].xyz;
+        precise vec3 f = pc.forwards[c].xyz;
         precise vec3 o = max(max(bmin - p, p - bmax), vec3(0.0));
         precise float d2 = max(o.x * o.x + o.y * o.y + o.z * o.z, 1e-6);
         precise float lhs = err * pc.cameras[c].w;
-        if (lhs * lhs > target_sq * d2) {
-            return true;
+        precise float widest = lhs * pc.forwards[c].w;
+        if (!(widest * widest > target_sq * d2)) {
+            continue;
+        }
+        for (uint k = 0u; k < 8u; ++k) {
+            precise vec3 v = vec3((k & 1u) != 0u ? bmax.x : bmin.x, (k & 2u) != 0u ? bmax.y : bmin.y,
+                                  (k & 4u) != 0u ? bmax.z : bmin.z) - p;
+            precise float z = v.x * f.x + v.y * f.y + v.z * f.z;
+            precise float l2 = v.x * v.x + v.y * v.y + v.z * v.z;
+            precise float a = lhs * l2;
+            precise float zz = z * z;
+            if (z <= 0.0 || a * a > target_sq * d2 * (zz * zz)) {
+                return true;
+            }
         }
     }
     return false;

@@ -10,9 +10,10 @@ use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree};
 use crate::terrain::selection::{TraverseCamera, TraverseParams};
-use crate::world::{bake_node, HeightSource, NodeId, PayloadFormat, WorldDesc};
+use crate::world::{bake_node, ErrorTree, HeightSource, NodeId, PayloadFormat, WorldDesc};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::Arc;
 
 #[derive(Debug, Clone, Serialize)]
 pub struct TraverseBenchRow {
@@ -27,6 +28,9 @@ pub struct TraverseBenchRow {
     /// single / multi: below 1 means the one-dispatch walk is faster.
     pub ratio: f64,
 }
+
+/// The benchmark camera looks north and 20 degrees down, as the default view.
+const BENCH_FORWARD: [f64; 3] = [0.0, 0.939_692_620_785_908_4, -0.342_020_143_325_668_7];
 
 pub struct TraverseBenchConfig {
     pub resident_sets: Vec<u32>,
@@ -66,9 +70,10 @@ fn resident_set(world: &WorldDesc, camera: [f64; 3], n: u32) -> Vec<NodeId> {
 pub fn bench_traverse(
     ctx: &Context,
     world: &WorldDesc,
-    source: &dyn HeightSource,
+    source: Arc<dyn HeightSource>,
     cfg: &TraverseBenchConfig,
 ) -> Result<Vec<TraverseBenchRow>> {
+    let errors = ErrorTree::new(world, Arc::clone(&source), None)?;
     let max = cfg.resident_sets.iter().copied().max().unwrap_or(64);
     let update = QuadtreeUpdatePass::new(ctx, false)?;
     let traverse = Traverse::with_per_level(ctx, world, max)?;
@@ -77,7 +82,14 @@ pub fn bench_traverse(
     for &requested in &cfg.resident_sets {
         let ids = resident_set(world, cfg.camera_m, requested);
         log::info!("baking {} nodes for the {requested}-node resident set", ids.len());
-        let nodes: Vec<_> = ids.par_iter().map(|id| bake_node(source, world, &[], *id)).collect();
+        let nodes = ids
+            .par_iter()
+            .map(|id| {
+                let mut node = bake_node(source.as_ref(), world, &[], *id);
+                errors.attach(&mut node)?;
+                Ok(node)
+            })
+            .collect::<std::result::Result<Vec<_>, crate::world::WorldError>>()?;
         let mut tree = GpuQuadtree::new(ctx, world, max, 1, AtlasSet::CORE, PayloadFormat::Bc)?;
         for n in nodes {
             tree.add(n, 0);
@@ -88,7 +100,12 @@ pub fn bench_traverse(
         let resident = tree.shadow.resident_count();
         for &target in &cfg.targets_px {
             let params = TraverseParams {
-                cameras: vec![TraverseCamera::perspective(cfg.camera_m, 60.0, cfg.viewport_height_px)],
+                cameras: vec![TraverseCamera::perspective(
+                    cfg.camera_m,
+                    BENCH_FORWARD,
+                    60.0,
+                    [cfg.viewport_height_px, cfg.viewport_height_px],
+                )],
                 target_error_px: target,
             };
             let mut exec = FrameExecutor::new(ctx, 1, 4)?;

@@ -10,10 +10,11 @@ use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource};
 use crate::gpu::{Binding, Image, Sampler};
 use crate::passes::cull_patches::{
-    nearest_sampler, spec_constants, CullBuild, CullInputs, CullPush, CullStages, PatchLists,
+    list_capacity, nearest_sampler, spec_constants, CullBuild, CullInputs, CullPush, CullStages, PatchLists,
 };
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lod_map::LodMap;
+use crate::passes::select_patches::SelectPatches;
 use crate::passes::traverse::Traverse;
 use crate::shaders::{consts as k, cull_occluded as sh};
 use crate::terrain::gpu_quadtree::GpuQuadtree;
@@ -21,7 +22,7 @@ use crate::terrain::quadtree::FIRST_SLOT;
 use crate::world::PATCHES_PER_NODE;
 
 /// This shader's bindings in the order of `CullInputs::bindings`.
-const CULL_BINDINGS: [Binding; 9] = [
+const CULL_BINDINGS: [Binding; 12] = [
     sh::TRAVERSE_OUT,
     sh::VIEW,
     sh::LOD_MAP,
@@ -31,6 +32,9 @@ const CULL_BINDINGS: [Binding; 9] = [
     sh::PATCH_CONES,
     sh::PATCH_HOLES,
     sh::HOLE_LIST,
+    sh::NODE_TEXTURE,
+    sh::PATCH_ERRORS,
+    sh::SELECT_LEVELS,
 ];
 
 pub struct CullOccluded {
@@ -49,7 +53,7 @@ impl CullOccluded {
     pub fn new(ctx: &Context, traverse: &Traverse, index_count: u32, build: CullBuild, slots: u32) -> Result<Self> {
         assert_eq!(sh::WORKGROUP_SIZE[0] as usize, PATCHES_PER_NODE, "one thread per patch of a node");
         assert_eq!(PATCHES_PER_NODE as u32, 32 * k::VISIBILITY_WORDS_PER_SLOT, "one visibility bit per patch");
-        let capacity = traverse.final_capacity() * PATCHES_PER_NODE as u32;
+        let capacity = list_capacity(traverse);
         let names = ["late_patch_list", "late_hole_patch_list"];
         let lists = PatchLists::new(ctx, names, capacity, build.holes, index_count)?;
         let visibility = Buffer::new(
@@ -90,6 +94,7 @@ impl CullOccluded {
         traverse: &Traverse,
         tree: &GpuQuadtree,
         lod_map: &LodMap,
+        select: &SelectPatches,
         view: &Buffer,
         stages: CullStages,
         hiz: &HizBuild,
@@ -103,7 +108,7 @@ impl CullOccluded {
         ];
         let [depth_w, depth_h] = depth.extent;
         let push = CullPush { stages: stages.bits(), capacity: self.lists.capacity, depth_w, depth_h };
-        let inputs = CullInputs { traverse, tree, lod_map, view };
+        let inputs = CullInputs { traverse, tree, lod_map, view, select };
         inputs.dispatch(rec, &self.pipeline, CULL_BINDINGS, self.build, &self.sampler, &self.lists, &extra, &push);
     }
 }

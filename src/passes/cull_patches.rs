@@ -1,10 +1,12 @@
 //! `cull_patches`: splits every listed node into 8x8 patches (one thread
-//! each, one workgroup per node, dispatched indirectly by `traverse`),
-//! culls them (frustum; backface cone and holes where those effects are
-//! built, as shader variants; each built stage switchable per frame),
-//! stitches LOD seams (4-bit delta per edge from the LOD map) and writes the
-//! visible patch list whose header is the indexed-indirect draw of
-//! `terrain_geometry`, with per-stage counters. With holes built, patches
+//! each, one workgroup per node, dispatched indirectly by `traverse`), draws
+//! for each what `select_patches` chose (an ancestor's patch, its own, or
+//! its sub-patches below LOD 0), culls them (frustum; backface cone and
+//! holes where those effects are built, as shader variants; each built
+//! stage switchable per frame), stitches LOD seams (4-bit delta per edge
+//! from the neighbours' drawn levels) and writes the visible patch list
+//! whose header is the indexed-indirect draw of `terrain_geometry`, with
+//! per-stage counters and the frame's achieved error bound. With holes built, patches
 //! that have some holes go to a second list drawn by `terrain_holes`. With
 //! occlusion built (variant OCCLUSION) this is phase 1: only patches
 //! visible last frame are listed; `cull_occluded` handles the rest.
@@ -15,11 +17,12 @@ use crate::gpu::{
     Sampler, SamplerDesc,
 };
 use crate::passes::lod_map::LodMap;
+use crate::passes::select_patches::SelectPatches;
 use crate::passes::traverse::Traverse;
 use crate::shaders::consts as k;
 use crate::shaders::{cull_patches as sh, structs};
 use crate::terrain::gpu_quadtree::{
-    GpuQuadtree, ATLAS_LAYOUT, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_PATCH_MIN_MAX,
+    GpuQuadtree, ATLAS_LAYOUT, ATLAS_PATCH_CONES, ATLAS_PATCH_ERRORS, ATLAS_PATCH_HOLES, ATLAS_PATCH_MIN_MAX,
 };
 use crate::terrain::quadtree::node_from_ref;
 use crate::world::{PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS};
@@ -77,8 +80,14 @@ pub struct PatchListHeader {
     pub after_hole: u32,
     /// Phase 2 only: patches the depth pyramid left visible.
     pub after_occlusion: u32,
-    pub pad: [u32; 2],
+    /// Largest projected error (px) of a listed patch, as f32 bits.
+    pub bound_bits: u32,
+    /// Edges whose neighbour was more than `MAX_LOD_DELTA` coarser (clamped).
+    pub seam_overflow: u32,
 }
+
+/// Bytes of one patch record (uvec4).
+pub const RECORD_BYTES: usize = 16;
 
 const _: () = assert!(std::mem::size_of::<PatchListHeader>() == structs::PATCH_LIST_HEADER);
 
@@ -93,7 +102,7 @@ pub struct CullPush {
 }
 
 /// Patch counts after each stage of one frame.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct CullCounters {
     /// 64 per listed node.
     pub patches_in: u32,
@@ -110,6 +119,11 @@ pub struct CullCounters {
     pub drawn_phase1: u32,
     pub occlusion_tested: u32,
     pub drawn_phase2: u32,
+    /// The error bound the frame achieved: the largest projected error (px)
+    /// of any patch drawn (0 when none was).
+    pub bound_px: f32,
+    /// Patch edges clamped to `MAX_LOD_DELTA` (0 unless a seam may open).
+    pub seam_overflow: u32,
 }
 
 impl CullCounters {
@@ -131,6 +145,11 @@ impl CullCounters {
             drawn_with_holes: drawn(&early[1]),
             ..CullCounters::default()
         };
+        let lists = early.iter().chain(late.iter().flatten()).flatten();
+        for h in lists {
+            c.bound_px = c.bound_px.max(f32::from_bits(h.bound_bits));
+            c.seam_overflow += h.seam_overflow;
+        }
         if let Some(late) = late {
             c.drawn_phase1 = c.drawn;
             c.drawn_phase2 = drawn(&late[0]) + drawn(&late[1]);
@@ -158,7 +177,7 @@ impl PatchLists {
                 ctx,
                 &BufferDesc {
                     name,
-                    size: (structs::PATCH_LIST_HEADER + capacity as usize * 8) as u64,
+                    size: (structs::PATCH_LIST_HEADER + capacity as usize * RECORD_BYTES) as u64,
                     usage: vk::BufferUsageFlags::STORAGE_BUFFER
                         | vk::BufferUsageFlags::INDIRECT_BUFFER
                         | vk::BufferUsageFlags::TRANSFER_DST
@@ -197,8 +216,8 @@ impl PatchLists {
             let bytes = ctx.read_buffer(list)?;
             let h: PatchListHeader = bytemuck::pod_read_unaligned(&bytes[..structs::PATCH_LIST_HEADER]);
             let n = h.instance_count.min(self.capacity) as usize;
-            let raw = &bytes[structs::PATCH_LIST_HEADER..structs::PATCH_LIST_HEADER + n * 8];
-            out.extend(raw.chunks_exact(8).map(|c| PatchRecord::unpack(bytemuck::pod_read_unaligned(c))));
+            let raw = &bytes[structs::PATCH_LIST_HEADER..structs::PATCH_LIST_HEADER + n * RECORD_BYTES];
+            out.extend(raw.chunks_exact(RECORD_BYTES).map(|c| PatchRecord::unpack(bytemuck::pod_read_unaligned(c))));
         }
         Ok(out)
     }
@@ -219,10 +238,14 @@ pub struct PatchRecord {
     pub patch: u32,
     /// LOD delta to the west, east, south and north neighbour.
     pub deltas: [u8; 4],
+    /// Levels below LOD 0 (0: the node's own samples).
+    pub refine: u8,
+    /// Sub-patch (row-major over 2^refine x 2^refine).
+    pub sub: u8,
 }
 
 impl PatchRecord {
-    pub(crate) fn unpack([n, w]: [u32; 2]) -> Self {
+    pub(crate) fn unpack([n, w, r, _]: [u32; 4]) -> Self {
         let node = node_from_ref(n);
         let field = |shift: u32, bits: u32| (w >> shift) & ((1 << bits) - 1);
         let delta = |edge: u32| field(k::PATCH_DELTA_SHIFT + k::PATCH_DELTA_BITS * edge, k::PATCH_DELTA_BITS) as u8;
@@ -233,6 +256,8 @@ impl PatchRecord {
             slot: field(0, k::SLOT_BITS),
             patch: (w >> k::PATCH_INDEX_SHIFT) & k::PATCH_INDEX_MASK,
             deltas: [k::EDGE_WEST, k::EDGE_EAST, k::EDGE_SOUTH, k::EDGE_NORTH].map(delta),
+            refine: (r & k::PATCH_REFINE_MASK) as u8,
+            sub: (r >> k::PATCH_SUB_SHIFT) as u8,
         }
     }
 }
@@ -253,6 +278,7 @@ pub(crate) struct CullInputs<'a> {
     pub tree: &'a GpuQuadtree,
     pub lod_map: &'a LodMap,
     pub view: &'a Buffer,
+    pub select: &'a SelectPatches,
 }
 
 impl<'a> CullInputs<'a> {
@@ -264,7 +290,7 @@ impl<'a> CullInputs<'a> {
         &self,
         rec: &mut Recorder,
         pipeline: &Pipeline,
-        b: [Binding; 9],
+        b: [Binding; 12],
         build: CullBuild,
         sampler: &Sampler,
         lists: &'a PatchLists,
@@ -287,10 +313,11 @@ impl<'a> CullInputs<'a> {
 
     /// Bindings of patch_cull.glsl, given each shader's own reflected
     /// bindings [traverse_out, view, lod_map, patch_min_max, nearest,
-    /// patch_list, patch_cones, patch_holes, hole_list].
+    /// patch_list, patch_cones, patch_holes, hole_list, node_texture,
+    /// patch_errors, select_levels].
     fn bindings(
         &self,
-        b: [Binding; 9],
+        b: [Binding; 12],
         build: CullBuild,
         sampler: &Sampler,
         lists: &'a PatchLists,
@@ -302,6 +329,9 @@ impl<'a> CullInputs<'a> {
             (b[3], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_MIN_MAX), ATLAS_LAYOUT)),
             (b[4], Resource::Sampler(sampler.raw())),
             (b[5], Resource::Buffer(&lists.list)),
+            (b[9], Resource::Image(&self.tree.node_texture, vk::ImageLayout::GENERAL)),
+            (b[10], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_ERRORS), ATLAS_LAYOUT)),
+            (b[11], Resource::Buffer(&self.select.levels)),
         ];
         if build.cone {
             out.push((b[6], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_CONES), ATLAS_LAYOUT)));
@@ -326,7 +356,7 @@ pub(crate) fn spec_constants() -> [(u32, u32); 2] {
 }
 
 /// This shader's bindings in the order of `CullInputs::bindings`.
-const CULL_BINDINGS: [Binding; 9] = [
+const CULL_BINDINGS: [Binding; 12] = [
     sh::TRAVERSE_OUT,
     sh::VIEW,
     sh::LOD_MAP,
@@ -336,7 +366,18 @@ const CULL_BINDINGS: [Binding; 9] = [
     sh::PATCH_CONES,
     sh::PATCH_HOLES,
     sh::HOLE_LIST,
+    sh::NODE_TEXTURE,
+    sh::PATCH_ERRORS,
+    sh::SELECT_LEVELS,
 ];
+
+/// Patch-list entries: every patch of the traversal's largest final list,
+/// plus the sub-patches of the refined LOD-0 patches (at most
+/// `MAX_REFINED_PATCHES`, each adding up to 4^REFINE_LEVELS - 1 records).
+pub(crate) fn list_capacity(traverse: &Traverse) -> u32 {
+    let per_refined = (1 << (2 * k::REFINE_LEVELS)) - 1;
+    traverse.final_capacity() * PATCHES_PER_NODE as u32 + k::MAX_REFINED_PATCHES * per_refined
+}
 
 pub struct CullPatches {
     pipeline: Pipeline,
@@ -353,7 +394,7 @@ impl CullPatches {
     /// `index_count` is the patch mesh's, written into the draw args.
     pub fn new(ctx: &Context, traverse: &Traverse, index_count: u32, build: CullBuild) -> Result<Self> {
         assert_eq!(sh::WORKGROUP_SIZE[0] as usize, PATCHES_PER_NODE, "one thread per patch of a node");
-        let capacity = traverse.final_capacity() * PATCHES_PER_NODE as u32;
+        let capacity = list_capacity(traverse);
         let lists = PatchLists::new(ctx, ["patch_list", "hole_patch_list"], capacity, build.holes, index_count)?;
         let sampler = nearest_sampler(ctx, "cull_patches_sampler")?;
         let bit = |on: bool, b: u32| if on { b } else { 0 };
@@ -371,10 +412,10 @@ impl CullPatches {
         &self.pipeline.label
     }
 
-    /// Writes this frame's view (`view_bytes`, a TerrainView, into `view`)
-    /// and resets the draw args and counters behind one barrier, then culls
-    /// the patches of every node in `traverse`'s list. `visibility`: last
-    /// frame's bits, with occlusion built.
+    /// Resets the draw args and counters, then culls the patches of every
+    /// node in `traverse`'s list as `select` chose them (the view was
+    /// written by `select`). `visibility`: last frame's bits, with occlusion
+    /// built.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -382,17 +423,16 @@ impl CullPatches {
         traverse: &Traverse,
         tree: &GpuQuadtree,
         lod_map: &LodMap,
+        select: &SelectPatches,
         view: &Buffer,
-        view_bytes: &[u8],
         stages: CullStages,
         visibility: Option<&Buffer>,
     ) {
         assert_eq!(visibility.is_some(), self.build.occlusion, "visibility bits exactly with occlusion");
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
-        rec.update_buffer(view, 0, view_bytes);
         let extra: Vec<_> = visibility.map(|v| (sh::VISIBILITY, Resource::Buffer(v))).into_iter().collect();
         let push = CullPush { stages: stages.bits(), capacity: self.lists.capacity, depth_w: 0, depth_h: 0 };
-        let inputs = CullInputs { traverse, tree, lod_map, view };
+        let inputs = CullInputs { traverse, tree, lod_map, view, select };
         inputs.dispatch(rec, &self.pipeline, CULL_BINDINGS, self.build, &self.sampler, &self.lists, &extra, &push);
     }
 }

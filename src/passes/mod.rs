@@ -10,6 +10,7 @@ pub mod lod_map;
 pub mod prefix_sum;
 pub mod quadtree_update;
 pub mod sector_data;
+pub mod select_patches;
 pub mod terrain_geometry;
 pub mod terrain_holes;
 pub mod terrain_query;

@@ -29,6 +29,7 @@ const MAX_LEVELS: usize = k::MAX_LEVELS as usize;
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct TraversePush {
     pub cameras: [[f32; 4]; MAX_CAMERAS],
+    pub forwards: [[f32; 4]; MAX_CAMERAS],
     pub camera_count: u32,
     pub target_error_px: f32,
     pub sector_size_m: f32,
@@ -192,6 +193,7 @@ impl Traverse {
         let root = self.world.grid(self.world.root_lod());
         TraversePush {
             cameras: g.cameras,
+            forwards: g.forwards,
             camera_count: g.camera_count,
             target_error_px: g.target_error_px,
             sector_size_m: g.sector_size_m,

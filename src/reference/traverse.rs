@@ -19,11 +19,23 @@ fn wants_refine(t: &QuadtreeShadow, g: &GpuInputs, n: NodeId, slot: u32) -> bool
     let bias = (((w1 >> k::DESC_BIAS_SHIFT) as i32) << spare) >> spare;
     let err = t.errors[slot as usize] * 2f32.powi(bias);
     let target_sq = g.target_error_px * g.target_error_px;
-    g.cameras[..g.camera_count as usize].iter().any(|c| {
+    let n = g.camera_count as usize;
+    g.cameras[..n].iter().zip(&g.forwards[..n]).any(|(c, f)| {
         let o: Vec<f32> = (0..3).map(|i| (bmin[i] - c[i]).max(c[i] - bmax[i]).max(0.0)).collect();
         let d2 = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).max(1e-6);
         let lhs = err * c[3];
-        lhs * lhs > target_sq * d2
+        let widest = lhs * f[3];
+        if !(widest * widest > target_sq * d2) {
+            return false;
+        }
+        (0..8).any(|k| {
+            let v: Vec<f32> = (0..3).map(|i| if k & (1 << i) != 0 { bmax[i] } else { bmin[i] } - c[i]).collect();
+            let z = v[0] * f[0] + v[1] * f[1] + v[2] * f[2];
+            let l2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            let a = lhs * l2;
+            let zz = z * z;
+            z <= 0.0 || a * a > target_sq * d2 * (zz * zz)
+        })
     })
 }
 

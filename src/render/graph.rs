@@ -15,7 +15,8 @@ use crate::frame::QueueKind;
 use crate::passes::{
     classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches, gbuffer_tiles::GbufferTiles,
     hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap, quadtree_update::QuadtreeUpdatePass,
-    sector_data::SectorData, terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
+    sector_data::SectorData, select_patches::SelectPatches, terrain_geometry::TerrainGeometry,
+    terrain_holes::TerrainHoles, traverse::Traverse,
 };
 use crate::render::effects::{Effect, EffectDecision};
 use serde::Serialize;
@@ -27,6 +28,7 @@ pub enum FramePass {
     Traverse,
     LodMap,
     SectorData,
+    SelectPatches,
     CullPatches,
     TerrainGeometry,
     TerrainHoles,
@@ -42,11 +44,12 @@ pub enum FramePass {
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 14] = [
+    pub const ALL: [FramePass; 15] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
         FramePass::SectorData,
+        FramePass::SelectPatches,
         FramePass::CullPatches,
         FramePass::TerrainGeometry,
         FramePass::TerrainHoles,
@@ -66,6 +69,7 @@ impl FramePass {
             FramePass::Traverse => Traverse::NAME,
             FramePass::LodMap => LodMap::NAME,
             FramePass::SectorData => SectorData::NAME,
+            FramePass::SelectPatches => SelectPatches::NAME,
             FramePass::CullPatches => CullPatches::NAME,
             FramePass::TerrainGeometry | FramePass::TerrainGeometryLate => TerrainGeometry::NAME,
             FramePass::TerrainHoles | FramePass::TerrainHolesLate => TerrainHoles::NAME,
@@ -96,6 +100,7 @@ impl FramePass {
             | FramePass::Traverse
             | FramePass::LodMap
             | FramePass::SectorData
+            | FramePass::SelectPatches
             | FramePass::CullPatches => QueueKind::Compute,
             _ => QueueKind::Graphics,
         }

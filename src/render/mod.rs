@@ -6,6 +6,7 @@
 
 pub mod detail_textures;
 pub mod effects;
+mod frame_passes;
 pub mod gbuffer;
 pub mod graph;
 pub mod materials;

@@ -2,7 +2,7 @@
 //! passes that turn it into pixels, built from the scene's effects, and
 //! records one frame into a command buffer the caller provides. The frame
 //! is the pass graph of [`graph`](super::graph) (in order: quadtree_update,
-//! traverse, lod_map, sector_data, cull_patches, terrain_geometry,
+//! traverse, lod_map, sector_data, select_patches, cull_patches, terrain_geometry,
 //! terrain_holes, the occlusion passes, classify_tiles, gbuffer_tiles,
 //! lighting_resolve); a pass whose effect is off is not built (no pipeline, no
 //! resource) and never recorded, and one with nothing to do this frame is
@@ -19,17 +19,18 @@ use crate::gpu::{vk, Buffer, BufferDesc, Context, FrameCommands, MemoryLocation,
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
-use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles};
+use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lighting_resolve::LightingResolve;
 use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
+use crate::passes::select_patches::SelectPatches;
 use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::passes::terrain_holes::TerrainHoles;
-use crate::passes::terrain_query::VistaTerrain;
-use crate::passes::traverse::{Traverse, TraverseMode};
+use crate::passes::traverse::Traverse;
 use crate::render::effects::{decide, Effect, EffectDecision, Effects, WorldContent};
+use crate::render::frame_passes::FramePasses;
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FramePass, PassGraph, Skip};
 use crate::render::materials_gpu::MaterialResources;
@@ -72,6 +73,8 @@ pub struct TerrainRenderer {
     pub lod_map: LodMap,
     /// Where any shader finds the terrain: the tile shading and `TerrainQuery`.
     pub sector_data: SectorData,
+    /// Per-patch LOD selection (always built).
+    pub select: SelectPatches,
     pub cull: CullPatches,
     /// Effect `occlusion`: the depth pyramid and phase 2's culling.
     pub occlusion: Option<Occlusion>,
@@ -227,6 +230,7 @@ impl TerrainRenderer {
             lod_map: LodMap::new(ctx, world)?,
             sector_data,
             terrain,
+            select: SelectPatches::new(ctx, world, options.terrain.slots)?,
             traverse,
             cull,
             occlusion,
@@ -347,7 +351,6 @@ impl TerrainRenderer {
         self.terrain.tree.begin_frame(number);
         let mut log = self.graph.begin_frame(number);
         let visibility = self.occlusion.as_ref().map(|o| &o.cull.visibility);
-
         if self.terrain.tree.has_work() {
             let (tree, update) = (&mut self.terrain.tree, &self.update);
             let writes = frame
@@ -357,93 +360,32 @@ impl TerrainRenderer {
             log.skipped(FramePass::QuadtreeUpdate, Skip::NothingToUpload);
         }
         let tree = &self.terrain.tree;
-        let (traverse, lod_map) = (&self.traverse, &self.lod_map);
-        let mut pass = |p: FramePass, f: &mut dyn FnMut(&mut Recorder)| {
-            frame.pass(p.name(), p.late(), p.queue(), |r| f(r));
-            log.ran(p, None);
+        let passes = FramePasses {
+            traverse: &self.traverse,
+            lod_map: &self.lod_map,
+            sector_data: &self.sector_data,
+            select: &self.select,
+            cull: &self.cull,
+            occlusion: self.occlusion.as_ref(),
+            geometry: &self.geometry,
+            holes: self.holes.as_ref(),
+            classify: &self.classify,
+            gbuffer_tiles: &self.gbuffer_tiles,
+            resolve: &self.resolve,
+            materials: self.materials.as_ref(),
+            view_buffer: &self.view_buffer,
+            stages: self.stages,
+            force_flavours: if self.shading == Shading::Tiled { 0 } else { self.shade.allowed },
         };
-        pass(FramePass::Traverse, &mut |r| traverse.record(r, tree, &params, TraverseMode::SingleDispatch));
-        pass(FramePass::LodMap, &mut |r| lod_map.record(r, traverse));
-        let sector_data = &self.sector_data;
-        pass(FramePass::SectorData, &mut |r| sector_data.record(r, tree));
-        let (cull, stages, view_buffer) = (&self.cull, self.stages, &self.view_buffer);
-        pass(FramePass::CullPatches, &mut |r| {
-            let view_bytes = bytemuck::bytes_of(&gpu);
-            cull.record(r, traverse, tree, lod_map, view_buffer, view_bytes, stages, visibility);
-        });
-        let (geometry, gb) = (&self.geometry, self.gbuffer.as_ref().expect("made above"));
-        pass(FramePass::TerrainGeometry, &mut |r| {
-            geometry.record(r, targets, gb, view_buffer, &cull.lists.list, tree, true)
-        });
-        if let Some(holes) = &self.holes {
-            pass(FramePass::TerrainHoles, &mut |r| {
-                holes.record(r, targets, gb, view_buffer, &cull.lists, geometry, tree)
-            });
-        }
-        let occlusion = self.occlusion.as_ref().filter(|_| stages.occlusion);
-        if let Some(o) = occlusion {
-            pass(FramePass::HizBuild, &mut |r| o.hiz.record(r, targets.depth));
-            pass(FramePass::CullOccluded, &mut |r| {
-                o.cull.record(r, traverse, tree, lod_map, view_buffer, stages, &o.hiz, targets.depth)
-            });
-            let late = &o.cull.lists;
-            pass(FramePass::TerrainGeometryLate, &mut |r| {
-                geometry.record(r, targets, gb, view_buffer, &late.list, tree, false)
-            });
-            if let Some(holes) = &self.holes {
-                pass(FramePass::TerrainHolesLate, &mut |r| {
-                    holes.record(r, targets, gb, view_buffer, late, geometry, tree)
-                });
-            }
-        }
-        if let (Some(o), None) = (&self.occlusion, occlusion) {
-            // Built but off this frame: nothing drawn in phase 2.
-            let passes = [FramePass::HizBuild, FramePass::CullOccluded, FramePass::TerrainGeometryLate];
-            for p in passes.into_iter().chain(self.holes.as_ref().map(|_| FramePass::TerrainHolesLate)) {
-                log.skipped(p, Skip::OcclusionOff);
-            }
-            frame.untimed(QueueKind::Graphics, |r| {
-                o.cull.lists.reset(r);
-                r.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
-            });
-        }
-        let classify = &self.classify;
-        let force = if self.shading == Shading::Tiled { 0 } else { self.shade.allowed };
-        frame.pass(FramePass::ClassifyTiles.name(), false, QueueKind::Graphics, |r| classify.record(r, gb, force));
-        log.ran(FramePass::ClassifyTiles, None);
-        let lists = classify.lists.as_ref().expect("prepared above");
-        let terrain = VistaTerrain::new(&world, sector_data);
-        let materials = self.materials.as_ref().map(|m| m.bindings());
-        frame.untimed(QueueKind::Graphics, |r| GbufferTiles::begin(r, targets, gb));
-        for (i, bits) in self.gbuffer_tiles.variants().into_iter().enumerate() {
-            let tiles = &self.gbuffer_tiles;
-            frame.pass(variant_label(bits), false, QueueKind::Graphics, |r| {
-                let m = materials.as_ref();
-                tiles.record_variant(
-                    r,
-                    bits,
-                    i == 0,
-                    targets,
-                    gb,
-                    view_buffer,
-                    lists,
-                    &sector_data.buffer,
-                    terrain,
-                    tree,
-                    m,
-                )
-            });
-        }
-        log.ran(FramePass::GbufferTiles, None);
-        let resolve = &self.resolve;
-        frame.pass(FramePass::LightingResolve.name(), false, QueueKind::Graphics, |r| {
-            resolve.record(r, targets, gb, view_buffer)
-        });
-        log.ran(FramePass::LightingResolve, None);
+        let gb = self.gbuffer.as_ref().expect("made above");
+        passes.record_lod(&mut frame, &mut log, tree, &params, &gpu, visibility);
+        passes.record_draws(&mut frame, &mut log, tree, targets, gb);
+        passes.record_shading(&mut frame, &mut log, tree, &world, targets, gb);
         let sources = CounterSources {
-            traverse: &traverse.output,
-            lists: counter_lists(cull, &self.occlusion),
-            tiles: Some(&lists.buffer),
+            traverse: &self.traverse.output,
+            lists: counter_lists(&self.cull, &self.occlusion),
+            tiles: self.classify.lists.as_ref().map(|l| &l.buffer),
+            select: &self.select.levels,
         };
         let telemetry = &mut self.telemetry;
         frame.untimed(QueueKind::Graphics, |r| telemetry.record(r, number, ctx_frame, &sources));
@@ -475,6 +417,7 @@ impl TerrainRenderer {
             Some(l) => bytes.extend(&ctx.read_buffer(&l.buffer)?[..crate::passes::classify_tiles::ARGS_BYTES as usize]),
             None => bytes.extend(vec![0; crate::passes::classify_tiles::ARGS_BYTES as usize]),
         }
+        bytes.extend(&ctx.read_buffer(&self.select.levels)?[..structs::SELECT_HEADER]);
         let frame = self.graph.last_frame().map_or(0, |l| l.frame);
         Ok(self.telemetry.layout().parse(frame, &bytes))
     }

@@ -279,6 +279,8 @@ fn work_of(
         FramePass::Traverse => (groups(1), None),
         FramePass::LodMap => (groups(nodes), no_nodes),
         FramePass::SectorData => (groups(r.sector_data.groups()), None),
+        // Two dispatches of one group per listed node.
+        FramePass::SelectPatches => (groups(2 * nodes), no_nodes),
         FramePass::CullPatches => {
             (PassWork { patches_tested: Some(u64::from(c.cull.patches_in)), ..groups(nodes) }, no_nodes)
         }

@@ -6,6 +6,7 @@
 use crate::error::Result;
 use crate::gpu::Context;
 use crate::passes::cull_patches::CullCounters;
+use crate::passes::select_patches::SelectHeader;
 use crate::reference::wanted_finer_cpu;
 use crate::render::renderer::TerrainRenderer;
 use crate::render::view::View;
@@ -19,6 +20,13 @@ pub const TRIANGLES_PER_PATCH: u64 = (PATCH_QUADS * PATCH_QUADS * 2) as u64;
 #[derive(Debug, Clone, Serialize)]
 pub struct RenderStats {
     pub patches: CullCounters,
+    /// Per-patch LOD selection: patches coarsened and refined, seam conflicts.
+    pub select: SelectHeader,
+    /// The error bound the frame achieved (px): the largest projected
+    /// error of any drawn patch; the target when the budget allowed it.
+    pub bound_px: f32,
+    /// The target it was asked for (px).
+    pub target_px: f32,
     /// Patch instances x triangles per patch (hole triangles included: they
     /// are submitted and dropped by the rasterizer).
     pub triangles_drawn: u64,
@@ -42,6 +50,9 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
     let wanted = wanted_finer_cpu(&terrain.tree.shadow, &terrain.world, &view.traverse_params());
     Ok(RenderStats {
         patches: c.cull,
+        select: c.select,
+        bound_px: c.cull.bound_px,
+        target_px: view.target_error_px,
         triangles_drawn: c.triangles,
         node_count: c.traverse.nodes,
         nodes_per_lod: c.traverse.nodes_per_lod,

@@ -10,6 +10,7 @@ use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
 use crate::passes::classify_tiles::ARGS_BYTES;
 use crate::passes::cull_patches::{CullCounters, PatchListHeader};
+use crate::passes::select_patches::SelectHeader;
 use crate::passes::traverse::TraverseHeader;
 use crate::shaders::structs;
 use serde::Serialize;
@@ -27,11 +28,14 @@ pub struct TraverseCounters {
 }
 
 /// Every GPU counter of one frame.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct FrameCounters {
     /// The renderer's frame number (as `FrameTimings::frame`).
     pub frame: u64,
     pub traverse: TraverseCounters,
+    /// Per-patch LOD selection: patches coarsened, refined below LOD 0,
+    /// seam conflicts.
+    pub select: SelectHeader,
     pub cull: CullCounters,
     /// Instances of each draw: phase 1 solid, phase 1 with holes, phase 2
     /// solid, phase 2 with holes (0 where the list does not exist).
@@ -54,11 +58,15 @@ pub struct CounterLayout {
 
 const TRAVERSE_BYTES: u64 = std::mem::size_of::<TraverseHeader>() as u64;
 const HEADER_BYTES: u64 = structs::PATCH_LIST_HEADER as u64;
+const SELECT_BYTES: u64 = structs::SELECT_HEADER as u64;
 /// Readback bytes: the traversal header, then 4 list headers (phase 1
-/// solid, holes; phase 2 solid, holes), absent ones left zero.
-const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + ARGS_BYTES;
+/// solid, holes; phase 2 solid, holes), absent ones left zero, the tile
+/// lists' draw arguments and the selection counters.
+const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + ARGS_BYTES + SELECT_BYTES;
 /// Where the tile lists' draw arguments start in a slot.
 const TILES_AT: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES;
+/// Where the selection counters start.
+const SELECT_AT: u64 = TILES_AT + ARGS_BYTES;
 
 impl CounterLayout {
     /// Parses a slot's bytes (also used on a waiting readback in tests).
@@ -74,7 +82,9 @@ impl CounterLayout {
         let instances = [0, 1, 2, 3].map(|i| header(i).instance_count.min(self.list_capacity));
         let args = &bytes[TILES_AT as usize..(TILES_AT + ARGS_BYTES) as usize];
         let tiles = bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(args).iter().map(|a| a[1]).collect();
+        let select = bytemuck::pod_read_unaligned(&bytes[SELECT_AT as usize..(SELECT_AT + SELECT_BYTES) as usize]);
         FrameCounters {
+            select,
             tiles,
             instances,
             frame,
@@ -97,6 +107,8 @@ pub struct CounterSources<'a> {
     pub lists: [Option<&'a Buffer>; 4],
     /// The tile lists (their draw arguments).
     pub tiles: Option<&'a Buffer>,
+    /// `select_patches`' levels buffer (its counters come first).
+    pub select: &'a Buffer,
 }
 
 struct Slot {
@@ -182,6 +194,7 @@ impl Telemetry {
         if let Some(tiles) = src.tiles {
             rec.copy_buffer_region(tiles, 0, &slot.buffer, TILES_AT, ARGS_BYTES);
         }
+        rec.copy_buffer_region(src.select, 0, &slot.buffer, SELECT_AT, SELECT_BYTES);
         rec.transfer_to_host_barrier();
     }
 

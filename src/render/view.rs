@@ -152,12 +152,19 @@ impl View {
         (forward + right * (nx * aspect / f) - up * (ny / f)).normalize()
     }
 
+    /// This view as the LOD selection sees it.
+    pub fn traverse_camera(&self) -> TraverseCamera {
+        let forward = self.camera.basis()[0].to_array();
+        let mut cam = TraverseCamera::perspective(self.camera.position_m, forward, self.fov_y_deg, self.size);
+        // Camera-relative planes to world ones: n . (p - c) + w = n . p + (w - n . c).
+        let c = DVec3::from(self.camera.position_m);
+        cam.frustum = Some(self.frustum_planes().map(|p| [p.x, p.y, p.z, p.w - p.truncate().dot(c)]));
+        cam
+    }
+
     /// The traversal's view of this camera.
     pub fn traverse_params(&self) -> TraverseParams {
-        TraverseParams {
-            cameras: vec![TraverseCamera::perspective(self.camera.position_m, self.fov_y_deg, self.size[1])],
-            target_error_px: self.target_error_px,
-        }
+        TraverseParams { cameras: vec![self.traverse_camera()], target_error_px: self.target_error_px }
     }
 
     /// The GPU twin, made relative to the camera in f64.
@@ -204,6 +211,12 @@ impl View {
             shade_bands: bands,
             shade_slope: slope,
             shade_flags: flags,
+            lod_forward: {
+                let cam = self.traverse_camera();
+                let f = cam.forward;
+                [f[0] as f32, f[1] as f32, f[2] as f32, cam.pixels_per_tan as f32]
+            },
+            lod_params: [self.target_error_px, self.traverse_camera().widest as f32, 0.0, 0.0],
         }
     }
 }
@@ -282,6 +295,10 @@ pub struct TerrainViewGpu {
     pub shade_bands: [f32; 4],
     pub shade_slope: [f32; 4],
     pub shade_flags: [u32; 4],
+    /// The camera's forward axis and pixels per unit of tan.
+    pub lod_forward: [f32; 4],
+    /// Target error (px), 1 / cos^2 of the frustum's widest angle.
+    pub lod_params: [f32; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<TerrainViewGpu>() == crate::shaders::structs::TERRAIN_VIEW);

@@ -93,6 +93,7 @@ pub fn check_plan(ctx: &Context, world: &WorldDesc, options: &TerrainOptions) ->
     let limits = Limits {
         max_image_dimension_2d: Some(device.max_image_dimension_2d),
         max_image_array_layers: Some(device.max_image_array_layers),
+        max_roots: Some(u64::from(options.slots / 4)),
         ..options.limits.clone()
     };
     let plan = WorldPlan::new(world, None).with_format(options.bake.format).with_slots(options.slots);
@@ -222,7 +223,7 @@ impl Terrain {
         let cam = &params.cameras[0];
         // Load a family a little before the traversal would refine into it.
         let want = RefineWant {
-            pixels_per_tan: cam.pixels_per_tan,
+            camera: *cam,
             target_error_px: f64::from(params.target_error_px),
             prefetch: 0.75,
             ring_factor: if self.ring_prefetch { 0.75 } else { 0.0 },

@@ -8,20 +8,7 @@ use crate::world::{NodeId, WorldDesc};
 /// Up to this many cameras refine one node list.
 pub const MAX_CAMERAS: usize = crate::shaders::consts::MAX_CAMERAS as usize;
 
-/// A view that asks for detail: position in world metres and the projection
-/// scale in pixels per unit of tangent (`viewport_height / (2 tan(fov_y / 2))`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TraverseCamera {
-    pub position_m: [f64; 3],
-    pub pixels_per_tan: f64,
-}
-
-impl TraverseCamera {
-    pub fn perspective(position_m: [f64; 3], fov_y_deg: f64, viewport_height_px: u32) -> Self {
-        let pixels_per_tan = f64::from(viewport_height_px) / (2.0 * (fov_y_deg.to_radians() / 2.0).tan());
-        TraverseCamera { position_m, pixels_per_tan }
-    }
-}
+pub use crate::world::TraverseCamera;
 
 /// The accuracy knob and the views it applies to.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,6 +22,8 @@ pub struct TraverseParams {
 #[derive(Debug, Clone, Copy)]
 pub struct GpuInputs {
     pub cameras: [[f32; 4]; MAX_CAMERAS],
+    /// Forward axis (xyz) and `widest` (w) of each camera.
+    pub forwards: [[f32; 4]; MAX_CAMERAS],
     pub camera_count: u32,
     pub target_error_px: f32,
     pub sector_size_m: f32,
@@ -46,15 +35,21 @@ impl GpuInputs {
     pub fn new(world: &WorldDesc, params: &TraverseParams) -> Self {
         assert!((1..=MAX_CAMERAS).contains(&params.cameras.len()), "1..={MAX_CAMERAS} cameras");
         let mut cameras = [[0.0; 4]; MAX_CAMERAS];
+        let mut forwards = [[0.0; 4]; MAX_CAMERAS];
         // Node boxes are in grid coordinates (metres from LOD-0 sample (0, 0)).
         let [ox, oy] = world.grid_origin_m;
         for (c, cam) in cameras.iter_mut().zip(&params.cameras) {
             let p = cam.position_m;
             *c = [(p[0] - ox) as f32, (p[1] - oy) as f32, p[2] as f32, cam.pixels_per_tan as f32];
         }
+        for (f, cam) in forwards.iter_mut().zip(&params.cameras) {
+            let a = cam.forward;
+            *f = [a[0] as f32, a[1] as f32, a[2] as f32, cam.widest as f32];
+        }
         let [lo, hi] = world.height_range_m;
         GpuInputs {
             cameras,
+            forwards,
             camera_count: params.cameras.len() as u32,
             target_error_px: params.target_error_px,
             sector_size_m: world.sector_size_m() as f32,

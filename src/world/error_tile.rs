@@ -208,9 +208,23 @@ impl Block {
         let mut level0 = LevelPatches::new(quads / patch0);
         // Per quad: the LOD-0 gap to the finest surface (reused by every level).
         let mut gap0 = vec![0f32; quads * quads];
+        let w4 = 4 * quads + 1;
+        // Sample rows interpolated along x at every quarter point, for the
+        // 4 rows qy - 1 ..= qy + 2 around the current quad row (a window).
+        let mut xrows: Vec<Vec<f64>> = (0..4).map(|k| self.x_row(k)).collect();
+        let mut fine = vec![[0.0; 5]; w4];
         for qy in 0..quads {
+            if qy > 0 {
+                xrows.rotate_left(1);
+                xrows[3] = self.x_row(qy + 3);
+            }
+            for (x4, f) in fine.iter_mut().enumerate() {
+                for (fy, w) in CR.iter().enumerate() {
+                    f[fy] = w[0] * xrows[0][x4] + w[1] * xrows[1][x4] + w[2] * xrows[2][x4] + w[3] * xrows[3][x4];
+                }
+            }
             for qx in 0..quads {
-                let q = self.quad(qx, qy);
+                let q = self.quad(qx, qy, &fine[4 * qx..=4 * qx + 4]);
                 gap0[qy * quads + qx] = q.gap0 as f32;
                 let p = (qy / patch0) * level0.side + qx / patch0;
                 level0.error[p] = level0.error[p].max(q.gap0 as f32);
@@ -259,35 +273,38 @@ impl Block {
         }
     }
 
-    /// The finest surface over LOD-0 quad (qx, qy) of the block, against
-    /// LOD 0 and the 2x refinement.
-    fn quad(&self, qx: usize, qy: usize) -> QuadStats {
-        // 4 sample rows (qy - 1 ..= qy + 2) interpolated along x at the 5 quarter points.
-        let mut xr = [[0.0; 5]; 4];
-        for (tj, row) in xr.iter_mut().enumerate() {
-            let y = qy + tj;
-            let taps = [0, 1, 2, 3].map(|ti| self.h[y * self.side + qx + ti]);
-            for (f, w) in CR.iter().enumerate() {
-                row[f] = w[0] * taps[0] + w[1] * taps[1] + w[2] * taps[2] + w[3] * taps[3];
+    /// Stored row `s` (sample row s - 1) interpolated along x at every
+    /// quarter point of the block: Catmull-Rom over the 4 samples around
+    /// each quad (its last point is the last quad's t = 1).
+    fn x_row(&self, s: usize) -> Vec<f64> {
+        let row = &self.h[s * self.side..(s + 1) * self.side];
+        let mut out = Vec::with_capacity(4 * self.quads + 1);
+        for qx in 0..self.quads {
+            let t = [row[qx], row[qx + 1], row[qx + 2], row[qx + 3]];
+            for w in &CR[..4] {
+                out.push(w[0] * t[0] + w[1] * t[1] + w[2] * t[2] + w[3] * t[3]);
             }
         }
-        let mut fine = [[0.0; 5]; 5];
-        for (fy, w) in CR.iter().enumerate() {
-            for fx in 0..5 {
-                fine[fy][fx] = w[0] * xr[0][fx] + w[1] * xr[1][fx] + w[2] * xr[2][fx] + w[3] * xr[3][fx];
-            }
-        }
+        out.push(row[self.quads + 1]);
+        out
+    }
+
+    /// LOD-0 quad (qx, qy) against the finest surface, whose 5 x 5 vertices
+    /// over it are `fine[fx][fy]` (x then y interpolated, as the vertex
+    /// shader evaluates them): the gaps of LOD 0 and of the 2x refinement,
+    /// and its height range.
+    fn quad(&self, qx: usize, qy: usize, fine: &[[f64; 5]]) -> QuadStats {
         let g = [self.origin[0] + qx, self.origin[1] + qy];
         let lod0 = [self.at(qx, qy), self.at(qx + 1, qy), self.at(qx, qy + 1), self.at(qx + 1, qy + 1)];
         let slash0 = (g[0] + g[1]).is_multiple_of(2);
         let mut s = QuadStats { gap0: 0.0, gap1: 0.0, lo: f64::INFINITY, hi: f64::NEG_INFINITY };
-        for (fy, row) in fine.iter().enumerate() {
-            for (fx, &z) in row.iter().enumerate() {
+        for (fx, col) in fine.iter().enumerate() {
+            for (fy, &z) in col.iter().enumerate() {
                 let (u, v) = (fx as f64 / 4.0, fy as f64 / 4.0);
                 s.gap0 = s.gap0.max((diamond(lod0, u, v, slash0) - z).abs());
                 // The 2x refinement's quad (half-sample lattice) holding this vertex.
                 let (hx, hy) = ((fx / 2).min(1), (fy / 2).min(1));
-                let c = |a: usize, b: usize| fine[2 * hy + 2 * b][2 * hx + 2 * a];
+                let c = |a: usize, b: usize| fine[2 * hx + 2 * a][2 * hy + 2 * b];
                 let corners = [c(0, 0), c(1, 0), c(0, 1), c(1, 1)];
                 let (u1, v1) = ((fx - 2 * hx) as f64 / 2.0, (fy - 2 * hy) as f64 / 2.0);
                 let slash1 = (2 * g[0] + hx + 2 * g[1] + hy).is_multiple_of(2);

@@ -36,6 +36,10 @@ pub const SPLAT_RES: usize = 65;
 pub const MAX_LOD_COUNT: u32 = crate::shaders::consts::MAX_NODE_LODS;
 /// Most sectors per world side: beyond this coordinates overflow GPU fields.
 pub const MAX_SECTORS_PER_SIDE: u64 = 1 << 20;
+/// Most roots per side of a world whose LOD count is not given
+/// ([`WorldDesc::lods_for`]): at most 64 roots, an eighth of the default
+/// 512 resident slots.
+pub const DEFAULT_MAX_ROOTS_PER_SIDE: u32 = 8;
 /// Largest accepted source image side, checked before any pixel allocation.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
@@ -167,6 +171,19 @@ impl WorldDesc {
             }
         }
         Ok(())
+    }
+
+    /// The fewest LODs (at most [`MAX_LOD_COUNT`]) that cover an extent with
+    /// at most [`DEFAULT_MAX_ROOTS_PER_SIDE`] roots a side: the default LOD
+    /// count, so a larger world gets larger roots instead of more of them
+    /// (which would hold the slots the near field needs). The default
+    /// 10 240 m world at 0.5 m gets 6 (5 x 5 roots of 2 048 m).
+    pub fn lods_for(extent_m: [f64; 2], spacing_m: f64) -> u32 {
+        let sector = f64::from(NODE_QUADS) * spacing_m;
+        let sectors = extent_m.iter().map(|e| (e / sector).ceil().max(1.0)).fold(1.0, f64::max);
+        (1..=MAX_LOD_COUNT)
+            .find(|l| (sectors / f64::from(1u32 << (l - 1))).ceil() <= f64::from(DEFAULT_MAX_ROOTS_PER_SIDE))
+            .unwrap_or(MAX_LOD_COUNT)
     }
 
     /// Side of a LOD-0 node in metres.
@@ -355,6 +372,18 @@ mod tests {
         let fnv = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
         assert_eq!(w.hash(), fnv);
         assert!(NodeId::new(0, 5, 6).is_within(&NodeId::new(2, 1, 1)));
+    }
+
+    #[test]
+    fn the_lod_count_follows_the_extent() {
+        // 160 sectors of 64 m: 5 x 5 roots at 6 LODs (2 048 m each).
+        assert_eq!(WorldDesc::lods_for([10_240.0, 10_240.0], 0.5), 6);
+        // 640 sectors: 8 LODs, 5 x 5 roots of 8 192 m (not 20 x 20 at 6).
+        assert_eq!(WorldDesc::lods_for([40_960.0, 40_960.0], 0.5), 8);
+        // Mont Blanc at 8 m: 59 sectors of 1 024 m, 8 x 8 roots at 4 LODs.
+        assert_eq!(WorldDesc::lods_for([60_000.0, 60_000.0], 8.0), 4);
+        assert_eq!(WorldDesc::lods_for([100.0, 100.0], 1.0), 1);
+        assert_eq!(WorldDesc::lods_for([1e9, 1e9], 0.5), MAX_LOD_COUNT);
     }
 
     #[test]

@@ -20,6 +20,7 @@ mod plan;
 mod png16;
 mod procedural;
 mod progress;
+mod projection;
 mod resample_bound;
 mod source;
 mod streaming;
@@ -49,6 +50,7 @@ pub use plan::{
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
 pub use progress::Progress;
+pub use projection::TraverseCamera;
 pub use resample_bound::RangeFit;
 pub use source::{GridSource, HeightSource};
 pub use streaming::{

@@ -52,6 +52,9 @@ pub struct Limits {
     pub max_image_dimension_2d: Option<u32>,
     /// The device's `maxImageArrayLayers`: one atlas layer per slot.
     pub max_image_array_layers: Option<u32>,
+    /// Most root nodes a renderer holds: a quarter of its slot budget, so
+    /// the rest can refine the near field (roots are always resident).
+    pub max_roots: Option<u64>,
 }
 
 impl Default for Limits {
@@ -61,6 +64,7 @@ impl Default for Limits {
             max_bake_disk_bytes: None,
             max_image_dimension_2d: None,
             max_image_array_layers: None,
+            max_roots: None,
         }
     }
 }
@@ -87,6 +91,11 @@ pub enum PlanError {
     NodeTextureTooLarge { w: u64, h: u64, x: u64, y: u64, lods: u32, max: u32 },
     #[error("{slots} resident slots need {layers} atlas layers; this device allows {max}: lower --slots")]
     TooManyLayers { slots: u32, layers: u64, max: u32 },
+    #[error(
+        "the world's {x} x {y} root nodes ({lods} LODs, {root_m} m each) would hold {roots} of the {slots} resident \
+         slots, more than a quarter, leaving too few to refine near the camera: raise --lods (or --slots)"
+    )]
+    TooManyRoots { x: u64, y: u64, roots: u64, lods: u32, root_m: f64, slots: u32 },
 }
 
 /// Where a plan's bake time comes from.
@@ -294,6 +303,13 @@ impl WorldPlan {
                 return Err(PlanError::TooManyLayers { slots: self.slots, layers, max });
             }
         }
+        if let Some(max) = limits.max_roots {
+            let [x, y] = self.grid_per_lod[self.world.root_lod() as usize];
+            if x * y > max {
+                let (lods, root_m) = (self.world.lod_count, self.world.node_size_m(self.world.root_lod()));
+                return Err(PlanError::TooManyRoots { x, y, roots: x * y, lods, root_m, slots: self.slots });
+            }
+        }
         if let Some(cap) = limits.max_bake_disk_bytes {
             if self.disk_bytes > cap {
                 let (disk, nodes, seconds) = (self.disk_bytes, self.nodes(), self.bake_seconds());
@@ -323,9 +339,10 @@ fn region_cells(world: &WorldDesc, lod: u8, region: Option<[f64; 4]>) -> [u64; 4
         None => [0, 0, gx, gy],
         Some(r) => {
             let s = world.node_size_m(lod);
-            let cell = |v: f64, g: u32| ((v / s).floor().max(0.0) as u32).min(g);
-            let end = |v: f64, g: u32| ((v / s).ceil().max(0.0) as u32).min(g);
-            [cell(r[0], gx), cell(r[1], gy), end(r[2], gx), end(r[3], gy)]
+            let [ox, oy] = world.grid_origin_m;
+            let cell = |v: f64, o: f64, g: u32| (((v - o) / s).floor().max(0.0) as u32).min(g);
+            let end = |v: f64, o: f64, g: u32| (((v - o) / s).ceil().max(0.0) as u32).min(g);
+            [cell(r[0], ox, gx), cell(r[1], oy, gy), end(r[2], ox, gx), end(r[3], oy, gy)]
         }
     };
     // An empty range where the region misses the world.

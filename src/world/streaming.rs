@@ -1,10 +1,13 @@
-//! Streaming residency after Far Cry 5: a ring of each LOD around the
-//! camera, roots always resident, nearest-first within a slot budget.
-//! Nodes are loaded and evicted in sibling families (the traversal refines a
-//! node only when all its valid children are resident, so a lone child is
-//! useless), and a family is also wanted wherever its resident parent's
-//! projected error exceeds the renderer's target ([`RefineWant`]), so every
-//! refinement the camera asks for becomes possible within the budget.
+//! Streaming residency after Far Cry 5: roots always resident, and a family
+//! wanted wherever its resident parent's projected error exceeds the
+//! renderer's target ([`RefineWant`]), plus a small ring of each LOD around
+//! the camera for motion. Nodes are loaded and evicted in sibling families
+//! (the traversal refines a node only when all its valid children are
+//! resident, so a lone child is useless). When the slot budget cannot hold
+//! every wanted family, slots go where they remove the most projected
+//! error: families in the view first, then by their parent's projected
+//! error in pixels, a held family counting `hysteresis` times its own so
+//! that near-equal ones do not churn; without a criterion, nearest first.
 //!
 //! A failed load is retried after a backoff counted in frames (so the
 //! schedule is deterministic), up to [`ResidencyConfig::max_load_attempts`];
@@ -21,6 +24,7 @@ use super::error::{Result, WorldError};
 use super::layout::{NodeId, WorldDesc};
 use super::loader::Loader;
 use super::payload::BakedNode;
+use super::projection::TraverseCamera;
 
 /// Streaming parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -48,13 +52,14 @@ impl Default for ResidencyConfig {
 }
 
 /// The renderer's LOD criterion as streaming sees it: a resident node whose
-/// projected vertical error exceeds `prefetch * target_error_px` pixels
-/// wants its children loaded (prefetch below 1 loads them a little before
-/// the traversal asks for them).
+/// projected vertical error ([`TraverseCamera::projected_px`], the bound
+/// the traversal uses) exceeds `prefetch * target_error_px` pixels wants
+/// its children loaded (prefetch below 1 loads them a little before the
+/// traversal asks for them).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefineWant {
-    /// viewport_height / (2 tan(fov_y / 2)).
-    pub pixels_per_tan: f64,
+    /// The drawing camera (its frustum decides what is in view).
+    pub camera: TraverseCamera,
     pub target_error_px: f64,
     pub prefetch: f64,
     /// Ring factor replacing the config's while this criterion decides: the
@@ -102,6 +107,16 @@ pub enum Arrival {
     Defer,
     /// No longer wanted: drop it.
     Discard,
+}
+
+/// A family that may be loaded (children of `parent`).
+struct Candidate {
+    in_view: bool,
+    /// Higher first: the parent's projected error (px), or minus its
+    /// distance without a criterion.
+    score: f64,
+    parent: NodeId,
+    family: Vec<NodeId>,
 }
 
 /// A node whose last load failed.
@@ -252,12 +267,29 @@ impl Residency {
 
     /// As [`Residency::update`], also wanting the children of every resident
     /// node whose projected error `want` finds too large. Families come
-    /// whole or not at all, nearest first.
+    /// whole or not at all, in priority order (module docs).
     pub fn update_with(&mut self, camera_pos_m: [f64; 3], want: Option<&RefineWant>) -> ResidencyChanges {
         self.frame += 1;
+        let candidates = self.candidates(camera_pos_m, want);
+        let mut selected: HashSet<NodeId> = self.roots.iter().copied().collect();
+        let mut order: Vec<NodeId> = self.roots.iter().copied().filter(|r| !self.is_failed(*r)).collect();
+        for c in candidates {
+            if selected.len() + c.family.len() > self.config.budget {
+                continue;
+            }
+            if selected.contains(&c.parent) {
+                selected.extend(c.family.iter().copied());
+                order.extend(c.family);
+            }
+        }
+        self.apply(selected, order)
+    }
+
+    /// Families that may be loaded, best first. Top-down: a family is a
+    /// candidate only if its parent's is one.
+    fn candidates(&self, camera_pos_m: [f64; 3], want: Option<&RefineWant>) -> Vec<Candidate> {
         let cam = [camera_pos_m[0], camera_pos_m[1]];
-        // Top-down: a family is a candidate only if its parent's is one.
-        let mut candidates: Vec<(f64, NodeId, Vec<NodeId>)> = Vec::new();
+        let mut out = Vec::new();
         let mut stack = self.roots.clone();
         while let Some(n) = stack.pop() {
             if self.is_failed(n) {
@@ -278,26 +310,50 @@ impl Residency {
                 let b = self.world.bounds_m(*c);
                 dist(cam, [(b[0] + b[2]) * 0.5, (b[1] + b[3]) * 0.5]) <= limit
             });
-            if in_ring || want.is_some_and(|w| self.wants_refine(n, camera_pos_m, w, held)) {
-                candidates.push((dist_to_box(cam, self.world.bounds_m(n)), n, family.clone()));
+            let (error_px, in_view) = match want {
+                Some(w) => self.projected(n, w),
+                None => (0.0, true),
+            };
+            let wanted = want.is_some_and(|w| {
+                // Held families stay until their error falls well below the target.
+                let threshold = w.target_error_px * w.prefetch / if held { self.config.hysteresis } else { 1.0 };
+                error_px > threshold
+            });
+            if in_ring || wanted {
+                let score = match want {
+                    Some(_) => error_px * if held { self.config.hysteresis } else { 1.0 },
+                    // Nearest first.
+                    None => -dist_to_box(cam, self.world.bounds_m(n)),
+                };
+                out.push(Candidate { in_view, score, parent: n, family: family.clone() });
                 stack.extend(family);
             }
         }
-        // Nearest first, coarser first on ties: a parent is never farther
-        // than its child, so a family comes after its parent's family.
-        candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.lod.cmp(&a.1.lod)));
-        let mut selected: HashSet<NodeId> = self.roots.iter().copied().collect();
-        let mut order: Vec<NodeId> = self.roots.iter().copied().filter(|r| !self.is_failed(*r)).collect();
-        for (_, parent, family) in candidates {
-            if selected.len() + family.len() > self.config.budget {
-                continue;
-            }
-            if selected.contains(&parent) {
-                selected.extend(family.iter().copied());
-                order.extend(family);
-            }
-        }
+        // A child's projected error never exceeds its parent's (monotone
+        // errors, nested boxes), and the view holds a child only if it holds
+        // the parent: a family sorts after its parent's. Coarser first on ties.
+        out.sort_by(|a, b| {
+            b.in_view.cmp(&a.in_view).then(b.score.total_cmp(&a.score)).then(b.parent.lod.cmp(&a.parent.lod))
+        });
+        out
+    }
 
+    /// Resident node `n`'s projected error (px; 0 before its bounds are
+    /// known) and whether the view holds its box.
+    fn projected(&self, n: NodeId, w: &RefineWant) -> (f64, bool) {
+        let b = self.world.bounds_m(n);
+        let Some(nb) = self.bounds.get(&n) else {
+            let (lo, hi) = ([b[0], b[1], f64::MIN], [b[2], b[3], f64::MAX]);
+            return (0.0, w.camera.sees(lo, hi));
+        };
+        let lo = [b[0], b[1], f64::from(nb.z[0])];
+        let hi = [b[2], b[3], f64::from(nb.z[1])];
+        (w.camera.projected_px(f64::from(nb.max_error_m), lo, hi), w.camera.sees(lo, hi))
+    }
+
+    /// Makes `selected` the slots: drops the rest (finest first), adds the
+    /// new ones in `order`.
+    fn apply(&mut self, selected: HashSet<NodeId>, order: Vec<NodeId>) -> ResidencyChanges {
         let mut changes = ResidencyChanges::default();
         let mut dropped: Vec<(NodeId, Slot)> =
             self.slots.iter().filter(|(id, _)| !selected.contains(id)).map(|(id, s)| (*id, *s)).collect();
@@ -318,21 +374,6 @@ impl Residency {
             }
         }
         changes
-    }
-
-    /// Whether resident node `n`'s projected error asks for its children.
-    fn wants_refine(&self, n: NodeId, cam: [f64; 3], w: &RefineWant, held: bool) -> bool {
-        let Some(nb) = self.bounds.get(&n) else { return false };
-        let b = self.world.bounds_m(n);
-        let d = [
-            (b[0] - cam[0]).max(cam[0] - b[2]).max(0.0),
-            (b[1] - cam[1]).max(cam[1] - b[3]).max(0.0),
-            (f64::from(nb.z[0]) - cam[2]).max(cam[2] - f64::from(nb.z[1])).max(0.0),
-        ];
-        let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-3);
-        // Held families stay until their error falls well below the target.
-        let threshold = w.target_error_px * w.prefetch * if held { 1.0 / self.config.hysteresis } else { 1.0 };
-        f64::from(nb.max_error_m) * w.pixels_per_tan / dist > threshold
     }
 
     /// Records a resident node's error and height range (metres), which

@@ -191,7 +191,7 @@ fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
         camera_m: camera,
         viewport_height_px: 1080,
     };
-    let rows = bench_traverse(ctx, d, &*world.source, &cfg)?;
+    let rows = bench_traverse(ctx, d, std::sync::Arc::clone(&world.source), &cfg)?;
     println!(
         "bench traverse: {} on {}  camera ({:.0}, {:.0}, {:.0}), 1080 px, 60 deg; median of {} frames after 3 warm-up",
         world.label,

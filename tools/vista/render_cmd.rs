@@ -331,6 +331,18 @@ fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
             p.occlusion_tested - p.drawn_phase2
         );
     }
+    let sel = &s.select;
+    println!(
+        "lod:     error bound {:.2} px (target {} px); {} listed patches drawn from an ancestor, {} LOD-0 patches \
+         refined below the samples ({} refused by the per-frame budget), {} seam conflicts, {} edges clamped",
+        s.bound_px,
+        s.target_px,
+        sel.coarsened,
+        sel.refined - sel.refine_capped,
+        sel.refine_capped,
+        sel.conflicts,
+        p.seam_overflow
+    );
     let per_lod: Vec<String> = s
         .nodes_per_lod
         .iter()

@@ -165,7 +165,8 @@ impl WorldArgs {
         let clamp = self.clamp_heights || w.clamp_heights;
         let defaults = WorldDesc::default();
         let spacing_m = self.spacing.or(w.spacing).unwrap_or(defaults.spacing_m);
-        let lod_count = self.lods.or(w.lods).unwrap_or(defaults.lod_count);
+        // Without a count, the extent decides (a small number of roots).
+        let lods_for_extent = |e: Option<[f64; 2]>| WorldDesc::lods_for(e.unwrap_or(defaults.extent_m), spacing_m);
         let seed = self.seed.or(w.seed).unwrap_or(1);
         let origin_m = self.origin.or(w.origin).unwrap_or([0.0, 0.0]);
         if !origin_m.iter().all(|v| v.is_finite()) {
@@ -184,6 +185,7 @@ impl WorldArgs {
         let (desc, source) = match heightmap {
             None => {
                 let extent_m = extent.unwrap_or(defaults.extent_m);
+                let lod_count = self.lods.or(w.lods).unwrap_or_else(|| lods_for_extent(extent));
                 let height_range_m = height_range.map_or(defaults.height_range_m, |r| r.range);
                 let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count, ..WorldDesc::default() };
                 check_desc(&desc, &names)?;
@@ -194,6 +196,7 @@ impl WorldArgs {
                     bail!("{what} {} needs --extent METRES (the world size it covers)", path.display());
                 };
                 let height_range_m = height_range.map_or([0.0, 1.0], |r| r.range);
+                let lod_count = self.lods.or(w.lods).unwrap_or_else(|| lods_for_extent(Some(extent_m)));
                 let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count, ..WorldDesc::default() };
                 // An absurd world fails before the file is opened.
                 check_desc(&desc, &names)?;

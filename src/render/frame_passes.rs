@@ -1,0 +1,155 @@
+//! One frame's passes after streaming, recorded phase by phase: the LOD
+//! phase (traverse, lod_map, sector_data, select_patches, cull_patches),
+//! the draws (terrain_geometry, terrain_holes and occlusion's phase 2) and
+//! the shading (classify_tiles, gbuffer_tiles, lighting_resolve). The
+//! renderer lends its passes apart from the frame executor and the
+//! streaming state ([`FramePasses`]); each pass is logged in the frame's
+//! [`FrameLog`] as the graph expects.
+
+use crate::frame::{Frame, QueueKind};
+use crate::gpu::{vk, Buffer, Recorder};
+use crate::passes::classify_tiles::ClassifyTiles;
+use crate::passes::cull_patches::{CullPatches, CullStages};
+use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles};
+use crate::passes::lighting_resolve::LightingResolve;
+use crate::passes::lod_map::LodMap;
+use crate::passes::sector_data::SectorData;
+use crate::passes::select_patches::SelectPatches;
+use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry};
+use crate::passes::terrain_holes::TerrainHoles;
+use crate::passes::terrain_query::VistaTerrain;
+use crate::passes::traverse::{Traverse, TraverseMode};
+use crate::render::gbuffer::GBuffer;
+use crate::render::graph::{FrameLog, FramePass, Skip};
+use crate::render::materials_gpu::MaterialResources;
+use crate::render::renderer::Occlusion;
+use crate::render::view::TerrainViewGpu;
+use crate::terrain::gpu_quadtree::GpuQuadtree;
+use crate::terrain::selection::TraverseParams;
+use crate::world::WorldDesc;
+
+/// The renderer's passes and per-frame inputs, borrowed for one frame.
+pub(crate) struct FramePasses<'a> {
+    pub traverse: &'a Traverse,
+    pub lod_map: &'a LodMap,
+    pub sector_data: &'a SectorData,
+    pub select: &'a SelectPatches,
+    pub cull: &'a CullPatches,
+    pub occlusion: Option<&'a Occlusion>,
+    pub geometry: &'a TerrainGeometry,
+    pub holes: Option<&'a TerrainHoles>,
+    pub classify: &'a ClassifyTiles,
+    pub gbuffer_tiles: &'a GbufferTiles,
+    pub resolve: &'a LightingResolve,
+    pub materials: Option<&'a MaterialResources>,
+    pub view_buffer: &'a Buffer,
+    pub stages: CullStages,
+    /// Shading flavours forced on every tile (the reference shadings), else 0.
+    pub force_flavours: u32,
+}
+
+/// Records `p` in `frame` and logs it.
+fn pass<'r>(frame: &mut Frame<'_, 'r>, log: &mut FrameLog, p: FramePass, f: impl FnOnce(&mut Recorder<'r>)) {
+    frame.pass(p.name(), p.late(), p.queue(), f);
+    log.ran(p, None);
+}
+
+impl FramePasses<'_> {
+    /// The node list, the maps the patches read, each patch's level and
+    /// the phase-1 patch lists.
+    pub fn record_lod(
+        &self,
+        frame: &mut Frame<'_, '_>,
+        log: &mut FrameLog,
+        tree: &GpuQuadtree,
+        params: &TraverseParams,
+        view: &TerrainViewGpu,
+        visibility: Option<&Buffer>,
+    ) {
+        let (traverse, lod_map, select) = (self.traverse, self.lod_map, self.select);
+        pass(frame, log, FramePass::Traverse, |r| traverse.record(r, tree, params, TraverseMode::SingleDispatch));
+        pass(frame, log, FramePass::LodMap, |r| lod_map.record(r, traverse));
+        pass(frame, log, FramePass::SectorData, |r| self.sector_data.record(r, tree));
+        pass(frame, log, FramePass::SelectPatches, |r| {
+            select.record(r, traverse, tree, lod_map, self.view_buffer, bytemuck::bytes_of(view))
+        });
+        pass(frame, log, FramePass::CullPatches, |r| {
+            self.cull.record(r, traverse, tree, lod_map, select, self.view_buffer, self.stages, visibility)
+        });
+    }
+
+    /// The terrain draws, and with occlusion the pyramid, phase 2's culling
+    /// and its draws (or, switched off this frame, their empty lists).
+    pub fn record_draws(
+        &self,
+        frame: &mut Frame<'_, '_>,
+        log: &mut FrameLog,
+        tree: &GpuQuadtree,
+        targets: &RenderTargets,
+        gb: &GBuffer,
+    ) {
+        let (geometry, view) = (self.geometry, self.view_buffer);
+        pass(frame, log, FramePass::TerrainGeometry, |r| {
+            geometry.record(r, targets, gb, view, &self.cull.lists.list, tree, true)
+        });
+        if let Some(holes) = self.holes {
+            pass(frame, log, FramePass::TerrainHoles, |r| {
+                holes.record(r, targets, gb, view, &self.cull.lists, geometry, tree)
+            });
+        }
+        let Some(o) = self.occlusion else { return };
+        if !self.stages.occlusion {
+            // Built but off this frame: nothing drawn in phase 2.
+            let passes = [FramePass::HizBuild, FramePass::CullOccluded, FramePass::TerrainGeometryLate];
+            for p in passes.into_iter().chain(self.holes.map(|_| FramePass::TerrainHolesLate)) {
+                log.skipped(p, Skip::OcclusionOff);
+            }
+            frame.untimed(QueueKind::Graphics, |r| {
+                o.cull.lists.reset(r);
+                r.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
+            });
+            return;
+        }
+        let (traverse, lod_map, select, stages) = (self.traverse, self.lod_map, self.select, self.stages);
+        pass(frame, log, FramePass::HizBuild, |r| o.hiz.record(r, targets.depth));
+        pass(frame, log, FramePass::CullOccluded, |r| {
+            o.cull.record(r, traverse, tree, lod_map, select, view, stages, &o.hiz, targets.depth)
+        });
+        let late = &o.cull.lists;
+        pass(frame, log, FramePass::TerrainGeometryLate, |r| {
+            geometry.record(r, targets, gb, view, &late.list, tree, false)
+        });
+        if let Some(holes) = self.holes {
+            pass(frame, log, FramePass::TerrainHolesLate, |r| holes.record(r, targets, gb, view, late, geometry, tree));
+        }
+    }
+
+    /// The G-buffer tile shading and the lit output.
+    pub fn record_shading(
+        &self,
+        frame: &mut Frame<'_, '_>,
+        log: &mut FrameLog,
+        tree: &GpuQuadtree,
+        world: &WorldDesc,
+        targets: &RenderTargets,
+        gb: &GBuffer,
+    ) {
+        let classify = self.classify;
+        pass(frame, log, FramePass::ClassifyTiles, |r| classify.record(r, gb, self.force_flavours));
+        let lists = classify.lists.as_ref().expect("prepared before the frame");
+        let terrain = VistaTerrain::new(world, self.sector_data);
+        let materials = self.materials.map(|m| m.bindings());
+        frame.untimed(QueueKind::Graphics, |r| GbufferTiles::begin(r, targets, gb));
+        for (i, bits) in self.gbuffer_tiles.variants().into_iter().enumerate() {
+            let tiles = self.gbuffer_tiles;
+            frame.pass(variant_label(bits), false, QueueKind::Graphics, |r| {
+                let sector = &self.sector_data.buffer;
+                let m = materials.as_ref();
+                tiles.record_variant(r, bits, i == 0, targets, gb, self.view_buffer, lists, sector, terrain, tree, m)
+            });
+        }
+        log.ran(FramePass::GbufferTiles, None);
+        let resolve = self.resolve;
+        pass(frame, log, FramePass::LightingResolve, |r| resolve.record(r, targets, gb, self.view_buffer));
+    }
+}
