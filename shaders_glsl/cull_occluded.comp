@@ -30,10 +30,9 @@ void main() {
         s_listed = 0u;
     }
     barrier();
+    // Counted in instances, as cull_patches counts them.
     PatchCull c = cull_patch(t);
-    if (c.drawn) {
-        atomicAdd(s_in, 1u);
-    }
+    atomicAdd(s_in, c.units);
     uint bit = 1u << (t & 31u);
     // Read before the barrier below; the words are rewritten after it.
     bool drawn_in_phase1 = c.hole && (visibility.words[c.slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] & bit) != 0u;
@@ -46,9 +45,9 @@ void main() {
         atomicOr(s_visible[t >> 5u], bit);
     }
     if (c.hole && !drawn_in_phase1) {
-        atomicAdd(s_tested, 1u);
+        atomicAdd(s_tested, kept_units(c, true));
         if (visible) {
-            atomicAdd(s_listed, 1u);
+            atomicAdd(s_listed, kept_units(c, true));
             emit_patch(c);
         }
     }

@@ -33,20 +33,14 @@ void main() {
         s_hole = 0u;
     }
     barrier();
+    // Counted in instances (a refined patch is 4^r of them): with every
+    // stage off, drawn == patches_in.
     PatchCull c = cull_patch(t);
-    if (c.drawn) {
-        atomicAdd(s_in, 1u);
-    }
-    if (c.frustum) {
-        atomicAdd(s_frustum, 1u);
-    }
-    if (c.cone) {
-        atomicAdd(s_cone, 1u);
-    }
+    atomicAdd(s_in, c.units);
+    atomicAdd(s_frustum, kept_units(c, c.frustum));
+    atomicAdd(s_cone, kept_units(c, c.cone));
+    atomicAdd(s_hole, kept_units(c, c.hole));
     bool keep = c.hole;
-    if (keep) {
-        atomicAdd(s_hole, 1u);
-    }
 #ifdef OCCLUSION
     uint word = visibility.words[c.slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)];
     if ((pc.stages & CULL_STAGE_OCCLUSION) != 0u) {

@@ -4,8 +4,10 @@
 //! terminal prints plain progress lines.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+mod vista_cmd;
+
 use std::sync::atomic::{AtomicUsize, Ordering};
+use vista_cmd::vista_cmd;
 
 /// Peak resident memory a refused command may reach, KiB. The refusals
 /// happen before anything sized by the world exists, so what remains is the
@@ -41,11 +43,7 @@ fn vista(args: &[&str]) -> Run {
     static RUNS: AtomicUsize = AtomicUsize::new(0);
     let rss = temp_dir(&format!("rss-{}", RUNS.fetch_add(1, Ordering::Relaxed)));
     let rss_file = rss.join("peak");
-    let out = Command::new(env!("CARGO_BIN_EXE_vista"))
-        .args(args)
-        .env("VISTA_PEAK_RSS_FILE", &rss_file)
-        .output()
-        .expect("run vista");
+    let out = vista_cmd().args(args).env("VISTA_PEAK_RSS_FILE", &rss_file).output().expect("run vista");
     let status = std::fs::read_to_string(&rss_file).unwrap_or_default();
     let _ = std::fs::remove_dir_all(&rss);
     // "VmHWM:	    5724 kB"; absent off Linux, where 0 passes.
@@ -147,10 +145,11 @@ fn each_limit_is_refused_before_allocating() {
     // The limit is an option.
     assert_refused(&["memory", "--max-sectors", "100"], &["160 x 160 sectors", "limit is 100"]);
 
-    // The disk cap: 1563 sectors a side at 0.5 m, 3.3 million nodes of about
-    // 43 KiB (compressed BC payloads): over 130 GiB.
+    // The disk cap: 1563 sectors a side at 0.5 m, 10 LODs (at most 4 roots
+    // a side: 1563 / 2^9 <= 4), sum of ceil(1563 / 2^k)^2 over k = 0..=9 =
+    // 3 258 654 nodes of about 43 KiB (compressed BC payloads): over 130 GiB.
     let big = ["bake", "--out", o, "--extent", "100000"];
-    let run = assert_refused(&big, &["GiB", "3257795 nodes", "64.00 GiB", "--yes", "--max-disk", "--region"]);
+    let run = assert_refused(&big, &["GiB", "3258654 nodes", "64.00 GiB", "--yes", "--max-disk", "--region"]);
     assert!(run.out.is_empty(), "{}", run.out);
     // Its dry run prints the plan, then the same refusal.
     let run = assert_refused(&[&big[..], &["--dry-run"]].concat(), &["--yes"]);

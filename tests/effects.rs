@@ -176,11 +176,12 @@ fn holes_forced_on_where_the_world_has_none_change_no_pixel() {
 #[test]
 fn cone_culling_on_or_off_gives_the_same_image() {
     gpu_test(|ctx| {
-        // Looking down a hill's far side: the cone stage has back faces to remove.
-        let v = view([200.0, 200.0, Surface::Hills.height(200.0, 200.0) + 40.0], 45.0, -15.0, [160, 120], 0.5);
+        // From the foot of a cone hill (300 m radius, 250 m high): its far
+        // flank faces away, at the size of the patches the selection draws.
+        let hill = Surface::Bump { z0: 150.0, c: [512.0, 512.0], r: 300.0, h: 250.0 };
+        let v = view([112.0, 512.0, hill.height(112.0, 512.0) + 10.0], 90.0, 5.0, [160, 120], 0.5);
         let fx = Effects::default();
-        let mut with =
-            Rig::with_options(ctx, world(), Surface::Hills, vec![], [160, 120], false, options(fx.clone(), false));
+        let mut with = Rig::with_options(ctx, world(), hill, vec![], [160, 120], false, options(fx.clone(), false));
         let (a, report) = shot(ctx, &mut with, &v);
         let counters = with.renderer.read_counters(ctx).unwrap().cull;
         assert!(counters.after_cone < counters.after_frustum, "the cone stage had work: {counters:?}");
@@ -189,7 +190,7 @@ fn cone_culling_on_or_off_gives_the_same_image() {
         let mut without = Rig::with_options(
             ctx,
             world(),
-            Surface::Hills,
+            hill,
             vec![],
             [160, 120],
             false,

@@ -5,11 +5,13 @@
 //! reference fails; `vista golden --update` rewrites them and prints what
 //! changed.
 
-use std::process::Command;
+mod vista_cmd;
+
+use vista_cmd::vista_cmd;
 
 #[test]
 fn golden_images_match_their_references_under_validation() {
-    let out = Command::new(env!("CARGO_BIN_EXE_vista"))
+    let out = vista_cmd()
         .args(["--validation", "golden", "--out"])
         .arg(std::env::temp_dir().join(format!("vista-golden-{}", std::process::id())))
         .output()
@@ -26,7 +28,7 @@ fn golden_images_match_their_references_under_validation() {
 fn a_missing_reference_fails_and_says_how_to_make_one() {
     let empty = std::env::temp_dir().join(format!("vista-golden-empty-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&empty);
-    let out = Command::new(env!("CARGO_BIN_EXE_vista"))
+    let out = vista_cmd()
         .args(["golden", "--only", "montblanc", "--dir"])
         .arg(&empty)
         .arg("--out")
@@ -41,7 +43,7 @@ fn a_missing_reference_fails_and_says_how_to_make_one() {
     assert!(empty.join("diff/montblanc.png").exists());
     let _ = std::fs::remove_dir_all(&empty);
     // A typo in a view name is a one-line input error.
-    let out = Command::new(env!("CARGO_BIN_EXE_vista")).args(["golden", "--only", "mont-blanc"]).output().unwrap();
+    let out = vista_cmd().args(["golden", "--only", "mont-blanc"]).output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("no golden view \"mont-blanc\"") && stderr.lines().count() == 1, "{stderr}");
@@ -52,7 +54,7 @@ fn bc_payloads_stay_near_rgba8_ones_on_a_lit_render() {
     // The default overview from BC3 / BC1 payloads against RGBA8 ones; the
     // tolerance and its reason: `PAYLOAD_MAX_*` in tools/vista/golden_cmd.rs.
     let out_dir = std::env::temp_dir().join(format!("vista-payload-diff-{}", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_vista"))
+    let out = vista_cmd()
         .args(["--validation", "golden", "--payload-diff", "--only", "default", "--out"])
         .arg(&out_dir)
         .output()

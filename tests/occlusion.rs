@@ -79,7 +79,7 @@ fn occlusion_changes_no_pixel_over_100_poses_with_teleports_and_turns() {
                     pos[2] = pos[2].max(Surface::Hills.height(pos[0], pos[1]) + 3.0);
                 }
             }
-            let v = view(pos, yaw, -5.0 - 20.0 * rng.unit(), size, 2.0);
+            let v = view(pos, yaw, -5.0 - 20.0 * rng.unit(), size, 0.5);
             let a = on.again(ctx, &v, CullStages::ALL);
             let b = off.again(ctx, &v, CullStages::ALL);
             assert!(a.rgba == b.rgba, "pose {i} ({pos:?}, yaw {yaw}): colour differs with occlusion");
@@ -92,8 +92,12 @@ fn occlusion_changes_no_pixel_over_100_poses_with_teleports_and_turns() {
             phase2 += u64::from(k.drawn_phase2);
         }
         // Not vacuous: the pyramid culled patches and phase 2 drew some
-        // (measured 997 culled on lavapipe; floors a little below).
-        assert!(culled > 800, "occlusion culled only {culled} patches over 100 poses");
+        // (measured 363 culled and 2822 drawn in phase 2 on lavapipe at
+        // 0.5 px; floors a little below). Per-patch LOD draws coarse
+        // ancestors' patches where they meet the target: fewer, larger
+        // patches, which a ridge hides whole less often (997 culled when
+        // every patch was its node's).
+        assert!(culled > 300, "occlusion culled only {culled} patches over 100 poses");
         assert!(phase2 > 100, "phase 2 drew only {phase2} patches over 100 poses");
     });
 }

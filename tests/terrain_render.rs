@@ -297,48 +297,88 @@ fn hills_world() -> WorldDesc {
 fn culling_never_changes_a_pixel() {
     let size = [64, 64];
     gpu_test(|ctx| {
-        let mut rig = Rig::new(ctx, hills_world(), Surface::Hills, Vec::new(), size, true);
         let (mut frustum_culled, mut cone_culled) = (0, 0);
-        for (i, v) in hill_poses(100, size).iter().enumerate() {
-            let on = rig.shot(ctx, v, CullStages::ALL);
-            let k = rig.renderer.read_counters(ctx).unwrap().cull;
-            frustum_culled += k.patches_in - k.after_frustum;
-            cone_culled += k.after_frustum - k.after_cone;
-            let off = rig.again(ctx, v, CullStages::NONE);
-            let k_off = rig.renderer.read_counters(ctx).unwrap().cull;
-            assert_eq!(k_off.drawn, k.patches_in, "culling off draws every patch");
-            assert!(on.rgba == off.rgba, "pose {i} {v:?}: colour differs with culling on");
-            let bits = |c: &Capture| c.depth.iter().map(|d| d.to_bits()).collect::<Vec<u32>>();
-            assert!(bits(&on) == bits(&off), "pose {i} {v:?}: depth differs with culling on");
+        // The hills from 100 poses, and the cone hill, whose far flank the
+        // cone stage removes.
+        for (surface, poses) in [(Surface::Hills, hill_poses(100, size)), (CONE_HILL, cone_hill_views(size))] {
+            let mut rig = Rig::new(ctx, hills_world(), surface, Vec::new(), size, true);
+            for (i, v) in poses.iter().enumerate() {
+                let on = rig.shot(ctx, v, CullStages::ALL);
+                let k = rig.renderer.read_counters(ctx).unwrap().cull;
+                frustum_culled += k.patches_in - k.after_frustum;
+                cone_culled += k.after_frustum - k.after_cone;
+                let off = rig.again(ctx, v, CullStages::NONE);
+                let k_off = rig.renderer.read_counters(ctx).unwrap().cull;
+                // Instances: a patch refined below LOD 0 counts its sub-patches.
+                assert_eq!(k_off.drawn, k.patches_in, "culling off draws every patch");
+                assert!(on.rgba == off.rgba, "pose {i} {v:?}: colour differs with culling on");
+                let bits = |c: &Capture| c.depth.iter().map(|d| d.to_bits()).collect::<Vec<u32>>();
+                assert!(bits(&on) == bits(&off), "pose {i} {v:?}: depth differs with culling on");
+            }
         }
         // The comparison means something only if culling removed patches.
         assert!(frustum_culled > 1000 && cone_culled > 0, "frustum culled {frustum_culled}, cone {cone_culled}");
     });
 }
 
-/// The 512 triangles of a patch as the GPU draws them (diamond split,
-/// counter-clockwise from above), from the CPU bake of its node.
+/// The triangles of a patch as the GPU draws them (diamond split,
+/// counter-clockwise from above, edge vertices snapped to the coarser
+/// neighbours' grids by the record's deltas as `terrain_vertex.glsl` does),
+/// from the CPU bake of its node; degenerate ones (no area) left out.
 fn patch_triangles(world: &WorldDesc, surface: &Surface, p: &PatchRecord) -> Vec<[DVec3; 3]> {
+    assert_eq!(p.refine, 0, "refined patches are not cone-tested");
     let node = bake_node(surface, world, &[], NodeId::new(p.lod, p.node_x, p.node_y));
     let b = world.bounds_m(node.id);
     let s = world.node_spacing_m(p.lod);
     let (px, py) = (p.patch % 8 * PATCH_QUADS, p.patch / 8 * PATCH_QUADS);
+    // Nearest point of the grid 2^d coarser, ties toward the lower one.
+    let snap = |v: u32, d: u8| if d == 0 { v } else { ((v + (1 << (d - 1)) - 1) >> d) << d };
+    let [dw, de, ds, dn] = p.deltas;
     let v = |i: u32, j: u32| {
-        let h = world.decode_height(node.height(i as isize, j as isize));
-        DVec3::new(b[0] + f64::from(i) * s, b[1] + f64::from(j) * s, f64::from(h))
+        let q = PATCH_QUADS;
+        let si = match j {
+            0 => snap(i, ds),
+            j if j == q => snap(i, dn),
+            _ => i,
+        };
+        let sj = match i {
+            0 => snap(j, dw),
+            i if i == q => snap(j, de),
+            _ => j,
+        };
+        let (gi, gj) = (px + si, py + sj);
+        let h = world.decode_height(node.height(gi as isize, gj as isize));
+        DVec3::new(b[0] + f64::from(gi) * s, b[1] + f64::from(gj) * s, f64::from(h))
     };
     let mut out = Vec::new();
-    for qy in py..py + PATCH_QUADS {
-        for qx in px..px + PATCH_QUADS {
+    for qy in 0..PATCH_QUADS {
+        for qx in 0..PATCH_QUADS {
             let (a, bb, c, d) = (v(qx, qy), v(qx + 1, qy), v(qx + 1, qy + 1), v(qx, qy + 1));
-            if (qx + qy).is_multiple_of(2) {
-                out.extend([[a, bb, c], [a, c, d]]);
-            } else {
-                out.extend([[a, bb, d], [bb, c, d]]);
-            }
+            let tris =
+                if (px + qx + py + qy).is_multiple_of(2) { [[a, bb, c], [a, c, d]] } else { [[a, bb, d], [bb, c, d]] };
+            out.extend(tris.into_iter().filter(|t| (t[1] - t[0]).cross(t[2] - t[0]) != DVec3::ZERO));
         }
     }
     out
+}
+
+/// A cone hill (300 m radius, 250 m high) in the middle of the hills
+/// world, and views from its foot and slopes: its far flank faces away at
+/// the size of the patches the selection draws (the rolling hills' far
+/// sides are drawn from patches too large to face away whole).
+const CONE_HILL: Surface = Surface::Bump { z0: 150.0, c: [512.0, 512.0], r: 300.0, h: 250.0 };
+
+fn cone_hill_views(size: [u32; 2]) -> Vec<View> {
+    let at = |x: f64, y: f64, dz: f64, yaw: f64, pitch: f64, t: f32| {
+        view([x, y, CONE_HILL.height(x, y) + dz], yaw, pitch, size, t)
+    };
+    vec![
+        at(112.0, 512.0, 10.0, 90.0, 5.0, 0.5),
+        at(182.0, 512.0, 5.0, 90.0, 10.0, 1.0),
+        at(512.0, 120.0, 10.0, 0.0, 5.0, 0.5),
+        at(62.0, 450.0, 60.0, 80.0, -3.0, 1.0),
+        at(900.0, 700.0, 20.0, 240.0, 0.0, 0.5),
+    ]
 }
 
 #[test]
@@ -346,9 +386,9 @@ fn cone_culling_removes_only_patches_whose_every_triangle_faces_away() {
     let size = [48, 48];
     let world = hills_world();
     gpu_test(|ctx| {
-        let mut rig = Rig::new(ctx, world, Surface::Hills, Vec::new(), size, true);
+        let mut rig = Rig::new(ctx, world, CONE_HILL, Vec::new(), size, true);
         let mut culled_total = 0;
-        for v in hill_poses(12, size) {
+        for v in cone_hill_views(size) {
             rig.shot(ctx, &v, CullStages::NONE);
             let all: BTreeSet<PatchRecord> = rig.renderer.read_patches(ctx).unwrap().into_iter().collect();
             rig.again(ctx, &v, CullStages { frustum: false, cone: true, hole: false, occlusion: false });
@@ -357,7 +397,7 @@ fn cone_culling_removes_only_patches_whose_every_triangle_faces_away() {
             let cam = DVec3::from(v.camera.position_m);
             for p in all.difference(&kept) {
                 culled_total += 1;
-                for t in patch_triangles(&world, &Surface::Hills, p) {
+                for t in patch_triangles(&world, &CONE_HILL, p) {
                     let n = (t[1] - t[0]).cross(t[2] - t[0]);
                     // Back-facing: the camera is behind the triangle's plane.
                     assert!(n.dot(cam - t[0]) < 0.0, "{p:?} culled but a triangle faces the camera at {cam}");

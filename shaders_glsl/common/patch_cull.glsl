@@ -100,11 +100,32 @@ struct PatchCull {
     uvec4 record;     // the patch-list entry (z: no refinement yet)
     uint slot;        // the listed node's slot (visibility bits)
     uint refine;      // levels below LOD 0 (4^refine sub-patches)
+    uint subs;        // bit per sub-patch (bit 0 alone when not refined) the frustum keeps
+    uint units;       // instances it stands for before culling: 4^refine when drawn, else 0
     ivec2 origin;     // LOD-0 sample of the drawn patch's corner
     int level;        // drawn level (-refine below LOD 0)
     float error;      // error of the drawn level (m)
     uint overflow;    // edges clamped to MAX_LOD_DELTA
 };
+
+// Bits of the sub-patches of a refined patch whose boxes (their own xy,
+// the patch's height range) the frustum does not exclude.
+uint sub_patches_in_frustum(PatchCull c) {
+    uint quads = PATCH_QUADS;
+    uint subs = 1u << c.refine;
+    int size = int(quads >> c.refine);
+    uint mask = 0u;
+    for (uint s = 0u; s < subs * subs; ++s) {
+        ivec2 o = c.origin + ivec2(s % subs, s / subs) * size;
+        vec3 lo = c.lo, hi = c.hi;
+        lo.xy = view_rel_xy(o, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m) - vec2(1e-3);
+        hi.xy = view_rel_xy(o + size, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m) + vec2(1e-3);
+        if (!box_outside_frustum(lo, hi)) {
+            mask |= 1u << s;
+        }
+    }
+    return mask;
+}
 
 PatchCull cull_patch(uint t) {
     uint per_side = PATCHES_PER_SIDE, quads = PATCH_QUADS;
@@ -140,12 +161,18 @@ PatchCull cull_patch(uint t) {
         deltas = edge_deltas(c.origin, int(quads) << dlod, c.level, c.overflow);
     }
 
-    bool keep = c.drawn && ((pc.stages & CULL_STAGE_FRUSTUM) == 0u || !box_outside_frustum(c.lo, c.hi));
+    c.units = c.drawn ? 1u << (2u * c.refine) : 0u;
+    c.subs = c.units == 0u ? 0u : (1u << c.units) - 1u;
+    if ((pc.stages & CULL_STAGE_FRUSTUM) != 0u) {
+        c.subs = box_outside_frustum(c.lo, c.hi) ? 0u : c.refine == 0u ? c.subs : sub_patches_in_frustum(c);
+    }
+    bool keep = c.subs != 0u;
     c.frustum = keep;
-    // Stitched edges and sub-patches make triangles the baked cone does
-    // not bound: only whole, unstitched patches are cone-tested.
+    // The baked cone holds every stitched variant of the patch's triangles
+    // (src/world/cones.rs), not the Catmull-Rom triangles of sub-patches:
+    // refined patches are not cone-tested.
 #ifdef CONE_CULL
-    if (keep && (pc.stages & CULL_STAGE_CONE) != 0u && deltas == 0u && c.refine == 0u) {
+    if (keep && (pc.stages & CULL_STAGE_CONE) != 0u && c.refine == 0u) {
         vec4 cone = texelFetch(sampler2DArray(patch_cones, nearest), ivec3(dpxy, int(dslot)), 0);
         keep = !cone_faces_away(cone, c.lo, c.hi);
     }
@@ -181,9 +208,13 @@ void append(bool holey, uvec4 record) {
     }
 }
 
-// Lists what a surviving patch draws: itself, or its sub-patches (each
-// frustum-tested on its own xy and the patch's height range), and raises
-// the frame's error bound to its projected error.
+// Instances a stage keeps when the patch survives it.
+uint kept_units(PatchCull c, bool survived) {
+    return survived ? bitCount(c.subs) : 0u;
+}
+
+// Lists what a surviving patch draws: itself, or its sub-patches the
+// frustum keeps, and raises the frame's error bound to its projected error.
 void emit_patch(PatchCull c) {
     atomicMax(patch_list.header.bound_bits, floatBitsToUint(projected_px(c.error, c.lo, c.hi)));
     if (c.overflow > 0u) {
@@ -197,13 +228,10 @@ void emit_patch(PatchCull c) {
     uint subs = 1u << c.refine;
     int size = int(quads >> c.refine);
     for (uint s = 0u; s < subs * subs; ++s) {
-        ivec2 o = c.origin + ivec2(s % subs, s / subs) * size;
-        vec3 lo = c.lo, hi = c.hi;
-        lo.xy = view_rel_xy(o, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m) - vec2(1e-3);
-        hi.xy = view_rel_xy(o + size, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m) + vec2(1e-3);
-        if ((pc.stages & CULL_STAGE_FRUSTUM) != 0u && box_outside_frustum(lo, hi)) {
+        if ((c.subs & (1u << s)) == 0u) {
             continue;
         }
+        ivec2 o = c.origin + ivec2(s % subs, s / subs) * size;
         uint overflow = 0u;
         uint deltas = edge_deltas(o, size, c.level, overflow);
         uvec4 r = c.record;

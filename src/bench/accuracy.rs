@@ -52,6 +52,9 @@ pub struct AccuracyBenchConfig {
     pub frames: u32,
     pub settle_timeout: Duration,
     pub cache_dir: PathBuf,
+    /// The world's error tree, shared by every renderer of the bench (`None`:
+    /// made under `cache_dir`).
+    pub errors: Option<std::sync::Arc<crate::world::ErrorTree>>,
     /// Resident node slots of every renderer (the budget that caps detail).
     pub slots: u32,
     pub raycast: RaycastConfig,
@@ -189,8 +192,12 @@ pub fn bench_accuracy(
     let shading_skipped = (!(fx.is_on(Effect::Splat) || fx.is_on(Effect::Cliffs)))
         .then(|| "the scene has neither splat nor cliffs: every shading setting draws the same".to_string())
         .or_else(|| (!cfg.shading).then(|| "not asked for".to_string()));
-    let terrain =
-        TerrainOptions { cache_dir: Some(cfg.cache_dir.clone()), slots: cfg.slots, ..TerrainOptions::default() };
+    let terrain = TerrainOptions {
+        cache_dir: Some(cfg.cache_dir.clone()),
+        slots: cfg.slots,
+        errors: cfg.errors.clone(),
+        ..TerrainOptions::default()
+    };
     let options =
         |shading| RendererOptions { terrain: terrain.clone(), effects: fx.clone(), shading, ..Default::default() };
     // The geometry sweep draws without the detail normals of splat and

@@ -30,6 +30,9 @@ pub struct EffectsBenchConfig {
     pub settle_timeout: Duration,
     /// Baked nodes are shared by every variant through this cache.
     pub cache_dir: PathBuf,
+    /// The world's error tree, shared by every renderer of the bench (`None`:
+    /// made under `cache_dir`).
+    pub errors: Option<std::sync::Arc<crate::world::ErrorTree>>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -80,7 +83,11 @@ pub fn bench_effects(
     full: &Effects,
     cfg: &EffectsBenchConfig,
 ) -> Result<Vec<EffectsBenchRow>> {
-    let terrain = TerrainOptions { cache_dir: Some(cfg.cache_dir.clone()), ..TerrainOptions::default() };
+    let terrain = TerrainOptions {
+        cache_dir: Some(cfg.cache_dir.clone()),
+        errors: cfg.errors.clone(),
+        ..TerrainOptions::default()
+    };
     let make = |fx: &Effects| {
         let options = RendererOptions { terrain: terrain.clone(), effects: fx.clone(), ..RendererOptions::default() };
         TerrainRenderer::new(ctx, world, source.clone(), holes.to_vec(), &options)

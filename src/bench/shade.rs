@@ -39,6 +39,9 @@ pub struct ShadeBenchConfig {
     pub settle_timeout: Duration,
     /// Baked nodes are shared by every renderer through this cache.
     pub cache_dir: PathBuf,
+    /// The world's error tree, shared by every renderer of the bench (`None`:
+    /// made under `cache_dir`).
+    pub errors: Option<std::sync::Arc<crate::world::ErrorTree>>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -104,7 +107,11 @@ pub fn bench_shade(
     views: &[ShadeView],
     cfg: &ShadeBenchConfig,
 ) -> Result<ShadeBench> {
-    let terrain = TerrainOptions { cache_dir: Some(cfg.cache_dir.clone()), ..TerrainOptions::default() };
+    let terrain = TerrainOptions {
+        cache_dir: Some(cfg.cache_dir.clone()),
+        errors: cfg.errors.clone(),
+        ..TerrainOptions::default()
+    };
     let mut off = Offscreen::new(ctx, cfg.size, 2, [0.55, 0.68, 0.85, 1.0])?;
     let mut out = ShadeBench { views: views.to_vec(), rows: Vec::new(), stochastic_error: Vec::new() };
     for sv in views {

@@ -54,6 +54,12 @@ pub struct TerrainOptions {
     /// ([`ResidencyConfig`]).
     pub max_load_attempts: u32,
     pub retry_frames: u64,
+    /// The world's error tree, shared with other renderers of the world and
+    /// usually prepared beforehand ([`ErrorTree::prepare`]); `None` makes
+    /// one (cached under `cache_dir`, else in memory) whose roots are
+    /// computed as their first nodes load. Must be the tree of this world
+    /// and source.
+    pub errors: Option<Arc<ErrorTree>>,
 }
 
 /// A caller's node loader (see [`TerrainOptions::load`]).
@@ -81,6 +87,7 @@ impl Default for TerrainOptions {
             max_load_attempts: ResidencyConfig::default().max_load_attempts,
             retry_frames: ResidencyConfig::default().retry_frames,
             limits: Limits::default(),
+            errors: None,
         }
     }
 }
@@ -155,10 +162,20 @@ impl Terrain {
         };
         let residency = Residency::new(world, config)?;
         let threads = options.loader_threads.max(1);
+        let errors = match &options.errors {
+            Some(e) => {
+                assert!(
+                    e.is_for(world, source.as_ref()),
+                    "TerrainOptions::errors: the tree of another world or source"
+                );
+                Arc::clone(e)
+            }
+            None => Arc::new(ErrorTree::new(world, Arc::clone(&source), options.cache_dir.as_deref())?),
+        };
         let loader = match (&options.load, &options.cache_dir) {
             (Some(load), _) => {
                 // A caller's payloads without errors get the world's.
-                let (load, errors) = (Arc::clone(&load.0), ErrorTree::new(world, source, None)?);
+                let load = Arc::clone(&load.0);
                 Loader::new(
                     threads,
                     Arc::new(move |id| {
@@ -172,11 +189,10 @@ impl Terrain {
             }
             (None, Some(dir)) => Loader::with_cache(
                 threads,
-                Arc::new(NodeCache::with_settings(dir, *world, source, holes, options.bake)?),
+                Arc::new(NodeCache::with_settings(dir, *world, source, holes, options.bake)?.with_errors(errors)),
             )?,
             (None, None) => {
                 let (w, settings) = (*world, options.bake);
-                let errors = ErrorTree::new(world, Arc::clone(&source), None)?;
                 let load: Arc<LoadFn> = Arc::new(move |id| {
                     let mut node = bake_node_with(&*source, &w, &holes, &settings, id);
                     errors.attach(&mut node)?;

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::cache::{CacheOutcome, NodeCache};
 use super::cones::{fit_cone, patch_triangle_normals};
 use super::error::Result;
+use super::errors::PreparedErrors;
 use super::hash::Fnv64;
 use super::holes::Hole;
 use super::layout::{
@@ -18,7 +19,7 @@ use super::layout::{
 use super::material_rules::MaterialRules;
 use super::payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 use super::plan::{Limits, WorldPlan};
-use super::progress::{Progress, Reporter};
+use super::progress::{Progress, Reporter, Work};
 use super::source::HeightSource;
 use super::texels::{pack_normal, texel_index, PayloadFormat, TexelKind, ATLAS_BORDER, ATLAS_SIDE, ATLAS_TEXELS};
 
@@ -247,6 +248,12 @@ pub struct BakeStats {
     pub seconds: f64,
     /// Bytes of the node files of this region on disk.
     pub bytes_on_disk: u64,
+    /// The error tree of the roots over the region, made before the nodes
+    /// (its seconds are not in `seconds`).
+    pub errors: PreparedErrors,
+    /// LOD-0 quads under those roots, inside the world: what the error
+    /// tree's time scales with.
+    pub error_quads: u64,
 }
 
 /// Bakes (or validates from cache) every valid node of every LOD
@@ -260,17 +267,17 @@ pub fn bake_world(
     cache_dir: &Path,
     progress: impl Into<Progress>,
 ) -> Result<BakeStats> {
-    let start = Instant::now();
     let cache = NodeCache::with_settings(cache_dir, *world, source, holes.to_vec(), *settings)?;
     // Before the node list, which grows with the world.
-    WorldPlan::new(world, region).check(&Limits::default())?;
+    let plan = WorldPlan::new(world, region);
+    plan.check(&Limits::default())?;
     let nodes = nodes_in_region(world, region);
-    // Each root's error tile first (parallel inside), so node bakes never
-    // wait for one.
-    for root in nodes.iter().filter(|n| n.lod == world.root_lod()) {
-        cache.errors().node(*root)?;
-    }
-    let bar = Reporter::new(progress.into(), nodes.len() as u64);
+    // Each root's error tile first, so node bakes never wait for one.
+    let progress = progress.into();
+    let roots: Vec<NodeId> = nodes.iter().filter(|n| n.lod == world.root_lod()).copied().collect();
+    let errors = cache.errors().prepare_roots(roots, progress);
+    let start = Instant::now();
+    let bar = Reporter::new(progress, nodes.len() as u64, Work::Nodes);
     let outcomes = nodes
         .par_iter()
         .map(|&id| {
@@ -281,7 +288,12 @@ pub fn bake_world(
         })
         .collect::<Result<Vec<_>>>()?;
     bar.finish();
-    let mut stats = BakeStats { nodes_per_lod: vec![0; world.lod_count as usize], ..BakeStats::default() };
+    let mut stats = BakeStats {
+        nodes_per_lod: vec![0; world.lod_count as usize],
+        errors,
+        error_quads: plan.error_quads,
+        ..BakeStats::default()
+    };
     for (id, outcome, bytes) in outcomes {
         stats.nodes_per_lod[id.lod as usize] += 1;
         stats.bytes_on_disk += bytes;

@@ -26,7 +26,7 @@ use super::texels::PayloadFormat;
 /// File magic: identifies a vista node file.
 const MAGIC: [u8; 4] = *b"VNOD";
 /// Bumped whenever the file layout or the bake's output changes.
-const FORMAT_VERSION: u32 = 5;
+const FORMAT_VERSION: u32 = 6;
 /// Bytes before the payload.
 const HEADER_BYTES: usize = 4 + 4 + 8 * 4 + 1 + 4 + 4 + 4;
 /// zstd level: 3 (zstd's default) measured within 1 % of level 9's size on
@@ -78,7 +78,7 @@ pub struct NodeCache {
     holes: Vec<Hole>,
     settings: BakeSettings,
     keys: [u64; 4],
-    errors: ErrorTree,
+    errors: Arc<ErrorTree>,
 }
 
 impl NodeCache {
@@ -100,8 +100,16 @@ impl NodeCache {
         settings.materials.validate()?;
         std::fs::create_dir_all(dir).map_err(|e| WorldError::create_dir(dir, e))?;
         let keys = [world.hash(), source.id_hash(), holes_hash(&holes), settings.hash()];
-        let errors = ErrorTree::new(&world, Arc::clone(&source), Some(dir))?;
+        let errors = Arc::new(ErrorTree::new(&world, Arc::clone(&source), Some(dir))?);
         Ok(NodeCache { dir: dir.to_path_buf(), world, source, holes, settings, keys, errors })
+    }
+
+    /// Takes its errors from `errors` (shared with other users of the
+    /// world, cached where that tree is) instead of `DIR/errors`.
+    pub fn with_errors(mut self, errors: Arc<ErrorTree>) -> Self {
+        assert!(errors.is_for(&self.world, self.source.as_ref()), "an error tree of another world or source");
+        self.errors = errors;
+        self
     }
 
     pub fn world(&self) -> &WorldDesc {

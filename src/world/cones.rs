@@ -2,6 +2,7 @@
 //! triangles the GPU draws.
 
 use super::layout::{NODE_SAMPLES, PATCH_QUADS};
+use crate::shaders::consts::MAX_LOD_DELTA;
 
 /// Angular padding (radians) covering f32 rounding of the stored axis and
 /// of the GPU's own normal arithmetic.
@@ -38,35 +39,64 @@ impl NormalCone {
     }
 }
 
-/// Unit normals of the 512 triangles of patch (px, py), from `heights`
-/// (129x129 decoded metres, row 0 south) with `spacing` metres between
-/// samples. Quads whose (x + y) is even are split along the SW-NE diagonal,
-/// odd ones along SE-NW, so every odd/odd vertex is the centre of 8
-/// triangles: the diamond pattern the GPU index buffer uses.
+/// Unit normals of every triangle the GPU may draw for patch (px, py),
+/// from `heights` (129x129 decoded metres, row 0 south) with `spacing`
+/// metres between samples: its 512 triangles, and those of its edge quads
+/// under every stitching (an edge next to a coarser patch snaps its
+/// vertices to that patch's grid, 1 to `MAX_LOD_DELTA` levels coarser, as
+/// `terrain_vertex.glsl` does), so a patch is cone-tested whatever its
+/// neighbours' levels. Quads whose (x + y) is even are split along the
+/// SW-NE diagonal, odd ones along SE-NW, so every odd/odd vertex is the
+/// centre of 8 triangles: the diamond pattern the GPU index buffer uses.
+/// Degenerate triangles (a snapped edge folds some to a line) draw nothing
+/// and are left out.
 pub fn patch_triangle_normals(heights: &[f32], spacing: f64, px: u32, py: u32) -> Vec<[f64; 3]> {
     assert_eq!(heights.len(), NODE_SAMPLES * NODE_SAMPLES, "not a node grid");
-    let mut out = Vec::with_capacity((PATCH_QUADS * PATCH_QUADS * 2) as usize);
-    let h = |i: u32, j: u32| f64::from(heights[j as usize * NODE_SAMPLES + i as usize]);
-    for qy in py * PATCH_QUADS..(py + 1) * PATCH_QUADS {
-        for qx in px * PATCH_QUADS..(px + 1) * PATCH_QUADS {
-            let p = |di: u32, dj: u32| [f64::from(di) * spacing, f64::from(dj) * spacing, h(qx + di, qy + dj)];
-            let (p00, p10, p01, p11) = (p(0, 0), p(1, 0), p(0, 1), p(1, 1));
-            if (qx + qy).is_multiple_of(2) {
-                out.push(tri_normal(p00, p10, p11));
-                out.push(tri_normal(p00, p11, p01));
-            } else {
-                out.push(tri_normal(p00, p10, p01));
-                out.push(tri_normal(p10, p11, p01));
+    let q = PATCH_QUADS;
+    let mut out = Vec::with_capacity((q * q * 2) as usize);
+    let h = |i: u32, j: u32| f64::from(heights[(py * q + j) as usize * NODE_SAMPLES + (px * q + i) as usize]);
+    let deltas = 0..=MAX_LOD_DELTA;
+    for qy in 0..q {
+        for qx in 0..q {
+            // Deltas of the edges this quad touches (west/east, south/north).
+            let on_x = qx == 0 || qx == q - 1;
+            let on_y = qy == 0 || qy == q - 1;
+            for dx in deltas.clone().take(if on_x { usize::MAX } else { 1 }) {
+                for dy in deltas.clone().take(if on_y { usize::MAX } else { 1 }) {
+                    let p = |di: u32, dj: u32| {
+                        let (i, j) = (qx + di, qy + dj);
+                        let (si, sj) = stitched(i, j, dx, dy, q);
+                        [f64::from(si) * spacing, f64::from(sj) * spacing, h(si, sj)]
+                    };
+                    let (p00, p10, p01, p11) = (p(0, 0), p(1, 0), p(0, 1), p(1, 1));
+                    let tris = if (qx + qy).is_multiple_of(2) {
+                        [(p00, p10, p11), (p00, p11, p01)]
+                    } else {
+                        [(p00, p10, p01), (p10, p11, p01)]
+                    };
+                    out.extend(tris.iter().filter_map(|&(a, b, c)| tri_normal(a, b, c)));
+                }
             }
         }
     }
     out
 }
 
-fn tri_normal(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+/// Where the vertex shader draws patch vertex (i, j) when the edges at
+/// i = 0 or q take delta `dx` and those at j = 0 or q take `dy`.
+fn stitched(i: u32, j: u32, dx: u32, dy: u32, q: u32) -> (u32, u32) {
+    let snap = |v: u32, d: u32| if d == 0 { v } else { ((v + (1 << (d - 1)) - 1) >> d) << d };
+    let si = if j == 0 || j == q { snap(i, dy) } else { i };
+    let sj = if i == 0 || i == q { snap(j, dx) } else { j };
+    (si, sj)
+}
+
+/// The unit normal, or `None` for a triangle of no area (drawn as nothing).
+fn tri_normal(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Option<[f64; 3]> {
     let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    normalize([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
+    let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+    (n != [0.0; 3]).then(|| normalize(n))
 }
 
 fn normalize(v: [f64; 3]) -> [f64; 3] {

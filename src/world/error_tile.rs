@@ -125,6 +125,13 @@ pub fn compute_root(world: &WorldDesc, source: &dyn HeightSource, root: NodeId) 
     levels
 }
 
+/// Computes (and drops) one block of `quads` x `quads` LOD-0 quads at
+/// LOD-0 sample `origin` with the levels of a root at `root_lod`: what the
+/// plan times to estimate a whole tree (the cost is per LOD-0 quad).
+pub fn compute_block(world: &WorldDesc, source: &dyn HeightSource, origin: [usize; 2], quads: usize, root_lod: u8) {
+    std::hint::black_box(Block::sample(world, source, origin, quads).run(usize::from(root_lod)));
+}
+
 /// Folds a block's patches (at `offset` quads into the root, patches of
 /// `patch_q` quads) into the root's.
 fn merge(into: &mut LevelPatches, part: &LevelPatches, offset: [usize; 2], patch_q: usize) {

@@ -18,13 +18,18 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
+use std::time::Instant;
+
+use rayon::prelude::*;
 
 use super::error::{Result, WorldError};
 use super::error_tile::{compute_root, node_patches, LevelPatches};
 use super::hash::Fnv64;
 use super::layout::{NodeId, WorldDesc, PATCHES_PER_NODE};
 use super::payload::BakedNode;
+use super::progress::{Progress, Reporter, Work};
 use super::source::HeightSource;
 
 const MAGIC: [u8; 4] = *b"VERR";
@@ -57,6 +62,23 @@ pub struct ErrorTree {
     dir: Option<PathBuf>,
     keys: [u64; 2],
     roots: Mutex<HashMap<NodeId, Arc<OnceLock<Tile>>>>,
+    /// Root tiles computed by this tree (not read from the folder).
+    computed: AtomicUsize,
+}
+
+impl std::fmt::Debug for ErrorTree {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ErrorTree").field("world", &self.world).field("dir", &self.dir).finish_non_exhaustive()
+    }
+}
+
+/// What [`ErrorTree::prepare`] did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PreparedErrors {
+    pub roots: usize,
+    /// Of those, read from the cache folder; the rest were computed.
+    pub read: usize,
+    pub seconds: f64,
 }
 
 impl ErrorTree {
@@ -65,8 +87,57 @@ impl ErrorTree {
     pub fn new(world: &WorldDesc, source: Arc<dyn HeightSource>, cache_dir: Option<&Path>) -> Result<Self> {
         world.validate()?;
         let keys = [world.hash(), source.id_hash()];
-        let dir = cache_dir.map(|d| d.join("errors"));
-        Ok(ErrorTree { world: *world, source, dir, keys, roots: Mutex::new(HashMap::new()) })
+        // A folder per world and source: a cache shared by several worlds
+        // keeps each one's tiles.
+        let dir = cache_dir.map(|d| d.join("errors").join(format!("{:016x}{:016x}", keys[0], keys[1])));
+        Ok(ErrorTree {
+            world: *world,
+            source,
+            dir,
+            keys,
+            roots: Mutex::new(HashMap::new()),
+            computed: AtomicUsize::new(0),
+        })
+    }
+
+    /// Where the root tiles are cached (`None`: in memory only).
+    pub fn dir(&self) -> Option<&Path> {
+        self.dir.as_deref()
+    }
+
+    /// Whether this tree is the error tree of `world` sampled from `source`.
+    pub fn is_for(&self, world: &WorldDesc, source: &dyn HeightSource) -> bool {
+        self.world == *world && self.keys == [world.hash(), source.id_hash()]
+    }
+
+    /// Reads or computes every root's tile now, reporting progress, so that
+    /// no node waits for one later. Several processes preparing one world
+    /// into one folder share the work: each starts at another root (by
+    /// process id) and reads what the others have written meanwhile.
+    pub fn prepare(&self, progress: Progress) -> PreparedErrors {
+        self.prepare_roots(self.world.roots(), progress)
+    }
+
+    /// As [`Self::prepare`], for the tiles of `roots` only.
+    pub fn prepare_roots(&self, mut roots: Vec<NodeId>, progress: Progress) -> PreparedErrors {
+        let start = Instant::now();
+        if !roots.is_empty() {
+            let shift = std::process::id() as usize % roots.len();
+            roots.rotate_left(shift);
+        }
+        let before = self.computed.load(Ordering::Relaxed);
+        let bar = Reporter::new(progress, roots.len() as u64, Work::ErrorRoots);
+        roots.par_iter().with_max_len(1).for_each(|r| {
+            self.tile(*r);
+            bar.inc();
+        });
+        bar.finish();
+        let computed = self.computed.load(Ordering::Relaxed) - before;
+        PreparedErrors {
+            roots: roots.len(),
+            read: roots.len().saturating_sub(computed),
+            seconds: start.elapsed().as_secs_f64(),
+        }
     }
 
     pub fn world(&self) -> &WorldDesc {
@@ -127,6 +198,7 @@ impl ErrorTree {
                 return Arc::new(tile);
             }
             let tile = compute_root(&self.world, self.source.as_ref(), root);
+            self.computed.fetch_add(1, Ordering::Relaxed);
             if let Err(e) = self.write(root, &tile) {
                 log::warn!("error tree of {root} not cached: {e}");
             }

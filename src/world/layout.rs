@@ -37,9 +37,10 @@ pub const MAX_LOD_COUNT: u32 = crate::shaders::consts::MAX_NODE_LODS;
 /// Most sectors per world side: beyond this coordinates overflow GPU fields.
 pub const MAX_SECTORS_PER_SIDE: u64 = 1 << 20;
 /// Most roots per side of a world whose LOD count is not given
-/// ([`WorldDesc::lods_for`]): at most 64 roots, an eighth of the default
-/// 512 resident slots.
-pub const DEFAULT_MAX_ROOTS_PER_SIDE: u32 = 8;
+/// ([`WorldDesc::lods_for`]): at most 16 roots, so the far field is drawn
+/// from coarse roots (fewer triangles where the error allows) and the roots
+/// hold few of the slots the near field needs.
+pub const DEFAULT_MAX_ROOTS_PER_SIDE: u32 = 4;
 /// Largest accepted source image side, checked before any pixel allocation.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
@@ -74,7 +75,8 @@ impl Default for WorldDesc {
             extent_m: [10_240.0, 10_240.0],
             height_range_m: [0.0, 1600.0],
             spacing_m: 0.5,
-            lod_count: 6,
+            // WorldDesc::lods_for the extent: 3 x 3 roots of 4 096 m.
+            lod_count: 7,
             grid_origin_m: [0.0, 0.0],
         }
     }
@@ -177,7 +179,7 @@ impl WorldDesc {
     /// at most [`DEFAULT_MAX_ROOTS_PER_SIDE`] roots a side: the default LOD
     /// count, so a larger world gets larger roots instead of more of them
     /// (which would hold the slots the near field needs). The default
-    /// 10 240 m world at 0.5 m gets 6 (5 x 5 roots of 2 048 m).
+    /// 10 240 m world at 0.5 m gets 7 (3 x 3 roots of 4 096 m).
     pub fn lods_for(extent_m: [f64; 2], spacing_m: f64) -> u32 {
         let sector = f64::from(NODE_QUADS) * spacing_m;
         let sectors = extent_m.iter().map(|e| (e / sector).ceil().max(1.0)).fold(1.0, f64::max);
@@ -367,7 +369,7 @@ mod tests {
         for v in [w.extent_m[0], w.extent_m[1], 0.0, 1600.0, w.spacing_m] {
             bytes.extend(v.to_bits().to_le_bytes());
         }
-        bytes.extend(6u64.to_le_bytes());
+        bytes.extend(u64::from(w.lod_count).to_le_bytes());
         bytes.extend([0u8; 16]);
         let fnv = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
         assert_eq!(w.hash(), fnv);
@@ -376,12 +378,14 @@ mod tests {
 
     #[test]
     fn the_lod_count_follows_the_extent() {
-        // 160 sectors of 64 m: 5 x 5 roots at 6 LODs (2 048 m each).
-        assert_eq!(WorldDesc::lods_for([10_240.0, 10_240.0], 0.5), 6);
-        // 640 sectors: 8 LODs, 5 x 5 roots of 8 192 m (not 20 x 20 at 6).
-        assert_eq!(WorldDesc::lods_for([40_960.0, 40_960.0], 0.5), 8);
-        // Mont Blanc at 8 m: 59 sectors of 1 024 m, 8 x 8 roots at 4 LODs.
-        assert_eq!(WorldDesc::lods_for([60_000.0, 60_000.0], 8.0), 4);
+        // 160 sectors of 64 m: 3 x 3 roots at 7 LODs (4 096 m each), the
+        // default world's count.
+        assert_eq!(WorldDesc::lods_for([10_240.0, 10_240.0], 0.5), 7);
+        assert_eq!(WorldDesc::default().lod_count, WorldDesc::lods_for(WorldDesc::default().extent_m, 0.5));
+        // 640 sectors: 9 LODs, 3 x 3 roots of 16 384 m (not 20 x 20 at 6).
+        assert_eq!(WorldDesc::lods_for([40_960.0, 40_960.0], 0.5), 9);
+        // Mont Blanc at 8 m: 59 sectors of 1 024 m, 4 x 4 roots at 5 LODs.
+        assert_eq!(WorldDesc::lods_for([60_000.0, 60_000.0], 8.0), 5);
         assert_eq!(WorldDesc::lods_for([100.0, 100.0], 1.0), 1);
         assert_eq!(WorldDesc::lods_for([1e9, 1e9], 0.5), MAX_LOD_COUNT);
     }

@@ -31,7 +31,7 @@ pub use cache::{estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, Mis
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
 pub use error_tile::diamond;
-pub use errors::{ErrorTree, NodeErrors};
+pub use errors::{ErrorTree, NodeErrors, PreparedErrors};
 pub use exr_source::{write_height_exr, ExrSource};
 pub use holes::{holes_hash, Hole};
 pub use layout::{

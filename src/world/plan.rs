@@ -11,8 +11,9 @@ use rayon::prelude::*;
 
 use super::bake::{bake_node_with, BakeSettings};
 use super::cache::estimated_file_bytes;
+use super::error_tile::compute_block;
 use super::holes::Hole;
-use super::layout::{NodeId, WorldDesc};
+use super::layout::{NodeId, WorldDesc, NODE_QUADS};
 use super::memory::MemoryReport;
 use super::source::HeightSource;
 use super::texels::PayloadFormat;
@@ -39,6 +40,9 @@ pub const DEFAULT_SLOTS: u32 = 512;
 /// seconds, 15 ms a node. Image sources are cheaper; where the source is
 /// at hand, [`WorldPlan::measure_bake`] times it instead.
 pub const NODE_BAKE_THREAD_SECONDS: f64 = 0.015;
+/// Single-thread seconds of the error tree per LOD-0 quad when nothing is
+/// timed (the default world on the 2-core reference machine).
+pub const ERROR_QUAD_THREAD_SECONDS: f64 = 5.6e-7;
 
 /// What a world may cost. `None` fields are not checked.
 #[derive(Clone, Debug, PartialEq)]
@@ -136,6 +140,11 @@ pub struct WorldPlan {
     /// Single-thread seconds per baked node, and where that comes from.
     pub node_seconds: f64,
     pub time_basis: TimeBasis,
+    /// LOD-0 quads under the roots over the region (inside the world): the
+    /// error tree needs every one of them ([`super::ErrorTree`]).
+    pub error_quads: u64,
+    /// Single-thread seconds of the error tree per LOD-0 quad.
+    pub error_quad_seconds: f64,
     /// Bake threads (rayon's pool).
     pub threads: usize,
 }
@@ -161,6 +170,11 @@ impl WorldPlan {
         let node_texture = world.grid(root).map(|g| u64::from(g) << root);
         let node_texture_bytes =
             (0..world.lod_count).map(|l| (node_texture[0] >> l) * (node_texture[1] >> l) * 2).sum();
+        // The roots over the region, clipped to the world's sectors.
+        let [rx0, ry0, rx1, ry1] = region_cells(world, root, region);
+        let clip = |c0: u64, c1: u64, s: u64| ((c1 << root).min(s)).saturating_sub(c0 << root);
+        let quads = u64::from(NODE_QUADS);
+        let error_quads = clip(rx0, rx1, sectors[0]) * quads * clip(ry0, ry1, sectors[1]) * quads;
         let mut plan = WorldPlan {
             world: *world,
             region,
@@ -176,6 +190,8 @@ impl WorldPlan {
             node_texture_bytes,
             node_seconds: NODE_BAKE_THREAD_SECONDS,
             time_basis: TimeBasis::Constant,
+            error_quads,
+            error_quad_seconds: ERROR_QUAD_THREAD_SECONDS,
             threads: rayon::current_num_threads().max(1),
         };
         plan.set_slots(DEFAULT_SLOTS);
@@ -209,7 +225,17 @@ impl WorldPlan {
     /// Estimated wall-clock seconds to bake the region from scratch (cached
     /// nodes only cost a read).
     pub fn bake_seconds(&self) -> f64 {
+        self.node_bake_seconds() + self.error_seconds()
+    }
+
+    /// The nodes' share of [`Self::bake_seconds`].
+    pub fn node_bake_seconds(&self) -> f64 {
         self.nodes() as f64 * self.node_seconds / self.threads as f64
+    }
+
+    /// The error tree's share of [`Self::bake_seconds`].
+    pub fn error_seconds(&self) -> f64 {
+        self.error_quads as f64 * self.error_quad_seconds / self.threads as f64
     }
 
     /// One line: nodes, disk size, time.
@@ -280,6 +306,36 @@ impl WorldPlan {
         let coarse_cost = measured.get(1).map_or(measured[0].0, |m| m.0);
         self.node_seconds = (measured[0].0 * lod0 + coarse_cost * coarse_nodes as f64) / total;
         self.time_basis = TimeBasis::Measured(measured.iter().map(|m| m.1 as usize).sum());
+        self.measure_errors(source);
+    }
+
+    /// Times the error tree on sectors of the region (Halton points, one per
+    /// thread at a time, as the tree computes blocks in parallel) until
+    /// [`MIN_TIMED_SECONDS`] have passed or [`MAX_SAMPLE_BATCHES`] batches.
+    fn measure_errors(&mut self, source: &dyn HeightSource) {
+        let [x0, y0, x1, y1] = region_cells(&self.world, 0, self.region);
+        if x0 == x1 || y0 == y1 {
+            return;
+        }
+        let q = NODE_QUADS as usize;
+        let root = self.world.root_lod();
+        let sector = |k: u64| {
+            let at = |v: f64, lo: u64, hi: u64| (lo + ((hi - lo) as f64 * v) as u64) as usize * q;
+            [at(halton(k, 2), x0, x1), at(halton(k, 3), y0, y1)]
+        };
+        compute_block(&self.world, source, sector(1), q, root);
+        let (mut thread_seconds, mut count) = (0.0, 0u64);
+        for batch in 0..MAX_SAMPLE_BATCHES {
+            let ks: Vec<u64> = (0..self.threads as u64).map(|t| 2 + batch * self.threads as u64 + t).collect();
+            let start = Instant::now();
+            ks.par_iter().for_each(|&k| compute_block(&self.world, source, sector(k), q, root));
+            thread_seconds += start.elapsed().as_secs_f64() * self.threads as f64;
+            count += ks.len() as u64;
+            if thread_seconds >= MIN_TIMED_SECONDS * self.threads as f64 {
+                break;
+            }
+        }
+        self.error_quad_seconds = thread_seconds / (count as f64 * (q * q) as f64);
     }
 
     /// The first limit this plan breaks, if any.
@@ -420,13 +476,19 @@ impl fmt::Display for WorldPlan {
         )?;
         let basis = match self.time_basis {
             TimeBasis::Constant => "the built-in per-node constant".to_string(),
-            TimeBasis::Measured(n) => format!("{n} sample nodes baked now"),
+            TimeBasis::Measured(n) => format!("{n} sample nodes and sectors of errors computed now"),
         };
         writeln!(
             f,
-            "bake:     about {} on {} threads ({:.1} ms per node per thread, from {basis}; cached nodes are faster)",
+            "bake:     about {} on {} threads: the error tree about {} ({:.2} us per LOD-0 sample per thread, {} \
+             samples under the region's roots), the nodes about {} ({:.1} ms per node per thread); from {basis}; \
+             cached nodes and trees are faster",
             duration(self.bake_seconds()),
             self.threads,
+            duration(self.error_seconds()),
+            1e6 * self.error_quad_seconds,
+            self.error_quads,
+            duration(self.node_bake_seconds()),
             1000.0 * self.node_seconds
         )
     }

@@ -50,16 +50,42 @@ impl From<bool> for Progress {
 /// The reporter behind [`Progress`], shared by the bake threads.
 pub(super) enum Reporter {
     Bar(ProgressBar),
-    Lines { total: u64, done: AtomicU64, start: Instant, every: Duration, next: Mutex<Duration> },
+    Lines { total: u64, done: AtomicU64, start: Instant, every: Duration, next: Mutex<Duration>, what: Work },
+}
+
+/// What a [`Reporter`] counts, for its lines and bar.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Work {
+    /// Nodes baked.
+    Nodes,
+    /// Roots of the error tree computed or read.
+    ErrorRoots,
+}
+
+impl Work {
+    fn verb(self) -> &'static str {
+        match self {
+            Work::Nodes => "baked",
+            Work::ErrorRoots => "error tree:",
+        }
+    }
+
+    fn unit(self) -> &'static str {
+        match self {
+            Work::Nodes => "nodes",
+            Work::ErrorRoots => "roots",
+        }
+    }
 }
 
 impl Reporter {
-    pub(super) fn new(progress: Progress, total: u64) -> Self {
+    pub(super) fn new(progress: Progress, total: u64, what: Work) -> Self {
         match progress {
             Progress::Hidden => Reporter::Bar(ProgressBar::hidden()),
             Progress::Bar => {
                 let bar = ProgressBar::new(total);
-                if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} nodes {per_sec} eta {eta}") {
+                let template = format!("{{bar:40}} {{pos}}/{{len}} {} {{per_sec}} eta {{eta}}", what.unit());
+                if let Ok(style) = ProgressStyle::with_template(&template) {
                     bar.set_style(style);
                 }
                 Reporter::Bar(bar)
@@ -70,6 +96,7 @@ impl Reporter {
                 start: Instant::now(),
                 every,
                 next: Mutex::new(every),
+                what,
             },
         }
     }
@@ -77,7 +104,7 @@ impl Reporter {
     pub(super) fn inc(&self) {
         match self {
             Reporter::Bar(bar) => bar.inc(1),
-            Reporter::Lines { total, done, start, every, next } => {
+            Reporter::Lines { total, done, start, every, next, what } => {
                 let done = done.fetch_add(1, Ordering::Relaxed) + 1;
                 let elapsed = start.elapsed();
                 // Another thread printing now is enough: never wait for it.
@@ -89,8 +116,9 @@ impl Reporter {
                 let secs = elapsed.as_secs_f64().max(1e-9);
                 let rate = done as f64 / secs;
                 let eta = (total - done) as f64 / rate;
+                let (verb, unit) = (what.verb(), what.unit());
                 eprintln!(
-                    "baked {done}/{total} nodes ({:.1} %), {rate:.1} nodes/s, eta {}",
+                    "{verb} {done}/{total} {unit} ({:.1} %), {rate:.1} {unit}/s, eta {}",
                     100.0 * done as f64 / (*total).max(1) as f64,
                     super::plan::duration(eta)
                 );

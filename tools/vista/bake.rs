@@ -131,9 +131,22 @@ struct BakeReport {
     /// Uncompressed node files over the bytes on disk (zstd's ratio).
     compression_ratio: f64,
     full_world_nodes: usize,
-    /// Only for a region: per-node figures times the full node count.
+    /// The error tree of the region's roots, made before the nodes (not in
+    /// `seconds`).
+    error_tree: ErrorTreeJson,
+    /// Only for a region: per-node figures times the full node count, and
+    /// the error tree's seconds per LOD-0 sample times the world's.
     extrapolated: Option<Extrapolation>,
     memory: MemoryJson,
+}
+
+#[derive(Serialize)]
+struct ErrorTreeJson {
+    roots: usize,
+    read: usize,
+    seconds: f64,
+    /// LOD-0 quads under those roots, inside the world.
+    quads: u64,
 }
 
 #[derive(Serialize)]
@@ -229,10 +242,22 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         compression_ratio: (nodes as u64 * uncompressed_file_bytes(w.bake.format)) as f64
             / (stats.bytes_on_disk.max(1) as f64),
         full_world_nodes,
-        extrapolated: args.region.map(|_| Extrapolation {
-            seconds: per_node(stats.seconds) * full_world_nodes as f64,
-            bytes_on_disk: per_node(stats.bytes_on_disk as f64) * full_world_nodes as f64,
+        extrapolated: args.region.map(|_| {
+            let e = &stats.errors;
+            // Per LOD-0 sample of the tree made now (none computed: reads).
+            let per_quad = e.seconds / stats.error_quads.max(1) as f64;
+            let world_quads = vista::world::WorldPlan::new(&w.desc, None).error_quads as f64;
+            Extrapolation {
+                seconds: per_node(stats.seconds) * full_world_nodes as f64 + per_quad * world_quads,
+                bytes_on_disk: per_node(stats.bytes_on_disk as f64) * full_world_nodes as f64,
+            }
         }),
+        error_tree: ErrorTreeJson {
+            roots: stats.errors.roots,
+            read: stats.errors.read,
+            seconds: stats.errors.seconds,
+            quads: stats.error_quads,
+        },
         memory: MemoryJson::new(&memory),
     };
     // The JSON first: a closed stdout (`| head`) must not lose the file.
@@ -281,7 +306,17 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
     let per_lod: Vec<String> = r.nodes_per_lod.iter().enumerate().map(|(l, n)| format!("lod{l} {n}")).collect();
     writeln!(out, "nodes:    {} ({})", r.nodes, per_lod.join(", "))?;
     writeln!(out, "          {} baked, {} cached", r.baked, r.cached)?;
-    writeln!(out, "time:     {:.2} s ({:.2} ms per node)", r.seconds, 1000.0 * r.seconds / r.nodes.max(1) as f64)?;
+    let e = &r.error_tree;
+    writeln!(
+        out,
+        "time:     {:.2} s for the nodes ({:.2} ms per node), {:.2} s before them for the error tree ({} roots: {} read, {} computed)",
+        r.seconds,
+        1000.0 * r.seconds / r.nodes.max(1) as f64,
+        e.seconds,
+        e.roots,
+        e.read,
+        e.roots - e.read
+    )?;
     writeln!(
         out,
         "disk:     {} in {} ({} per node; zstd {:.2}:1)",
@@ -292,7 +327,7 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
     )?;
     if let Some(x) = &r.extrapolated {
         // Cached nodes only measure validation, so say which time this is.
-        let basis = if r.baked == 0 { "cache reads" } else { "this run" };
+        let basis = if r.baked == 0 && e.read == e.roots { "cache reads" } else { "this run" };
         writeln!(
             out,
             "extrapolated to the whole world ({} nodes, per-node figures of {basis}): {:.1} s, {}",

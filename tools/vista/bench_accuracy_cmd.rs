@@ -64,6 +64,7 @@ pub fn accuracy(
         frames: args.frames,
         settle_timeout: Duration::from_secs(300),
         cache_dir: cache.clone(),
+        errors: Some(world.errors(None)?),
         slots,
         raycast: RaycastConfig::default(),
         keep_images: images.is_some(),

@@ -6,13 +6,15 @@ use std::time::Duration;
 use vista::bench::{bench_cull, cull_views, CullBenchConfig};
 use vista::gpu::Context;
 use vista::render::{RendererOptions, TerrainRenderer};
+use vista::terrain::TerrainOptions;
 
 pub fn cull(ctx: &Context, b: &ViewBench) -> Result<()> {
     let (frames, size, target_error_px) = (b.frames, b.size, b.target_error_px);
     let world = b.world.load()?;
     world.require_unplaced("vista bench cull")?;
     let d = world.desc;
-    let options = RendererOptions { effects: world.effects.clone(), ..RendererOptions::default() };
+    let terrain = TerrainOptions { errors: Some(world.errors(None)?), ..TerrainOptions::default() };
+    let options = RendererOptions { effects: world.effects.clone(), terrain, ..RendererOptions::default() };
     let mut renderer = TerrainRenderer::new(ctx, &d, world.source.clone(), world.holes.clone(), &options)?;
     let views = cull_views(&d, &*world.source);
     let cfg =

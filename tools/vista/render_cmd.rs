@@ -64,7 +64,9 @@ pub struct RenderArgs {
     /// Resident node slots (at most 1023: slots are 10-bit).
     #[arg(long, default_value_t = 512, allow_negative_numbers = true)]
     pub slots: u32,
-    /// Cache baked nodes here across runs (default: bake in memory only).
+    /// Cache baked nodes and the error tree here across runs (default: bake
+    /// in memory only; the error tree goes to $VISTA_CACHE, else
+    /// $XDG_CACHE_HOME/vista, else ~/.cache/vista).
     #[arg(long)]
     pub cache: Option<PathBuf>,
     /// Longest wait for the streamed set to become resident before the measured frames.
@@ -206,10 +208,12 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
 }
 
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
+    let errors = world.errors(args.cache.as_deref())?;
     let options = RendererOptions {
         terrain: TerrainOptions {
             slots: args.slots,
             cache_dir: args.cache.clone(),
+            errors: Some(errors),
             bake: world.bake,
             limits: world.limits.clone(),
             ..TerrainOptions::default()

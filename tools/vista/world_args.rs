@@ -9,8 +9,9 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use vista::render::Effects;
 use vista::world::{
-    BakeSettings, ExrSource, GridSource, HeightSource, Hole, Limits, PayloadFormat, Png16Source, ProceduralSource,
-    WorldDesc, WorldError, WorldPlan, DEFAULT_MAX_SECTORS_PER_SIDE, MAX_LOD_COUNT, MAX_SECTORS_PER_SIDE,
+    BakeSettings, ErrorTree, ExrSource, GridSource, HeightSource, Hole, Limits, PayloadFormat, Png16Source,
+    ProceduralSource, Progress, WorldDesc, WorldError, WorldPlan, DEFAULT_MAX_SECTORS_PER_SIDE, MAX_LOD_COUNT,
+    MAX_SECTORS_PER_SIDE,
 };
 
 use crate::scene::{Scene, SceneSource};
@@ -93,7 +94,41 @@ pub struct LoadedWorld {
     pub limits: Limits,
 }
 
+/// Where error trees are cached when no `--cache` is given: `$VISTA_CACHE`
+/// (empty: nowhere, computed in memory every run), else
+/// `$XDG_CACHE_HOME/vista`, else `~/.cache/vista`.
+pub fn default_cache_dir() -> Option<PathBuf> {
+    if let Some(v) = std::env::var_os("VISTA_CACHE") {
+        return (!v.is_empty()).then(|| PathBuf::from(v));
+    }
+    let xdg = std::env::var_os("XDG_CACHE_HOME").filter(|v| !v.is_empty()).map(PathBuf::from);
+    xdg.or_else(|| std::env::var_os("HOME").filter(|v| !v.is_empty()).map(|h| Path::new(&h).join(".cache")))
+        .map(|d| d.join("vista"))
+}
+
 impl LoadedWorld {
+    /// The world's error tree (every node's error needs every LOD-0 sample
+    /// under its root, so the whole tree is made before rendering), read
+    /// from `cache/errors` (`--cache`, else [`default_cache_dir`]) or
+    /// computed there, with progress on stderr and one line saying which.
+    pub fn errors(&self, cache: Option<&Path>) -> Result<Arc<ErrorTree>> {
+        let dir = cache.map(Path::to_path_buf).or_else(default_cache_dir);
+        let tree = ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?;
+        let p = tree.prepare(Progress::auto());
+        let place = match tree.dir() {
+            Some(d) => format!("cached in {}", d.display()),
+            None => "in memory only ($VISTA_CACHE is empty)".to_string(),
+        };
+        eprintln!(
+            "error tree: {} roots, {} read, {} computed in {:.1} s; {place}",
+            p.roots,
+            p.read,
+            p.roots - p.read,
+            p.seconds
+        );
+        Ok(Arc::new(tree))
+    }
+
     /// Commands whose views are chosen in world metres (benchmarks, golden)
     /// refuse a placed world rather than silently ignoring the placement.
     pub fn require_unplaced(&self, command: &str) -> Result<()> {
