@@ -93,6 +93,8 @@ void refine_level(ivec2 node, uint slot, uint t) {
     patch_box(0u, node, pxy, slot, lo, hi);
     vec2 e = patch_error(slot, pxy);
     int r = meets_target(e.x, lo, hi) ? 0 : meets_target(e.y, lo, hi) ? 1 : int(REFINE_LEVELS);
+    // The renderer's cap (LodOptions::refine_levels).
+    r = min(r, int(view.v.lod_params.z));
     if (r > 0) {
         // Mid-edge samples just across each edge: the neighbours' coarse levels.
         int side = int(quads);

@@ -98,15 +98,17 @@ void main() {
     uint side = quads + 1u;
     uint i = uint(gl_VertexIndex) % side, j = uint(gl_VertexIndex) / side;
     uint si = i, sj = j;
+    // 0 unless stitching is switched off (tests that show the seams open).
+    uint off = uint(view.v.lod_params.w != 0.0);
     if (j == 0u) {
-        si = snap(i, patch_delta(p, EDGE_SOUTH));
+        si = snap(i, patch_delta(p, EDGE_SOUTH) * (1u - off));
     } else if (j == quads) {
-        si = snap(i, patch_delta(p, EDGE_NORTH));
+        si = snap(i, patch_delta(p, EDGE_NORTH) * (1u - off));
     }
     if (i == 0u) {
-        sj = snap(j, patch_delta(p, EDGE_WEST));
+        sj = snap(j, patch_delta(p, EDGE_WEST) * (1u - off));
     } else if (i == quads) {
-        sj = snap(j, patch_delta(p, EDGE_EAST));
+        sj = snap(j, patch_delta(p, EDGE_EAST) * (1u - off));
     }
     uvec2 pxy = uvec2(index % per_side, index / per_side);
     uint lod = node_lod(n);

@@ -33,7 +33,8 @@ struct TerrainView {
     uvec4 shade_flags;      // x: flavours the scene can produce; y: hash seed; z: 1 = stochastic cliffs; w: clay albedo bits (0: G-buffer albedo)
     // Per-patch LOD selection (lod_select.glsl).
     vec4 lod_forward;       // xyz: the camera's forward axis (world); w: pixels per unit of tan (viewport_h / (2 tan(fov_y / 2)))
-    vec4 lod_params;        // x: target error (px); y: 1 / cos^2 of the frustum's widest angle to the forward axis; zw: unused
+    vec4 lod_params;        // x: target error (px); y: 1 / cos^2 of the frustum's widest angle to the forward axis;
+                            // z: refinement levels below LOD 0 allowed; w: 1 = no stitching (tests only)
 };
 
 // LOD-0 sample index -> camera-relative metres (x, y). Takes fields, not

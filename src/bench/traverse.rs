@@ -39,6 +39,8 @@ pub struct TraverseBenchConfig {
     pub frames: u32,
     pub camera_m: [f64; 3],
     pub viewport_height_px: u32,
+    /// The world's error tree (`None`: made here, in memory).
+    pub errors: Option<Arc<ErrorTree>>,
 }
 
 /// `n` nodes around `camera` as a streaming camera would hold them: the
@@ -73,7 +75,10 @@ pub fn bench_traverse(
     source: Arc<dyn HeightSource>,
     cfg: &TraverseBenchConfig,
 ) -> Result<Vec<TraverseBenchRow>> {
-    let errors = ErrorTree::new(world, Arc::clone(&source), None)?;
+    let errors = match &cfg.errors {
+        Some(e) => Arc::clone(e),
+        None => Arc::new(ErrorTree::new(world, Arc::clone(&source), None)?),
+    };
     let max = cfg.resident_sets.iter().copied().max().unwrap_or(64);
     let update = QuadtreeUpdatePass::new(ctx, false)?;
     let traverse = Traverse::with_per_level(ctx, world, max)?;

@@ -64,6 +64,27 @@ pub struct RendererOptions {
     /// show that its path changes nothing there.
     #[doc(hidden)]
     pub force_content_gated: bool,
+    /// What the per-patch LOD selection may do.
+    pub lod: LodOptions,
+}
+
+/// Per-patch LOD selection settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LodOptions {
+    /// Levels of refinement below LOD 0 allowed (0: none; 1: 2x; 2: 4x, the
+    /// finest surface the error tree measures against). Below the finest,
+    /// the error bound reported is the refused level's.
+    pub refine_levels: u32,
+    /// Tests only: off, edges are not snapped to coarser neighbours (seams
+    /// open), to show that the watertightness tests can fail.
+    #[doc(hidden)]
+    pub stitching: bool,
+}
+
+impl Default for LodOptions {
+    fn default() -> Self {
+        LodOptions { refine_levels: crate::shaders::consts::REFINE_LEVELS, stitching: true }
+    }
 }
 
 pub struct TerrainRenderer {
@@ -90,6 +111,8 @@ pub struct TerrainRenderer {
     pub gbuffer: Option<GBuffer>,
     pub shade: ShadeRules,
     shading: Shading,
+    /// Per-patch LOD settings of the next recorded frame.
+    pub lod: LodOptions,
     view_buffer: Buffer,
     telemetry: Telemetry,
     exec: FrameExecutor,
@@ -243,6 +266,7 @@ impl TerrainRenderer {
             gbuffer: None,
             shade,
             shading: options.shading,
+            lod: options.lod,
             view_buffer,
             telemetry: Telemetry::new(ctx, options.terrain.frames_in_flight, layout)?,
             exec,
@@ -343,7 +367,9 @@ impl TerrainRenderer {
         let ctx_frame = ctx.frame_recording();
         self.telemetry.harvest(ctx);
         let world = self.terrain.world;
-        let gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting, &self.shade);
+        let mut gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting, &self.shade);
+        gpu.lod_params[2] = self.lod.refine_levels as f32;
+        gpu.lod_params[3] = if self.lod.stitching { 0.0 } else { 1.0 };
         let params = view.traverse_params();
         self.terrain.stream(&params)?;
         let mut frame = self.exec.begin(cmds, mode);

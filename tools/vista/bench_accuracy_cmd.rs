@@ -27,9 +27,6 @@ pub fn accuracy(
     images: Option<&Path>,
     slots: u32,
 ) -> Result<()> {
-    if !(1..=1023).contains(&slots) {
-        bail!("--slots must be 1..=1023 resident nodes (slots are 10-bit)");
-    }
     if targets.is_empty() || targets.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         bail!("--targets must be positive numbers of pixels");
     }
@@ -42,6 +39,7 @@ pub fn accuracy(
         }
     }
     let world = args.world.load()?;
+    crate::world_args::check_slots(slots, &world.desc)?;
     world.require_unplaced("vista bench accuracy")?;
     let d = world.desc;
     let mut all = cull_views(&d, &*world.source);
@@ -64,7 +62,7 @@ pub fn accuracy(
         frames: args.frames,
         settle_timeout: Duration::from_secs(300),
         cache_dir: cache.clone(),
-        errors: Some(world.errors(None)?),
+        errors: Some(world.errors(ctx, None)?),
         slots,
         raycast: RaycastConfig::default(),
         keep_images: images.is_some(),

@@ -190,6 +190,7 @@ fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
         frames,
         camera_m: camera,
         viewport_height_px: 1080,
+        errors: Some(world.errors(ctx, None)?),
     };
     let rows = bench_traverse(ctx, d, std::sync::Arc::clone(&world.source), &cfg)?;
     println!(

@@ -13,7 +13,7 @@ pub fn cull(ctx: &Context, b: &ViewBench) -> Result<()> {
     let world = b.world.load()?;
     world.require_unplaced("vista bench cull")?;
     let d = world.desc;
-    let terrain = TerrainOptions { errors: Some(world.errors(None)?), ..TerrainOptions::default() };
+    let terrain = TerrainOptions { errors: Some(world.errors(ctx, None)?), ..TerrainOptions::default() };
     let options = RendererOptions { effects: world.effects.clone(), terrain, ..RendererOptions::default() };
     let mut renderer = TerrainRenderer::new(ctx, &d, world.source.clone(), world.holes.clone(), &options)?;
     let views = cull_views(&d, &*world.source);

@@ -33,7 +33,7 @@ pub fn effects(ctx: &Context, b: &ViewBench) -> Result<()> {
         rounds: 4,
         settle_timeout: Duration::from_secs(300),
         cache_dir: cache.clone(),
-        errors: Some(world.errors(None)?),
+        errors: Some(world.errors(ctx, None)?),
     };
     let rows = bench_effects(ctx, &d, world.source.clone(), &world.holes, &full, &cfg);
     let _ = std::fs::remove_dir_all(&cache);

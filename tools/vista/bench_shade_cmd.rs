@@ -35,7 +35,7 @@ pub fn shade(ctx: &Context, args: &ViewBench) -> Result<()> {
         rounds: 3,
         settle_timeout: Duration::from_secs(300),
         cache_dir: cache.clone(),
-        errors: Some(world.errors(None)?),
+        errors: Some(world.errors(ctx, None)?),
     };
     let result = bench_shade(ctx, &d, world.source.clone(), &world.holes, &fx, &views, &cfg);
     let _ = std::fs::remove_dir_all(&cache);

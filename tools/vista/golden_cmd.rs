@@ -195,7 +195,11 @@ fn render(ctx: &Context, g: &Golden, payload: PayloadFormat) -> Result<Vec<u8>> 
     let view = View { camera, fov_y_deg: 60.0, size: SIZE, target_error_px: 1.0, near_m: DEFAULT_NEAR_M };
     let options = RendererOptions {
         effects: world.effects.clone(),
-        terrain: TerrainOptions { bake: world.bake, errors: Some(world.errors(None)?), ..TerrainOptions::default() },
+        terrain: TerrainOptions {
+            bake: world.bake,
+            errors: Some(world.errors(ctx, None)?),
+            ..TerrainOptions::default()
+        },
         ..RendererOptions::default()
     };
     let mut r = TerrainRenderer::new(ctx, &world.desc, world.source.clone(), world.holes.clone(), &options)?;

@@ -208,7 +208,7 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
 }
 
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
-    let errors = world.errors(args.cache.as_deref())?;
+    let errors = world.errors(ctx, args.cache.as_deref())?;
     let options = RendererOptions {
         terrain: TerrainOptions {
             slots: args.slots,

@@ -94,6 +94,33 @@ pub struct LoadedWorld {
     pub limits: Limits,
 }
 
+/// Refuses a slot budget the renderer cannot use for `world`, in the
+/// option's terms and before any GPU work: slots are 10-bit (at most
+/// `MAX_SLOTS`), and the roots, always resident, may hold at most a quarter
+/// of them (the plan's rule).
+pub fn check_slots(slots: u32, world: &WorldDesc) -> Result<()> {
+    let max = vista::terrain::quadtree::MAX_SLOTS;
+    let [x, y] = world.grid(world.root_lod());
+    let roots = u64::from(x) * u64::from(y);
+    let min = (4 * roots).max(1);
+    if !(min..=u64::from(max)).contains(&u64::from(slots)) {
+        let why = if u64::from(slots) > u64::from(max) {
+            "slots are 10-bit".to_string()
+        } else {
+            format!("the world's {x} x {y} root nodes stay resident and may hold at most a quarter of them")
+        };
+        if min > u64::from(max) {
+            return Err(anyhow::Error::new(crate::InputError(format!(
+                "--slots {slots}: the world's {x} x {y} root nodes need {min} slots, more than the {max} there can be: raise --lods"
+            ))));
+        }
+        return Err(anyhow::Error::new(crate::InputError(format!(
+            "--slots {slots}: use {min} to {max} resident nodes for this world ({why})"
+        ))));
+    }
+    Ok(())
+}
+
 /// Where error trees are cached when no `--cache` is given: `$VISTA_CACHE`
 /// (empty: nowhere, computed in memory every run), else
 /// `$XDG_CACHE_HOME/vista`, else `~/.cache/vista`.
@@ -111,7 +138,16 @@ impl LoadedWorld {
     /// under its root, so the whole tree is made before rendering), read
     /// from `cache/errors` (`--cache`, else [`default_cache_dir`]) or
     /// computed there, with progress on stderr and one line saying which.
-    pub fn errors(&self, cache: Option<&Path>) -> Result<Arc<ErrorTree>> {
+    /// The world is first checked against the device (as
+    /// `TerrainRenderer::new` would), so a world no renderer can hold is
+    /// refused before its tree is made.
+    pub fn errors(&self, ctx: &vista::gpu::Context, cache: Option<&Path>) -> Result<Arc<ErrorTree>> {
+        let terrain = vista::terrain::TerrainOptions {
+            bake: self.bake,
+            limits: self.limits.clone(),
+            ..vista::terrain::TerrainOptions::default()
+        };
+        vista::terrain::check_plan(ctx, &self.desc, &terrain).map_err(plan_error_is_input)?;
         let dir = cache.map(Path::to_path_buf).or_else(default_cache_dir);
         let tree = ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?;
         let p = tree.prepare(Progress::auto());
