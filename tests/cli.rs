@@ -475,14 +475,14 @@ fn vista_without_vulkan_fails_at_vulkan() {
 
 #[test]
 fn slot_budgets_the_renderer_cannot_use_are_refused_before_vulkan() {
-    // The default world: 3 x 3 roots of 4 096 m, which may hold at most a
-    // quarter of the slots: 36 to 1023 (slots are 10-bit).
-    for (slots, why) in [("0", "root nodes"), ("1", "root nodes"), ("35", "root nodes"), ("1024", "10-bit")] {
+    // The default world: 5 x 5 roots of 2 048 m, which may hold at most a
+    // quarter of the slots: 100 to 1023 (slots are 10-bit).
+    for (slots, why) in [("0", "root nodes"), ("1", "root nodes"), ("99", "root nodes"), ("1024", "10-bit")] {
         let (code, stdout, err) = vista_without_vulkan(&["render", "--slots", slots, "--size", "8x8", "--frames", "1"]);
         assert_eq!(code, Some(2), "--slots {slots}: {err}");
         assert!(stdout.is_empty(), "{stdout}");
         assert_eq!(err.trim().lines().count(), 1, "{err}");
-        for n in [&format!("--slots {slots}"), "use 36 to 1023", why] {
+        for n in [&format!("--slots {slots}"), "use 100 to 1023", why] {
             assert!(err.contains(n), "{n:?} missing from: {err}");
         }
     }

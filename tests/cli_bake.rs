@@ -50,25 +50,25 @@ fn bakes_a_region_of_the_default_world() {
     let (o, j) = (out.to_str().unwrap(), json.to_str().unwrap());
     let (ok, text, err) = vista(&["bake", "--out", o, "--region", "0,0,64,64", "--no-progress", "--json", j]);
     assert!(ok, "{err}");
-    // One node of each of the 7 LODs covers the 64 m corner; the world has
-    // 160^2 + 80^2 + 40^2 + 20^2 + 10^2 + 5^2 + 3^2 = 34134 nodes.
-    assert!(text.contains("nodes:    7 (lod0 1, lod1 1"), "{text}");
-    assert!(text.contains("7 baked, 0 cached"), "{text}");
+    // One node of each of the 6 LODs covers the 64 m corner; the world has
+    // 160^2 + 80^2 + 40^2 + 20^2 + 10^2 + 5^2 = 34125 nodes.
+    assert!(text.contains("nodes:    6 (lod0 1, lod1 1"), "{text}");
+    assert!(text.contains("6 baked, 0 cached"), "{text}");
     // The error tree of the one root over the corner comes first.
     assert!(text.contains("for the error tree (1 roots: 0 read, 1 computed)"), "{text}");
-    assert!(text.contains("extrapolated") && text.contains("34134 nodes"), "{text}");
+    assert!(text.contains("extrapolated") && text.contains("34125 nodes"), "{text}");
     assert!(text.contains("total for 512 nodes"), "{text}");
-    assert_eq!(node_files(&out), 7);
+    assert_eq!(node_files(&out), 6);
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    assert_eq!(v["nodes"], 7);
-    assert_eq!(v["full_world_nodes"], 34134);
+    assert_eq!(v["nodes"], 6);
+    assert_eq!(v["full_world_nodes"], 34125);
     assert_eq!(v["error_tree"]["roots"], 1);
     assert!(v["extrapolated"]["bytes_on_disk"].as_f64().unwrap() > 0.0);
 
     // A second run finds every node in the cache.
     let (ok, text, err) = vista(&["bake", "--out", o, "--region", "0,0,64,64"]);
     assert!(ok, "{err}");
-    assert!(text.contains("0 baked, 7 cached") && text.contains("(1 roots: 1 read, 0 computed)"), "{text}");
+    assert!(text.contains("0 baked, 6 cached") && text.contains("(1 roots: 1 read, 0 computed)"), "{text}");
 }
 
 #[test]
@@ -93,7 +93,7 @@ fn bakes_a_region_of_montblanc() {
     ]);
     assert!(ok, "{err}");
     assert!(text.contains("montblanc.png") && text.contains("extrapolated"), "{text}");
-    // 1024 m sectors: 59 per side, 5 LODs (at most 4 roots a side):
+    // 1024 m sectors: 59 per side, 5 LODs (at most 5 roots a side):
     // 59^2 + 30^2 + 15^2 + 8^2 + 4^2 = 4686 nodes.
     assert!(text.contains("5 LODs") && text.contains("(4686 nodes"), "{text}");
     assert!(node_files(&dir) >= 6, "{text}");

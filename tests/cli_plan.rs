@@ -107,7 +107,15 @@ fn dry_run_prints_the_plan_and_bakes_nothing() {
     let total: u64 = expected.iter().map(|r| r.1).sum();
     assert!(run.out.lines().any(|l| l.split_whitespace().collect::<Vec<_>>() == ["total", "85", "85"]), "{}", run.out);
     assert_eq!(total, 85);
-    for key in ["disk:", "GPU:", "512 resident slots", "bake:", "sample nodes baked now", "dry run: nothing baked"] {
+    for key in [
+        "disk:",
+        "GPU:",
+        "512 resident slots",
+        "bake:",
+        "the error tree about",
+        "sample nodes and sectors of errors computed now",
+        "dry run: nothing baked",
+    ] {
         assert!(run.out.contains(key), "{key:?} missing:\n{}", run.out);
     }
     assert!(!out.exists(), "a dry run creates no cache folder");
@@ -145,8 +153,8 @@ fn each_limit_is_refused_before_allocating() {
     // The limit is an option.
     assert_refused(&["memory", "--max-sectors", "100"], &["160 x 160 sectors", "limit is 100"]);
 
-    // The disk cap: 1563 sectors a side at 0.5 m, 10 LODs (at most 4 roots
-    // a side: 1563 / 2^9 <= 4), sum of ceil(1563 / 2^k)^2 over k = 0..=9 =
+    // The disk cap: 1563 sectors a side at 0.5 m, 10 LODs (at most 5 roots
+    // a side: 1563 / 2^9 <= 5), sum of ceil(1563 / 2^k)^2 over k = 0..=9 =
     // 3 258 654 nodes of about 43 KiB (compressed BC payloads): over 130 GiB.
     let big = ["bake", "--out", o, "--extent", "100000"];
     let run = assert_refused(&big, &["GiB", "3258654 nodes", "64.00 GiB", "--yes", "--max-disk", "--region"]);

@@ -76,11 +76,21 @@ pub struct AccuracyPoint {
     pub family: String,
     pub setting: String,
     pub target_error_px: f32,
+    /// The error bound the frame achieved (px): the largest projected error
+    /// of any drawn patch; above the target when the slot budget could not
+    /// meet it.
+    pub bound_px: f32,
+    /// Whether the target's promise held: `None` where the bound exceeds the
+    /// target (nothing was promised), else the LOD part's p99 within the
+    /// target and its maximum within twice the target.
+    pub promise_held: Option<bool>,
     pub passes: Vec<PassMs>,
     /// Sum of the pass medians.
     pub gpu_ms: f64,
     pub samples: usize,
     pub triangles_drawn: u64,
+    /// Triangles drawn per screen pixel.
+    pub triangles_per_pixel: f64,
     pub patches_drawn: u32,
     pub nodes_drawn_per_lod: Vec<u32>,
     pub resident_per_lod: Vec<u32>,
@@ -293,11 +303,21 @@ impl Run<'_> {
         for id in r.terrain.resident_nodes() {
             resident[id.lod as usize] += 1;
         }
+        let error = accuracy_error(&capture, reference, view, &**self.source, self.world);
+        let target = view.target_error_px;
+        let promise_held = (stats.bound_px <= target).then(|| {
+            let t = f64::from(target);
+            error.lod_px_p99 <= t && error.lod_px_max <= 2.0 * t
+        });
+        let pixels = f64::from(view.size[0]) * f64::from(view.size[1]);
         let point = AccuracyPoint {
             view: view_name.to_string(),
             family: family.to_string(),
             setting: setting.to_string(),
-            target_error_px: view.target_error_px,
+            target_error_px: target,
+            bound_px: stats.bound_px,
+            promise_held,
+            triangles_per_pixel: stats.triangles_drawn as f64 / pixels,
             gpu_ms: passes.iter().map(|p| p.median_ms).sum(),
             passes,
             samples: timings.len(),
@@ -307,7 +327,7 @@ impl Run<'_> {
             resident_per_lod: resident,
             wanted_finer: stats.wanted_finer_per_lod.iter().sum(),
             settled,
-            error: accuracy_error(&capture, reference, view, &**self.source, self.world),
+            error,
             differs_from_culled_px: None,
             texture_flip_vs_accurate: None,
         };

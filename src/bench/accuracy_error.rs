@@ -1,7 +1,7 @@
 //! What one rendered frame loses against the reference ray-caster: depth,
 //! silhouette, screen-space geometric error and colour.
 
-use crate::reference::{flip_map, ReferenceImage};
+use crate::reference::{flip_map, FinestSurface, ReferenceImage};
 use crate::render::offscreen::Capture;
 use crate::render::view::{linear_depth, View};
 use crate::world::{HeightSource, WorldDesc};
@@ -24,12 +24,23 @@ pub struct AccuracyError {
     pub silhouette_fraction: f64,
     /// Per rendered terrain pixel: the vertical distance from its world
     /// position (from the depth buffer) to the source surface, projected
-    /// onto the screen, in pixels. What the LOD criterion bounds.
+    /// onto the screen, in pixels: the whole error.
     pub geometric_px_max: f64,
     pub geometric_px_p99: f64,
     pub geometric_px_mean: f64,
-    /// Lit (clay) image against the reference's: PSNR over RGB (dB; null
-    /// when identical) and mean FLIP (nv-flip, the NVIDIA FLIP metric).
+    /// Its LOD part: the same distance to the finest surface vista can draw
+    /// ([`FinestSurface`]), which the target error bounds.
+    pub lod_px_max: f64,
+    pub lod_px_p99: f64,
+    /// Its representation part: at the same points, the finest surface's
+    /// distance to the source, projected (what no LOD choice removes).
+    pub repr_px_max: f64,
+    pub repr_px_p99: f64,
+    /// Lit (clay) image against the reference's over the pixels where
+    /// either has terrain (the sky, identical in both, left out): PSNR over
+    /// RGB (dB; null when identical) and mean FLIP (nv-flip, the NVIDIA
+    /// FLIP metric, computed on the whole image and averaged over those
+    /// pixels).
     pub psnr_db: f64,
     pub flip_mean: f64,
 }
@@ -46,6 +57,13 @@ fn quantile(v: &mut [f64], q: f64) -> f64 {
 /// The vertical distance of each rendered terrain pixel's world position to
 /// the source surface, projected onto the screen (pixels).
 pub fn geometric_error_px(capture: &Capture, view: &View, source: &dyn HeightSource, world: &WorldDesc) -> Vec<f64> {
+    projected_px(capture, view, world, |p| (p.z, f64::from(source.sample(p.x, p.y))))
+}
+
+/// For each rendered terrain pixel inside the world, at its world position
+/// p (from the depth buffer): the screen length (pixels) of the vertical
+/// segment between the two heights `ends(p)` gives at p's x and y.
+pub fn projected_px(capture: &Capture, view: &View, world: &WorldDesc, ends: impl Fn(DVec3) -> (f64, f64)) -> Vec<f64> {
     let [w, h] = capture.size;
     let origin = DVec3::from(view.camera.position_m);
     let forward = view.camera.basis()[0];
@@ -63,9 +81,9 @@ pub fn geometric_error_px(capture: &Capture, view: &View, source: &dyn HeightSou
             if !inside {
                 continue;
             }
-            let dz = p.z - f64::from(source.sample(p.x, p.y));
-            let q = DVec3::new(p.x, p.y, p.z - dz);
-            if let (Some((a, _)), Some((b, _))) = (view.project(p.to_array()), view.project(q.to_array())) {
+            let (za, zb) = ends(p);
+            let (a, b) = (DVec3::new(p.x, p.y, za), DVec3::new(p.x, p.y, zb));
+            if let (Some((a, _)), Some((b, _))) = (view.project(a.to_array()), view.project(b.to_array())) {
                 out.push((a[0] - b[0]).hypot(a[1] - b[1]));
             }
         }
@@ -97,14 +115,25 @@ pub fn accuracy_error(
     let (d05, d2) = (within(0.005), within(0.02));
     let mut geo = geometric_error_px(capture, view, source, world);
     let geo_mean = geo.iter().sum::<f64>() / geo.len().max(1) as f64;
+    let finest = FinestSurface::new(world, source);
+    let mut lod = projected_px(capture, view, world, |p| (p.z, f64::from(finest.sample(p.x, p.y))));
+    let mut repr = projected_px(capture, view, world, |p| {
+        (f64::from(finest.sample(p.x, p.y)), f64::from(source.sample(p.x, p.y)))
+    });
+    // Terrain in either image: the metrics are not diluted by the sky.
+    let terrain: Vec<bool> = capture.depth.iter().zip(&reference.depth_m).map(|(&d, &r)| d > 0.0 || r > 0.0).collect();
+    let counted = terrain.iter().filter(|&&t| t).count().max(1) as f64;
     let mse = capture
         .rgba
         .chunks_exact(4)
         .zip(reference.rgba.chunks_exact(4))
-        .map(|(a, b)| (0..3).map(|i| (f64::from(a[i]) - f64::from(b[i])).powi(2)).sum::<f64>())
+        .zip(&terrain)
+        .filter(|(_, &t)| t)
+        .map(|((a, b), _)| (0..3).map(|i| (f64::from(a[i]) - f64::from(b[i])).powi(2)).sum::<f64>())
         .sum::<f64>()
-        / (3 * capture.rgba.len() / 4).max(1) as f64;
+        / (3.0 * counted);
     let flip = flip_map(&reference.rgba, &capture.rgba, capture.size);
+    let flip_sum: f64 = flip.iter().zip(&terrain).filter(|(_, &t)| t).map(|(&e, _)| f64::from(e)).sum();
     let pixels = u64::from(capture.size[0]) * u64::from(capture.size[1]);
     AccuracyError {
         terrain_pixels: rel.len() as u64,
@@ -117,7 +146,11 @@ pub fn accuracy_error(
         geometric_px_max: geo.iter().copied().fold(0.0, f64::max),
         geometric_px_p99: quantile(&mut geo, 0.99),
         geometric_px_mean: geo_mean,
+        lod_px_max: lod.iter().copied().fold(0.0, f64::max),
+        lod_px_p99: quantile(&mut lod, 0.99),
+        repr_px_max: repr.iter().copied().fold(0.0, f64::max),
+        repr_px_p99: quantile(&mut repr, 0.99),
         psnr_db: 10.0 * (255.0f64.powi(2) / mse).log10(),
-        flip_mean: flip.iter().map(|&e| f64::from(e)).sum::<f64>() / flip.len().max(1) as f64,
+        flip_mean: flip_sum / counted,
     }
 }

@@ -2,6 +2,7 @@
 //! its inputs: tests and benches compare each pass against its twin here.
 
 pub mod classify;
+pub mod finest;
 pub mod image_metric;
 pub mod lod_map;
 pub mod occlusion;
@@ -11,6 +12,7 @@ pub mod sector_data;
 pub mod traverse;
 
 pub use classify::classify_tiles_cpu;
+pub use finest::FinestSurface;
 pub use image_metric::{flip_magma, flip_map, flip_stats, FlipStats};
 pub use lod_map::lod_map_cpu;
 pub use raycast::{HeightBounds, RayCaster, RaycastConfig, ReferenceImage, Trace};

@@ -25,7 +25,7 @@ fn wants_refine(t: &QuadtreeShadow, g: &GpuInputs, n: NodeId, slot: u32) -> bool
         let d2 = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).max(1e-6);
         let lhs = err * c[3];
         let widest = lhs * f[3];
-        if !(widest * widest > target_sq * d2) {
+        if widest * widest <= target_sq * d2 {
             return false;
         }
         (0..8).any(|k| {

@@ -37,10 +37,12 @@ pub const MAX_LOD_COUNT: u32 = crate::shaders::consts::MAX_NODE_LODS;
 /// Most sectors per world side: beyond this coordinates overflow GPU fields.
 pub const MAX_SECTORS_PER_SIDE: u64 = 1 << 20;
 /// Most roots per side of a world whose LOD count is not given
-/// ([`WorldDesc::lods_for`]): at most 16 roots, so the far field is drawn
+/// ([`WorldDesc::lods_for`]): at most 25 roots, so the far field is drawn
 /// from coarse roots (fewer triangles where the error allows) and the roots
-/// hold few of the slots the near field needs.
-pub const DEFAULT_MAX_ROOTS_PER_SIDE: u32 = 4;
+/// hold few of the slots the near field needs. Five, not four: the default
+/// 10 240 m world is then exactly 5 x 5 roots of 2 048 m, with no part of a
+/// root outside it for the hole path to cut away.
+pub const DEFAULT_MAX_ROOTS_PER_SIDE: u32 = 5;
 /// Largest accepted source image side, checked before any pixel allocation.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
@@ -75,8 +77,8 @@ impl Default for WorldDesc {
             extent_m: [10_240.0, 10_240.0],
             height_range_m: [0.0, 1600.0],
             spacing_m: 0.5,
-            // WorldDesc::lods_for the extent: 3 x 3 roots of 4 096 m.
-            lod_count: 7,
+            // WorldDesc::lods_for the extent: 5 x 5 roots of 2 048 m.
+            lod_count: 6,
             grid_origin_m: [0.0, 0.0],
         }
     }
@@ -179,7 +181,7 @@ impl WorldDesc {
     /// at most [`DEFAULT_MAX_ROOTS_PER_SIDE`] roots a side: the default LOD
     /// count, so a larger world gets larger roots instead of more of them
     /// (which would hold the slots the near field needs). The default
-    /// 10 240 m world at 0.5 m gets 7 (3 x 3 roots of 4 096 m).
+    /// 10 240 m world at 0.5 m gets 6 (5 x 5 roots of 2 048 m).
     pub fn lods_for(extent_m: [f64; 2], spacing_m: f64) -> u32 {
         let sector = f64::from(NODE_QUADS) * spacing_m;
         let sectors = extent_m.iter().map(|e| (e / sector).ceil().max(1.0)).fold(1.0, f64::max);
@@ -378,12 +380,12 @@ mod tests {
 
     #[test]
     fn the_lod_count_follows_the_extent() {
-        // 160 sectors of 64 m: 3 x 3 roots at 7 LODs (4 096 m each), the
+        // 160 sectors of 64 m: 5 x 5 roots at 6 LODs (2 048 m each), the
         // default world's count.
-        assert_eq!(WorldDesc::lods_for([10_240.0, 10_240.0], 0.5), 7);
+        assert_eq!(WorldDesc::lods_for([10_240.0, 10_240.0], 0.5), 6);
         assert_eq!(WorldDesc::default().lod_count, WorldDesc::lods_for(WorldDesc::default().extent_m, 0.5));
-        // 640 sectors: 9 LODs, 3 x 3 roots of 16 384 m (not 20 x 20 at 6).
-        assert_eq!(WorldDesc::lods_for([40_960.0, 40_960.0], 0.5), 9);
+        // 640 sectors: 8 LODs, 5 x 5 roots of 8 192 m (not 20 x 20 at 6).
+        assert_eq!(WorldDesc::lods_for([40_960.0, 40_960.0], 0.5), 8);
         // Mont Blanc at 8 m: 59 sectors of 1 024 m, 4 x 4 roots at 5 LODs.
         assert_eq!(WorldDesc::lods_for([60_000.0, 60_000.0], 8.0), 5);
         assert_eq!(WorldDesc::lods_for([100.0, 100.0], 1.0), 1);

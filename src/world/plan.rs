@@ -13,7 +13,7 @@ use super::bake::{bake_node_with, BakeSettings};
 use super::cache::estimated_file_bytes;
 use super::error_tile::compute_block;
 use super::holes::Hole;
-use super::layout::{NodeId, WorldDesc, NODE_QUADS};
+use super::layout::{NodeId, WorldDesc, MAX_LOD_COUNT, NODE_QUADS};
 use super::memory::MemoryReport;
 use super::source::HeightSource;
 use super::texels::PayloadFormat;
@@ -97,9 +97,9 @@ pub enum PlanError {
     TooManyLayers { slots: u32, layers: u64, max: u32 },
     #[error(
         "the world's {x} x {y} root nodes ({lods} LODs, {root_m} m each) would hold {roots} of the {slots} resident \
-         slots, more than a quarter, leaving too few to refine near the camera: raise --lods (or --slots)"
+         slots, more than a quarter, leaving too few to refine near the camera: {fix}"
     )]
-    TooManyRoots { x: u64, y: u64, roots: u64, lods: u32, root_m: f64, slots: u32 },
+    TooManyRoots { x: u64, y: u64, roots: u64, lods: u32, root_m: f64, slots: u32, fix: &'static str },
 }
 
 /// Where a plan's bake time comes from.
@@ -363,7 +363,12 @@ impl WorldPlan {
             let [x, y] = self.grid_per_lod[self.world.root_lod() as usize];
             if x * y > max {
                 let (lods, root_m) = (self.world.lod_count, self.world.node_size_m(self.world.root_lod()));
-                return Err(PlanError::TooManyRoots { x, y, roots: x * y, lods, root_m, slots: self.slots });
+                let fix = if lods < MAX_LOD_COUNT {
+                    "raise --lods (or --slots)"
+                } else {
+                    "raise --spacing or lower --extent (the world has the most LODs there can be)"
+                };
+                return Err(PlanError::TooManyRoots { x, y, roots: x * y, lods, root_m, slots: self.slots, fix });
             }
         }
         if let Some(cap) = limits.max_bake_disk_bytes {

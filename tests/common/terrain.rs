@@ -50,6 +50,21 @@ pub enum Surface {
         c: [f64; 3],
         r: f64,
     },
+    /// Flat terraces `width` m wide with vertical steps of `step` m, the
+    /// step lines at 30 degrees to the y axis: no sample grid lines up with
+    /// them.
+    Terraces {
+        z0: f64,
+        step: f64,
+        width: f64,
+    },
+    /// A sawtooth ridge: ramps rising `amp` m over `period` m along y, each
+    /// ending in a vertical drop, crossed by a gentle wave along x.
+    Sawtooth {
+        z0: f64,
+        amp: f64,
+        period: f64,
+    },
 }
 
 impl Surface {
@@ -68,6 +83,13 @@ impl Surface {
                 } else {
                     z0
                 }
+            }
+            Surface::Terraces { z0, step, width } => {
+                let (s, c) = 30f64.to_radians().sin_cos();
+                z0 + step * ((x * c + y * s) / width).floor()
+            }
+            Surface::Sawtooth { z0, amp, period } => {
+                z0 + amp * (y / period).rem_euclid(1.0) + 0.1 * amp * (x / (0.7 * period)).sin()
             }
         }
     }
@@ -184,16 +206,29 @@ impl Rig {
         rings: bool,
         options: RendererOptions,
     ) -> Rig {
+        Rig::with_source(ctx, world, Arc::new(surface), holes, size, rings, options)
+    }
+
+    /// As `with_options`, for any height source; `options.terrain.slots`
+    /// is kept when it is not the default.
+    pub fn with_source(
+        ctx: &Context,
+        world: WorldDesc,
+        source: Arc<dyn HeightSource>,
+        holes: Vec<Hole>,
+        size: [u32; 2],
+        rings: bool,
+        options: RendererOptions,
+    ) -> Rig {
+        let slots = match options.terrain.slots {
+            s if s == TerrainOptions::default().slots => 400,
+            s => s,
+        };
         let options = RendererOptions {
-            terrain: TerrainOptions {
-                slots: 400,
-                loader_threads: 2,
-                ring_prefetch: rings,
-                ..TerrainOptions::default()
-            },
+            terrain: TerrainOptions { slots, loader_threads: 2, ring_prefetch: rings, ..TerrainOptions::default() },
             ..options
         };
-        let renderer = TerrainRenderer::new(ctx, &world, Arc::new(surface), holes, &options).expect("renderer");
+        let renderer = TerrainRenderer::new(ctx, &world, source, holes, &options).expect("renderer");
         let off = Offscreen::new(ctx, size, 2, MAGENTA).expect("targets");
         Rig { renderer, off, world }
     }

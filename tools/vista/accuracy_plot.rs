@@ -1,6 +1,8 @@
 //! The Pareto plot of `vista bench accuracy`: one panel per view, GPU time
-//! against the lit image's mean FLIP, a curve per setting family with its
-//! points labelled by target (px), the shading settings as labelled marks.
+//! against the measured LOD error (p99 of the drawn surface's projected
+//! vertical distance to the finest surface, px: what the target bounds), a
+//! curve per setting family with its points labelled by target (px), the
+//! shading settings as labelled marks.
 
 use anyhow::{anyhow, Context as _, Result};
 use plotters::prelude::*;
@@ -37,10 +39,8 @@ pub fn pareto_plot(b: &AccuracyBench, title: &str, path: &Path) -> Result<()> {
 fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::with_buffer(buf, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
-    let root = root.titled(
-        &format!("{title}: GPU time vs error against the CPU reference (labels: target px)"),
-        ("sans-serif", 22),
-    )?;
+    let root =
+        root.titled(&format!("{title}: GPU time vs measured LOD error (labels: target px)"), ("sans-serif", 22))?;
     let views: Vec<&str> = b.references.iter().map(|r| r.view.as_str()).collect();
     let cols = if views.len() > 1 { 2 } else { 1 };
     let rows = views.len().div_ceil(cols).max(1);
@@ -48,7 +48,7 @@ fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn st
     for (panel, view) in panels.iter().zip(&views) {
         let pts: Vec<&AccuracyPoint> = b.points.iter().filter(|p| p.view == *view).collect();
         let xs = pts.iter().map(|p| p.gpu_ms);
-        let ys = pts.iter().map(|p| p.error.flip_mean);
+        let ys = pts.iter().map(|p| p.error.lod_px_p99);
         let (x0, x1) = (xs.clone().fold(f64::MAX, f64::min), xs.fold(0.0, f64::max));
         let (y0, y1) = (ys.clone().fold(f64::MAX, f64::min), ys.fold(0.0, f64::max));
         let (dx, dy) = (((x1 - x0) * 0.1).max(1e-3), ((y1 - y0) * 0.15).max(1e-4));
@@ -63,7 +63,7 @@ fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn st
         chart
             .configure_mesh()
             .x_desc("GPU ms per frame (sum of pass medians)")
-            .y_desc("mean FLIP of the lit image")
+            .y_desc("LOD error p99 (px)")
             .label_style(("sans-serif", 13))
             .max_light_lines(1)
             .draw()?;
@@ -71,7 +71,7 @@ fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn st
             let mut line: Vec<(f64, f64, f32)> = pts
                 .iter()
                 .filter(|p| p.family == family)
-                .map(|p| (p.gpu_ms, p.error.flip_mean, p.target_error_px))
+                .map(|p| (p.gpu_ms, p.error.lod_px_p99, p.target_error_px))
                 .collect();
             line.sort_by(|a, b| a.2.total_cmp(&b.2));
             chart
@@ -89,12 +89,12 @@ fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn st
             let t = shading[0].target_error_px;
             chart
                 .draw_series(
-                    shading.iter().map(|p| TriangleMarker::new((p.gpu_ms, p.error.flip_mean), 6, GREEN.filled())),
+                    shading.iter().map(|p| TriangleMarker::new((p.gpu_ms, p.error.lod_px_p99), 6, GREEN.filled())),
                 )?
                 .label(format!("shading at {t} px: T tiled, B blended cliffs, E every flavour, /2 x2 thresholds"))
                 .legend(|(x, y)| TriangleMarker::new((x + 10, y), 6, GREEN.filled()));
             chart.draw_series(shading.iter().map(|p| {
-                EmptyElement::at((p.gpu_ms, p.error.flip_mean))
+                EmptyElement::at((p.gpu_ms, p.error.lod_px_p99))
                     + Text::new(shading_mark(&p.setting), (7, 4), ("sans-serif", 13).into_font())
             }))?;
         }

@@ -64,7 +64,8 @@ pub fn accuracy(
         cache_dir: cache.clone(),
         errors: Some(world.errors(ctx, None)?),
         slots,
-        raycast: RaycastConfig::default(),
+        // One ray per pixel: the renderer samples each pixel once too.
+        raycast: RaycastConfig { colour_samples: 1, ..RaycastConfig::default() },
         keep_images: images.is_some(),
     };
     let start = Instant::now();
@@ -155,23 +156,25 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         );
     }
     println!(
-        "{:<12} {:<34} {:>6} {:>9} {:>10} {:>7} {:>6} {:>5} {:>7} {:>7} {:>9} {:>8} {:>7} {:>7} {:>6} {:>6} {:>8}",
+        "{:<12} {:<32} {:>6} {:>6} {:>9} {:>10} {:>6} {:>7} {:>5} {:>5} {:>8} {:>7} {:>13} {:>13} {:>13} {:>6} {:>6} {:>5} {:>8}",
         "view",
         "setting",
         "target",
+        "bound",
         "GPU ms",
         "triangles",
+        "tri/px",
         "patches",
         "nodes",
         "want+",
-        "d<0.5%",
-        "d<2%",
         "d p99",
         "silh px",
-        "geo max",
-        "geo p99",
+        "geo max/p99",
+        "lod max/p99",
+        "repr max/p99",
         "PSNR",
         "FLIP",
+        "held",
         "extra"
     );
     for p in &b.points {
@@ -182,34 +185,47 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
             (_, Some(f)) => format!("tex {f:.4}"),
             _ => String::new(),
         };
+        let held = match p.promise_held {
+            Some(true) => "yes",
+            Some(false) => "NO",
+            None => "-",
+        };
+        let pair = |a: f64, b: f64| format!("{a:.2}/{b:.2}");
         println!(
-            "{:<12} {:<34} {:>6} {:>9.2} {:>10} {:>7} {:>6} {:>5} {:>6.1}% {:>6.1}% {:>9.2e} {:>8} {:>7.2} {:>7.2} {:>6.1} {:>6.4} {:>8}{}",
+            "{:<12} {:<32} {:>6} {:>6.2} {:>9.2} {:>10} {:>6.2} {:>7} {:>5} {:>5} {:>8.1e} {:>7} {:>13} {:>13} {:>13} {:>6.1} {:>6.4} {:>5} {:>8}{}",
             p.view,
             setting,
             p.target_error_px,
+            p.bound_px,
             p.gpu_ms,
             p.triangles_drawn,
+            p.triangles_per_pixel,
             p.patches_drawn,
             p.nodes_drawn_per_lod.iter().sum::<u32>(),
             p.wanted_finer,
-            100.0 * e.depth_within_0_5pct,
-            100.0 * e.depth_within_2pct,
             e.depth_rel_p99,
             e.silhouette_pixels,
-            e.geometric_px_max,
-            e.geometric_px_p99,
+            pair(e.geometric_px_max, e.geometric_px_p99),
+            pair(e.lod_px_max, e.lod_px_p99),
+            pair(e.repr_px_max, e.repr_px_p99),
             e.psnr_db,
             e.flip_mean,
+            held,
             extra,
             if p.settled { "" } else { " (not settled)" }
         );
     }
     println!(
-        "want+: drawn nodes the camera wants finer whose children are not resident (the slot budget); \
-         d: relative depth error; silh: pixels terrain in one image only; geo: vertical error to the \
-         source surface projected on screen (px); PSNR, FLIP: the clay-lit image vs the reference's \
-         (4 rays per pixel); extra: culling off, pixels differing from culling on; shading rows, FLIP \
-         of the textured image vs every flavour + blended cliffs"
+        "bound: the largest projected error of any drawn patch (px; above the target when the slot budget could not \
+         meet it); tri/px: triangles drawn per screen pixel; want+: drawn nodes the camera wants finer whose children \
+         are not resident; d: relative depth error; silh: pixels terrain in one image only; geo: vertical error to \
+         the source surface projected on screen (px), split into lod (drawn surface vs the finest surface vista can \
+         draw: what the target bounds) and repr (finest surface vs the source: what no LOD choice removes); PSNR, \
+         FLIP: the clay-lit image vs the reference's over the pixels where either has terrain, both at {} sample(s) \
+         per pixel; held: the promise where bound <= target (lod p99 <= target, lod max <= 2 x target), - where the \
+         budget made no promise; extra: culling off, pixels differing from culling on; shading rows, FLIP of the \
+         textured image vs every flavour + blended cliffs",
+        cfg.raycast.colour_samples
     );
     if let Some(why) = &b.shading_skipped {
         println!("shading rows skipped: {why}");
