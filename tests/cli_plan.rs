@@ -153,8 +153,8 @@ fn each_limit_is_refused_before_allocating() {
     // The limit is an option.
     assert_refused(&["memory", "--max-sectors", "100"], &["160 x 160 sectors", "limit is 100"]);
 
-    // The disk cap: 1563 sectors a side at 0.5 m, 10 LODs (at most 5 roots
-    // a side: 1563 / 2^9 <= 5), sum of ceil(1563 / 2^k)^2 over k = 0..=9 =
+    // The disk cap: 1563 sectors a side at 0.5 m, 10 LODs (no exact tiling;
+    // the most there can be), sum of ceil(1563 / 2^k)^2 over k = 0..=9 =
     // 3 258 654 nodes of about 43 KiB (compressed BC payloads): over 130 GiB.
     let big = ["bake", "--out", o, "--extent", "100000"];
     let run = assert_refused(&big, &["GiB", "3258654 nodes", "64.00 GiB", "--yes", "--max-disk", "--region"]);

@@ -35,6 +35,8 @@ struct TerrainView {
     vec4 lod_forward;       // xyz: the camera's forward axis (world); w: pixels per unit of tan (viewport_h / (2 tan(fov_y / 2)))
     vec4 lod_params;        // x: target error (px); y: 1 / cos^2 of the frustum's widest angle to the forward axis;
                             // z: refinement levels below LOD 0 allowed; w: 1 = no stitching (tests only)
+    vec4 lod_right;         // xyz: the camera's right axis (world); w: tan of the frustum's half width
+    vec4 lod_up;            // xyz: the camera's up axis (world); w: tan of the frustum's half height
 };
 
 // LOD-0 sample index -> camera-relative metres (x, y). Takes fields, not

@@ -217,6 +217,15 @@ impl View {
                 [f[0] as f32, f[1] as f32, f[2] as f32, cam.pixels_per_tan as f32]
             },
             lod_params: [self.target_error_px, self.traverse_camera().widest as f32, 0.0, 0.0],
+            lod_right: {
+                let r = self.camera.basis()[1];
+                let tan_x = (self.fov_y_deg.to_radians() / 2.0).tan() * w / h;
+                [r.x as f32, r.y as f32, r.z as f32, tan_x as f32]
+            },
+            lod_up: {
+                let u = self.camera.basis()[2];
+                [u.x as f32, u.y as f32, u.z as f32, (self.fov_y_deg.to_radians() / 2.0).tan() as f32]
+            },
         }
     }
 }
@@ -297,8 +306,13 @@ pub struct TerrainViewGpu {
     pub shade_flags: [u32; 4],
     /// The camera's forward axis and pixels per unit of tan.
     pub lod_forward: [f32; 4],
-    /// Target error (px), 1 / cos^2 of the frustum's widest angle.
+    /// Target error (px), 1 / cos^2 of the frustum's widest angle,
+    /// refinement levels allowed, no stitching (tests).
     pub lod_params: [f32; 4],
+    /// The camera's right axis and the frustum's half-width tangent.
+    pub lod_right: [f32; 4],
+    /// The camera's up axis and the frustum's half-height tangent.
+    pub lod_up: [f32; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<TerrainViewGpu>() == crate::shaders::structs::TERRAIN_VIEW);

@@ -36,12 +36,9 @@ pub const SPLAT_RES: usize = 65;
 pub const MAX_LOD_COUNT: u32 = crate::shaders::consts::MAX_NODE_LODS;
 /// Most sectors per world side: beyond this coordinates overflow GPU fields.
 pub const MAX_SECTORS_PER_SIDE: u64 = 1 << 20;
-/// Most roots per side of a world whose LOD count is not given
-/// ([`WorldDesc::lods_for`]): at most 25 roots, so the far field is drawn
-/// from coarse roots (fewer triangles where the error allows) and the roots
-/// hold few of the slots the near field needs. Five, not four: the default
-/// 10 240 m world is then exactly 5 x 5 roots of 2 048 m, with no part of a
-/// root outside it for the hole path to cut away.
+/// Most roots per side of a world whose LOD count is not given and whose
+/// extent they tile exactly ([`WorldDesc::lods_for`]): five, so the default
+/// 10 240 m world is exactly 5 x 5 roots of 2 048 m.
 pub const DEFAULT_MAX_ROOTS_PER_SIDE: u32 = 5;
 /// Largest accepted source image side, checked before any pixel allocation.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
@@ -177,17 +174,25 @@ impl WorldDesc {
         Ok(())
     }
 
-    /// The fewest LODs (at most [`MAX_LOD_COUNT`]) that cover an extent with
-    /// at most [`DEFAULT_MAX_ROOTS_PER_SIDE`] roots a side: the default LOD
-    /// count, so a larger world gets larger roots instead of more of them
-    /// (which would hold the slots the near field needs). The default
-    /// 10 240 m world at 0.5 m gets 6 (5 x 5 roots of 2 048 m).
+    /// The default LOD count of an extent: coarse roots, so the far field
+    /// can be drawn coarsely where the error allows and the roots (always
+    /// resident) hold few slots. The most LODs whose roots tile the extent
+    /// exactly with at most [`DEFAULT_MAX_ROOTS_PER_SIDE`] a side (no part
+    /// of a root outside the world for the hole path to cut away): the
+    /// default 10 240 m world at 0.5 m gets 6, 5 x 5 roots of 2 048 m. When
+    /// none does, the fewest LODs with at most 2 roots a side (Mont Blanc's
+    /// 60 km at 8 m: 6, 2 x 2 roots of 32 km), at most [`MAX_LOD_COUNT`].
     pub fn lods_for(extent_m: [f64; 2], spacing_m: f64) -> u32 {
         let sector = f64::from(NODE_QUADS) * spacing_m;
-        let sectors = extent_m.iter().map(|e| (e / sector).ceil().max(1.0)).fold(1.0, f64::max);
-        (1..=MAX_LOD_COUNT)
-            .find(|l| (sectors / f64::from(1u32 << (l - 1))).ceil() <= f64::from(DEFAULT_MAX_ROOTS_PER_SIDE))
-            .unwrap_or(MAX_LOD_COUNT)
+        let sectors = extent_m.map(|e| (e / sector).ceil().max(1.0) as u64);
+        let roots = |l: u32| sectors.map(|s| s.div_ceil(1 << (l - 1)));
+        let exact = (1..=MAX_LOD_COUNT).rev().find(|&l| {
+            let r = roots(l);
+            r.iter().all(|&n| n <= u64::from(DEFAULT_MAX_ROOTS_PER_SIDE))
+                && sectors.iter().all(|s| s % (1 << (l - 1)) == 0)
+        });
+        exact
+            .unwrap_or_else(|| (1..=MAX_LOD_COUNT).find(|&l| roots(l).iter().all(|&n| n <= 2)).unwrap_or(MAX_LOD_COUNT))
     }
 
     /// Side of a LOD-0 node in metres.
@@ -386,8 +391,11 @@ mod tests {
         assert_eq!(WorldDesc::default().lod_count, WorldDesc::lods_for(WorldDesc::default().extent_m, 0.5));
         // 640 sectors: 8 LODs, 5 x 5 roots of 8 192 m (not 20 x 20 at 6).
         assert_eq!(WorldDesc::lods_for([40_960.0, 40_960.0], 0.5), 8);
-        // Mont Blanc at 8 m: 59 sectors of 1 024 m, 4 x 4 roots at 5 LODs.
-        assert_eq!(WorldDesc::lods_for([60_000.0, 60_000.0], 8.0), 5);
+        // Mont Blanc at 8 m: 59 sectors of 1 024 m (a prime: no exact
+        // tiling), 2 x 2 roots of 32 km at 6 LODs.
+        assert_eq!(WorldDesc::lods_for([60_000.0, 60_000.0], 8.0), 6);
+        // 1563 sectors: 2 roots a side would need 11 LODs; the most is 10.
+        assert_eq!(WorldDesc::lods_for([100_000.0, 100_000.0], 0.5), MAX_LOD_COUNT);
         assert_eq!(WorldDesc::lods_for([100.0, 100.0], 1.0), 1);
         assert_eq!(WorldDesc::lods_for([1e9, 1e9], 0.5), MAX_LOD_COUNT);
     }
