@@ -115,8 +115,13 @@ fn plane_and_tilted_plane() {
             let node = bake_node(&src, &w, &[], id);
             check_grids(&src, &w, &node);
             let widest = check_cones(&w, &node);
-            // Quantisation of the heights only: the cones stay tight.
-            assert!(widest < 2.0, "plane cone too wide: {widest} deg");
+            // Quantisation of the heights only: the cones stay narrow. The
+            // R16 step (2.3 cm here) tilts a unit triangle's normal by up to
+            // 1.3 degrees, and the cones also hold the stitched edge
+            // triangles, slivers down to 1/7 of a quad across (an edge
+            // vertex snapped 7 samples along a 16-sample coarser edge),
+            // which magnify it as much: 9 degrees at most.
+            assert!(widest < 10.0, "plane cone too wide: {widest} deg");
             assert!(node.patch_holes.iter().all(|&h| h == PATCH_HOLE_NONE));
             assert!(node.hole_mask().iter().all(|h| !h));
         }
