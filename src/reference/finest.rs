@@ -35,9 +35,8 @@ impl<'a> FinestSurface<'a> {
     }
 
     /// LOD-0 sample (i, j) as the bake stores it (position clamped to the
-    /// extent, rounded to R16).
-    fn sample_at(&self, i: i64, j: i64) -> f64 {
-        let mut cache = self.samples.lock().unwrap_or_else(|e| e.into_inner());
+    /// extent, rounded to R16), from `cache` or the source.
+    fn sample_at(&self, cache: &mut HashMap<(i64, i64), f64>, i: i64, j: i64) -> f64 {
         *cache.entry((i, j)).or_insert_with(|| {
             let [x, y] = self.world.sample_pos(i, j);
             let [ex, ey] = self.world.extent_m;
@@ -55,9 +54,11 @@ impl<'a> FinestSurface<'a> {
         let scale = f64::from(1u32 << r);
         let wx = catmull_rom((u - (ci << r)) as f64 / scale);
         let wy = catmull_rom((v - (cj << r)) as f64 / scale);
+        let mut cache = self.samples.lock().unwrap_or_else(|e| e.into_inner());
         (0..4)
             .map(|b| {
-                let row: f64 = (0..4).map(|a| wx[a] * self.sample_at(ci + a as i64 - 1, cj + b as i64 - 1)).sum();
+                let row: f64 =
+                    (0..4).map(|a| wx[a] * self.sample_at(&mut cache, ci + a as i64 - 1, cj + b as i64 - 1)).sum();
                 wy[b] * row
             })
             .sum()

@@ -314,6 +314,11 @@ impl Residency {
                 Some(w) => self.projected(n, w),
                 None => (0.0, true),
             };
+            // The families right around the camera count as in view: those
+            // behind it are drawn at the edges of the view and cap, through
+            // the seams, how finely the patches at the camera's feet may be
+            // drawn. (A ring family's parent's family is in the ring too.)
+            let in_view = in_view || in_ring;
             let wanted = want.is_some_and(|w| {
                 // Held families stay until their error falls well below the target.
                 let threshold = w.target_error_px * w.prefetch / if held { self.config.hysteresis } else { 1.0 };
