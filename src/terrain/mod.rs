@@ -31,6 +31,9 @@ pub struct TerrainOptions {
     /// Resident node slots (Far Cry 5: ~500); at most 1023.
     pub slots: u32,
     pub frames_in_flight: usize,
+    /// Threads loading (baking) nodes; 0 loads each requested node at once
+    /// on the thread that streams (slower frames, but the same resident set
+    /// on every run, as golden images need).
     pub loader_threads: usize,
     /// Bake lazily into this cache directory (reused across runs); `None`
     /// bakes in memory only.
@@ -161,7 +164,7 @@ impl Terrain {
             ..ResidencyConfig::default()
         };
         let residency = Residency::new(world, config)?;
-        let threads = options.loader_threads.max(1);
+        let threads = options.loader_threads;
         let errors = match &options.errors {
             Some(e) => {
                 assert!(

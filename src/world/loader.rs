@@ -19,13 +19,17 @@ pub type LoadFn = dyn Fn(NodeId) -> Result<BakedNode> + Send + Sync;
 pub struct Loader {
     jobs: Option<Sender<NodeId>>,
     results: Receiver<(NodeId, Result<BakedNode>)>,
+    /// Without workers: `request` loads at once, on the caller's thread.
+    inline: Option<(Arc<LoadFn>, Sender<(NodeId, Result<BakedNode>)>)>,
     cancelled: Arc<Mutex<HashSet<NodeId>>>,
     shutdown: Arc<AtomicBool>,
     workers: Vec<JoinHandle<()>>,
 }
 
 impl Loader {
-    /// `workers` threads (at least one) running `load`.
+    /// `workers` threads running `load`; with 0, every request is loaded
+    /// at once on the caller's thread (slower frames, but the same arrivals
+    /// in the same frames on every run: golden images).
     /// Fails only if the OS refuses to start a thread.
     pub fn new(workers: usize, load: Arc<LoadFn>) -> Result<Self> {
         let (job_tx, job_rx) = channel::<NodeId>();
@@ -36,11 +40,12 @@ impl Loader {
         let mut loader = Loader {
             jobs: Some(job_tx),
             results: res_rx,
+            inline: (workers == 0).then(|| (Arc::clone(&load), res_tx.clone())),
             cancelled: Arc::clone(&cancelled),
             shutdown: Arc::clone(&shutdown),
             workers: Vec::new(),
         };
-        for i in 0..workers.max(1) {
+        for i in 0..workers {
             let ctx = WorkerCtx {
                 jobs: Arc::clone(&job_rx),
                 results: res_tx.clone(),
@@ -66,6 +71,12 @@ impl Loader {
 
     /// Queues a load; never blocks.
     pub fn request(&self, id: NodeId) {
+        if let Some((load, results)) = &self.inline {
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| load(id)))
+                .unwrap_or(Err(WorldError::LoaderFailed(id)));
+            let _ = results.send((id, result));
+            return;
+        }
         lock(&self.cancelled).remove(&id);
         if let Some(jobs) = &self.jobs {
             // Send only fails once every worker is gone, which poll reports.

@@ -195,9 +195,13 @@ fn render(ctx: &Context, g: &Golden, payload: PayloadFormat) -> Result<Vec<u8>> 
     let view = View { camera, fov_y_deg: 60.0, size: SIZE, target_error_px: 1.0, near_m: DEFAULT_NEAR_M };
     let options = RendererOptions {
         effects: world.effects.clone(),
+        // Loads on the streaming thread: the resident set, and so the
+        // picture, is the same on every run (threads finishing in another
+        // order leave another set where the slot budget is short).
         terrain: TerrainOptions {
             bake: world.bake,
             errors: Some(world.errors(ctx, None)?),
+            loader_threads: 0,
             ..TerrainOptions::default()
         },
         ..RendererOptions::default()
