@@ -15,12 +15,15 @@ use super::payload::BakedNode;
 /// Produces a node's payload: usually a cache read or a bake.
 pub type LoadFn = dyn Fn(NodeId) -> Result<BakedNode> + Send + Sync;
 
+/// A finished load, as `poll` reports it.
+type Loaded = (NodeId, Result<BakedNode>);
+
 /// A pool of loader threads fed through a FIFO queue.
 pub struct Loader {
     jobs: Option<Sender<NodeId>>,
-    results: Receiver<(NodeId, Result<BakedNode>)>,
+    results: Receiver<Loaded>,
     /// Without workers: `request` loads at once, on the caller's thread.
-    inline: Option<(Arc<LoadFn>, Sender<(NodeId, Result<BakedNode>)>)>,
+    inline: Option<(Arc<LoadFn>, Sender<Loaded>)>,
     cancelled: Arc<Mutex<HashSet<NodeId>>>,
     shutdown: Arc<AtomicBool>,
     workers: Vec<JoinHandle<()>>,
