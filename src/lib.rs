@@ -1,6 +1,7 @@
 //! vista: a GPU-driven terrain renderer for Vulkan (Far Cry 5 style) on ash.
 //!
 //! Layers, each using only those above it:
+//! - [`output`]: every file vista writes, whole or not at all;
 //! - [`shaders`]: generated at build time from `shaders_glsl/` (SPIR-V,
 //!   reflection, struct layouts, the constants shared with shaders);
 //! - [`gpu`]: every unsafe Vulkan call; [`frame`]: the frame executor
@@ -16,6 +17,7 @@ pub mod bench;
 pub mod error;
 pub mod frame;
 pub mod gpu;
+pub mod output;
 pub mod passes;
 pub mod reference;
 pub mod render;

@@ -11,7 +11,7 @@
 //! file is caught before the decompressor sees it.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use super::bake::{bake_node_with, BakeSettings};
@@ -35,9 +35,6 @@ const HEADER_BYTES: usize = 4 + 4 + 8 * 4 + 1 + 4 + 4 + 4;
 const ZSTD_LEVEL: i32 = 3;
 /// Trailing crc32.
 const CRC_BYTES: usize = 4;
-/// Distinguishes temp files of concurrent writers in one process.
-static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
-
 /// Bytes a node file of `format` would take without compression: what the
 /// cache's compression ratio is measured against.
 pub fn uncompressed_file_bytes(format: PayloadFormat) -> u64 {
@@ -79,6 +76,8 @@ pub struct NodeCache {
     settings: BakeSettings,
     keys: [u64; 4],
     errors: Arc<ErrorTree>,
+    /// A write failed while rendering: reported once, then no more writes.
+    unwritable: AtomicBool,
 }
 
 impl NodeCache {
@@ -101,7 +100,16 @@ impl NodeCache {
         std::fs::create_dir_all(dir).map_err(|e| WorldError::create_dir(dir, e))?;
         let keys = [world.hash(), source.id_hash(), holes_hash(&holes), settings.hash()];
         let errors = Arc::new(ErrorTree::new(&world, Arc::clone(&source), Some(dir))?);
-        Ok(NodeCache { dir: dir.to_path_buf(), world, source, holes, settings, keys, errors })
+        Ok(NodeCache {
+            dir: dir.to_path_buf(),
+            world,
+            source,
+            holes,
+            settings,
+            keys,
+            errors,
+            unwritable: AtomicBool::new(false),
+        })
     }
 
     /// Takes its errors from `errors` (shared with other users of the
@@ -193,19 +201,25 @@ impl NodeCache {
         let dir = path.parent().unwrap_or(&self.dir);
         std::fs::create_dir_all(dir).map_err(|e| WorldError::create_dir(dir, e))?;
         let bytes = self.encode(node)?;
-        let tmp =
-            path.with_extension(format!("tmp{}_{}", std::process::id(), TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)));
-        std::fs::write(&tmp, &bytes).map_err(|e| WorldError::io_write(&tmp, e))?;
-        std::fs::rename(&tmp, &path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            WorldError::io_write(&path, e)
-        })?;
+        crate::output::write(&path, &bytes).map_err(|e| WorldError::io_write(&path, e.error))?;
         Ok(bytes.len() as u64)
     }
 
     /// The cached node if its file is intact and current, else a fresh bake
     /// that replaces the file.
+    /// A file that cannot be written is an error (a bake).
     pub fn get_or_bake(&self, id: NodeId) -> Result<(BakedNode, CacheOutcome)> {
+        self.get_or_bake_with(id, true)
+    }
+
+    /// As [`Self::get_or_bake`], but a cache that cannot be written (a full
+    /// disk) is reported once and the node returned uncached; later nodes
+    /// are not written: a render goes on without caching.
+    pub fn get_or_bake_for_render(&self, id: NodeId) -> Result<(BakedNode, CacheOutcome)> {
+        self.get_or_bake_with(id, false)
+    }
+
+    fn get_or_bake_with(&self, id: NodeId, must_write: bool) -> Result<(BakedNode, CacheOutcome)> {
         if !self.world.is_valid(id) {
             return Err(WorldError::InvalidNode(id));
         }
@@ -217,7 +231,17 @@ impl NodeCache {
                 }
                 let mut node = bake_node_with(self.source.as_ref(), &self.world, &self.holes, &self.settings, id);
                 self.errors.attach(&mut node)?;
-                self.write(&node)?;
+                if !self.unwritable.load(Ordering::Relaxed) {
+                    match self.write(&node) {
+                        Ok(_) => {}
+                        Err(e) if must_write => return Err(e),
+                        Err(e) => {
+                            if !self.unwritable.swap(true, Ordering::Relaxed) {
+                                log::warn!("{e}; the render goes on without caching nodes in {}", self.dir.display());
+                            }
+                        }
+                    }
+                }
                 Ok((node, CacheOutcome::Baked(reason)))
             }
         }

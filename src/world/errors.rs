@@ -18,7 +18,7 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
@@ -64,6 +64,8 @@ pub struct ErrorTree {
     roots: Mutex<HashMap<NodeId, Arc<OnceLock<Tile>>>>,
     /// Root tiles computed by this tree (not read from the folder).
     computed: AtomicUsize,
+    /// A tile could not be cached: reported once, then not tried again.
+    unwritable: AtomicBool,
 }
 
 impl std::fmt::Debug for ErrorTree {
@@ -97,6 +99,7 @@ impl ErrorTree {
             keys,
             roots: Mutex::new(HashMap::new()),
             computed: AtomicUsize::new(0),
+            unwritable: AtomicBool::new(false),
         })
     }
 
@@ -199,8 +202,12 @@ impl ErrorTree {
             }
             let tile = compute_root(&self.world, self.source.as_ref(), root);
             self.computed.fetch_add(1, Ordering::Relaxed);
-            if let Err(e) = self.write(root, &tile) {
-                log::warn!("error tree of {root} not cached: {e}");
+            if !self.unwritable.load(Ordering::Relaxed) {
+                if let Err(e) = self.write(root, &tile) {
+                    if !self.unwritable.swap(true, Ordering::Relaxed) {
+                        log::warn!("{e}; the error tree is not cached");
+                    }
+                }
             }
             Arc::new(tile)
         }))
@@ -239,12 +246,7 @@ impl ErrorTree {
         }
         out.extend_from_slice(&packed);
         out.extend_from_slice(&crc32fast::hash(&out).to_le_bytes());
-        let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-        std::fs::write(&tmp, &out).map_err(|e| WorldError::io_write(&tmp, e))?;
-        std::fs::rename(&tmp, &path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            WorldError::io_write(&path, e)
-        })
+        crate::output::write(&path, &out).map_err(|e| WorldError::io_write(&path, e.error))
     }
 }
 

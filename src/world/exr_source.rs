@@ -118,8 +118,12 @@ pub fn write_height_exr(path: &Path, width: usize, height: usize, heights: &[f32
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(vec![channel])),
     );
-    Image::from_layer(layer).write().non_parallel().to_file(path).map_err(|e| match e {
-        exr::error::Error::Io(io) => WorldError::io_write(path, io),
-        other => WorldError::corrupt(path, other),
+    let image = Image::from_layer(layer);
+    crate::output::write_with(path, |w| {
+        image.write().non_parallel().to_buffered(w).map_err(|e| match e {
+            exr::error::Error::Io(io) => io,
+            other => std::io::Error::other(other),
+        })
     })
+    .map_err(|e| WorldError::io_write(path, e.error))
 }

@@ -69,7 +69,7 @@ impl Loader {
 
     /// Loader reading from (and filling) a node cache.
     pub fn with_cache(workers: usize, cache: Arc<NodeCache>) -> Result<Self> {
-        Self::new(workers, Arc::new(move |id| cache.get_or_bake(id).map(|(node, _)| node)))
+        Self::new(workers, Arc::new(move |id| cache.get_or_bake_for_render(id).map(|(node, _)| node)))
     }
 
     /// Queues a load; never blocks.

@@ -4,7 +4,7 @@
 //! curve per setting family with its points labelled by target (px), the
 //! shading settings as labelled marks.
 
-use anyhow::{anyhow, Context as _, Result};
+use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 use std::path::Path;
@@ -32,8 +32,7 @@ pub fn pareto_plot(b: &AccuracyBench, title: &str, path: &Path) -> Result<()> {
     let (w, h) = SIZE;
     let mut buf = vec![255u8; (w * h * 3) as usize];
     draw(b, title, &mut buf).map_err(|e| anyhow!("drawing the plot: {e}"))?;
-    image::save_buffer(path, &buf, w, h, image::ExtendedColorType::Rgb8)
-        .with_context(|| format!("writing --plot {}", path.display()))
+    Ok(vista::output::write_png(path, &buf, [w, h], image::ExtendedColorType::Rgb8)?)
 }
 
 fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn std::error::Error>> {

@@ -357,7 +357,7 @@ fn bytes(b: f64) -> String {
 
 fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
     let text = serde_json::to_string_pretty(value)?;
-    std::fs::write(path, text + "\n").with_context(|| format!("writing --json {}", path.display()))
+    Ok(vista::output::write(path, (text + "\n").as_bytes())?)
 }
 
 pub fn memory(args: MemoryArgs) -> Result<()> {

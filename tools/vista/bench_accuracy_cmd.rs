@@ -2,7 +2,7 @@
 //! CPU ray-caster: a table, JSON (`--json`) and a Pareto plot (`--plot`).
 
 use crate::bench_cmd::{write_json, ViewBench};
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, Result};
 use std::path::Path;
 use std::time::{Duration, Instant};
 use vista::bench::accuracy::CLAY_ALBEDO;
@@ -111,8 +111,7 @@ fn write_images(dir: &Path, b: &AccuracyBench) -> Result<()> {
             ("flip", &flip, image::ExtendedColorType::Rgb8),
         ] {
             let path = dir.join(format!("{stem}_{suffix}.png"));
-            image::save_buffer(&path, data, v.size[0], v.size[1], colour)
-                .with_context(|| format!("writing {}", path.display()))?;
+            vista::output::write_png(&path, data, v.size, colour)?;
         }
     }
     println!("wrote {} images to {}", 3 * b.images.len(), dir.display());

@@ -1,7 +1,7 @@
 //! `vista bench`: GPU-time benchmarks with medians after warm-up.
 
 use crate::world_args::WorldArgs;
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use vista::bench::{bench_traverse, TraverseBenchConfig};
@@ -105,7 +105,7 @@ impl<'a> ViewBench<'a> {
 
 /// Writes a benchmark's table as pretty JSON and says so.
 pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
-    std::fs::write(path, serde_json::to_string_pretty(json)?).with_context(|| format!("writing {}", path.display()))?;
+    vista::output::write(path, serde_json::to_string_pretty(json)?.as_bytes())?;
     println!("wrote {}", path.display());
     Ok(())
 }

@@ -128,8 +128,7 @@ pub fn golden(ctx: &Context, args: &GoldenArgs) -> Result<()> {
             save_rgba(&args.out.join(format!("{}.png", g.name)), &rgba)?;
             if let Some((_, errors)) = &diff {
                 let map = args.out.join(format!("{}.flip.png", g.name));
-                image::save_buffer(&map, &flip_magma(errors, SIZE), SIZE[0], SIZE[1], image::ExtendedColorType::Rgb8)
-                    .with_context(|| format!("writing {}", map.display()))?;
+                vista::output::write_png(&map, &flip_magma(errors, SIZE), SIZE, image::ExtendedColorType::Rgb8)?;
             }
             failed.push(g.name);
         }
@@ -166,8 +165,7 @@ fn payload_diff(ctx: &Context, args: &GoldenArgs) -> Result<()> {
         save_rgba(&args.out.join(format!("{}.bc.png", g.name)), &bc)?;
         save_rgba(&args.out.join(format!("{}.rgba8.png", g.name)), &rgba8)?;
         let map = args.out.join(format!("{}.payload-flip.png", g.name));
-        image::save_buffer(&map, &flip_magma(&errors, SIZE), SIZE[0], SIZE[1], image::ExtendedColorType::Rgb8)
-            .with_context(|| format!("writing {}", map.display()))?;
+        vista::output::write_png(&map, &flip_magma(&errors, SIZE), SIZE, image::ExtendedColorType::Rgb8)?;
         if !ok {
             failed.push(g.name);
         }
@@ -230,6 +228,5 @@ fn read_reference(path: &Path) -> Result<Option<Vec<u8>>> {
 }
 
 fn save_rgba(path: &Path, rgba: &[u8]) -> Result<()> {
-    image::save_buffer(path, rgba, SIZE[0], SIZE[1], image::ExtendedColorType::Rgba8)
-        .with_context(|| format!("writing {}", path.display()))
+    Ok(vista::output::write_png(path, rgba, SIZE, image::ExtendedColorType::Rgba8)?)
 }

@@ -67,6 +67,11 @@ fn main() {
         Ok(cli) => cli,
         Err(e) => exit_on_usage_error(e),
     };
+    // Tests walk every write-failure path: the Nth file written (from 0)
+    // fails as on a full disk.
+    if let Some(n) = std::env::var("VISTA_FAIL_WRITE").ok().and_then(|v| v.parse().ok()) {
+        vista::output::faults().fail_write_in(n);
+    }
     let result = run(cli);
     write_peak_rss();
     if let Err(e) = result {
@@ -129,7 +134,7 @@ fn run(cli: Cli) -> Result<()> {
             let world = args.world.load()?;
             world_args::check_slots(args.slots, &world.desc)?;
             let view = render_cmd::view_of(&args, &world).map_err(|e| InputError(format!("{e:#}")))?;
-            render_cmd::prepare_paths(&args)?;
+            render_cmd::check_paths(&args)?;
             with_gpu(&options, |ctx| render_cmd::render(ctx, &world, &view, &args))
         }
         // Baking and accounting are CPU-only: no Vulkan needed.

@@ -17,6 +17,17 @@ const FILE_EXTENSIONS: [&str; 9] = ["png", "exr", "jpg", "jpeg", "json", "tif", 
 /// `path` (given as `option`) is a folder vista writes several files into:
 /// it is created now, with its parents, and must be writable.
 pub fn prepare_out_dir(path: &Path, option: &str, writes: &str) -> Result<()> {
+    check_out_dir(path, option, writes)?;
+    if let Err(e) = std::fs::create_dir_all(path) {
+        return refuse(format!("{option} {}: cannot create the folder: {e}", path.display()));
+    }
+    Ok(())
+}
+
+/// As [`prepare_out_dir`], creating nothing: the folder, or the nearest
+/// existing folder above it, must be writable. For outputs that appear
+/// only once the work succeeded (`output::FileSet` creates the folder).
+pub fn check_out_dir(path: &Path, option: &str, writes: &str) -> Result<()> {
     let shown = path.display();
     if !path.is_dir() {
         if let Some(file) = path.ancestors().find(|a| a.exists()).filter(|a| !a.is_dir()) {
@@ -34,13 +45,12 @@ pub fn prepare_out_dir(path: &Path, option: &str, writes: &str) -> Result<()> {
         if let Some(ext) = ext.filter(|e| FILE_EXTENSIONS.contains(&e.as_str())) {
             return refuse(format!("{option} {shown} looks like a .{ext} file; {option} takes a folder ({writes})"));
         }
-        if let Err(e) = std::fs::create_dir_all(path) {
-            return refuse(format!("{option} {shown}: cannot create the folder: {e}"));
-        }
     }
     // Creating a file is the one test of writability that holds for every
     // user (root included) and file system.
-    let probe = path.join(format!(".vista-write-test-{}", std::process::id()));
+    let existing = path.ancestors().find(|a| a.is_dir()).unwrap_or(Path::new("."));
+    let existing = if existing.as_os_str().is_empty() { Path::new(".") } else { existing };
+    let probe = existing.join(format!(".vista-write-test-{}", std::process::id()));
     match std::fs::write(&probe, b"") {
         Ok(()) => {
             let _ = std::fs::remove_file(&probe);
@@ -80,6 +90,8 @@ mod tests {
         assert!(msg(prepare_out_dir(&file.join("b"), "--out", "w")).contains("a is a file, not a folder"));
         assert!(msg(prepare_out_dir(&dir.join("shot.PNG"), "--out", "w")).contains(".png file"));
         assert!(!dir.join("shot.PNG").exists(), "nothing created for a refused path");
+        check_out_dir(&dir.join("new/deep"), "--out", "w").unwrap();
+        assert!(!dir.join("new").exists(), "checking creates nothing");
         prepare_out_dir(&dir.join("new/deep"), "--out", "w").unwrap();
         assert!(dir.join("new/deep").is_dir());
         assert!(msg(check_out_file(&dir, "--json")).contains("is a folder"));

@@ -4,11 +4,13 @@
 //! depth and the numbers with `--out`.
 
 use crate::world_args::{LoadedWorld, WorldArgs};
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, Result};
 use clap::Args;
+use image::ExtendedColorType;
 use std::path::{Path, PathBuf};
 use vista::frame::FrameTimings;
 use vista::gpu::{Context, QueueMode};
+use vista::output::{encode_png, FileSet, OutputWriter};
 use vista::passes::cull_patches::CullStages;
 use vista::render::gbuffer::{classification_colour, GBufferCapture};
 use vista::render::offscreen::{Capture, Offscreen};
@@ -162,14 +164,15 @@ pub(crate) fn parse_stages(s: &str) -> Result<CullStages, String> {
 /// What `--out` receives, for messages.
 const OUTPUTS: &str = "image.png, lit.exr, depth.exr, classification.png and the JSON reports";
 
-/// Creates `--out` and `--cache` and checks they are writable folders, so a
-/// bad path fails before the render, not after it.
-pub fn prepare_paths(args: &RenderArgs) -> Result<()> {
+/// Checks that `--out` and `--cache` can be written, so a bad path fails
+/// before the render, not after it. Neither is created here: `--out`
+/// appears with the render's files, the cache with its first file.
+pub fn check_paths(args: &RenderArgs) -> Result<()> {
     if let Some(dir) = &args.out {
-        crate::out_path::prepare_out_dir(dir, "--out", OUTPUTS)?;
+        crate::out_path::check_out_dir(dir, "--out", OUTPUTS)?;
     }
     if let Some(dir) = &args.cache {
-        crate::out_path::prepare_out_dir(dir, "--cache", "the baked node files")?;
+        crate::out_path::check_out_dir(dir, "--cache", "the baked node files")?;
     }
     Ok(())
 }
@@ -303,10 +306,9 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     }
     if let Some(dir) = &args.out {
         let gbuffer = renderer.gbuffer.as_ref().expect("a frame was rendered").capture(ctx)?;
-        write_outputs(dir, &frames, warmup_timed, &capture, &gbuffer, view, &stats)?;
-        let path = dir.join("report.json");
-        std::fs::write(&path, serde_json::to_string_pretty(&report)?)
-            .with_context(|| format!("writing {}", path.display()))?;
+        let files =
+            Outputs { frames: &frames, warmup: warmup_timed, capture: &capture, gbuffer: &gbuffer, stats: &stats };
+        files.write(dir, view, &serde_json::to_string_pretty(&report)?)?;
     }
     print!("{}", renderer.terrain.memory_report());
     Ok(())
@@ -386,47 +388,56 @@ fn print_timings(timed: &[FrameTimings]) {
     println!("{:<44} {:<9} {:>10.4}", "sum of medians", "", total);
 }
 
-/// timings.json holds the timed frames (what the printed table summarises);
-/// trace.json every frame, warm-up included, for looking at first-use costs.
-fn write_outputs(
-    dir: &Path,
-    frames: &[FrameTimings],
+/// What `--out` receives.
+struct Outputs<'a> {
+    frames: &'a [FrameTimings],
     warmup: usize,
-    capture: &Capture,
-    gbuffer: &GBufferCapture,
-    view: &View,
-    stats: &RenderStats,
-) -> Result<()> {
-    let write = |name: &str, text: String| {
-        let path = dir.join(name);
-        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
-    };
-    write("timings.json", vista::frame::profiler::to_json(&frames[warmup..]))?;
-    write("trace.json", vista::frame::profiler::to_chrome_trace(frames))?;
-    write("stats.json", serde_json::to_string_pretty(stats)?)?;
-    let [w, h] = capture.size;
-    image::save_buffer(dir.join("image.png"), &capture.rgba, w, h, image::ExtendedColorType::Rgba8)
-        .with_context(|| format!("writing {}", dir.join("image.png").display()))?;
-    let depth = capture.linear_depth(view.near_m);
-    let exr_path = dir.join("depth.exr");
-    write_depth_exr(&exr_path, [w as usize, h as usize], depth)
-        .with_context(|| format!("writing {}", exr_path.display()))?;
-    write_lit_exr(&dir.join("lit.exr"), [w as usize, h as usize], &gbuffer.hdr)
-        .with_context(|| format!("writing {}", dir.join("lit.exr").display()))?;
-    let class: Vec<u8> = gbuffer.classification.iter().flat_map(|&b| classification_colour(b)).collect();
-    image::save_buffer(dir.join("classification.png"), &class, w, h, image::ExtendedColorType::Rgb8)
-        .with_context(|| format!("writing {}", dir.join("classification.png").display()))?;
-    println!(
-        "wrote {}/{{image.png, lit.exr, depth.exr, classification.png, timings.json, trace.json, stats.json, \
-         report.json}}",
-        dir.display()
-    );
-    Ok(())
+    capture: &'a Capture,
+    gbuffer: &'a GBufferCapture,
+    stats: &'a RenderStats,
+}
+
+impl Outputs<'_> {
+    /// All files or none: each is written beside its final name and the
+    /// set renamed into place once every one was written, so a full disk
+    /// leaves the previous render's files (or no folder) as they were.
+    /// timings.json holds the timed frames (what the printed table
+    /// summarises); trace.json every frame, warm-up included, for looking
+    /// at first-use costs.
+    fn write(&self, dir: &Path, view: &View, report_json: &str) -> Result<()> {
+        let mut set = FileSet::new(dir);
+        set.add("timings.json", vista::frame::profiler::to_json(&self.frames[self.warmup..]).as_bytes())?;
+        set.add("trace.json", vista::frame::profiler::to_chrome_trace(self.frames).as_bytes())?;
+        set.add("stats.json", serde_json::to_string_pretty(self.stats)?.as_bytes())?;
+        set.add("report.json", report_json.as_bytes())?;
+        let [w, h] = self.capture.size;
+        set.add_with("image.png", |f| encode_png(f, &self.capture.rgba, [w, h], ExtendedColorType::Rgba8))?;
+        let depth = self.capture.linear_depth(view.near_m);
+        let size = [w as usize, h as usize];
+        set.add_with("depth.exr", |f| write_depth_exr(f, size, depth))?;
+        set.add_with("lit.exr", |f| write_lit_exr(f, size, &self.gbuffer.hdr))?;
+        let class: Vec<u8> = self.gbuffer.classification.iter().flat_map(|&b| classification_colour(b)).collect();
+        set.add_with("classification.png", |f| encode_png(f, &class, [w, h], ExtendedColorType::Rgb8))?;
+        set.commit()?;
+        println!(
+            "wrote {}/{{image.png, lit.exr, depth.exr, classification.png, timings.json, trace.json, stats.json, \
+             report.json}}",
+            dir.display()
+        );
+        Ok(())
+    }
+}
+
+fn exr_io(e: exr::error::Error) -> std::io::Error {
+    match e {
+        exr::error::Error::Io(io) => io,
+        other => std::io::Error::other(other),
+    }
 }
 
 /// The lit image before display encoding: linear RGB radiance (float16
 /// channels R, G, B), row 0 at the top.
-fn write_lit_exr(path: &Path, size: [usize; 2], hdr: &[[f32; 4]]) -> Result<()> {
+fn write_lit_exr(w: &mut OutputWriter, size: [usize; 2], hdr: &[[f32; 4]]) -> std::io::Result<()> {
     use exr::prelude::*;
     let channel = |name: &str, i: usize| {
         AnyChannel::new(name, FlatSamples::F16(hdr.iter().map(|p| f16::from_f32(p[i])).collect()))
@@ -437,13 +448,12 @@ fn write_lit_exr(path: &Path, size: [usize; 2], hdr: &[[f32; 4]]) -> Result<()> 
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(vec![channel("R", 0), channel("G", 1), channel("B", 2)])),
     );
-    Image::from_layer(layer).write().non_parallel().to_file(path)?;
-    Ok(())
+    Image::from_layer(layer).write().non_parallel().to_buffered(w).map_err(exr_io)
 }
 
 /// One float32 channel `Z`: linear view depth in metres along the camera's
 /// forward axis, 0 where no terrain; row 0 is the top of the image.
-fn write_depth_exr(path: &Path, size: [usize; 2], depth: Vec<f32>) -> Result<()> {
+fn write_depth_exr(w: &mut OutputWriter, size: [usize; 2], depth: Vec<f32>) -> std::io::Result<()> {
     use exr::prelude::*;
     let channel = AnyChannel::new("Z", FlatSamples::F32(depth));
     let layer = Layer::new(
@@ -452,6 +462,5 @@ fn write_depth_exr(path: &Path, size: [usize; 2], depth: Vec<f32>) -> Result<()>
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(vec![channel])),
     );
-    Image::from_layer(layer).write().non_parallel().to_file(path)?;
-    Ok(())
+    Image::from_layer(layer).write().non_parallel().to_buffered(w).map_err(exr_io)
 }

@@ -65,8 +65,7 @@ pub fn stability(device: Option<String>, args: &StabilityArgs) -> Result<()> {
             "form": if args.full { "full" } else { "quick" },
             "cases": reports,
         });
-        std::fs::write(path, serde_json::to_string_pretty(&json)?)
-            .with_context(|| format!("--json {}", path.display()))?;
+        vista::output::write(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
     }
     let failed: Vec<String> = reports.iter().filter(|r| !r.pass).map(|r| r.case.to_string()).collect();
     if !failed.is_empty() {
