@@ -374,3 +374,50 @@ fn memory_json_gives_the_bytes_per_node_of_each_payload_format() {
     assert_eq!(per_node("rgba8").1, bc_gpu - 33 * 33 * 24 + 2 * 132 * 132 * 4);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Runs vista, killing it if it has not exited after a minute: a hang is
+/// the failure this guards against, not slowness (no timing is asserted).
+fn vista_or_hang(args: &[&str]) -> (Option<i32>, String) {
+    let mut child = vista_cmd()
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run vista");
+    for _ in 0..1200 {
+        if let Some(status) = child.try_wait().unwrap() {
+            let mut err = String::new();
+            std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+            return (status.code(), err);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let _ = child.kill();
+    panic!("{args:?} hung");
+}
+
+#[test]
+fn inputs_that_are_not_regular_files_are_refused_without_opening_them() {
+    let dir = temp_dir("fifo");
+    let fifo = dir.join("map.png");
+    assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let f = fifo.to_str().unwrap();
+    let scene = dir.join("fifo-source.toml");
+    std::fs::write(&scene, format!("[world]\nsource = {f:?}\nextent = 1000\nheight_range = [0, 100]\n")).unwrap();
+    let s = scene.to_str().unwrap();
+    let map = ["--extent", "1000", "--height-range", "0", "100"];
+    for (args, needle) in [
+        (&[&["bake", "--dry-run", "--heightmap", f][..], &map[..]].concat(), "--heightmap"),
+        (&[&["memory", "--heightmap", f][..], &map[..]].concat(), "--heightmap"),
+        (&[&["render", "--heightmap", f][..], &map[..]].concat(), "--heightmap"),
+        (&vec!["render", "--scene", f], "--scene"),
+        (&vec!["bake", "--dry-run", "--scene", s], "source"),
+        (&[&["memory", "--heightmap", "/dev/zero"][..], &map[..]].concat(), "a device"),
+    ] {
+        let (code, err) = vista_or_hang(args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(needle) && err.contains("not a regular file"), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -251,7 +251,8 @@ fn decode(path: &Path, what: &str) -> Result<image::DynamicImage> {
         let why = why.lines().map(str::trim).collect::<Vec<_>>().join("; ");
         Error::Scene(format!("{what} texture {}: {why}", path.display()))
     };
-    let img = image::ImageReader::open(path)
+    let img = crate::world::require_regular_file(path)
+        .and_then(|()| image::ImageReader::open(path))
         .and_then(|r| r.with_guessed_format())
         .map_err(|e| fail(format!("cannot read it: {e}")))?
         .decode()

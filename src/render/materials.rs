@@ -153,8 +153,9 @@ impl MaterialSet {
     /// its folder. Every error is one line naming the file and the key.
     pub fn from_file(path: &Path) -> Result<MaterialSet> {
         let origin = path.display().to_string();
-        let text =
-            std::fs::read_to_string(path).map_err(|e| Error::Scene(format!("{origin}: cannot read the file: {e}")))?;
+        let text = crate::world::require_regular_file(path)
+            .and_then(|()| std::fs::read_to_string(path))
+            .map_err(|e| Error::Scene(format!("{origin}: cannot read the file: {e}")))?;
         let table: toml::Table = toml::from_str(&text).map_err(|e| {
             // toml's Display spans several lines (a source excerpt); the
             // line number and the message are enough.

@@ -19,6 +19,7 @@ pub struct ExrSource {
 
 impl ExrSource {
     pub fn open(path: &Path, extent_m: [f64; 2]) -> Result<Self> {
+        super::require_regular_file(path).map_err(|e| WorldError::io(path, e))?;
         let bytes = std::fs::read(path).map_err(|e| WorldError::io(path, e))?;
         Self::from_bytes(&bytes, path, extent_m)
     }

@@ -11,6 +11,7 @@ mod errors;
 mod exr_source;
 mod hash;
 mod holes;
+mod input_file;
 mod layout;
 mod loader;
 mod material_rules;
@@ -34,6 +35,7 @@ pub use error_tile::diamond;
 pub use errors::{ErrorTree, NodeErrors, PreparedErrors};
 pub use exr_source::{write_height_exr, ExrSource};
 pub use holes::{holes_hash, Hole};
+pub use input_file::require_regular_file;
 pub use layout::{
     decode_height, encode_height, NodeId, WorldDesc, MAX_ABS_HEIGHT_M, MAX_IMAGE_SIDE, MAX_LOD_COUNT,
     MAX_SECTORS_PER_SIDE, NODE_QUADS, NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS,

@@ -26,6 +26,7 @@ pub struct Png16Source {
 impl Png16Source {
     /// Reads and validates `path`.
     pub fn open(path: &Path, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<Self> {
+        super::require_regular_file(path).map_err(|e| WorldError::io(path, e))?;
         let bytes = std::fs::read(path).map_err(|e| WorldError::io(path, e))?;
         Self::from_bytes(&bytes, path, extent_m, height_range_m)
     }

@@ -123,6 +123,11 @@ impl Scene {
         if path.is_dir() {
             bail!("--scene {} is a directory, expected a scene file (.toml)", path.display());
         }
+        if let Err(e) = vista::world::require_regular_file(path) {
+            if e.kind() != std::io::ErrorKind::NotFound {
+                bail!("--scene {} {e}: give a scene file (.toml)", path.display());
+            }
+        }
         let text = std::fs::read_to_string(path).with_context(|| format!("scene file {}", path.display()))?;
         let raw: RawScene = toml::from_str(&text).map_err(|e| {
             // toml's Display spans several lines (a source excerpt); one

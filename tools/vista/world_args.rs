@@ -424,6 +424,11 @@ fn heightmap_kind(path: &Path, what: &str, height_range: Option<GivenRange>) -> 
     if path.is_dir() {
         bail!("{what} {} is a directory, expected a PNG or EXR height map file", path.display());
     }
+    if let Err(e) = vista::world::require_regular_file(path) {
+        if e.kind() != std::io::ErrorKind::NotFound {
+            bail!("{what} {} {e}: give a PNG or EXR height map file", path.display());
+        }
+    }
     let mut magic = [0u8; 4];
     let mut file = std::fs::File::open(path).with_context(|| format!("heightmap file {}", path.display()))?;
     if let Err(e) = file.read_exact(&mut magic) {
