@@ -421,3 +421,44 @@ fn inputs_that_are_not_regular_files_are_refused_without_opening_them() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn every_option_acts_or_is_refused() {
+    let dir = temp_dir("nothing-ignored");
+    // --clamp-heights has EXR data to clamp or nothing: refused otherwise.
+    assert_fails_naming(&["bake", "--dry-run", "--clamp-heights"], &["--clamp-heights", "procedural", "drop it"]);
+    let png = ["--heightmap", MONTBLANC, "--extent", "60000", "--height-range", "454", "4810", "--spacing", "8"];
+    let args = [&["bake", "--dry-run", "--clamp-heights"][..], &png[..]].concat();
+    assert_fails_naming(&args, &["--clamp-heights", "is a PNG", "drop it"]);
+
+    // A dry run writes its plan as JSON when asked (and says so by exit 0).
+    let json = dir.join("plan.json");
+    let small = ["--extent", "2048", "--spacing", "2", "--lods", "4"];
+    let args = [&["bake", "--dry-run", "--json", json.to_str().unwrap()][..], &small[..]].concat();
+    let (ok, _, err) = vista(&args);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // 2048 m at 2 m spacing: LOD-0 nodes of 256 m, 8 x 8 of them, then 4 x 4, 2 x 2, 1.
+    let nodes: Vec<u64> = v["plan"]["nodes_per_lod"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
+    assert_eq!(nodes, [64, 16, 4, 1]);
+    assert!(v["refused"].is_null() && v["estimated_seconds"].as_f64().unwrap() > 0.0, "{v}");
+    // A refused plan is written too, with the refusal.
+    let args = [&["bake", "--dry-run", "--max-disk", "0", "--json", json.to_str().unwrap()][..]].concat();
+    let (ok, _, _) = vista(&args);
+    assert!(!ok);
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["refused"].as_str().is_some_and(|r| r.contains("disk")), "{v}");
+
+    // A scene value replaced on the command line, and a hole that misses
+    // the world: one line each, and the run goes on.
+    let scene = dir.join("s.toml");
+    std::fs::write(&scene, "[world]\nspacing = 2\nextent = 2048\nlods = 4\n[[holes]]\ncircle = [5000, 5000, 20]\n")
+        .unwrap();
+    let (ok, _, err) = vista(&["bake", "--dry-run", "--scene", scene.to_str().unwrap(), "--spacing", "4"]);
+    assert!(ok, "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 2, "{err}");
+    assert!(lines.contains(&"note: --spacing 4 replaces the scene's spacing 2"), "{err}");
+    assert!(err.contains("hole 1 (circle at 5000,5000 radius 20) lies outside the world"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

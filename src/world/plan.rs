@@ -103,7 +103,8 @@ pub enum PlanError {
 }
 
 /// Where a plan's bake time comes from.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum TimeBasis {
     /// [`NODE_BAKE_THREAD_SECONDS`].
     Constant,
@@ -112,7 +113,7 @@ pub enum TimeBasis {
 }
 
 /// The cost of a world (or of a region of it), before any of it is made.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct WorldPlan {
     pub world: WorldDesc,
     /// Nodes overlapping this rectangle, metres; `None` = the whole world.

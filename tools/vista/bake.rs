@@ -187,12 +187,16 @@ pub fn bake(args: BakeArgs) -> Result<()> {
     let mut plan = spec.plan(args.region).with_slots(REPORT_SLOTS as u32);
     let cap = (!args.yes).then_some(args.max_disk);
     let limits = Limits { max_bake_disk_bytes: cap, ..spec.limits.clone() };
+    if let Some(json) = &args.json {
+        crate::out_path::check_out_file(json, "--json")?;
+    }
     if args.dry_run {
         // The plan even of a refused world: what it would cost is the point.
         let mut out = format!("world:    {}\n", spec.label());
         if let Err(e) = spec.check(&plan, &limits) {
             write!(out, "{plan}")?;
             emit(&out)?;
+            write_plan_json(args.json.as_deref(), &spec.label(), &plan, Some(&e))?;
             return Err(e);
         }
         let w = spec.open()?;
@@ -201,15 +205,13 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         writeln!(out, "{}", world_line(&w))?;
         write!(out, "{plan}")?;
         writeln!(out, "dry run: nothing baked")?;
-        return emit(&out);
+        emit(&out)?;
+        return write_plan_json(args.json.as_deref(), &w.label, &plan, None);
     }
     spec.check(&plan, &limits)?;
     // clap asks for --out unless --dry-run.
     let dir = args.out.clone().context("--out DIR is needed to bake")?;
     crate::out_path::prepare_out_dir(&dir, "--out", "the node cache: lod{k}/{x}_{y}.vnode")?;
-    if let Some(json) = &args.json {
-        crate::out_path::check_out_file(json, "--json")?;
-    }
     let w = spec.open()?;
     let progress = match (args.no_progress, args.progress_every) {
         (true, _) => Progress::Hidden,
@@ -274,6 +276,20 @@ pub fn bake(args: BakeArgs) -> Result<()> {
 }
 
 /// Writes a report to stdout; a reader that went away early is not an error.
+/// `bake --dry-run --json FILE`: the plan as printed, and the refusal if
+/// the plan was refused.
+fn write_plan_json(path: Option<&Path>, source: &str, plan: &WorldPlan, refused: Option<&anyhow::Error>) -> Result<()> {
+    let Some(path) = path else { return Ok(()) };
+    let json = serde_json::json!({
+        "dry_run": true,
+        "source": source,
+        "plan": plan,
+        "estimated_seconds": plan.bake_seconds(),
+        "refused": refused.map(|e| format!("{e:#}")),
+    });
+    write_json(path, &json)
+}
+
 fn emit(text: &str) -> Result<()> {
     match std::io::stdout().lock().write_all(text.as_bytes()) {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),

@@ -234,6 +234,10 @@ impl WorldArgs {
             (None, None) => None,
         };
         let clamp = self.clamp_heights || w.clamp_heights;
+        let clamp_name = if self.clamp_heights { "--clamp-heights" } else { "the scene's clamp_heights" };
+        if self.scene.is_some() {
+            self.note_overrides(&scene);
+        }
         let defaults = WorldDesc::default();
         let spacing_m = self.spacing.or(w.spacing).unwrap_or(defaults.spacing_m);
         // Without a count, the extent decides (a small number of roots).
@@ -251,7 +255,7 @@ impl WorldArgs {
         };
         let mut holes = scene.holes()?;
         holes.extend(self.hole_circle.iter().cloned());
-        let holes = holes.iter().map(|h| h.relative_to(origin_m)).collect();
+        let holes: Vec<Hole> = holes.iter().map(|h| h.relative_to(origin_m)).collect();
 
         let (desc, source) = match heightmap {
             None => {
@@ -260,6 +264,9 @@ impl WorldArgs {
                 let height_range_m = height_range.map_or(defaults.height_range_m, |r| r.range);
                 let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count, ..WorldDesc::default() };
                 check_desc(&desc, &names)?;
+                if clamp {
+                    bail!("{clamp_name} clamps an EXR height map's data; the procedural world has none: drop it");
+                }
                 (desc, SpecSource::Procedural { seed })
             }
             Some((path, what)) => {
@@ -272,13 +279,73 @@ impl WorldArgs {
                 // An absurd world fails before the file is opened.
                 check_desc(&desc, &names)?;
                 let kind = heightmap_kind(&path, what, height_range)?;
+                if clamp && kind == MapKind::Png {
+                    bail!(
+                        "{clamp_name} clamps an EXR height map's data; {} is a PNG, whose 0..65535 always maps into \
+                         its height range: drop it",
+                        path.display()
+                    );
+                }
                 (desc, SpecSource::Heightmap { path, kind, height_range, clamp })
             }
         };
+        note_holes_outside(&holes, &desc, origin_m);
         let max_sectors_per_side = self.max_sectors.unwrap_or(DEFAULT_MAX_SECTORS_PER_SIDE);
         let limits = Limits { max_sectors_per_side, ..Limits::default() };
         let bake = BakeSettings { format: self.payload, materials: scene.material_rules };
         Ok(WorldSpec { desc, source, holes, effects: scene.effects, origin_m, limits, bake })
+    }
+}
+
+impl WorldArgs {
+    /// One line on stderr for each scene value a command-line option
+    /// replaces with another.
+    fn note_overrides(&self, scene: &Scene) {
+        let w = &scene.world;
+        let show = |v: Option<String>, s: Option<String>, option: &str, key: &str| {
+            if let (Some(v), Some(s)) = (v, s) {
+                if v != s {
+                    eprintln!("note: {option} {v} replaces the scene's {key} {s}");
+                }
+            }
+        };
+        let pair = |v: [f64; 2]| format!("{},{}", v[0], v[1]);
+        show(self.extent.map(pair), w.extent.map(|e| pair(e.xy())), "--extent", "extent");
+        let range = |v: [f32; 2]| format!("{} {}", v[0], v[1]);
+        show(
+            self.height_range.as_ref().map(|v| range([v[0], v[1]])),
+            w.height_range.map(range),
+            "--height-range",
+            "height_range",
+        );
+        show(self.spacing.map(|v| v.to_string()), w.spacing.map(|v| v.to_string()), "--spacing", "spacing");
+        show(self.lods.map(|v| v.to_string()), w.lods.map(|v| v.to_string()), "--lods", "lods");
+        show(self.seed.map(|v| v.to_string()), w.seed.map(|v| v.to_string()), "--seed", "seed");
+        show(self.origin.map(pair), w.origin.map(pair), "--origin", "origin");
+    }
+}
+
+/// A hole that misses the world cuts nothing: one line each, in the
+/// user's coordinates, so a typo in a hole is not silently dropped.
+fn note_holes_outside(holes: &[Hole], desc: &WorldDesc, origin_m: [f64; 2]) {
+    let [ex, ey] = desc.extent_m;
+    for (i, h) in holes.iter().enumerate() {
+        let [x0, y0, x1, y1] = h.bounds();
+        if x1 < 0.0 || y1 < 0.0 || x0 > ex || y0 > ey {
+            let [ox, oy] = origin_m;
+            let what = match h.relative_to([-ox, -oy]) {
+                Hole::Circle { center_m, radius_m } => {
+                    format!("circle at {},{} radius {radius_m}", center_m[0], center_m[1])
+                }
+                Hole::Polygon(p) => format!("polygon of {} points", p.len()),
+            };
+            eprintln!(
+                "note: hole {} ({what}) lies outside the world ({ox}..{} x {oy}..{} m): it cuts nothing",
+                i + 1,
+                ox + ex,
+                oy + ey
+            );
+        }
     }
 }
 
