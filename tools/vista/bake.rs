@@ -18,9 +18,6 @@ use crate::world_args::{parse_f64, parse_list, LoadedWorld, WorldArgs};
 /// Resident slots the bake's memory report assumes (the streamer's default
 /// budget order of magnitude).
 const REPORT_SLOTS: usize = 512;
-/// Upper bound for `--slots`: far beyond any GPU, and keeps byte totals
-/// from overflowing.
-const MAX_SLOTS: u64 = 1 << 24;
 /// Nodes per timed batch of a plan (half at LOD 0, half at LOD 1); levels
 /// bake batches until 50 ms have passed (`WorldPlan::measure_bake`): about
 /// 0.25 s in all, and the default world's estimate within about 10 % of its
@@ -70,9 +67,10 @@ pub struct BakeArgs {
 pub struct MemoryArgs {
     #[command(flatten)]
     pub world: WorldArgs,
-    /// Resident node slots to account for.
-    #[arg(long, default_value_t = REPORT_SLOTS as u64, value_parser = clap::value_parser!(u64).range(1..=MAX_SLOTS), allow_negative_numbers = true)]
-    pub slots: u64,
+    /// Resident node slots to account for: what `vista render --slots` takes
+    /// for this world (at most 1023: slots are 10-bit).
+    #[arg(long, default_value_t = REPORT_SLOTS as u32, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
+    pub slots: u32,
     /// Also write the figures as JSON to this file (`cpu_bytes_per_node`,
     /// `gpu_bytes_per_node`, totals, and every payload kind).
     #[arg(long, value_name = "FILE")]
@@ -381,10 +379,10 @@ pub fn memory(args: MemoryArgs) -> Result<()> {
         crate::out_path::check_out_file(json, "--json")?;
     }
     let w = args.world.load()?;
+    crate::world_args::check_slots(args.slots, &w.desc)?;
     let mut out = String::new();
     // Counted, not listed: a huge world costs no memory to account for.
     let full = WorldPlan::new(&w.desc, None).world_nodes as usize;
-    // Bounded by MAX_SLOTS, so it fits usize everywhere clap runs.
     let slots = args.slots as usize;
     writeln!(out, "world:    {} ({} nodes over {} LODs)", w.label, full, w.desc.lod_count)?;
     writeln!(out, "memory for {slots} resident nodes:")?;

@@ -46,7 +46,8 @@ pub fn accuracy(
     if let Some(wanted) = views {
         let known: Vec<String> = all.iter().map(|(n, _)| view_key(n)).collect();
         if let Some(bad) = wanted.iter().find(|w| !known.contains(w)) {
-            bail!("--views: no view named {bad:?} (known: {})", known.join(", "));
+            let known = known.join(", ");
+            return Err(crate::InputError(format!("--views: no view named {bad:?} (known: {known})")).into());
         }
         all.retain(|(n, _)| wanted.contains(&view_key(n)));
     }

@@ -37,12 +37,12 @@ pub struct BenchArgs {
     json: Option<PathBuf>,
     /// `bench traverse`: resident-set sizes (nodes; at most 1023: slots are
     /// 10-bit) [default: 64,256,512,1000].
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     sets: Option<Vec<u32>>,
     /// `bench traverse` and `bench accuracy`: target projected errors in
     /// pixels [default: 0.5,1,2,4,8 for traverse; 0.25,0.5,1,2,4,8,16 for
     /// accuracy].
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', value_parser = crate::numbers::number_f32, allow_negative_numbers = true)]
     targets: Option<Vec<f32>>,
     /// `bench accuracy`: only these views (ground, low-flight, high-flight,
     /// facing-ridge) [default: all four].
@@ -57,17 +57,17 @@ pub struct BenchArgs {
     images: Option<PathBuf>,
     /// `bench accuracy`: resident node slots of the renderers (at most
     /// 1023) [default: the renderer's default].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     slots: Option<u32>,
     /// Measured frames per row (after warm-up); the median is reported
     /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects, 3 per block (3 rounds) for shade].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     frames: Option<u32>,
     /// Target size of every kind but traverse [default: 1280x720].
-    #[arg(long, value_parser = crate::render_cmd::parse_size)]
+    #[arg(long, value_parser = crate::render_cmd::parse_size, allow_hyphen_values = true)]
     size: Option<[u32; 2]>,
     /// Target projected error of every kind but traverse, pixels [default: 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = crate::numbers::number_f32, allow_negative_numbers = true)]
     target_error: Option<f32>,
     /// `bench traverse`: camera position (x,y,z metres); default: 60 m above
     /// the world's centre at mid height.

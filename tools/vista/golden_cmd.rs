@@ -92,11 +92,22 @@ const GOLDENS: [Golden; 3] = [
     Golden { name: "montblanc", scene: concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/montblanc.toml"), camera: None },
 ];
 
-pub fn golden(ctx: &Context, args: &GoldenArgs) -> Result<()> {
+/// The arguments' own checks, before Vulkan starts.
+pub fn check(args: &GoldenArgs) -> Result<()> {
     if let Some(bad) = args.only.iter().find(|n| !GOLDENS.iter().any(|g| g.name == n.as_str())) {
         let names: Vec<&str> = GOLDENS.iter().map(|g| g.name).collect();
         return Err(crate::InputError(format!("no golden view {bad:?}; there are: {}", names.join(", "))).into());
     }
+    if !args.update && !args.payload_diff && !args.dir.is_dir() {
+        let why = if args.dir.exists() { "is not a folder" } else { "does not exist" };
+        let message =
+            format!("--dir {} {why}: it holds the reference images (--update writes them)", args.dir.display());
+        return Err(crate::InputError(message).into());
+    }
+    Ok(())
+}
+
+pub fn golden(ctx: &Context, args: &GoldenArgs) -> Result<()> {
     if args.payload_diff {
         return payload_diff(ctx, args);
     }

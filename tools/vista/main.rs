@@ -9,9 +9,11 @@ mod bench_cull_cmd;
 mod bench_effects_cmd;
 mod bench_shade_cmd;
 mod golden_cmd;
+mod numbers;
 mod out_path;
 mod render_cmd;
 mod scene;
+mod scene_words;
 mod stability_cmd;
 mod world_args;
 
@@ -141,7 +143,10 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bake(args) => bake::bake(args),
         Command::Memory(args) => bake::memory(args),
         Command::Bench(args) => with_gpu(&options, |ctx| bench_cmd::bench(ctx, args)),
-        Command::Golden(args) => with_gpu(&options, |ctx| golden_cmd::golden(ctx, &args)),
+        Command::Golden(args) => {
+            golden_cmd::check(&args)?;
+            with_gpu(&options, |ctx| golden_cmd::golden(ctx, &args))
+        }
         Command::Stability(args) => stability_cmd::stability(cli.device.clone(), &args),
     }
 }

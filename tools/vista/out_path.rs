@@ -71,7 +71,14 @@ pub fn check_out_file(path: &Path, option: &str) -> Result<()> {
     if !parent.is_dir() {
         return refuse(format!("{option} {shown}: the folder {} does not exist", parent.display()));
     }
-    Ok(())
+    let probe = parent.join(format!(".vista-write-test-{}", std::process::id()));
+    match std::fs::write(&probe, b"") {
+        Ok(()) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => refuse(format!("{option} {shown}: the folder {} is not writable: {e}", parent.display())),
+    }
 }
 
 #[cfg(test)]

@@ -26,11 +26,11 @@ pub(crate) const SKY_CLEAR: [f32; 4] = [0.55, 0.68, 0.85, 1.0];
 #[derive(Args)]
 pub struct RenderArgs {
     /// Target size, e.g. 1280x720.
-    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    #[arg(long, default_value = "1280x720", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: [u32; 2],
     /// Frames rendered after streaming settled; the first 2 are warm-up and
     /// left out of the medians and timings.json.
-    #[arg(long, default_value_t = 12, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 12, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub frames: u32,
     /// Folder (created if needed) for image.png, lit.exr, depth.exr,
     /// classification.png, timings.json (the timed frames), trace.json
@@ -49,10 +49,10 @@ pub struct RenderArgs {
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub camera: Option<CameraArg>,
     /// Vertical field of view in degrees.
-    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
     pub fov: f64,
     /// Largest accepted projected vertical error in pixels (the accuracy knob).
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::numbers::number_f32, allow_negative_numbers = true)]
     pub target_error: f32,
     /// How frames are submitted: auto (async where the device has a
     /// compute-only queue family, else single), single (one command buffer),
@@ -64,7 +64,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "frustum,cone,hole,occlusion", value_parser = parse_stages)]
     pub cull: CullStages,
     /// Resident node slots (at most 1023: slots are 10-bit).
-    #[arg(long, default_value_t = 512, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 512, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub slots: u32,
     /// Cache baked nodes and the error tree here across runs (default: bake
     /// in memory only; the error tree goes to $VISTA_CACHE, else
@@ -72,7 +72,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub cache: Option<PathBuf>,
     /// Longest wait for the streamed set to become resident before the measured frames.
-    #[arg(long, default_value_t = 120.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 120.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
     pub settle_seconds: f64,
     /// The world to render (default: the procedural world, baked lazily).
     #[command(flatten)]

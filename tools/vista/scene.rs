@@ -135,7 +135,9 @@ impl Scene {
             // Counted on the bytes: no string slicing, whatever span the parser reports.
             let line = e.span().map(|s| text.as_bytes()[..s.start.min(text.len())].split(|&b| b == b'\n').count());
             let at = line.map(|l| format!(":{l}")).unwrap_or_default();
-            anyhow::anyhow!("scene file {}{at}: {}", path.display(), e.message().trim())
+            let source_line = line.and_then(|l| text.lines().nth(l - 1));
+            let message = crate::scene_words::reword(e.message().trim(), source_line);
+            anyhow::anyhow!("scene file {}{at}: {message}", path.display())
         })?;
         let mut world = raw.world;
         if let SceneSource::Path(p) = &world.source {

@@ -18,10 +18,10 @@ pub struct StabilityArgs {
     #[arg(long)]
     pub full: bool,
     /// Run only these cases, e.g. 1,2,7 [default: all ten].
-    #[arg(long, value_delimiter = ',', value_name = "N,...")]
+    #[arg(long, value_delimiter = ',', value_name = "N,...", value_parser = crate::numbers::whole_u8, allow_negative_numbers = true)]
     pub cases: Option<Vec<u8>>,
     /// Soak: sample every N frames [default: 100 quick, 1000 full].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub soak_every: Option<u32>,
     /// Internal: print the determinism script's frame hashes and exit (the
     /// second process of case 7).
@@ -38,6 +38,9 @@ pub fn stability(device: Option<String>, args: &StabilityArgs) -> Result<()> {
         let hashes = determinism::script_hashes(&ctx)?;
         println!("{}", serde_json::to_string(&hashes)?);
         return Ok(());
+    }
+    if let Some(json) = &args.json {
+        crate::out_path::check_out_file(json, "--json")?;
     }
     let cases = args.cases.clone().unwrap_or(ALL.to_vec());
     if let Some(bad) = cases.iter().find(|c| !ALL.contains(c)) {

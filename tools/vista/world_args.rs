@@ -41,7 +41,7 @@ pub struct WorldArgs {
     /// the 16-bit height encoding. Optional for EXR (taken from the data,
     /// resampling overshoot included); an EXR range that clips data is an
     /// error unless --clamp-heights is given.
-    #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true, help_heading = "World",
+    #[arg(long, num_args = 2, value_names = ["LO", "HI"], value_parser = crate::numbers::number_f32, allow_negative_numbers = true, help_heading = "World",
           action = clap::ArgAction::Set)]
     pub height_range: Option<Vec<f32>>,
     /// Clamp EXR heights outside --height-range (or the scene's height_range)
@@ -49,13 +49,13 @@ pub struct WorldArgs {
     #[arg(long, help_heading = "World")]
     pub clamp_heights: bool,
     /// Distance between LOD-0 samples in metres [default: 0.5].
-    #[arg(long, value_name = "METRES", allow_negative_numbers = true, help_heading = "World")]
+    #[arg(long, value_name = "METRES", value_parser = crate::numbers::number_f64, allow_negative_numbers = true, help_heading = "World")]
     pub spacing: Option<f64>,
     /// Number of quadtree levels (1..=10) [default: 6].
-    #[arg(long, value_name = "N", allow_negative_numbers = true, help_heading = "World")]
+    #[arg(long, value_name = "N", value_parser = crate::numbers::whole_u32, allow_negative_numbers = true, help_heading = "World")]
     pub lods: Option<u32>,
     /// Seed of the procedural world [default: 1].
-    #[arg(long, value_name = "N", allow_negative_numbers = true, help_heading = "World")]
+    #[arg(long, value_name = "N", value_parser = crate::numbers::whole_u64, allow_negative_numbers = true, help_heading = "World")]
     pub seed: Option<u64>,
     /// Cut a circular hole into the terrain (repeatable): centre X,Y and
     /// radius R, metres.
@@ -71,7 +71,7 @@ pub struct WorldArgs {
     pub payload: PayloadFormat,
     /// Refuse worlds with more LOD-0 sectors than this along either side,
     /// checked before anything is read or allocated [default: 16384].
-    #[arg(long, value_name = "N", allow_negative_numbers = true, help_heading = "World")]
+    #[arg(long, value_name = "N", value_parser = crate::numbers::whole_u64, allow_negative_numbers = true, help_heading = "World")]
     pub max_sectors: Option<u64>,
 }
 
