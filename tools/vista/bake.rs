@@ -179,7 +179,11 @@ pub fn bake(args: BakeArgs) -> Result<()> {
     if let Some(r) = args.region {
         let [ex, ey] = spec.desc.extent_m;
         if r[2] <= 0.0 || r[3] <= 0.0 || r[0] >= ex || r[1] >= ey {
-            bail!("--region {},{},{},{} does not overlap the world (0..{ex} x 0..{ey} m)", r[0], r[1], r[2], r[3]);
+            let message = format!(
+                "--region {},{},{},{} does not overlap the world (0..{ex} x 0..{ey} m)",
+                r[0], r[1], r[2], r[3]
+            );
+            return Err(crate::InputError(message).into());
         }
     }
     let mut plan = spec.plan(args.region).with_slots(REPORT_SLOTS as u32);

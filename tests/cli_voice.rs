@@ -1,0 +1,176 @@
+//! One voice for bad input, across every command: exit code 2, exactly one
+//! line on stderr, none of the parsers' own phrases (which name Rust types,
+//! not what the option takes), and nothing written. No GPU work: every case
+//! is refused before (or, for the few that need the device's limits, right
+//! after) Vulkan starts.
+
+use std::path::{Path, PathBuf};
+mod vista_cmd;
+
+const MONTBLANC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/montblanc.png");
+
+/// Phrases of the standard library's, serde's and clap's parsers that must
+/// not reach a user.
+const JARGON: [&str; 13] = [
+    "invalid digit",
+    "too large to fit",
+    "cannot parse",
+    "invalid float literal",
+    "expected u",
+    "expected f",
+    "expected i",
+    "did not match any variant",
+    "untagged enum",
+    "invalid type:",
+    "panicked",
+    "RUST_BACKTRACE",
+    "Parse",
+];
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vista-cli-voice-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+fn scene(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.push(p.clone());
+            out.extend(files_under(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
+
+#[test]
+fn sixty_bad_inputs_each_get_one_line_and_exit_2() {
+    let inputs = temp_dir("inputs");
+    let lods = scene(&inputs, "lods.toml", "[world]\nlods = \"x\"\n");
+    let extent = scene(&inputs, "extent.toml", "[world]\nextent = \"big\"\n");
+    let key = scene(&inputs, "key.toml", "[world]\nlodz = 3\n");
+    let circle = scene(&inputs, "circle.toml", "[[holes]]\ncircle = [1, 2]\n");
+    let rules = scene(&inputs, "rules.toml", "[material_rules]\nsnow_line_m = \"high\"\n");
+    let effect = scene(&inputs, "effect.toml", "[effects]\nholes = 5\n");
+    let syntax = scene(&inputs, "syntax.toml", "[world\nlods = 3\n");
+    let cargo = concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.toml");
+    let mb_range = ["--extent", "60000", "--height-range", "454", "4810", "--spacing", "8"];
+    let s = |v: &[&str]| v.iter().map(|a| a.to_string()).collect::<Vec<String>>();
+    let with_mb = |v: &[&str]| [s(v), s(&mb_range)].concat();
+    let cases: Vec<Vec<String>> = vec![
+        s(&["render", "--frames", "abc"]),
+        s(&["render", "--frames", "-1"]),
+        s(&["render", "--frames", "0"]),
+        s(&["render", "--frames", "99999999999"]),
+        s(&["render", "--slots", ""]),
+        s(&["render", "--slots", "1024"]),
+        s(&["render", "--slots", "1"]),
+        s(&["render", "--fov", "x"]),
+        s(&["render", "--fov", "0"]),
+        s(&["render", "--fov", "180"]),
+        s(&["render", "--target-error", "0"]),
+        s(&["render", "--target-error", "-1"]),
+        s(&["render", "--target-error", "abc"]),
+        s(&["render", "--size", "0x10"]),
+        s(&["render", "--size", "-160x120"]),
+        s(&["render", "--size", "100"]),
+        s(&["render", "--size", "20000x10"]),
+        s(&["render", "--camera", "1,2"]),
+        s(&["render", "--camera", "1,nan,3"]),
+        s(&["render", "--camera", "1,2,3,0,-120"]),
+        s(&["render", "--cull", "frustum,bogus"]),
+        s(&["render", "--queues", "bogus"]),
+        s(&["render", "--settle-seconds", "-1"]),
+        s(&["render", "--out", "shot.png"]),
+        s(&["render", "--spacing", "-1"]),
+        s(&["render", "--spacing", "abc"]),
+        s(&["render", "--lods", "11"]),
+        s(&["render", "--lods", "1.5"]),
+        s(&["render", "--seed", "-1"]),
+        s(&["render", "--extent", "0"]),
+        s(&["render", "--extent", "abc"]),
+        s(&["render", "--extent", "1,2,3"]),
+        s(&["render", "--height-range", "5", "1"]),
+        s(&["render", "--origin", "1"]),
+        s(&["render", "--hole-circle", "1,2"]),
+        s(&["render", "--hole-circle", "1,2,-3"]),
+        s(&["render", "--heightmap", "/no/such.png", "--extent", "100", "--height-range", "0", "1"]),
+        s(&["render", "--heightmap", cargo, "--extent", "100", "--height-range", "0", "1"]),
+        s(&["render", "--heightmap", MONTBLANC, "--extent", "60000"]),
+        s(&["render", "--heightmap", MONTBLANC]),
+        with_mb(&["render", "--heightmap", MONTBLANC, "--lods", "1"]),
+        with_mb(&["render", "--heightmap", MONTBLANC, "--clamp-heights"]),
+        s(&["render", "--scene", "/no/such.toml"]),
+        s(&["render", "--scene", &lods]),
+        s(&["render", "--scene", &extent]),
+        s(&["render", "--scene", &key]),
+        s(&["render", "--scene", &circle]),
+        s(&["render", "--scene", &rules]),
+        s(&["render", "--scene", &effect]),
+        s(&["render", "--scene", &syntax]),
+        s(&["render", "--scene", &lods, "--heightmap", MONTBLANC]),
+        s(&["render", "--clamp-heights"]),
+        s(&["render", "--max-sectors", "10"]),
+        s(&["render", "--payload", "foo"]),
+        s(&["render", "--bogus-flag"]),
+        s(&["bake"]),
+        s(&["bake", "--out", "nodes", "--region", "1,2,3"]),
+        s(&["bake", "--out", "nodes", "--region", "5,5,1,1"]),
+        s(&["bake", "--out", "nodes", "--region", "99999,99999,100000,100000"]),
+        s(&["bake", "--out", "nodes", "--max-disk", "-1"]),
+        s(&["bake", "--out", "nodes", "--max-disk", "abc"]),
+        s(&["bake", "--dry-run", "--json", "/nonexistent/plan.json"]),
+        s(&["memory", "--slots", "0"]),
+        s(&["memory", "--slots", "1024"]),
+        s(&["memory", "--slots", "abc"]),
+        s(&["memory", "--json", "/proc/memory.json"]),
+        s(&["memory", "--extent", "1e30"]),
+        s(&["bench", "nope"]),
+        s(&["bench", "cull", "--camera", "1,2,3"]),
+        s(&["bench", "traverse", "--size", "10x10"]),
+        s(&["bench", "traverse", "--sets", "x"]),
+        s(&["bench", "accuracy", "--targets", "x"]),
+        s(&["golden", "--dir", "/nonexistent"]),
+        s(&["golden", "--only", "nope"]),
+        s(&["stability", "--cases", "300"]),
+        s(&["stability", "--cases", "x"]),
+        s(&["stability", "--json", "/nonexistent/table.json"]),
+        s(&["nonsense-command"]),
+        s(&["--device"]),
+    ];
+    assert!(cases.len() >= 60);
+    let mut failures = Vec::new();
+    for (i, args) in cases.iter().enumerate() {
+        // Each in an empty folder, relative outputs landing there.
+        let cwd = temp_dir(&format!("case{i}"));
+        let out = vista_cmd::vista_cmd().args(args).current_dir(&cwd).output().expect("run vista");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let lines = err.trim_end().lines().count();
+        let mut jargon: Vec<&str> = JARGON.iter().copied().filter(|j| err.contains(j)).collect();
+        // A negative number taken for an option by clap.
+        if err.split("unexpected argument '-").skip(1).any(|rest| rest.starts_with(|c: char| c.is_ascii_digit())) {
+            jargon.push("unexpected argument '-N'");
+        }
+        let written = files_under(&cwd);
+        if out.status.code() != Some(2) || lines != 1 || !jargon.is_empty() || !written.is_empty() {
+            failures.push(format!(
+                "{args:?}: exit {:?}, {lines} lines, jargon {jargon:?}, wrote {written:?}:\n{err}",
+                out.status.code()
+            ));
+        }
+        let _ = std::fs::remove_dir_all(&cwd);
+    }
+    assert!(failures.is_empty(), "{} of {} cases:\n{}", failures.len(), cases.len(), failures.join("\n"));
+    let _ = std::fs::remove_dir_all(&inputs);
+}
