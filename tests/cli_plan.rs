@@ -239,3 +239,54 @@ fn bakes_print_plain_progress_without_a_terminal() {
     let run = vista(&[&args[..], &["--no-progress"]].concat());
     assert!(run.ok && run.err.is_empty(), "{}", run.err);
 }
+
+/// A 16384² PNG16, the largest side vista takes (a real DEM's size): 512
+/// MiB of pixels in a file of a few MiB (runs of 64 equal values).
+fn big_png(path: &Path) -> u64 {
+    const SIDE: u32 = 16384;
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut enc = png::Encoder::new(file, SIDE, SIDE);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Sixteen);
+    enc.set_compression(png::Compression::Fast);
+    enc.set_filter(png::Filter::NoFilter);
+    let mut w = enc.write_header().unwrap().into_stream_writer().unwrap();
+    let mut row = vec![0u8; SIDE as usize * 2];
+    for j in 0..SIDE {
+        for (i, px) in row.chunks_exact_mut(2).enumerate() {
+            let v = ((i as u32 / 64 + j / 64) * 97 % 65536) as u16;
+            px.copy_from_slice(&v.to_be_bytes());
+        }
+        std::io::Write::write_all(&mut w, &row).unwrap();
+    }
+    w.finish().unwrap();
+    u64::from(SIDE) * u64::from(SIDE) * 2
+}
+
+#[test]
+fn a_16384_map_is_planned_from_its_header_and_baked_within_its_own_size() {
+    let dir = temp_dir("big-map");
+    let map = dir.join("big.png");
+    let map_bytes = big_png(&map);
+    let m = map.to_str().unwrap();
+    let world = ["--heightmap", m, "--extent", "16384", "--height-range", "0", "2000", "--spacing", "4"];
+    // Plans read the header (memory) or a 1024² corner (a dry run's timing).
+    for cmd in [&["memory"][..], &["bake", "--dry-run"][..]] {
+        let r = vista(&[cmd, &world[..]].concat());
+        assert!(r.ok, "{cmd:?}: {}", r.err);
+        assert!(r.peak_kib <= 64 * 1024, "{cmd:?} peaked at {} KiB", r.peak_kib);
+    }
+    // A bake keeps the map's 16-bit samples as they are (no float copy):
+    // the map itself plus the error tree's working set (a 1024² root of
+    // f32 samples per thread) and the process, bounded at the map's bytes
+    // plus a quarter. Before, a whole-map f32 copy beside the decoded image
+    // took 3x the map (1.58 GB measured).
+    let out = dir.join("nodes");
+    let args = [&["bake", "--out", out.to_str().unwrap(), "--region", "0,0,100,100", "--no-progress"][..], &world[..]];
+    let r = vista(&args.concat());
+    assert!(r.ok, "{}", r.err);
+    let bound_kib = map_bytes * 5 / 4 / 1024;
+    assert!(r.peak_kib <= bound_kib, "bake peaked at {} KiB, bound {bound_kib} KiB", r.peak_kib);
+    assert!(r.peak_kib >= map_bytes / 1024, "the whole map is read to bake: {} KiB", r.peak_kib);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -28,6 +28,12 @@ fn golden_images_match_their_references_under_validation() {
 fn a_missing_reference_fails_and_says_how_to_make_one() {
     let empty = std::env::temp_dir().join(format!("vista-golden-empty-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&empty);
+    // A folder that does not exist is named at once, before any render.
+    let out = vista_cmd().args(["golden", "--dir"]).arg(&empty).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("does not exist") && stderr.contains("vista golden --update"), "{stderr}");
+    std::fs::create_dir_all(&empty).unwrap();
     let out = vista_cmd()
         .args(["golden", "--only", "montblanc", "--dir"])
         .arg(&empty)

@@ -25,10 +25,51 @@ pub struct Png16Source {
 
 impl Png16Source {
     /// Reads and validates `path`.
+    /// Decoded straight from the file (not from a copy of it in memory):
+    /// the peak is the 16-bit pixels themselves, 2 bytes a sample.
     pub fn open(path: &Path, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<Self> {
+        let (w, h) = Self::header(path)?;
+        check_params(extent_m, height_range_m)?;
+        let file = std::fs::File::open(path).map_err(|e| WorldError::io(path, e))?;
+        let mut reader = ImageReader::new(std::io::BufReader::new(file));
+        reader.set_format(image::ImageFormat::Png);
+        reader.no_limits();
+        let img = reader.decode().map_err(|e| WorldError::corrupt(path, e))?;
+        Self::from_image(img, (w, h), path, extent_m, height_range_m)
+    }
+
+    /// At most `side` x `side` pixels from the map's north-west corner,
+    /// decoded row by row (the rest of the file is never decompressed into
+    /// memory), stretched over `extent_m`: the same per-sample work as the
+    /// whole map, for timing a bake without reading it. `None` for an
+    /// interlaced file, whose rows do not come in order.
+    pub fn open_corner(path: &Path, side: u32, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<Option<Self>> {
+        let (w, h) = Self::header(path)?;
+        check_params(extent_m, height_range_m)?;
+        let file = std::fs::File::open(path).map_err(|e| WorldError::io(path, e))?;
+        let mut reader =
+            png::Decoder::new(std::io::BufReader::new(file)).read_info().map_err(|e| WorldError::corrupt(path, e))?;
+        if reader.info().interlaced {
+            return Ok(None);
+        }
+        let (cw, ch) = (w.min(side) as usize, h.min(side) as usize);
+        let mut values = Vec::with_capacity(cw * ch);
+        while values.len() < cw * ch {
+            let row = reader.next_row().map_err(|e| WorldError::corrupt(path, e))?;
+            let row = row.ok_or_else(|| WorldError::corrupt(path, "fewer rows than its header says"))?;
+            values.extend(row.data().chunks_exact(2).take(cw).map(|b| u16::from_be_bytes([b[0], b[1]])));
+        }
+        Ok(Some(Png16Source { grid: GridSource::from_u16(cw, ch, values, height_range_m, extent_m) }))
+    }
+
+    /// The map's size, from its header alone (what plans need).
+    pub fn header(path: &Path) -> Result<(u32, u32)> {
         super::require_regular_file(path).map_err(|e| WorldError::io(path, e))?;
-        let bytes = std::fs::read(path).map_err(|e| WorldError::io(path, e))?;
-        Self::from_bytes(&bytes, path, extent_m, height_range_m)
+        let mut head = [0u8; IHDR_PREFIX_LEN];
+        let mut file = std::fs::File::open(path).map_err(|e| WorldError::io(path, e))?;
+        std::io::Read::read_exact(&mut file, &mut head)
+            .map_err(|_| WorldError::corrupt(path, "not a PNG file (shorter than its header)"))?;
+        check_header(&head, path)
     }
 
     /// Decodes an in-memory PNG; `label` names it in errors.
@@ -37,7 +78,18 @@ impl Png16Source {
         let (w, h) = check_header(bytes, label)?;
         let mut reader = ImageReader::new(Cursor::new(bytes));
         reader.set_format(image::ImageFormat::Png);
+        reader.no_limits();
         let img = reader.decode().map_err(|e| WorldError::corrupt(label, e))?;
+        Self::from_image(img, (w, h), label, extent_m, height_range_m)
+    }
+
+    fn from_image(
+        img: DynamicImage,
+        (w, h): (u32, u32),
+        label: &Path,
+        extent_m: [f64; 2],
+        height_range_m: [f32; 2],
+    ) -> Result<Self> {
         let DynamicImage::ImageLuma16(img) = img else {
             // The header said 16-bit gray; a decoder disagreeing means the
             // file lies about itself.
@@ -46,10 +98,8 @@ impl Png16Source {
         if (img.width(), img.height()) != (w, h) {
             return Err(WorldError::corrupt(label, "decoded size differs from header"));
         }
-        let [lo, hi] = height_range_m;
-        let scale = (hi - lo) / 65535.0;
-        let heights = img.as_raw().iter().map(|&v| lo + f32::from(v) * scale).collect();
-        Ok(Png16Source { grid: GridSource::new(w as usize, h as usize, heights, extent_m) })
+        let grid = GridSource::from_u16(w as usize, h as usize, img.into_raw(), height_range_m, extent_m);
+        Ok(Png16Source { grid })
     }
 
     /// The decoded grid, heights in metres.

@@ -32,9 +32,36 @@ pub trait HeightSource: Send + Sync {
 pub struct GridSource {
     width: usize,
     height: usize,
-    heights: Vec<f32>,
+    heights: Samples,
     extent_m: [f64; 2],
     id: u64,
+}
+
+/// 16-bit maps stay 16-bit: a 16384² map is 512 MiB as read, 1 GiB as f32,
+/// and each height is decoded where it is sampled.
+#[derive(Clone, Debug)]
+enum Samples {
+    F32(Vec<f32>),
+    /// Metres = `lo + value * scale`, the PNG16 mapping of 0..65535.
+    U16 {
+        values: Vec<u16>,
+        lo: f32,
+        scale: f32,
+    },
+}
+
+impl Samples {
+    #[inline]
+    fn get(&self, k: usize) -> f32 {
+        match self {
+            Samples::F32(v) => v[k],
+            Samples::U16 { values, lo, scale } => lo + f32::from(values[k]) * scale,
+        }
+    }
+}
+
+fn grid_hash(width: usize, height: usize, extent_m: [f64; 2]) -> Fnv64 {
+    Fnv64::new().u64(width as u64).u64(height as u64).f64(extent_m[0]).f64(extent_m[1])
 }
 
 impl GridSource {
@@ -44,11 +71,25 @@ impl GridSource {
     pub fn new(width: usize, height: usize, heights: Vec<f32>, extent_m: [f64; 2]) -> Self {
         assert!(width > 0 && height > 0, "empty height grid");
         assert_eq!(heights.len(), width * height, "height grid size mismatch");
-        let mut h = Fnv64::new().u64(width as u64).u64(height as u64).f64(extent_m[0]).f64(extent_m[1]);
+        let mut h = grid_hash(width, height, extent_m);
         for v in &heights {
             h = h.bytes(&v.to_le_bytes());
         }
-        GridSource { width, height, id: h.finish(), heights, extent_m }
+        GridSource { width, height, id: h.finish(), heights: Samples::F32(heights), extent_m }
+    }
+
+    /// 16-bit `values` (row 0 north) whose 0..65535 map linearly onto
+    /// `range_m`; kept as they are, decoded per sample.
+    pub fn from_u16(width: usize, height: usize, values: Vec<u16>, range_m: [f32; 2], extent_m: [f64; 2]) -> Self {
+        assert!(width > 0 && height > 0, "empty height grid");
+        assert_eq!(values.len(), width * height, "height grid size mismatch");
+        let [lo, hi] = range_m;
+        let scale = (hi - lo) / 65535.0;
+        let h = grid_hash(width, height, extent_m).f64(f64::from(lo)).f64(f64::from(scale));
+        // Hashed 2 bytes at a time (as the values are stored): half the
+        // work of the f32 copy this replaces.
+        let id = values.iter().fold(h, |h, v| h.bytes(&v.to_le_bytes())).finish();
+        GridSource { width, height, id, heights: Samples::U16 { values, lo, scale }, extent_m }
     }
 
     pub fn width(&self) -> usize {
@@ -61,7 +102,7 @@ impl GridSource {
 
     /// Raw value of pixel (i, j), row 0 north.
     pub fn pixel(&self, i: usize, j: usize) -> f32 {
-        self.heights[j * self.width + i]
+        self.heights.get(j * self.width + i)
     }
 
     /// World position of the centre of pixel (i, j).
@@ -78,7 +119,7 @@ impl GridSource {
     fn at(&self, i: isize, j: isize) -> f32 {
         let i = i.clamp(0, self.width as isize - 1) as usize;
         let j = j.clamp(0, self.height as isize - 1) as usize;
-        self.heights[j * self.width + i]
+        self.heights.get(j * self.width + i)
     }
 }
 

@@ -201,7 +201,7 @@ pub fn bake(args: BakeArgs) -> Result<()> {
             write_plan_json(args.json.as_deref(), &spec.label(), &plan, Some(&e))?;
             return Err(e);
         }
-        let w = spec.open()?;
+        let w = spec.open_for_timing()?;
         plan.measure_bake(&*w.source, &w.holes, &w.bake, PLAN_SAMPLES);
         let mut out = String::new();
         writeln!(out, "{}", world_line(&w))?;
@@ -382,13 +382,17 @@ pub fn memory(args: MemoryArgs) -> Result<()> {
     if let Some(json) = &args.json {
         crate::out_path::check_out_file(json, "--json")?;
     }
-    let w = args.world.load()?;
+    // Headers only: the figures depend on the world's geometry, not its
+    // heights, so no map is read.
+    let w = args.world.resolve()?;
+    w.check(&w.plan(None), &w.limits)?;
     crate::world_args::check_slots(args.slots, &w.desc)?;
+    let label = w.label();
     let mut out = String::new();
     // Counted, not listed: a huge world costs no memory to account for.
     let full = WorldPlan::new(&w.desc, None).world_nodes as usize;
     let slots = args.slots as usize;
-    writeln!(out, "world:    {} ({} nodes over {} LODs)", w.label, full, w.desc.lod_count)?;
+    writeln!(out, "world:    {} ({} nodes over {} LODs)", label, full, w.desc.lod_count)?;
     writeln!(out, "memory for {slots} resident nodes:")?;
     let report = MemoryReport::for_format(slots, w.bake.format);
     write!(out, "{report}")?;

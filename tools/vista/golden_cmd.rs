@@ -100,8 +100,10 @@ pub fn check(args: &GoldenArgs) -> Result<()> {
     }
     if !args.update && !args.payload_diff && !args.dir.is_dir() {
         let why = if args.dir.exists() { "is not a folder" } else { "does not exist" };
-        let message =
-            format!("--dir {} {why}: it holds the reference images (--update writes them)", args.dir.display());
+        let message = format!(
+            "--dir {} {why}: it holds the reference images (`vista golden --update` writes them)",
+            args.dir.display()
+        );
         return Err(crate::InputError(message).into());
     }
     Ok(())

@@ -368,6 +368,25 @@ impl WorldSpec {
         plan.check(limits).map_err(|e| anyhow::Error::new(crate::InputError(e.to_string())))
     }
 
+    /// A source to time the bake with, reading as little as it can: a
+    /// 16-bit PNG's north-west corner (at most `TIMING_CORNER` pixels a
+    /// side, decoded row by row) stretched over the world, so a plan of a
+    /// map of any size stays small in memory; the per-sample work is the
+    /// same. Other sources open whole. The label says which.
+    pub fn open_for_timing(self) -> Result<LoadedWorld> {
+        let SpecSource::Heightmap { path, kind: MapKind::Png, height_range: Some(given), .. } = &self.source else {
+            return self.open();
+        };
+        let corner = Png16Source::open_corner(path, TIMING_CORNER, self.desc.extent_m, given.range)
+            .map_err(input_error)?;
+        let Some(corner) = corner else { return self.open() };
+        let (cw, ch) = (corner.grid().width(), corner.grid().height());
+        let label = format!("{} (bake timed on its {cw} x {ch} corner)", path.display());
+        let (desc, holes, effects, origin_m, limits, bake) =
+            (self.desc, self.holes, self.effects, self.origin_m, self.limits, self.bake);
+        Ok(LoadedWorld { desc, source: Arc::new(corner), holes, effects, label, origin_m, limits, bake })
+    }
+
     /// Reads the height map (or makes the procedural source).
     pub fn open(self) -> Result<LoadedWorld> {
         let (desc, source, label): (WorldDesc, Arc<dyn HeightSource>, String) = match self.source {
@@ -477,6 +496,9 @@ impl std::fmt::Display for GivenRange {
         }
     }
 }
+
+/// Pixels a side of the corner a plan times a PNG world's bake on: 2 MiB.
+const TIMING_CORNER: u32 = 1024;
 
 /// A height map's kind, by its first bytes.
 #[derive(Clone, Copy, PartialEq)]
