@@ -9,6 +9,7 @@ mod error;
 mod error_tile;
 mod errors;
 mod exr_source;
+mod geotiff;
 mod hash;
 mod holes;
 mod input_file;
@@ -34,6 +35,7 @@ pub use error::{Result, WorldError};
 pub use error_tile::diamond;
 pub use errors::{ErrorTree, NodeErrors, PreparedErrors};
 pub use exr_source::{write_height_exr, ExrSource};
+pub use geotiff::{GeoTiffInfo, GeoTiffSource};
 pub use holes::{holes_hash, Hole};
 pub use input_file::require_regular_file;
 pub use layout::{

@@ -3,7 +3,7 @@
 //!
 //! ```toml
 //! [world]
-//! source = "procedural"        # or a PNG16 / EXR path, relative to this file
+//! source = "procedural"        # or a PNG16 / EXR / GeoTIFF path, relative to this file
 //! extent = 10240               # metres; or [x, y]
 //! height_range = [0, 1600]
 //! clamp_heights = false        # EXR only: clamp data outside height_range, not fail

@@ -9,9 +9,9 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use vista::render::Effects;
 use vista::world::{
-    BakeSettings, ErrorTree, ExrSource, GridSource, HeightSource, Hole, Limits, PayloadFormat, Png16Source,
-    ProceduralSource, Progress, WorldDesc, WorldError, WorldPlan, DEFAULT_MAX_SECTORS_PER_SIDE, MAX_LOD_COUNT,
-    MAX_SECTORS_PER_SIDE,
+    BakeSettings, ErrorTree, ExrSource, GeoTiffInfo, GeoTiffSource, GridSource, HeightSource, Hole, Limits,
+    PayloadFormat, Png16Source, ProceduralSource, Progress, WorldDesc, WorldError, WorldPlan,
+    DEFAULT_MAX_SECTORS_PER_SIDE, MAX_LOD_COUNT, MAX_SECTORS_PER_SIDE,
 };
 
 use crate::scene::{Scene, SceneSource};
@@ -20,6 +20,8 @@ use crate::scene::{Scene, SceneSource};
 /// content, so a misnamed file still loads (or fails naming its real kind).
 const PNG_MAGIC: [u8; 4] = [0x89, b'P', b'N', b'G'];
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+/// TIFF and BigTIFF, little- and big-endian.
+const TIFF_MAGIC: [[u8; 4]; 4] = [*b"II*\0", *b"MM\0*", *b"II+\0", *b"MM\0+"];
 
 /// WORLD: `--scene FILE.toml` | `--heightmap FILE --extent M --height-range LO HI`
 /// | nothing (the default procedural world). Values given on the command line
@@ -30,8 +32,10 @@ pub struct WorldArgs {
     /// [[holes]] circle = [x, y, r] or polygon = [[x, y], ...], [effects].
     #[arg(long, value_name = "FILE.toml", help_heading = "World")]
     pub scene: Option<PathBuf>,
-    /// Height map: 16-bit grayscale PNG or single-channel float EXR (told
-    /// apart by content). Needs --extent and, for PNG, --height-range.
+    /// Height map: 16-bit grayscale PNG, single-channel float EXR or a
+    /// one-band GeoTIFF (16-bit integer or 32-bit float metres), told apart
+    /// by content. Needs --extent (a GeoTIFF's tags give it, and the
+    /// origin) and, for PNG, --height-range.
     #[arg(long, value_name = "FILE", help_heading = "World")]
     pub heightmap: Option<PathBuf>,
     /// World size in metres: one number (square) or X,Y.
@@ -227,7 +231,12 @@ impl WorldArgs {
             (None, SceneSource::Path(p)) => Some((p.clone(), "the scene's source")),
             (None, SceneSource::Procedural) => None,
         };
-        let extent = self.extent.or(w.extent.map(|e| e.xy()));
+        // A GeoTIFF places itself: extent and origin from its tags unless given.
+        let geotiff = match &heightmap {
+            Some((p, _)) if magic(p).is_some_and(|m| TIFF_MAGIC.contains(&m)) => Some(GeoTiffSource::read_header(p)?),
+            _ => None,
+        };
+        let extent = self.extent.or(w.extent.map(|e| e.xy())).or(geotiff.as_ref().and_then(GeoTiffInfo::extent_m));
         let height_range = match (&self.height_range, w.height_range) {
             (Some(v), _) => Some(GivenRange::new([v[0], v[1]], "--height-range")),
             (None, Some(r)) => Some(GivenRange::new(r, "the scene's height_range")),
@@ -243,7 +252,7 @@ impl WorldArgs {
         // Without a count, the extent decides (a small number of roots).
         let lods_for_extent = |e: Option<[f64; 2]>| WorldDesc::lods_for(e.unwrap_or(defaults.extent_m), spacing_m);
         let seed = self.seed.or(w.seed).unwrap_or(1);
-        let origin_m = self.origin.or(w.origin).unwrap_or([0.0, 0.0]);
+        let origin_m = self.origin.or(w.origin).or(geotiff.as_ref().and_then(|g| g.origin_m)).unwrap_or([0.0, 0.0]);
         if !origin_m.iter().all(|v| v.is_finite()) {
             bail!("the scene's origin {origin_m:?} must be two finite numbers");
         }
@@ -271,7 +280,8 @@ impl WorldArgs {
             }
             Some((path, what)) => {
                 let Some(extent_m) = extent else {
-                    bail!("{what} {} needs --extent METRES (the world size it covers)", path.display());
+                    let untagged = if geotiff.is_some() { " (the GeoTIFF has no pixel scale tag)" } else { "" };
+                    bail!("{what} {} needs --extent METRES (the world size it covers){untagged}", path.display());
                 };
                 let height_range_m = height_range.map_or([0.0, 1.0], |r| r.range);
                 let lod_count = self.lods.or(w.lods).unwrap_or_else(|| lods_for_extent(Some(extent_m)));
@@ -280,6 +290,7 @@ impl WorldArgs {
                 check_desc(&desc, &names)?;
                 let kind = heightmap_kind(&path, what, height_range)?;
                 if clamp && kind == MapKind::Png {
+                    // (a GeoTIFF's data is clamped like an EXR's)
                     bail!(
                         "{clamp_name} clamps an EXR height map's data; {} is a PNG, whose 0..65535 always maps into \
                          its height range: drop it",
@@ -377,8 +388,8 @@ impl WorldSpec {
         let SpecSource::Heightmap { path, kind: MapKind::Png, height_range: Some(given), .. } = &self.source else {
             return self.open();
         };
-        let corner = Png16Source::open_corner(path, TIMING_CORNER, self.desc.extent_m, given.range)
-            .map_err(input_error)?;
+        let corner =
+            Png16Source::open_corner(path, TIMING_CORNER, self.desc.extent_m, given.range).map_err(input_error)?;
         let Some(corner) = corner else { return self.open() };
         let (cw, ch) = (corner.grid().width(), corner.grid().height());
         let label = format!("{} (bake timed on its {cw} x {ch} corner)", path.display());
@@ -505,24 +516,32 @@ const TIMING_CORNER: u32 = 1024;
 enum MapKind {
     Png,
     Exr,
+    Tiff,
+}
+
+/// A file's first four bytes, if it has them.
+fn magic(path: &Path) -> Option<[u8; 4]> {
+    let mut m = [0u8; 4];
+    std::fs::File::open(path).ok()?.read_exact(&mut m).ok()?;
+    Some(m)
 }
 
 /// Reads the first bytes only: a wrong file or a missing argument is told
 /// before the plan, and no pixel is read.
 fn heightmap_kind(path: &Path, what: &str, height_range: Option<GivenRange>) -> Result<MapKind> {
     if path.is_dir() {
-        bail!("{what} {} is a directory, expected a PNG or EXR height map file", path.display());
+        bail!("{what} {} is a directory, expected a PNG, EXR or GeoTIFF height map file", path.display());
     }
     if let Err(e) = vista::world::require_regular_file(path) {
         if e.kind() != std::io::ErrorKind::NotFound {
-            bail!("{what} {} {e}: give a PNG or EXR height map file", path.display());
+            bail!("{what} {} {e}: give a PNG, EXR or GeoTIFF height map file", path.display());
         }
     }
     let mut magic = [0u8; 4];
     let mut file = std::fs::File::open(path).with_context(|| format!("heightmap file {}", path.display()))?;
     if let Err(e) = file.read_exact(&mut magic) {
         if e.kind() == std::io::ErrorKind::UnexpectedEof {
-            bail!("{what} {} is too short to be a PNG or EXR file", path.display());
+            bail!("{what} {} is too short to be a PNG, EXR or GeoTIFF file", path.display());
         }
         return Err(e).with_context(|| format!("reading {what} {}", path.display()));
     }
@@ -532,7 +551,8 @@ fn heightmap_kind(path: &Path, what: &str, height_range: Option<GivenRange>) -> 
         }
         PNG_MAGIC => Ok(MapKind::Png),
         EXR_MAGIC => Ok(MapKind::Exr),
-        _ => bail!("{what} {} is neither a PNG nor an OpenEXR file (by its first bytes)", path.display()),
+        m if TIFF_MAGIC.contains(&m) => Ok(MapKind::Tiff),
+        _ => bail!("{what} {} is neither a PNG, an OpenEXR nor a GeoTIFF file (by its first bytes)", path.display()),
     }
 }
 
@@ -551,10 +571,20 @@ fn open_heightmap(
             Ok((geometry.with_posts(source.grid().pixel_size_m()), Arc::new(source)))
         }
         (MapKind::Png, None) => unreachable!("heightmap_kind refuses a PNG without a height range"),
+        (MapKind::Tiff, _) => {
+            let source = GeoTiffSource::open(path, geometry.extent_m)?;
+            let range = match height_range {
+                Some(given) => checked_range(source.grid(), path, given, clamp)?,
+                None => auto_range(source.grid()),
+            };
+            let desc = WorldDesc { height_range_m: range, ..geometry }.with_posts(source.grid().pixel_size_m());
+            desc.validate().with_context(|| format!("height range of {}", path.display()))?;
+            Ok((desc, Arc::new(source)))
+        }
         (MapKind::Exr, _) => {
             let source = ExrSource::open(path, geometry.extent_m)?;
             let range = match height_range {
-                Some(given) => checked_range(&source, path, given, clamp)?,
+                Some(given) => checked_range(source.grid(), path, given, clamp)?,
                 None => auto_range(source.grid()),
             };
             let desc = WorldDesc { height_range_m: range, ..geometry }.with_posts(source.grid().pixel_size_m());
@@ -567,9 +597,9 @@ fn open_heightmap(
 
 /// The user's range for an EXR, refused if it would clip pixels (heights
 /// are clamped to the range when encoded, silently) unless `clamp`.
-fn checked_range(source: &ExrSource, path: &Path, given: GivenRange, clamp: bool) -> Result<[f32; 2]> {
+fn checked_range(grid: &GridSource, path: &Path, given: GivenRange, clamp: bool) -> Result<[f32; 2]> {
     let [lo, hi] = given.range;
-    let fit = source.grid().fit(given.range);
+    let fit = grid.fit(given.range);
     let file = path.display();
     let (n, total) = (fit.outside, fit.total);
     if n > 0 && !clamp {
@@ -585,7 +615,7 @@ fn checked_range(source: &ExrSource, path: &Path, given: GivenRange, clamp: bool
         return Ok(given.range);
     }
     // Every pixel fits, but Catmull-Rom may still overshoot between them.
-    let [rlo, rhi] = source.grid().resampled_range();
+    let [rlo, rhi] = grid.resampled_range();
     if rlo < lo || rhi > hi {
         eprintln!(
             "warning: {given} holds every sample of {file}, but resampling between them reaches {rlo:.1}..{rhi:.1} m, \

@@ -1,0 +1,170 @@
+//! GeoTIFF height maps: the same heights as a PNG of the same data, the
+//! extent and origin from the tags, PixelIsPoint against PixelIsArea, f32
+//! and signed 16-bit bands, no-data refused. The files are written here with
+//! the `tiff` crate's encoder (stripped; tiled files go through the same
+//! decoder call but are not made here: the encoder writes strips only).
+
+use std::path::{Path, PathBuf};
+use tiff::encoder::{colortype, TiffEncoder};
+use tiff::tags::Tag;
+use vista::world::{GeoTiffSource, HeightSource, Png16Source};
+mod vista_cmd;
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vista-geotiff-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+/// Where and how a test map is placed.
+struct Tags {
+    scale: [f64; 2],
+    /// Raster position (i, j) tied to map position (x, y).
+    tie: [f64; 4],
+    point: bool,
+    no_data: Option<&'static str>,
+}
+
+const TAGS: Tags = Tags { scale: [30.0, 20.0], tie: [0.0, 0.0, 340_000.0, 5_081_000.0], point: false, no_data: None };
+
+fn write_tiff<C: colortype::ColorType>(path: &Path, w: u32, h: u32, data: &[C::Inner], t: &Tags)
+where
+    [C::Inner]: tiff::encoder::TiffValue,
+{
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut enc = TiffEncoder::new(file).unwrap();
+    let mut img = enc.new_image::<C>(w, h).unwrap();
+    let e = img.encoder();
+    e.write_tag(Tag::ModelPixelScaleTag, &[t.scale[0], t.scale[1], 0.0][..]).unwrap();
+    e.write_tag(Tag::ModelTiepointTag, &[t.tie[0], t.tie[1], 0.0, t.tie[2], t.tie[3], 0.0][..]).unwrap();
+    // Version 1.1.0, one key: GTRasterTypeGeoKey = 1 (area) or 2 (point).
+    e.write_tag(Tag::GeoKeyDirectoryTag, &[1u16, 1, 0, 1, 1025, 0, 1, if t.point { 2 } else { 1 }][..]).unwrap();
+    if let Some(n) = t.no_data {
+        e.write_tag(Tag::GdalNodata, n).unwrap();
+    }
+    img.write_data(data).unwrap();
+}
+
+/// Heights with every kind of neighbourhood: a ramp, a ripple and noise.
+fn heights(w: u32, h: u32) -> Vec<u16> {
+    let mut state = 0x9e37_79b9_u32;
+    (0..w * h)
+        .map(|k| {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            let (i, j) = ((k % w) as f64, (k / w) as f64);
+            (1000.0 + 20.0 * i + 300.0 * (j * 0.3).sin() + f64::from(state % 50)) as u16
+        })
+        .collect()
+}
+
+fn write_png16(path: &Path, w: u32, h: u32, data: &[u16]) {
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut enc = png::Encoder::new(file, w, h);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Sixteen);
+    let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_be_bytes()).collect();
+    enc.write_header().unwrap().write_image_data(&bytes).unwrap();
+}
+
+#[test]
+fn a_geotiff_has_the_heights_of_the_same_png_and_places_itself() {
+    let dir = temp_dir("same");
+    let (w, h) = (64, 48);
+    let data = heights(w, h);
+    let tif = dir.join("dem.tif");
+    let png = dir.join("dem.png");
+    write_tiff::<colortype::Gray16>(&tif, w, h, &data, &TAGS);
+    write_png16(&png, w, h, &data);
+    let info = GeoTiffSource::read_header(&tif).unwrap();
+    // Extent: 64 x 30 m by 48 x 20 m. Origin (PixelIsArea): the tie point
+    // is the north-west corner, so the south-west corner is 48 x 20 m south.
+    assert_eq!(info.extent_m(), Some([1920.0, 960.0]));
+    assert_eq!(info.origin_m, Some([340_000.0, 5_081_000.0 - 960.0]));
+    let extent = info.extent_m().unwrap();
+    let tiff = GeoTiffSource::open(&tif, extent).unwrap();
+    // The PNG's 0..65535 onto 0..65535 m: the same metres as the TIFF.
+    let png = Png16Source::open(&png, extent, [0.0, 65535.0]).unwrap();
+    let mut state = 12345u64;
+    for _ in 0..2000 {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let x = (state >> 11) as f64 / (1u64 << 53) as f64 * extent[0];
+        let y = (state >> 7 & 0xffff) as f64 / 65536.0 * extent[1];
+        assert_eq!(tiff.sample(x, y).to_bits(), png.sample(x, y).to_bits(), "at {x}, {y}");
+    }
+    // Posts: each pixel centre returns its sample exactly.
+    assert_eq!(tiff.sample(15.0, 960.0 - 10.0), f32::from(data[0]));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn pixel_is_point_moves_the_origin_by_half_a_pixel() {
+    let dir = temp_dir("point");
+    let data = heights(8, 4);
+    let (area, point) = (dir.join("area.tif"), dir.join("point.tif"));
+    // Tied at raster (2, 1), not the corner.
+    let tie = [2.0, 1.0, 1000.0, 2000.0];
+    write_tiff::<colortype::Gray16>(&area, 8, 4, &data, &Tags { tie, ..TAGS });
+    write_tiff::<colortype::Gray16>(&point, 8, 4, &data, &Tags { tie, point: true, ..TAGS });
+    let a = GeoTiffSource::read_header(&area).unwrap();
+    let p = GeoTiffSource::read_header(&point).unwrap();
+    assert!(!a.pixel_is_point && p.pixel_is_point);
+    // Area: raster (2, 1) is a pixel corner: west edge 1000 - 2 x 30, north
+    // edge 2000 + 1 x 20, south edge 4 x 20 below it.
+    assert_eq!(a.origin_m, Some([940.0, 1940.0]));
+    // Point: raster (2, 1) is that pixel's centre, half a pixel further in.
+    assert_eq!(p.origin_m, Some([925.0, 1950.0]));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn float_and_signed_bands_keep_their_metres_and_no_data_is_refused() {
+    let dir = temp_dir("kinds");
+    let f: Vec<f32> = (0..12).map(|k| -411.5 + 100.25 * k as f32).collect();
+    let i: Vec<i16> = (0..12).map(|k| -400 + 100 * k as i16).collect();
+    let (ft, it) = (dir.join("f.tif"), dir.join("i.tif"));
+    write_tiff::<colortype::Gray32Float>(&ft, 4, 3, &f, &TAGS);
+    write_tiff::<colortype::GrayI16>(&it, 4, 3, &i, &TAGS);
+    let extent = [120.0, 60.0];
+    let fs = GeoTiffSource::open(&ft, extent).unwrap();
+    let is = GeoTiffSource::open(&it, extent).unwrap();
+    for k in 0..12 {
+        let (col, row) = ((k % 4) as f64, (k / 4) as f64);
+        let (x, y) = ((col + 0.5) * 30.0, 60.0 - (row + 0.5) * 20.0);
+        assert_eq!(fs.sample(x, y), f[k], "f32 pixel {k}");
+        assert_eq!(is.sample(x, y), f32::from(i[k]), "i16 pixel {k}");
+    }
+    let nd = dir.join("nodata.tif");
+    let mut holed = i.clone();
+    holed[5] = -9999;
+    write_tiff::<colortype::GrayI16>(&nd, 4, 3, &holed, &Tags { no_data: Some("-9999"), ..TAGS });
+    let e = GeoTiffSource::open(&nd, extent).unwrap_err().to_string();
+    assert!(e.contains("1 samples hold the no-data value -9999"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_command_line_takes_extent_and_origin_from_the_tags() {
+    let dir = temp_dir("cli");
+    let tif = dir.join("dem.tif");
+    write_tiff::<colortype::Gray16>(&tif, 64, 48, &heights(64, 48), &TAGS);
+    let out = vista_cmd::vista_cmd()
+        .args(["bake", "--dry-run", "--spacing", "10", "--heightmap"])
+        .arg(&tif)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("(1920 x 960 m, heights"), "{text}");
+    // A hole given in map coordinates lands in the world (no "outside" note).
+    let out = vista_cmd::vista_cmd()
+        .args(["bake", "--dry-run", "--spacing", "10", "--hole-circle", "340100,5080500,20", "--heightmap"])
+        .arg(&tif)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !err.contains("outside the world"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
