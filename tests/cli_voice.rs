@@ -124,6 +124,13 @@ fn sixty_bad_inputs_each_get_one_line_and_exit_2() {
         s(&["render", "--max-sectors", "10"]),
         s(&["render", "--payload", "foo"]),
         s(&["render", "--bogus-flag"]),
+        // Degenerate worlds and views, refused with their ranges.
+        s(&["render", "--extent", "1"]),
+        s(&["render", "--spacing", "1e12"]),
+        s(&["render", "--origin", "1e20,1e20"]),
+        s(&["render", "--camera", "1e300,0,0"]),
+        s(&["render", "--fov", "1e-9"]),
+        s(&["render", "--fov", "179.95"]),
         s(&["bake"]),
         s(&["bake", "--out", "nodes", "--region", "1,2,3"]),
         s(&["bake", "--out", "nodes", "--region", "5,5,1,1"]),
@@ -173,4 +180,17 @@ fn sixty_bad_inputs_each_get_one_line_and_exit_2() {
     }
     assert!(failures.is_empty(), "{} of {} cases:\n{}", failures.len(), cases.len(), failures.join("\n"));
     let _ = std::fs::remove_dir_all(&inputs);
+}
+
+#[test]
+fn a_camera_under_the_ground_or_outside_the_world_renders_and_says_so() {
+    let small = ["--extent", "1024", "--spacing", "2", "--size", "32x24", "--frames", "1"];
+    for (camera, note) in [("500,500,-200", "below the ground"), ("-300,500,400", "outside the world")] {
+        let out =
+            vista_cmd::vista_cmd().args(["--validation", "render", "--camera", camera]).args(small).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{camera}: {err}");
+        let notes: Vec<&str> = err.lines().filter(|l| l.starts_with("note:")).collect();
+        assert!(notes.len() == 1 && notes[0].contains(note), "{camera}: {err}");
+    }
 }

@@ -44,6 +44,11 @@ fn case_7_determinism_in_one_process() {
     gpu_test(|ctx| check(stability::determinism::run(ctx, Form::Quick, Vec::new())));
 }
 
+#[test]
+fn case_11_tiny_and_huge_fov() {
+    gpu_test(|ctx| check(stability::fov::run(ctx, Form::Quick)));
+}
+
 /// Case 8 makes its own contexts (one per injected fault) and checks each
 /// one's teardown itself.
 #[test]

@@ -60,6 +60,16 @@ pub struct View {
     pub near_m: f64,
 }
 
+/// The fields of view the projection is exact for, degrees
+/// (`stability::fov`, case 11, measures it). At 1e-7 degrees the default
+/// world's ground view still matched 60 degrees' axis; at 3e-8 half the
+/// image showed another surface (the f32 focal length 1 / tan(fov / 2) =
+/// 3.8e9 no longer separates neighbouring rays): 1e-6 keeps a factor of
+/// 10. Above 179.9 the image plane's half-height (tan(fov / 2) > 1146)
+/// leaves each pixel a cone wider than most worlds.
+pub const MIN_FOV_DEG: f64 = 1e-6;
+pub const MAX_FOV_DEG: f64 = 179.9;
+
 impl View {
     /// Checks what a user can get wrong; every renderer entry point calls it.
     pub fn validate(&self) -> Result<()> {
@@ -74,8 +84,12 @@ impl View {
                 c.yaw_deg, c.pitch_deg
             ));
         }
-        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
-            return bad(format!("field of view {} degrees must be strictly between 0 and 180", self.fov_y_deg));
+        if !(MIN_FOV_DEG..=MAX_FOV_DEG).contains(&self.fov_y_deg) {
+            return bad(format!(
+                "field of view {} degrees is outside {MIN_FOV_DEG:e}..={MAX_FOV_DEG}, where the projection is exact \
+                 (`vista stability --cases 11`)",
+                self.fov_y_deg
+            ));
         }
         if self.size[0] == 0 || self.size[1] == 0 {
             return bad(format!("target size {}x{} is empty", self.size[0], self.size[1]));

@@ -9,6 +9,7 @@ use serde::Serialize;
 pub mod depth;
 pub mod determinism;
 pub mod faults;
+pub mod fov;
 pub mod fuzz;
 pub mod grazing;
 pub mod hygiene;
@@ -39,7 +40,7 @@ impl Form {
 /// One row of the stability table.
 #[derive(Debug, Clone, Serialize)]
 pub struct CaseReport {
-    /// The issue's case number (1..=10).
+    /// The case number (1..=10 from the stability issue, 11 tiny and huge fov).
     pub case: u8,
     /// Short name: "far from the origin", "depth", ...
     pub name: &'static str,

@@ -3,7 +3,7 @@
 //! culling stage, triangles and nodes per LOD, and writes the picture, the
 //! depth and the numbers with `--out`.
 
-use crate::world_args::{LoadedWorld, WorldArgs};
+use crate::world_args::{show_m, LoadedWorld, WorldArgs};
 use anyhow::{bail, Result};
 use clap::Args;
 use image::ExtendedColorType;
@@ -207,7 +207,47 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
     if let Err(e) = view.validate() {
         bail!("{}", e.to_string().replace("field of view", "--fov").replace("target error", "--target-error"));
     }
+    let p = view.camera.position_m;
+    if p.iter().any(|v| v.abs() > PROVEN_RANGE_M) {
+        bail!(
+            "--camera {},{},{}: coordinates beyond +-{PROVEN_RANGE_M:e} m are outside what `vista stability` case 1 \
+             proves exact",
+            show_m(p[0]),
+            show_m(p[1]),
+            show_m(p[2])
+        );
+    }
+    note_camera_place(&view, world);
     Ok(view)
+}
+
+/// Placement and camera coordinates `vista stability` case 1 renders
+/// exactly (f64 world-relative views, 2 nm at 1e7 m).
+pub const PROVEN_RANGE_M: f64 = 1e7;
+
+/// A camera outside the world or under the ground still renders (a user
+/// may mean it), but says so in one line.
+fn note_camera_place(view: &View, world: &LoadedWorld) {
+    let [x, y, z] = view.camera.position_m;
+    let (lx, ly) = (x - world.origin_m[0], y - world.origin_m[1]);
+    let [ex, ey] = world.desc.extent_m;
+    if !(0.0..=ex).contains(&lx) || !(0.0..=ey).contains(&ly) {
+        let [ox, oy] = world.origin_m;
+        eprintln!(
+            "note: the camera ({x}, {y}) is outside the world ({ox}..{} x {oy}..{} m); it looks from outside",
+            ox + ex,
+            oy + ey
+        );
+        return;
+    }
+    let ground = f64::from(world.source.sample(lx, ly));
+    if z < ground {
+        eprintln!(
+            "note: the camera is {:.1} m below the ground ({ground:.1} m) at ({x}, {y}); it sees the terrain from \
+             underneath",
+            ground - z
+        );
+    }
 }
 
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {

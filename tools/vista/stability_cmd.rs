@@ -17,7 +17,7 @@ pub struct StabilityArgs {
     /// (case 10) runs 10 000 frames instead of 1000.
     #[arg(long)]
     pub full: bool,
-    /// Run only these cases, e.g. 1,2,7 [default: all ten].
+    /// Run only these cases, e.g. 1,2,7 [default: all eleven].
     #[arg(long, value_delimiter = ',', value_name = "N,...", value_parser = crate::numbers::whole_u8, allow_negative_numbers = true)]
     pub cases: Option<Vec<u8>>,
     /// Soak: sample every N frames [default: 100 quick, 1000 full].
@@ -29,7 +29,7 @@ pub struct StabilityArgs {
     pub script_hashes: bool,
 }
 
-const ALL: [u8; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10];
+const ALL: [u8; 11] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11];
 
 pub fn stability(device: Option<String>, args: &StabilityArgs) -> Result<()> {
     let options = ContextOptions { validation: true, sync_validation: false, device_name: device };
@@ -45,7 +45,7 @@ pub fn stability(device: Option<String>, args: &StabilityArgs) -> Result<()> {
     let cases = args.cases.clone().unwrap_or(ALL.to_vec());
     if let Some(bad) = cases.iter().find(|c| !ALL.contains(c)) {
         return Err(anyhow::Error::new(crate::InputError(format!(
-            "--cases: there is no case {bad}; the cases are 1..=10"
+            "--cases: there is no case {bad}; the cases are 1..=11"
         ))));
     }
     if args.soak_every == Some(0) {
@@ -107,6 +107,7 @@ fn run_case(
                 s.frame, s.validation_messages, s.live_objects, s.allocated_bytes, s.rss_mib
             )
         })?,
+        11 => stability::fov::run(&ctx, form)?,
         _ => unreachable!("checked against ALL"),
     };
     ctx.wait_idle()?;

@@ -256,6 +256,15 @@ impl WorldArgs {
         if !origin_m.iter().all(|v| v.is_finite()) {
             bail!("the scene's origin {origin_m:?} must be two finite numbers");
         }
+        let limit = crate::render_cmd::PROVEN_RANGE_M;
+        if origin_m.iter().any(|v| v.abs() > limit) {
+            let name = if self.origin.is_some() { "--origin" } else { "the scene's origin" };
+            bail!(
+                "{name} {},{}: placements beyond +-{limit:e} m are outside what `vista stability` case 1 proves exact",
+                show_m(origin_m[0]),
+                show_m(origin_m[1])
+            );
+        }
         let names = FieldNames {
             extent: given_as(self.extent.is_none() && w.extent.is_some(), "--extent", "extent"),
             spacing: given_as(self.spacing.is_none() && w.spacing.is_some(), "--spacing", "spacing"),
@@ -431,6 +440,16 @@ fn input_error(e: impl Into<anyhow::Error>) -> anyhow::Error {
     anyhow::Error::new(crate::InputError(format!("{:#}", e.into())))
 }
 
+/// A number of metres as a person reads it: digits up to a billion, then
+/// scientific notation (a 1e300 input is not 300 digits).
+pub fn show_m(v: f64) -> String {
+    if v.abs() < 1e9 {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// How the user gave each world field: a command-line option or a scene
 /// key, so a refusal names what to change.
 struct FieldNames {
@@ -466,6 +485,21 @@ fn check_desc(desc: &WorldDesc, names: &FieldNames) -> Result<()> {
     let [x, y] = desc.extent_m;
     if !(x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0) {
         bail!("{} {x},{y} must be positive metres", names.extent);
+    }
+    // Smaller than one LOD-0 node, nothing is drawn (a node is the unit
+    // the quadtree streams and draws).
+    let node_m = s * f64::from(vista::world::NODE_QUADS);
+    if x.min(y) < node_m {
+        bail!(
+            "a world of {} x {} m is smaller than one node ({} quads of {} m = {} m a side): raise {} or lower {}",
+            show_m(x),
+            show_m(y),
+            vista::world::NODE_QUADS,
+            show_m(s),
+            show_m(node_m),
+            names.extent,
+            names.spacing
+        );
     }
     let sectors = x.max(y) / desc.sector_size_m();
     if sectors.ceil() > MAX_SECTORS_PER_SIDE as f64 {
