@@ -144,9 +144,22 @@ impl Offscreen {
         view: &View,
         frames: u32,
     ) -> Result<Vec<FrameTimings>> {
+        self.run_observed(ctx, renderer, view, frames, || {})
+    }
+
+    /// As [`Self::run`], calling `each` after every frame (progress).
+    pub fn run_observed(
+        &mut self,
+        ctx: &Context,
+        renderer: &mut TerrainRenderer,
+        view: &View,
+        frames: u32,
+        mut each: impl FnMut(),
+    ) -> Result<Vec<FrameTimings>> {
         let mut out: Vec<FrameTimings> = Vec::new();
         for _ in 0..frames {
             self.frame(ctx, renderer, view)?;
+            each();
             if let Some(t) = renderer.latest_timings() {
                 if out.last().is_none_or(|l| l.frame < t.frame) {
                     out.push(t.clone());

@@ -53,7 +53,7 @@ pub use plan::{
 };
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
-pub use progress::Progress;
+pub use progress::{Progress, Reporter, Work};
 pub use projection::TraverseCamera;
 pub use resample_bound::RangeFit;
 pub use source::{GridSource, HeightSource};

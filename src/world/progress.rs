@@ -48,16 +48,18 @@ impl From<bool> for Progress {
 }
 
 /// The reporter behind [`Progress`], shared by the bake threads.
-pub(super) enum Reporter {
+pub enum Reporter {
     Bar(ProgressBar),
     Lines { total: u64, done: AtomicU64, start: Instant, every: Duration, next: Mutex<Duration>, what: Work },
 }
 
 /// What a [`Reporter`] counts, for its lines and bar.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Work {
+pub enum Work {
     /// Nodes baked.
     Nodes,
+    /// Frames rendered (`vista render --frames`).
+    Frames,
     /// Roots of the error tree computed or read.
     ErrorRoots,
 }
@@ -66,6 +68,7 @@ impl Work {
     fn verb(self) -> &'static str {
         match self {
             Work::Nodes => "baked",
+            Work::Frames => "rendered",
             Work::ErrorRoots => "error tree:",
         }
     }
@@ -73,13 +76,14 @@ impl Work {
     fn unit(self) -> &'static str {
         match self {
             Work::Nodes => "nodes",
+            Work::Frames => "frames",
             Work::ErrorRoots => "roots",
         }
     }
 }
 
 impl Reporter {
-    pub(super) fn new(progress: Progress, total: u64, what: Work) -> Self {
+    pub fn new(progress: Progress, total: u64, what: Work) -> Self {
         match progress {
             Progress::Hidden => Reporter::Bar(ProgressBar::hidden()),
             Progress::Bar => {
@@ -101,7 +105,7 @@ impl Reporter {
         }
     }
 
-    pub(super) fn inc(&self) {
+    pub fn inc(&self) {
         match self {
             Reporter::Bar(bar) => bar.inc(1),
             Reporter::Lines { total, done, start, every, next, what } => {
@@ -126,7 +130,7 @@ impl Reporter {
         }
     }
 
-    pub(super) fn finish(&self) {
+    pub fn finish(&self) {
         if let Reporter::Bar(bar) = self {
             bar.finish();
         }

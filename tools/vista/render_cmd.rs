@@ -17,6 +17,7 @@ use vista::render::offscreen::{Capture, Offscreen};
 use vista::render::stats::RenderStats;
 use vista::render::{overview_camera, Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
 use vista::terrain::TerrainOptions;
+use vista::world::{Progress, Work};
 
 /// Frames excluded from medians (pipeline creation, first-use costs).
 const WARMUP_FRAMES: usize = 2;
@@ -28,13 +29,15 @@ pub struct RenderArgs {
     /// Target size, e.g. 1280x720.
     #[arg(long, default_value = "1280x720", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: [u32; 2],
-    /// Frames rendered after streaming settled; the first 2 are warm-up and
-    /// left out of the medians and timings.json.
+    /// Frames rendered after streaming settled. Of more than 2, the first 2
+    /// are warm-up, left out of the medians and timings.json; 1 or 2 frames
+    /// are all timed (and include first-use costs).
     #[arg(long, default_value_t = 12, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub frames: u32,
-    /// Folder (created if needed) for image.png, lit.exr, depth.exr,
-    /// classification.png, timings.json (the timed frames), trace.json
-    /// (every frame), stats.json and report.json.
+    /// Folder for image.png, lit.exr, depth.exr, classification.png,
+    /// timings.json (the timed frames), trace.json (every frame), stats.json
+    /// and report.json: created (if needed) once the render succeeded, its
+    /// files written whole and all together, or none of them.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print the pass report: effects and why each is on or off, pipelines
@@ -276,7 +279,10 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let mut off = Offscreen::with_mode(ctx, view.size, options.terrain.frames_in_flight, SKY_CLEAR, mode)?;
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
     let first = renderer.frames_recorded() + 1;
-    let mut frames = off.run(ctx, &mut renderer, view, args.frames)?;
+    // A bar on a terminal, a line every 5 s otherwise (long runs only).
+    let progress = vista::world::Reporter::new(Progress::auto(), u64::from(args.frames), Work::Frames);
+    let mut frames = off.run_observed(ctx, &mut renderer, view, args.frames, || progress.inc())?;
+    progress.finish();
     let capture = off.capture(ctx)?;
     // The last frame's timings are back once capture waited for it; they
     // count like the others.
