@@ -176,10 +176,10 @@ fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
     let targets = args.targets.clone().unwrap_or(vec![0.5, 1.0, 2.0, 4.0, 8.0]);
     let sets = args.sets.clone().unwrap_or(vec![64, 256, 512, 1000]);
     if let Some(n) = sets.iter().find(|&&n| n == 0 || n > 1023) {
-        input_error(&format!("--sets {n}: a resident set is 1 to 1023 nodes (slots are 10-bit)"))?;
+        input_error(format!("--sets {n}: a resident set is 1 to 1023 nodes (slots are 10-bit)"))?;
     }
     if let Some(t) = targets.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
-        input_error(&format!("--targets {t}: a target error is a positive number of pixels"))?;
+        input_error(format!("--targets {t}: a target error is a positive number of pixels"))?;
     }
     if frames == 0 {
         input_error("--frames 0: measure at least 1 frame")?;
