@@ -194,3 +194,17 @@ fn a_camera_under_the_ground_or_outside_the_world_renders_and_says_so() {
         assert!(notes.len() == 1 && notes[0].contains(note), "{camera}: {err}");
     }
 }
+
+#[test]
+fn each_bench_kind_has_its_own_help() {
+    let help = |kind: &str| {
+        let out = vista_cmd::vista_cmd().args(["bench", kind, "--help"]).output().unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let (traverse, cull, accuracy) = (help("traverse"), help("cull"), help("accuracy"));
+    assert!(traverse.contains("Usage: vista bench traverse") && traverse.contains("--camera"), "{traverse}");
+    assert!(!traverse.contains("--size") && !traverse.contains("--plot"), "{traverse}");
+    assert!(cull.contains("Patch culling per view") && !cull.contains("--camera") && cull.contains("--size"), "{cull}");
+    assert!(accuracy.contains("--plot") && accuracy.contains("--views") && !accuracy.contains("--sets"), "{accuracy}");
+}

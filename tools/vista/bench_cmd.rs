@@ -110,39 +110,70 @@ pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
     Ok(())
 }
 
+/// Which kinds read each kind-specific option (by its argument id); every
+/// other option is read by all kinds.
+const USED_BY: [(&str, &[BenchKind]); 9] = {
+    use BenchKind::*;
+    [
+        ("sets", &[Traverse]),
+        ("camera", &[Traverse]),
+        ("targets", &[Traverse, Accuracy]),
+        ("size", &[Cull, Effects, Shade, Accuracy]),
+        ("target_error", &[Cull, Effects, Shade, Accuracy]),
+        ("views", &[Accuracy]),
+        ("plot", &[Accuracy]),
+        ("images", &[Accuracy]),
+        ("slots", &[Accuracy]),
+    ]
+};
+
 /// The options a kind does not read, given anyway: each would be silently
 /// ignored, so giving one is an error (each option's help names its kinds).
-fn unused_options(args: &BenchArgs) -> Vec<&'static str> {
-    use BenchKind::*;
-    let kind = args.kind;
-    let given: [(&str, bool, &[BenchKind]); 8] = [
-        ("--sets", args.sets.is_some(), &[Traverse]),
-        ("--camera", args.camera.is_some(), &[Traverse]),
-        ("--targets", args.targets.is_some(), &[Traverse, Accuracy]),
-        ("--size", args.size.is_some(), &[Cull, Effects, Shade, Accuracy]),
-        ("--target-error", args.target_error.is_some(), &[Cull, Effects, Shade, Accuracy]),
-        ("--views", args.views.is_some(), &[Accuracy]),
-        ("--plot", args.plot.is_some(), &[Accuracy]),
-        ("--images", args.images.is_some(), &[Accuracy]),
+fn unused_options(args: &BenchArgs) -> Vec<String> {
+    let given = [
+        args.sets.is_some(),
+        args.camera.is_some(),
+        args.targets.is_some(),
+        args.size.is_some(),
+        args.target_error.is_some(),
+        args.views.is_some(),
+        args.plot.is_some(),
+        args.images.is_some(),
+        args.slots.is_some(),
     ];
-    let mut unused: Vec<&str> =
-        given.iter().filter(|(_, on, kinds)| *on && !kinds.contains(&kind)).map(|g| g.0).collect();
-    if args.slots.is_some() && !matches!(kind, Accuracy) {
-        unused.push("--slots");
+    USED_BY
+        .iter()
+        .zip(given)
+        .filter(|((_, kinds), on)| *on && !kinds.contains(&args.kind))
+        .map(|((id, _), _)| format!("--{}", id.replace('_', "-")))
+        .collect()
+}
+
+/// `vista bench KIND --help`: the kind's own description and only the
+/// options it reads. `None` for a name that is no kind (clap then says so).
+pub fn kind_help(name: &str) -> Option<String> {
+    use clap::Args as _;
+    let kind = BenchKind::from_str(name, false).ok()?;
+    let about = kind.to_possible_value()?.get_help().map(ToString::to_string).unwrap_or_default();
+    let mut cmd = BenchArgs::augment_args(clap::Command::new("vista bench").bin_name(format!("vista bench {name}")))
+        .about(about)
+        .override_usage(format!("vista bench {name} [OPTIONS]"))
+        .mut_arg("kind", |a| a.hide(true));
+    for (id, kinds) in USED_BY {
+        if !kinds.contains(&kind) {
+            cmd = cmd.mut_arg(id, |a| a.hide(true));
+        }
     }
-    unused
+    Some(cmd.render_long_help().to_string())
 }
 
-fn input_error(message: impl Into<String>) -> Result<()> {
-    Err(anyhow::Error::new(crate::InputError(message.into())))
-}
-
-pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
-    let unused = unused_options(&args);
+/// The arguments' own checks, before Vulkan starts.
+pub fn check(args: &BenchArgs) -> Result<()> {
+    let unused = unused_options(args);
     if !unused.is_empty() {
         let name = args.kind.to_possible_value().map_or(String::new(), |v| v.get_name().to_string());
         input_error(format!(
-            "vista bench {name} does not use {}: drop {} (`vista bench --help` says which kind takes what)",
+            "vista bench {name} does not use {}: drop {} (`vista bench {name} --help` lists what it takes)",
             unused.join(", "),
             if unused.len() == 1 { "it" } else { "them" }
         ))?;
@@ -150,6 +181,14 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
     if let Some(path) = &args.json {
         crate::out_path::check_out_file(path, "--json")?;
     }
+    Ok(())
+}
+
+fn input_error(message: impl Into<String>) -> Result<()> {
+    Err(anyhow::Error::new(crate::InputError(message.into())))
+}
+
+pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
     match args.kind {
         BenchKind::Traverse => traverse(ctx, args),
         BenchKind::Cull => crate::bench_cull_cmd::cull(ctx, &ViewBench::new(&args, 7)?),

@@ -65,6 +65,17 @@ enum Command {
 
 fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    // `vista bench KIND --help` is the kind's own (clap's would list every
+    // kind's options).
+    let argv: Vec<String> = std::env::args().collect();
+    if let [_, bench, kind, help] = &argv[..] {
+        if bench == "bench" && (help == "--help" || help == "-h") {
+            if let Some(text) = bench_cmd::kind_help(kind) {
+                print!("{text}");
+                return;
+            }
+        }
+    }
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => exit_on_usage_error(e),
@@ -142,7 +153,10 @@ fn run(cli: Cli) -> Result<()> {
         // Baking and accounting are CPU-only: no Vulkan needed.
         Command::Bake(args) => bake::bake(args),
         Command::Memory(args) => bake::memory(args),
-        Command::Bench(args) => with_gpu(&options, |ctx| bench_cmd::bench(ctx, args)),
+        Command::Bench(args) => {
+            bench_cmd::check(&args)?;
+            with_gpu(&options, |ctx| bench_cmd::bench(ctx, args))
+        }
         Command::Golden(args) => {
             golden_cmd::check(&args)?;
             with_gpu(&options, |ctx| golden_cmd::golden(ctx, &args))
