@@ -576,9 +576,9 @@ fn stability_prints_the_table_and_compares_processes() {
     assert_eq!(cases.len(), 2);
     assert!(cases.iter().all(|c| c["pass"] == true));
     let _ = std::fs::remove_file(&json);
-    let (code, _, err) = vista_code(&["stability", "--cases", "11"]);
+    let (code, _, err) = vista_code(&["stability", "--cases", "12"]);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("there is no case 11") && err.lines().count() == 1, "{err}");
+    assert!(err.contains("there is no case 12") && err.lines().count() == 1, "{err}");
 }
 
 /// `--origin` places the world: a render at UTM-like coordinates with the
