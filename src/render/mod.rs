@@ -21,7 +21,7 @@ pub mod view;
 
 pub use crate::passes::terrain_geometry::RenderTargets;
 pub use effects::{Effect, EffectDecision, Effects};
-pub use renderer::{LodOptions, RendererOptions, TerrainRenderer};
+pub use renderer::{memory_for, LodOptions, RendererOptions, TerrainRenderer};
 pub use report::{frame_report, FrameReport, PassState};
 pub use shading::Shading;
 pub use view::{linear_depth, overview_camera, Camera, Lighting, TerrainViewGpu, View, DEFAULT_NEAR_M};

@@ -160,6 +160,31 @@ fn counter_lists<'a>(cull: &'a CullPatches, occlusion: &'a Option<Occlusion>) ->
 }
 
 /// Whether the world has anything for the hole path to cut.
+/// The payload atlases a renderer keeps on the GPU for these decisions:
+/// the core ones, the normal (the geometry pass classifies by it), and
+/// each atlas an effect that is on reads.
+fn atlases_for(decisions: &[EffectDecision]) -> AtlasSet {
+    let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
+    EFFECT_ATLASES
+        .iter()
+        .filter(|(effect, _)| on(*effect))
+        .fold(AtlasSet::CORE.with(ATLAS_NORMAL), |set, (_, atlas)| set.with(*atlas))
+}
+
+/// Memory of `slots` resident nodes as a renderer of `effects` over this
+/// world keeps them (what `vista memory` prints): payload kinds no effect
+/// reads are baked, not kept on the GPU.
+pub fn memory_for(
+    slots: usize,
+    format: crate::world::PayloadFormat,
+    effects: &Effects,
+    world: &WorldDesc,
+    holes: &[Hole],
+) -> crate::world::MemoryReport {
+    let decisions = decide(effects, &world_content(world, holes), false);
+    crate::terrain::mask_memory(crate::world::MemoryReport::for_format(slots, format), atlases_for(&decisions))
+}
+
 fn world_content(world: &WorldDesc, holes: &[Hole]) -> WorldContent {
     let root = world.node_size_m(world.root_lod());
     let ragged = world.extent_m.iter().any(|e| e % root != 0.0);
@@ -197,13 +222,7 @@ impl TerrainRenderer {
         crate::terrain::check_plan(ctx, world, &options.terrain)?;
         let decisions = decide(&options.effects, &world_content(world, &holes), options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
-        // The geometry pass classifies by the baked normal.
-        let mut atlases = AtlasSet::CORE.with(ATLAS_NORMAL);
-        for (effect, atlas) in EFFECT_ATLASES {
-            if on(effect) {
-                atlases = atlases.with(atlas);
-            }
-        }
+        let atlases = atlases_for(&decisions);
         let terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
         let geometry = TerrainGeometry::new(ctx)?;
         let shade = ShadeRules::from_effects(&options.effects, on(Effect::Splat), on(Effect::Cliffs));

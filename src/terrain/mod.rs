@@ -299,15 +299,18 @@ impl Terrain {
     /// Memory of the resident payloads, CPU and GPU side; payload kinds no
     /// effect reads are baked (CPU) but not kept on the GPU.
     pub fn memory_report(&self) -> MemoryReport {
-        let mut r = MemoryReport::for_format(self.stats.resident, self.tree.payload_format());
-        let set = self.tree.atlas_set();
-        // The report lists the atlas kinds first, in `ATLAS_*` order.
-        for (i, k) in r.kinds.iter_mut().enumerate().take(ATLAS_COUNT) {
-            if !set.contains(i) {
-                k.gpu_bytes = 0;
-                k.gpu_format = "not kept (effect off)";
-            }
-        }
-        r
+        mask_memory(MemoryReport::for_format(self.stats.resident, self.tree.payload_format()), self.tree.atlas_set())
     }
+}
+
+/// `report` with the GPU bytes of the atlases not in `set` taken out.
+pub fn mask_memory(mut report: MemoryReport, set: AtlasSet) -> MemoryReport {
+    // The report lists the atlas kinds first, in `ATLAS_*` order.
+    for (i, k) in report.kinds.iter_mut().enumerate().take(ATLAS_COUNT) {
+        if !set.contains(i) {
+            k.gpu_bytes = 0;
+            k.gpu_format = "not kept (effect off)";
+        }
+    }
+    report
 }

@@ -143,8 +143,42 @@ impl GeoTiffSource {
         check_params(extent_m, [0.0, 1.0])?;
         let mut d = decoder(path)?;
         let info = Self::read_info(&mut d, path)?;
-        let (w, h) = (info.width as usize, info.height as usize);
         let image = d.read_image().map_err(|e| WorldError::corrupt(path, e))?;
+        let grid = to_grid(image, (info.width as usize, info.height as usize), &info, path, extent_m)?;
+        Ok(GeoTiffSource { grid, info })
+    }
+
+    /// The map's first strip or tile only, stretched over `extent_m`: the
+    /// same per-sample work as the whole map, for timing a bake without
+    /// reading it (a DEM's strips and tiles are a few rows or 256² to 512²).
+    pub fn open_corner(path: &Path, extent_m: [f64; 2]) -> Result<Self> {
+        check_params(extent_m, [0.0, 1.0])?;
+        let mut d = decoder(path)?;
+        let info = Self::read_info(&mut d, path)?;
+        let (cw, ch) = d.chunk_data_dimensions(0);
+        let chunk = d.read_chunk(0).map_err(|e| WorldError::corrupt(path, e))?;
+        let grid = to_grid(chunk, (cw as usize, ch as usize), &info, path, extent_m)?;
+        Ok(GeoTiffSource { grid, info })
+    }
+
+    pub fn grid(&self) -> &GridSource {
+        &self.grid
+    }
+
+    pub fn info(&self) -> &GeoTiffInfo {
+        &self.info
+    }
+}
+
+/// Decoded samples (`w` x `h`, row 0 north) as a grid over `extent_m`.
+fn to_grid(
+    image: DecodingResult,
+    (w, h): (usize, usize),
+    info: &GeoTiffInfo,
+    path: &Path,
+    extent_m: [f64; 2],
+) -> Result<GridSource> {
+    {
         let no_data = |v: f64| info.no_data.is_some_and(|n| v == n);
         let grid = match image {
             DecodingResult::U16(values) if values.len() == w * h => {
@@ -180,15 +214,7 @@ impl GeoTiffSource {
             }
             other => return Err(wrong_format(path, format!("{} samples", sample_kind(&other)))),
         };
-        Ok(GeoTiffSource { grid, info })
-    }
-
-    pub fn grid(&self) -> &GridSource {
-        &self.grid
-    }
-
-    pub fn info(&self) -> &GeoTiffInfo {
-        &self.info
+        Ok(grid)
     }
 }
 

@@ -394,9 +394,11 @@ pub fn memory(args: MemoryArgs) -> Result<()> {
     let slots = args.slots as usize;
     writeln!(out, "world:    {} ({} nodes over {} LODs)", label, full, w.desc.lod_count)?;
     writeln!(out, "memory for {slots} resident nodes:")?;
-    let report = MemoryReport::for_format(slots, w.bake.format);
+    // As a renderer of the scene's effects keeps them.
+    let (effects, holes) = w.effects_and_holes();
+    let report = vista::render::memory_for(slots, w.bake.format, effects, &w.desc, holes);
     write!(out, "{report}")?;
-    let all = MemoryReport::for_format(full, w.bake.format);
+    let all = vista::render::memory_for(full, w.bake.format, effects, &w.desc, holes);
     writeln!(
         out,
         "every node resident would take {} CPU / {} GPU",

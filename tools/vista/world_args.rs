@@ -378,6 +378,11 @@ impl WorldSpec {
         }
     }
 
+    /// The scene's effects and the holes (world-relative).
+    pub fn effects_and_holes(&self) -> (&Effects, &[Hole]) {
+        (&self.effects, &self.holes)
+    }
+
     /// The plan of `region` (`None`: the whole world).
     pub fn plan(&self, region: Option<[f64; 4]>) -> WorldPlan {
         WorldPlan::new(&self.desc, region).with_format(self.bake.format)
@@ -394,6 +399,16 @@ impl WorldSpec {
     /// map of any size stays small in memory; the per-sample work is the
     /// same. Other sources open whole. The label says which.
     pub fn open_for_timing(self) -> Result<LoadedWorld> {
+        if let SpecSource::Heightmap { path, kind: MapKind::Tiff, height_range, .. } = &self.source {
+            let corner = GeoTiffSource::open_corner(path, self.desc.extent_m).map_err(input_error)?;
+            let (cw, ch) = (corner.grid().width(), corner.grid().height());
+            let what = if height_range.is_some() { "bake" } else { "heights and bake" };
+            let label = format!("{} ({what} from its first {cw} x {ch} strip or tile)", path.display());
+            let range = height_range.map_or_else(|| auto_range(corner.grid()), |r| r.range);
+            let mut world = self.with_source(Arc::new(corner), label);
+            world.desc.height_range_m = range;
+            return Ok(world);
+        }
         let SpecSource::Heightmap { path, kind: MapKind::Png, height_range: Some(given), .. } = &self.source else {
             return self.open();
         };
@@ -402,9 +417,13 @@ impl WorldSpec {
         let Some(corner) = corner else { return self.open() };
         let (cw, ch) = (corner.grid().width(), corner.grid().height());
         let label = format!("{} (bake timed on its {cw} x {ch} corner)", path.display());
+        Ok(self.with_source(Arc::new(corner), label))
+    }
+
+    fn with_source(self, source: Arc<dyn HeightSource>, label: String) -> LoadedWorld {
         let (desc, holes, effects, origin_m, limits, bake) =
             (self.desc, self.holes, self.effects, self.origin_m, self.limits, self.bake);
-        Ok(LoadedWorld { desc, source: Arc::new(corner), holes, effects, label, origin_m, limits, bake })
+        LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake }
     }
 
     /// Reads the height map (or makes the procedural source).
@@ -553,8 +572,10 @@ enum MapKind {
     Tiff,
 }
 
-/// A file's first four bytes, if it has them.
+/// A regular file's first four bytes, if it has them (never opens a FIFO,
+/// which would block: `heightmap_kind` then refuses it).
 fn magic(path: &Path) -> Option<[u8; 4]> {
+    vista::world::require_regular_file(path).ok()?;
     let mut m = [0u8; 4];
     std::fs::File::open(path).ok()?.read_exact(&mut m).ok()?;
     Some(m)
