@@ -297,7 +297,7 @@ fn colour(key: &str, v: &toml::Value) -> Result<[f32; 3]> {
 
 fn file(key: &str, v: &toml::Value, base: &Path) -> Result<PathBuf> {
     let s = v.as_str().ok_or_else(|| wrong(key, "a file path (string)", v))?;
-    let path = base.join(s);
+    let path = crate::world::resolve_relative(base, Path::new(s));
     if !path.is_file() {
         return Err(bad(format!("{key}: file {} does not exist", path.display())));
     }

@@ -283,7 +283,7 @@ fn texture_source(key: &str, v: &toml::Value, base: &Path) -> std::result::Resul
                 let key = format!("{key}.{k}");
                 let v = t.get(k).ok_or_else(|| format!("{key} is missing (a PNG file)"))?;
                 let s = v.as_str().ok_or_else(|| wrong(&key, "a file path (string)", v))?;
-                let path = base.join(s);
+                let path = crate::world::resolve_relative(base, Path::new(s));
                 if !path.is_file() {
                     return Err(format!("{key}: file {} does not exist", path.display()));
                 }

@@ -143,7 +143,7 @@ impl Scene {
         if let SceneSource::Path(p) = &world.source {
             if p.is_relative() {
                 let dir = path.parent().unwrap_or(Path::new("."));
-                world.source = SceneSource::Path(dir.join(p));
+                world.source = SceneSource::Path(vista::world::resolve_relative(dir, p));
             }
         }
         let dir = path.parent().unwrap_or(Path::new("."));
