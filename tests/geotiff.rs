@@ -151,7 +151,7 @@ fn the_command_line_takes_extent_and_origin_from_the_tags() {
     let tif = dir.join("dem.tif");
     write_tiff::<colortype::Gray16>(&tif, 64, 48, &heights(64, 48), &TAGS);
     let out = vista_cmd::vista_cmd()
-        .args(["bake", "--dry-run", "--spacing", "10", "--heightmap"])
+        .args(["bake", "--dry-run", "--spacing", "5", "--heightmap"])
         .arg(&tif)
         .output()
         .unwrap();
@@ -160,7 +160,7 @@ fn the_command_line_takes_extent_and_origin_from_the_tags() {
     assert!(text.contains("(1920 x 960 m, heights"), "{text}");
     // A hole given in map coordinates lands in the world (no "outside" note).
     let out = vista_cmd::vista_cmd()
-        .args(["bake", "--dry-run", "--spacing", "10", "--hole-circle", "340100,5080500,20", "--heightmap"])
+        .args(["bake", "--dry-run", "--spacing", "5", "--hole-circle", "340100,5080500,20", "--heightmap"])
         .arg(&tif)
         .output()
         .unwrap();
