@@ -1,6 +1,6 @@
 //! GeoTIFF height maps: the same heights as a PNG of the same data, the
 //! extent and origin from the tags, PixelIsPoint against PixelIsArea, f32
-//! and signed 16-bit bands, no-data refused. The files are written here with
+//! and signed 16-bit bands, no-data samples baked as holes. The files are written here with
 //! the `tiff` crate's encoder (stripped; tiled files go through the same
 //! decoder call but are not made here: the encoder writes strips only).
 
@@ -120,7 +120,7 @@ fn pixel_is_point_moves_the_origin_by_half_a_pixel() {
 }
 
 #[test]
-fn float_and_signed_bands_keep_their_metres_and_no_data_is_refused() {
+fn float_and_signed_bands_keep_their_metres() {
     let dir = temp_dir("kinds");
     let f: Vec<f32> = (0..12).map(|k| -411.5 + 100.25 * k as f32).collect();
     let i: Vec<i16> = (0..12).map(|k| -400 + 100 * k as i16).collect();
@@ -136,12 +136,54 @@ fn float_and_signed_bands_keep_their_metres_and_no_data_is_refused() {
         assert_eq!(fs.sample(x, y), f[k], "f32 pixel {k}");
         assert_eq!(is.sample(x, y), f32::from(i[k]), "i16 pixel {k}");
     }
-    let nd = dir.join("nodata.tif");
-    let mut holed = i.clone();
-    holed[5] = -9999;
-    write_tiff::<colortype::GrayI16>(&nd, 4, 3, &holed, &Tags { no_data: Some("-9999"), ..TAGS });
-    let e = GeoTiffSource::open(&nd, extent).unwrap_err().to_string();
-    assert!(e.contains("1 samples hold the no-data value -9999"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn no_data_samples_become_holes_in_the_bake() {
+    use vista::world::{bake_node, NodeId, WorldDesc, PATCHES_PER_NODE_SIDE, PATCH_HOLE_NONE};
+    let dir = temp_dir("nodata");
+    // 64 x 64 pixels of 4 m: a 256 m map. Pixel (10, 5) and the whole of
+    // row 40 hold no data.
+    let (w, h) = (64u32, 64u32);
+    let mut data: Vec<i16> = (0..w * h).map(|k| 500 + (k % w) as i16).collect();
+    data[(5 * w + 10) as usize] = -9999;
+    for i in 0..w {
+        data[(40 * w + i) as usize] = -9999;
+    }
+    let tif = dir.join("holes.tif");
+    let tags = Tags { scale: [4.0, 4.0], no_data: Some("-9999"), ..TAGS };
+    write_tiff::<colortype::GrayI16>(&tif, w, h, &data, &tags);
+    let extent = [256.0, 256.0];
+    let src = GeoTiffSource::open(&tif, extent).unwrap();
+    assert!(src.has_holes());
+    // Pixel (10, 5) covers x 40..44, y 232..236 (row 0 is the north edge,
+    // y 252..256); its centre is a hole, its neighbours' centres are not.
+    assert!(src.is_hole(42.0, 234.0));
+    assert!(!src.is_hole(38.0, 234.0) && !src.is_hole(46.0, 234.0) && !src.is_hole(42.0, 238.0));
+    // Filled from the nearer valid neighbour of its row for the resampler:
+    // 500 + 9 or 500 + 11 (equally near: the left one).
+    assert_eq!(src.sample(42.0, 234.0), 509.0);
+    // A whole row without data copies the nearer row (39, the same values).
+    assert_eq!(src.sample(2.0, 256.0 - 162.0), 500.0);
+    assert!(src.is_hole(2.0, 256.0 - 162.0));
+
+    // The bake cuts them like hole shapes: at 1 m spacing the map is 2 x 2
+    // LOD-0 nodes of 128 m; node (0, 1) (north-west) holds pixel (10, 5)
+    // (x 40..44, y 232..236) in its patch (2, 6) of 16 m (x 32..48, y 224..240).
+    let world = WorldDesc {
+        extent_m: extent,
+        height_range_m: [-100.0, 1000.0],
+        spacing_m: 1.0,
+        lod_count: 2,
+        ..WorldDesc::default()
+    };
+    let node = bake_node(&src, &world, &[], NodeId::new(0, 0, 1));
+    let side = PATCHES_PER_NODE_SIDE as usize;
+    let holed: Vec<usize> = (0..side * side).filter(|&p| node.patch_holes[p] != PATCH_HOLE_NONE).collect();
+    // Row 40 (y 92..96) lies in node (x, 0); pixel (10, 5) is the only
+    // no-data in node (0, 1).
+    assert_eq!(holed, [6 * side + 2], "patches with holes: {holed:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -150,11 +192,8 @@ fn the_command_line_takes_extent_and_origin_from_the_tags() {
     let dir = temp_dir("cli");
     let tif = dir.join("dem.tif");
     write_tiff::<colortype::Gray16>(&tif, 64, 48, &heights(64, 48), &TAGS);
-    let out = vista_cmd::vista_cmd()
-        .args(["bake", "--dry-run", "--spacing", "5", "--heightmap"])
-        .arg(&tif)
-        .output()
-        .unwrap();
+    let out =
+        vista_cmd::vista_cmd().args(["bake", "--dry-run", "--spacing", "5", "--heightmap"]).arg(&tif).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(text.contains("(1920 x 960 m, heights"), "{text}");

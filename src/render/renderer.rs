@@ -180,12 +180,15 @@ pub fn memory_for(
     effects: &Effects,
     world: &WorldDesc,
     holes: &[Hole],
+    source_holes: bool,
 ) -> crate::world::MemoryReport {
-    let decisions = decide(effects, &world_content(world, holes), false);
+    let decisions = decide(effects, &world_content(world, holes, source_holes), false);
     crate::terrain::mask_memory(crate::world::MemoryReport::for_format(slots, format), atlases_for(&decisions))
 }
 
-fn world_content(world: &WorldDesc, holes: &[Hole]) -> WorldContent {
+/// `source_holes`: the height source has holes of its own (a DEM's no-data
+/// samples).
+fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool) -> WorldContent {
     let root = world.node_size_m(world.root_lod());
     let ragged = world.extent_m.iter().any(|e| e % root != 0.0);
     let [ex, ey] = world.extent_m;
@@ -199,6 +202,9 @@ fn world_content(world: &WorldDesc, holes: &[Hole]) -> WorldContent {
     let mut present = Vec::new();
     if inside > 0 {
         present.push(format!("{inside} hole region(s) in the world"));
+    }
+    if source_holes {
+        present.push("the height map's no-data samples".to_string());
     }
     if ragged {
         present.push(format!("the {ex} x {ey} m extent is not a whole number of {root} m root nodes: the edge is cut"));
@@ -220,7 +226,8 @@ impl TerrainRenderer {
     ) -> Result<Self> {
         // Before any pass allocates: a world over its limits fails alone.
         crate::terrain::check_plan(ctx, world, &options.terrain)?;
-        let decisions = decide(&options.effects, &world_content(world, &holes), options.force_content_gated);
+        let decisions =
+            decide(&options.effects, &world_content(world, &holes, source.has_holes()), options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         let atlases = atlases_for(&decisions);
         let terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };

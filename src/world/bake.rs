@@ -120,8 +120,9 @@ pub fn bake_node_with(
             let s = [t as i64 - ATLAS_BORDER as i64, u as i64 - ATLAS_BORDER as i64];
             let n0 = [i64::from(id.x), i64::from(id.y)].map(|c| c * i64::from(NODE_QUADS));
             let pos = [world.grid_pos(0, n0[0] + s[0], step), world.grid_pos(1, n0[1] + s[1], step)];
-            let solid =
-                !outside_extent(pos, world.extent_m, step) && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]));
+            let solid = !outside_extent(pos, world.extent_m, step)
+                && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]))
+                && !source.is_hole(pos[0], pos[1]);
             let (rgb, smooth) = material_look(mat, slope_deg);
             normals.push(pack_normal(nrm, NO_OCCLUSION, smooth));
             albedo.push([rgb[0], rgb[1], rgb[2], if solid { 255 } else { 0 }]);

@@ -2,7 +2,9 @@
 //! not) or 32-bit floats, stripped or tiled, any compression the `tiff`
 //! crate decodes (deflate, LZW, PackBits, none). The tags that place the
 //! map (pixel scale, tie point, raster type) are read with the header, so
-//! a plan knows the world's extent without reading a pixel.
+//! a plan knows the world's extent without reading a pixel. GDAL's no-data
+//! samples become holes, cut like a hole shape (their heights are filled
+//! from valid neighbours for the resampler).
 //!
 //! Raster type: with PixelIsArea (GeoTIFF's default) the tie point is a
 //! pixel's corner; with PixelIsPoint it is the pixel's centre, the post
@@ -170,7 +172,8 @@ impl GeoTiffSource {
     }
 }
 
-/// Decoded samples (`w` x `h`, row 0 north) as a grid over `extent_m`.
+/// Decoded samples (`w` x `h`, row 0 north) as a grid over `extent_m`;
+/// no-data samples become holes.
 fn to_grid(
     image: DecodingResult,
     (w, h): (usize, usize),
@@ -178,57 +181,115 @@ fn to_grid(
     path: &Path,
     extent_m: [f64; 2],
 ) -> Result<GridSource> {
-    {
-        let no_data = |v: f64| info.no_data.is_some_and(|n| v == n);
-        let grid = match image {
-            DecodingResult::U16(values) if values.len() == w * h => {
-                if let Some(n) = info.no_data.filter(|&n| values.iter().any(|&v| f64::from(v) == n)) {
-                    return Err(no_data_error(path, n, values.iter().filter(|&&v| f64::from(v) == n).count()));
-                }
-                // Metres as stored: 0..65535 onto 0..65535 m, scale 1.
-                GridSource::from_u16(w, h, values, [0.0, 65535.0], extent_m)
+    let (grid, mask) = match image {
+        DecodingResult::U16(mut values) if values.len() == w * h => {
+            let mask = fill_no_data(&mut values, w, info.no_data, |v| f64::from(*v), path)?;
+            // Metres as stored: 0..65535 onto 0..65535 m, scale 1.
+            (GridSource::from_u16(w, h, values, [0.0, 65535.0], extent_m), mask)
+        }
+        DecodingResult::I16(mut values) if values.len() == w * h => {
+            let mask = fill_no_data(&mut values, w, info.no_data, |v| f64::from(*v), path)?;
+            // Shifted into u16: -32768 m at 0.
+            let shifted = values.into_iter().map(|v| (i32::from(v) + 32768) as u16).collect();
+            (GridSource::from_u16(w, h, shifted, [-32768.0, 32767.0], extent_m), mask)
+        }
+        DecodingResult::F32(mut values) if values.len() == w * h => {
+            let mask = fill_no_data(&mut values, w, info.no_data, |v| f64::from(*v), path)?;
+            let non_finite = values.iter().filter(|v| !v.is_finite()).count();
+            if non_finite > 0 {
+                return Err(WorldError::NonFiniteHeights { path: path.into(), count: non_finite });
             }
-            DecodingResult::I16(values) if values.len() == w * h => {
-                let bad = values.iter().filter(|&&v| no_data(f64::from(v))).count();
-                if bad > 0 {
-                    return Err(no_data_error(path, info.no_data.unwrap_or_default(), bad));
-                }
-                // Shifted into u16 in place of a copy: -32768 m at 0.
-                let shifted = values.into_iter().map(|v| (i32::from(v) + 32768) as u16).collect();
-                GridSource::from_u16(w, h, shifted, [-32768.0, 32767.0], extent_m)
+            let huge = values.iter().filter(|v| v.abs() > MAX_ABS_HEIGHT_M).count();
+            if huge > 0 {
+                return Err(WorldError::HugeHeights { path: path.into(), count: huge, limit: MAX_ABS_HEIGHT_M });
             }
-            DecodingResult::F32(values) if values.len() == w * h => {
-                let bad = values.iter().filter(|&&v| no_data(f64::from(v))).count();
-                if bad > 0 {
-                    return Err(no_data_error(path, info.no_data.unwrap_or_default(), bad));
-                }
-                let non_finite = values.iter().filter(|v| !v.is_finite()).count();
-                if non_finite > 0 {
-                    return Err(WorldError::NonFiniteHeights { path: path.into(), count: non_finite });
-                }
-                let huge = values.iter().filter(|v| v.abs() > MAX_ABS_HEIGHT_M).count();
-                if huge > 0 {
-                    return Err(WorldError::HugeHeights { path: path.into(), count: huge, limit: MAX_ABS_HEIGHT_M });
-                }
-                GridSource::new(w, h, values, extent_m)
-            }
-            other => return Err(wrong_format(path, format!("{} samples", sample_kind(&other)))),
-        };
-        Ok(grid)
-    }
+            (GridSource::new(w, h, values, extent_m), mask)
+        }
+        other => return Err(wrong_format(path, format!("{} samples", sample_kind(&other)))),
+    };
+    Ok(match mask {
+        Some(mask) => grid.with_no_data(mask),
+        None => grid,
+    })
 }
 
-/// No-data samples cannot be drawn, and vista cuts holes only from
-/// shapes: refused, saying how many and how to fill them, rather than
-/// drawn as the sentinel height (often -32768 m).
-fn no_data_error(path: &Path, value: f64, count: usize) -> WorldError {
-    WorldError::corrupt(
-        path,
-        format!(
-            "{count} samples hold the no-data value {value}; vista cannot draw them (fill them first, e.g. with \
-             gdal_fillnodata, and cut holes with --hole-circle or the scene's [[holes]])"
-        ),
-    )
+/// Marks the samples equal to `no_data` (one bit each, row-major) and
+/// gives each the nearest valid value of its row (else the nearest row
+/// with one), so the resampler near a hole's edge reads terrain, not the
+/// sentinel (often -32768 m). `None` where no sample is no-data.
+fn fill_no_data<T: Copy>(
+    values: &mut [T],
+    w: usize,
+    no_data: Option<f64>,
+    as_f64: impl Fn(&T) -> f64,
+    path: &Path,
+) -> Result<Option<Vec<u64>>> {
+    let Some(n) = no_data else { return Ok(None) };
+    let mut mask = vec![0u64; values.len().div_ceil(64)];
+    for (k, v) in values.iter().enumerate() {
+        if as_f64(v) == n {
+            mask[k / 64] |= 1 << (k % 64);
+        }
+    }
+    if mask.iter().all(|&m| m == 0) {
+        return Ok(None);
+    }
+    let hole = |k: usize| mask[k / 64] >> (k % 64) & 1 == 1;
+    let mut valid_rows = Vec::new();
+    for (j, row) in values.chunks_mut(w).enumerate() {
+        let valid: Vec<usize> = (0..w).filter(|&i| !hole(j * w + i)).collect();
+        if valid.is_empty() {
+            continue;
+        }
+        valid_rows.push(j);
+        // Each hole takes the nearer valid sample of its row.
+        for i in 0..w {
+            if hole(j * w + i) {
+                let p = valid.partition_point(|&v| v < i);
+                let right = valid.get(p).copied();
+                let left = p.checked_sub(1).map(|q| valid[q]);
+                let from = match (left, right) {
+                    (Some(l), Some(r)) => {
+                        if i - l <= r - i {
+                            l
+                        } else {
+                            r
+                        }
+                    }
+                    (Some(l), None) => l,
+                    (None, Some(r)) => r,
+                    (None, None) => unreachable!("the row has a valid sample"),
+                };
+                row[i] = row[from];
+            }
+        }
+    }
+    if valid_rows.is_empty() {
+        return Err(WorldError::corrupt(path, format!("every sample holds the no-data value {n}")));
+    }
+    // Rows without a valid sample copy the nearest row that has one.
+    for j in 0..values.len() / w {
+        let p = valid_rows.partition_point(|&v| v < j);
+        if valid_rows.get(p) == Some(&j) {
+            continue;
+        }
+        let below = valid_rows.get(p).copied();
+        let above = p.checked_sub(1).map(|q| valid_rows[q]);
+        let from = match (above, below) {
+            (Some(a), Some(b)) => {
+                if j - a <= b - j {
+                    a
+                } else {
+                    b
+                }
+            }
+            (Some(a), None) => a,
+            (None, Some(b)) => b,
+            (None, None) => unreachable!("some row has a valid sample"),
+        };
+        values.copy_within(from * w..from * w + w, j * w);
+    }
+    Ok(Some(mask))
 }
 
 fn sample_kind(r: &DecodingResult) -> &'static str {
@@ -254,5 +315,13 @@ impl HeightSource for GeoTiffSource {
 
     fn id_hash(&self) -> u64 {
         self.grid.id_hash()
+    }
+
+    fn is_hole(&self, x_m: f64, y_m: f64) -> bool {
+        self.grid.is_hole(x_m, y_m)
+    }
+
+    fn has_holes(&self) -> bool {
+        self.grid.has_holes()
     }
 }

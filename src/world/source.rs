@@ -14,6 +14,17 @@ pub trait HeightSource: Send + Sync {
     /// cache key, so stale baked nodes are never reused.
     fn id_hash(&self) -> u64;
 
+    /// Whether the source has no data at this point (a DEM's no-data
+    /// samples): the bake cuts a hole there, as for a hole shape.
+    fn is_hole(&self, _x_m: f64, _y_m: f64) -> bool {
+        false
+    }
+
+    /// Whether any point is a hole (the renderer then builds its hole path).
+    fn has_holes(&self) -> bool {
+        false
+    }
+
     /// `out[i] = sample(xs[i], y_m)`, bit for bit; a source may share work
     /// between the neighbouring points of a row.
     fn sample_row(&self, xs: &[f64], y_m: f64, out: &mut [f32]) {
@@ -35,6 +46,8 @@ pub struct GridSource {
     heights: Samples,
     extent_m: [f64; 2],
     id: u64,
+    /// One bit per pixel with no data (a hole), if any pixel has none.
+    no_data: Option<Vec<u64>>,
 }
 
 /// 16-bit maps stay 16-bit: a 16384² map is 512 MiB as read, 1 GiB as f32,
@@ -75,7 +88,7 @@ impl GridSource {
         for v in &heights {
             h = h.bytes(&v.to_le_bytes());
         }
-        GridSource { width, height, id: h.finish(), heights: Samples::F32(heights), extent_m }
+        GridSource { width, height, id: h.finish(), heights: Samples::F32(heights), extent_m, no_data: None }
     }
 
     /// 16-bit `values` (row 0 north) whose 0..65535 map linearly onto
@@ -89,7 +102,20 @@ impl GridSource {
         // Hashed 2 bytes at a time (as the values are stored): half the
         // work of the f32 copy this replaces.
         let id = values.iter().fold(h, |h, v| h.bytes(&v.to_le_bytes())).finish();
-        GridSource { width, height, id, heights: Samples::U16 { values, lo, scale }, extent_m }
+        GridSource { width, height, id, heights: Samples::U16 { values, lo, scale }, extent_m, no_data: None }
+    }
+
+    /// Marks the pixels whose bit is set in `mask` (row-major, 64 a word)
+    /// as holes; their heights should already be filled from valid
+    /// neighbours, which the resampler then reads near the hole's edge.
+    pub fn with_no_data(mut self, mask: Vec<u64>) -> Self {
+        assert_eq!(mask.len(), (self.width * self.height).div_ceil(64), "no-data mask size mismatch");
+        if mask.iter().all(|&w| w == 0) {
+            return self;
+        }
+        self.id = mask.iter().fold(Fnv64::new().u64(self.id), |h, w| h.u64(*w)).finish();
+        self.no_data = Some(mask);
+        self
     }
 
     pub fn width(&self) -> usize {
@@ -151,5 +177,19 @@ impl HeightSource for GridSource {
 
     fn id_hash(&self) -> u64 {
         self.id
+    }
+
+    /// The pixel containing the point (pixels are areas around their posts).
+    fn is_hole(&self, x_m: f64, y_m: f64) -> bool {
+        let Some(mask) = &self.no_data else { return false };
+        let [dx, dy] = self.pixel_size_m();
+        let i = ((x_m / dx).floor().max(0.0) as usize).min(self.width - 1);
+        let j = (((self.extent_m[1] - y_m) / dy).floor().max(0.0) as usize).min(self.height - 1);
+        let k = j * self.width + i;
+        mask[k / 64] >> (k % 64) & 1 == 1
+    }
+
+    fn has_holes(&self) -> bool {
+        self.no_data.is_some()
     }
 }

@@ -396,9 +396,10 @@ pub fn memory(args: MemoryArgs) -> Result<()> {
     writeln!(out, "memory for {slots} resident nodes:")?;
     // As a renderer of the scene's effects keeps them.
     let (effects, holes) = w.effects_and_holes();
-    let report = vista::render::memory_for(slots, w.bake.format, effects, &w.desc, holes);
+    let source_holes = w.may_have_source_holes()?;
+    let report = vista::render::memory_for(slots, w.bake.format, effects, &w.desc, holes, source_holes);
     write!(out, "{report}")?;
-    let all = vista::render::memory_for(full, w.bake.format, effects, &w.desc, holes);
+    let all = vista::render::memory_for(full, w.bake.format, effects, &w.desc, holes, source_holes);
     writeln!(
         out,
         "every node resident would take {} CPU / {} GPU",

@@ -383,6 +383,17 @@ impl WorldSpec {
         (&self.effects, &self.holes)
     }
 
+    /// Whether the source may cut holes of its own, from its header: a
+    /// GeoTIFF that declares a no-data value (its pixels are not read).
+    pub fn may_have_source_holes(&self) -> Result<bool> {
+        Ok(match &self.source {
+            SpecSource::Heightmap { path, kind: MapKind::Tiff, .. } => {
+                GeoTiffSource::read_header(path).map_err(input_error)?.no_data.is_some()
+            }
+            _ => false,
+        })
+    }
+
     /// The plan of `region` (`None`: the whole world).
     pub fn plan(&self, region: Option<[f64; 4]>) -> WorldPlan {
         WorldPlan::new(&self.desc, region).with_format(self.bake.format)
