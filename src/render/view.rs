@@ -88,7 +88,7 @@ impl View {
             return bad(format!(
                 "field of view {} degrees is outside {MIN_FOV_DEG:e}..={MAX_FOV_DEG}, where the projection is exact \
                  (`vista stability --cases 11`)",
-                self.fov_y_deg
+                if self.fov_y_deg.abs() < 1e-3 { format!("{:e}", self.fov_y_deg) } else { self.fov_y_deg.to_string() }
             ));
         }
         if self.size[0] == 0 || self.size[1] == 0 {

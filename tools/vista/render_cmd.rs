@@ -208,7 +208,8 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
         near_m: DEFAULT_NEAR_M,
     };
     if let Err(e) = view.validate() {
-        bail!("{}", e.to_string().replace("field of view", "--fov").replace("target error", "--target-error"));
+        let message = e.to_string().replace("field of view", "--fov").replace("target error", "--target-error");
+        bail!("{}", message.trim_start_matches("bad input: "));
     }
     let p = view.camera.position_m;
     if p.iter().any(|v| v.abs() > PROVEN_RANGE_M) {

@@ -283,7 +283,7 @@ impl WorldArgs {
                 let desc = WorldDesc { extent_m, height_range_m, spacing_m, lod_count, ..WorldDesc::default() };
                 check_desc(&desc, &names)?;
                 if clamp {
-                    bail!("{clamp_name} clamps an EXR height map's data; the procedural world has none: drop it");
+                    bail!("{clamp_name} clamps an EXR or GeoTIFF height map's data; the procedural world has none: drop it");
                 }
                 (desc, SpecSource::Procedural { seed })
             }
@@ -301,8 +301,8 @@ impl WorldArgs {
                 if clamp && kind == MapKind::Png {
                     // (a GeoTIFF's data is clamped like an EXR's)
                     bail!(
-                        "{clamp_name} clamps an EXR height map's data; {} is a PNG, whose 0..65535 always maps into \
-                         its height range: drop it",
+                        "{clamp_name} clamps an EXR or GeoTIFF height map's data; {} is a PNG, whose 0..65535 always \
+                         maps into its height range: drop it",
                         path.display()
                     );
                 }
