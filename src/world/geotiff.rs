@@ -245,22 +245,7 @@ fn fill_no_data<T: Copy>(
         // Each hole takes the nearer valid sample of its row.
         for i in 0..w {
             if hole(j * w + i) {
-                let p = valid.partition_point(|&v| v < i);
-                let right = valid.get(p).copied();
-                let left = p.checked_sub(1).map(|q| valid[q]);
-                let from = match (left, right) {
-                    (Some(l), Some(r)) => {
-                        if i - l <= r - i {
-                            l
-                        } else {
-                            r
-                        }
-                    }
-                    (Some(l), None) => l,
-                    (None, Some(r)) => r,
-                    (None, None) => unreachable!("the row has a valid sample"),
-                };
-                row[i] = row[from];
+                row[i] = row[nearest(&valid, i)];
             }
         }
     }
@@ -269,27 +254,24 @@ fn fill_no_data<T: Copy>(
     }
     // Rows without a valid sample copy the nearest row that has one.
     for j in 0..values.len() / w {
-        let p = valid_rows.partition_point(|&v| v < j);
-        if valid_rows.get(p) == Some(&j) {
-            continue;
+        if valid_rows.binary_search(&j).is_err() {
+            let from = nearest(&valid_rows, j);
+            values.copy_within(from * w..from * w + w, j * w);
         }
-        let below = valid_rows.get(p).copied();
-        let above = p.checked_sub(1).map(|q| valid_rows[q]);
-        let from = match (above, below) {
-            (Some(a), Some(b)) => {
-                if j - a <= b - j {
-                    a
-                } else {
-                    b
-                }
-            }
-            (Some(a), None) => a,
-            (None, Some(b)) => b,
-            (None, None) => unreachable!("some row has a valid sample"),
-        };
-        values.copy_within(from * w..from * w + w, j * w);
     }
     Ok(Some(mask))
+}
+
+/// The element of `sorted` (ascending, not empty) nearest to `x`, the
+/// lower on a tie.
+fn nearest(sorted: &[usize], x: usize) -> usize {
+    let p = sorted.partition_point(|&v| v < x);
+    match (p.checked_sub(1).map(|q| sorted[q]), sorted.get(p)) {
+        (Some(l), Some(&r)) if r - x < x - l => r,
+        (Some(l), _) => l,
+        (None, Some(&r)) => r,
+        (None, None) => unreachable!("nearest in an empty list"),
+    }
 }
 
 fn sample_kind(r: &DecodingResult) -> &'static str {

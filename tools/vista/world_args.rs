@@ -639,26 +639,33 @@ fn open_heightmap(
         (MapKind::Png, None) => unreachable!("heightmap_kind refuses a PNG without a height range"),
         (MapKind::Tiff, _) => {
             let source = GeoTiffSource::open(path, geometry.extent_m)?;
-            let range = match height_range {
-                Some(given) => checked_range(source.grid(), path, given, clamp)?,
-                None => auto_range(source.grid()),
-            };
-            let desc = WorldDesc { height_range_m: range, ..geometry }.with_posts(source.grid().pixel_size_m());
-            desc.validate().with_context(|| format!("height range of {}", path.display()))?;
-            Ok((desc, Arc::new(source)))
+            Ok((ranged(source.grid(), path, geometry, height_range, clamp)?, Arc::new(source)))
         }
         (MapKind::Exr, _) => {
             let source = ExrSource::open(path, geometry.extent_m)?;
-            let range = match height_range {
-                Some(given) => checked_range(source.grid(), path, given, clamp)?,
-                None => auto_range(source.grid()),
-            };
-            let desc = WorldDesc { height_range_m: range, ..geometry }.with_posts(source.grid().pixel_size_m());
-            // The geometry was checked; only the range is new here.
-            desc.validate().with_context(|| format!("height range of {}", path.display()))?;
-            Ok((desc, Arc::new(source)))
+            Ok((ranged(source.grid(), path, geometry, height_range, clamp)?, Arc::new(source)))
         }
     }
+}
+
+/// `geometry` with the height range of a map whose data decide it (EXR,
+/// GeoTIFF): the given one, checked against the data, or one fitted to
+/// them; its posts on the map's.
+fn ranged(
+    grid: &GridSource,
+    path: &Path,
+    geometry: WorldDesc,
+    height_range: Option<GivenRange>,
+    clamp: bool,
+) -> Result<WorldDesc> {
+    let range = match height_range {
+        Some(given) => checked_range(grid, path, given, clamp)?,
+        None => auto_range(grid),
+    };
+    let desc = WorldDesc { height_range_m: range, ..geometry }.with_posts(grid.pixel_size_m());
+    // The geometry was checked; only the range is new here.
+    desc.validate().with_context(|| format!("height range of {}", path.display()))?;
+    Ok(desc)
 }
 
 /// The user's range for an EXR, refused if it would clip pixels (heights
