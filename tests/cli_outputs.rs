@@ -158,3 +158,24 @@ fn a_render_whose_cache_cannot_be_written_says_so_once_and_goes_on() {
     }
     let _ = std::fs::remove_dir_all(&root);
 }
+
+#[test]
+fn a_json_report_on_a_full_disk_keeps_the_previous_one() {
+    let root = temp_dir("json");
+    let trees = root.join("trees");
+    let json = root.join("report.json");
+    std::fs::write(&json, "previous").unwrap();
+    for args in [["memory", "--json"], ["bake", "--dry-run"]] {
+        let mut args = args.to_vec();
+        if args[0] == "bake" {
+            args.push("--json");
+        }
+        args.push(json.to_str().unwrap());
+        let run = vista(&args, Some(0), &trees);
+        assert_full_disk_error(&run, &root, &format!("{args:?}"));
+        let files = snapshot(&root);
+        assert!(temporaries(&files).is_empty(), "{args:?}: {:?}", temporaries(&files));
+        assert_eq!(std::fs::read_to_string(&json).unwrap(), "previous", "{args:?}");
+    }
+    let _ = std::fs::remove_dir_all(&root);
+}

@@ -207,3 +207,96 @@ fn the_command_line_takes_extent_and_origin_from_the_tags() {
     assert!(out.status.success() && !err.contains("outside the world"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A tiled little-endian TIFF written by hand (the `tiff` crate's encoder
+/// writes strips only): 16-bit samples, uncompressed, 16 x 16 tiles, the
+/// right and bottom tiles partly outside the image as TIFF pads them.
+fn write_tiled(path: &Path, w: u32, h: u32, data: &[u16], scale: [f64; 2]) {
+    const TILE: u32 = 16;
+    let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let mut tiles: Vec<u8> = Vec::new();
+    let mut offsets = Vec::new();
+    // Header (8 bytes), then the tiles, then the IFD.
+    for j in 0..ty {
+        for i in 0..tx {
+            offsets.push(8 + tiles.len() as u32);
+            for y in 0..TILE {
+                for x in 0..TILE {
+                    let (px, py) = (i * TILE + x, j * TILE + y);
+                    let v = if px < w && py < h { data[(py * w + px) as usize] } else { 0 };
+                    tiles.extend(v.to_le_bytes());
+                }
+            }
+        }
+    }
+    let tile_bytes = TILE * TILE * 2;
+    let n_tiles = offsets.len() as u32;
+    let extra_start = 8 + tiles.len() as u32;
+    // Out-of-line values after the tiles: offsets, byte counts, pixel scale.
+    let mut extra: Vec<u8> = Vec::new();
+    let offsets_at = extra_start;
+    offsets.iter().for_each(|o| extra.extend(o.to_le_bytes()));
+    let counts_at = extra_start + extra.len() as u32;
+    (0..n_tiles).for_each(|_| extra.extend(tile_bytes.to_le_bytes()));
+    let scale_at = extra_start + extra.len() as u32;
+    [scale[0], scale[1], 0.0f64].iter().for_each(|v| extra.extend(v.to_le_bytes()));
+    let ifd_at = extra_start + extra.len() as u32;
+    // (tag, type, count, value): type 3 short, 4 long, 12 double.
+    let entries: [(u16, u16, u32, u32); 11] = [
+        (256, 4, 1, w),
+        (257, 4, 1, h),
+        (258, 3, 1, 16),
+        (259, 3, 1, 1),
+        (262, 3, 1, 1),
+        (277, 3, 1, 1),
+        (322, 4, 1, TILE),
+        (323, 4, 1, TILE),
+        (324, 4, n_tiles, offsets_at),
+        (325, 4, n_tiles, counts_at),
+        (33550, 12, 3, scale_at),
+    ];
+    let mut out: Vec<u8> = b"II*\0".to_vec();
+    out.extend(ifd_at.to_le_bytes());
+    out.extend(&tiles);
+    out.extend(&extra);
+    out.extend((entries.len() as u16).to_le_bytes());
+    for (tag, kind, count, value) in entries {
+        out.extend(tag.to_le_bytes());
+        out.extend(kind.to_le_bytes());
+        out.extend(count.to_le_bytes());
+        // A single short sits in the first two bytes of the value field.
+        if kind == 3 && count == 1 {
+            out.extend((value as u16).to_le_bytes());
+            out.extend([0, 0]);
+        } else {
+            out.extend(value.to_le_bytes());
+        }
+    }
+    out.extend(0u32.to_le_bytes());
+    std::fs::write(path, out).unwrap();
+}
+
+#[test]
+fn a_tiled_geotiff_reads_as_the_same_heights_as_a_stripped_one() {
+    let dir = temp_dir("tiled");
+    // 40 x 24: 3 x 2 tiles of 16, the last column and row partial.
+    let (w, h) = (40, 24);
+    let data = heights(w, h);
+    let (tiled, stripped) = (dir.join("tiled.tif"), dir.join("stripped.tif"));
+    write_tiled(&tiled, w, h, &data, [30.0, 20.0]);
+    write_tiff::<colortype::Gray16>(&stripped, w, h, &data, &TAGS);
+    let info = GeoTiffSource::read_header(&tiled).unwrap();
+    assert_eq!(info.extent_m(), Some([1200.0, 480.0]));
+    let extent = info.extent_m().unwrap();
+    let (a, b) = (GeoTiffSource::open(&tiled, extent).unwrap(), GeoTiffSource::open(&stripped, extent).unwrap());
+    for k in 0..(w * h) as usize {
+        let (i, j) = ((k % w as usize) as f64, (k / w as usize) as f64);
+        let (x, y) = ((i + 0.5) * 30.0, 480.0 - (j + 0.5) * 20.0);
+        assert_eq!(a.sample(x, y), f32::from(data[k]), "tiled pixel {k}");
+        assert_eq!(b.sample(x, y), f32::from(data[k]), "stripped pixel {k}");
+    }
+    // A plan times on the first tile (16 x 16).
+    let corner = GeoTiffSource::open_corner(&tiled, extent).unwrap();
+    assert_eq!((corner.grid().width(), corner.grid().height()), (16, 16));
+    let _ = std::fs::remove_dir_all(&dir);
+}
