@@ -46,18 +46,18 @@ pub fn check_out_dir(path: &Path, option: &str, writes: &str) -> Result<()> {
             return refuse(format!("{option} {shown} looks like a .{ext} file; {option} takes a folder ({writes})"));
         }
     }
-    // Creating a file is the one test of writability that holds for every
-    // user (root included) and file system.
     let existing = path.ancestors().find(|a| a.is_dir()).unwrap_or(Path::new("."));
     let existing = if existing.as_os_str().is_empty() { Path::new(".") } else { existing };
-    let probe = existing.join(format!(".vista-write-test-{}", std::process::id()));
-    match std::fs::write(&probe, b"") {
-        Ok(()) => {
-            let _ = std::fs::remove_file(&probe);
-            Ok(())
-        }
-        Err(e) => refuse(format!("{option} {shown} is not writable: {e}")),
-    }
+    writable(existing).or_else(|e| refuse(format!("{option} {shown} is not writable: {e}")))
+}
+
+/// Creating a file is the one test of writability that holds for every
+/// user (root included) and file system.
+fn writable(dir: &Path) -> std::io::Result<()> {
+    let probe = dir.join(format!(".vista-write-test-{}", std::process::id()));
+    std::fs::write(&probe, b"")?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }
 
 /// `path` (given as `option`) is one file vista writes: not a folder, and
@@ -71,14 +71,8 @@ pub fn check_out_file(path: &Path, option: &str) -> Result<()> {
     if !parent.is_dir() {
         return refuse(format!("{option} {shown}: the folder {} does not exist", parent.display()));
     }
-    let probe = parent.join(format!(".vista-write-test-{}", std::process::id()));
-    match std::fs::write(&probe, b"") {
-        Ok(()) => {
-            let _ = std::fs::remove_file(&probe);
-            Ok(())
-        }
-        Err(e) => refuse(format!("{option} {shown}: the folder {} is not writable: {e}", parent.display())),
-    }
+    writable(parent)
+        .or_else(|e| refuse(format!("{option} {shown}: the folder {} is not writable: {e}", parent.display())))
 }
 
 #[cfg(test)]
