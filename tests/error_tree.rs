@@ -89,6 +89,7 @@ fn errors_and_bounds_are_monotone_over_whole_trees() {
                     let (i, j) = (k % 8 + 8 * cx, k / 8 + 8 * cy);
                     let pk = (j / 2) * 8 + i / 2;
                     assert!(e.patch_m[pk][0] >= cp[0], "{id} patch {pk} < {child} patch {k}");
+                    assert!(e.patch_max_m[pk][0] >= c.patch_max_m[k][0], "{id} patch {pk} max < {child} patch {k}");
                     assert!(e.bounds[pk][0] <= cb[0] && e.bounds[pk][1] >= cb[1], "{id} bounds");
                     checked += 1;
                 }
@@ -145,6 +146,8 @@ fn no_triangle_lies_farther_from_the_finest_surface_than_its_patch_error() {
                 // The finest surface's vertices: a quarter of a LOD-0 sample apart.
                 let n = 16 * step * 4;
                 let mut worst = 0f64;
+                // Exact gap at every finest vertex, row-major over (n + 1)^2.
+                let mut gaps = vec![0f64; (n + 1) * (n + 1)];
                 let (ox, oy) = (id.x as usize * NODE_QUADS as usize * step, id.y as usize * NODE_QUADS as usize * step);
                 for b in 0..=n {
                     for a in 0..=n {
@@ -160,14 +163,35 @@ fn no_triangle_lies_farther_from_the_finest_surface_than_its_patch_error() {
                         let slash = (qx + qy) % 2 == 0;
                         let p = diamond(corners, lx - qx as f64, ly - qy as f64, slash);
                         worst = worst.max((p - f).abs());
+                        gaps[b * (n + 1) + a] = (p - f).abs();
                         let z = world.decode_height(e.bounds[patch][0]) as f64 - 1e-9;
                         let zmax = world.decode_height(e.bounds[patch][1]) as f64 + 1e-9;
                         assert!((z..=zmax).contains(&f), "{id} patch {patch}: {f} outside {z}..{zmax}");
                     }
                 }
-                let stored = f64::from(e.patch_m[patch][0]);
+                let stored = f64::from(e.patch_max_m[patch][0]);
                 assert!(worst <= stored + 1e-4, "{id} patch {patch}: {worst} m > stored {stored} m");
-                println!("{id} patch {patch}: brute force {worst:.4} m, stored {stored:.4} m");
+                // The selection error: at least half the largest, and at
+                // most 1 % of the patch's LOD-0 quads reach above it.
+                let sel = f64::from(e.patch_m[patch][0]);
+                assert!(sel >= 0.5 * stored && sel <= stored, "{id} patch {patch}: selection {sel}, max {stored}");
+                let quads = n / 4;
+                let above = (0..quads * quads)
+                    .filter(|&q| {
+                        let (qx, qy) = (q % quads, q / quads);
+                        let m = (0..=4)
+                            .flat_map(|b| (0..=4).map(move |a| (4 * qx + a, 4 * qy + b)))
+                            .map(|(a, b)| gaps[b * (n + 1) + a])
+                            .fold(0.0, f64::max);
+                        m > sel + 1e-4
+                    })
+                    .count();
+                assert!(
+                    above * 100 <= quads * quads,
+                    "{id} patch {patch}: {above} of {} quads above {sel}",
+                    quads * quads
+                );
+                println!("{id} patch {patch}: brute force {worst:.4} m, stored {stored:.4} m, selection {sel:.4} m");
             }
         }
     }

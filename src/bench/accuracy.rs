@@ -76,8 +76,9 @@ pub struct AccuracyPoint {
     pub family: String,
     pub setting: String,
     pub target_error_px: f32,
-    /// The error bound the frame achieved (px): the largest projected error
-    /// of any drawn patch; above the target when the slot budget could not
+    /// The error bound the frame achieved (px): the largest projected
+    /// selection error of any drawn patch (p99 within it, the largest error
+    /// within twice it); above the target when the slot budget could not
     /// meet it.
     pub bound_px: f32,
     /// Whether the target's promise held: `None` where the bound exceeds the

@@ -46,7 +46,7 @@ pub struct AccuracyError {
 }
 
 /// The `q`-quantile of `v` (sorted in place); 0 when empty.
-fn quantile(v: &mut [f64], q: f64) -> f64 {
+pub fn quantile(v: &mut [f64], q: f64) -> f64 {
     if v.is_empty() {
         return 0.0;
     }

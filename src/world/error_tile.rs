@@ -16,12 +16,14 @@
 //!   at every sample (exact for the same reason), plus the quad's LOD-0
 //!   gap: the triangle inequality bounds level k against the finest surface.
 //!
-//! Patches then take the largest value of their quads, and the tree is
-//! made monotone by construction: a patch's error and height range cover
-//! those of the four finer patches under it.
+//! Patches then take the largest value of their quads and a bound of their
+//! 99th percentile ([`super::error_quantile`]), and the tree is made
+//! monotone by construction: a patch's errors and height range cover those
+//! of the four finer patches under it.
 
 use rayon::prelude::*;
 
+use super::error_quantile::Histogram;
 use super::layout::{NodeId, WorldDesc, NODE_QUADS, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS};
 use super::source::HeightSource;
 
@@ -74,12 +76,19 @@ pub struct LevelPatches {
     pub error: Vec<f32>,
     /// LOD 0 only: error of the 2x refinement; 0 elsewhere.
     pub refine: Vec<f32>,
+    /// Upper bounds of the 99th percentile of `error` and `refine` over the
+    /// patch's LOD-0 quads.
+    pub error_q: Vec<f32>,
+    pub refine_q: Vec<f32>,
     /// LOD-0 representation error (LOD 0 against the finest surface), the
     /// largest over the patch's area.
     pub repr: Vec<f32>,
     /// Height range of the finest surface over the patch, metres.
     pub lo: Vec<f64>,
     pub hi: Vec<f64>,
+    /// While a root is computed: the error histograms of patches larger
+    /// than a block, summed over their blocks (empty otherwise).
+    pub partial: Vec<Histogram>,
 }
 
 impl LevelPatches {
@@ -89,6 +98,9 @@ impl LevelPatches {
             side,
             error: vec![0.0; n],
             refine: vec![0.0; n],
+            error_q: vec![0.0; n],
+            refine_q: vec![0.0; n],
+            partial: Vec::new(),
             repr: vec![0.0; n],
             lo: vec![f64::INFINITY; n],
             hi: vec![f64::NEG_INFINITY; n],
@@ -121,6 +133,11 @@ pub fn compute_root(world: &WorldDesc, source: &dyn HeightSource, root: NodeId) 
             merge(&mut levels[k], part, [b[0] * block, b[1] * block], (PATCH_QUADS as usize) << k);
         }
     }
+    for l in &mut levels {
+        for (p, h) in std::mem::take(&mut l.partial).iter().enumerate() {
+            l.error_q[p] = h.quantile(l.error[p]);
+        }
+    }
     make_monotone(&mut levels);
     levels
 }
@@ -141,6 +158,14 @@ fn merge(into: &mut LevelPatches, part: &LevelPatches, offset: [usize; 2], patch
             let (s, d) = (j * part.side + i, (base[1] + j) * into.side + base[0] + i);
             into.error[d] = into.error[d].max(part.error[s]);
             into.refine[d] = into.refine[d].max(part.refine[s]);
+            into.error_q[d] = into.error_q[d].max(part.error_q[s]);
+            into.refine_q[d] = into.refine_q[d].max(part.refine_q[s]);
+            if let Some(h) = part.partial.get(s) {
+                if into.partial.is_empty() {
+                    into.partial = vec![Histogram::default(); into.error.len()];
+                }
+                into.partial[d].merge(h);
+            }
             into.repr[d] = into.repr[d].max(part.repr[s]);
             into.lo[d] = into.lo[d].min(part.lo[s]);
             into.hi[d] = into.hi[d].max(part.hi[s]);
@@ -148,11 +173,12 @@ fn merge(into: &mut LevelPatches, part: &LevelPatches, offset: [usize; 2], patch
     }
 }
 
-/// Each patch covers the four finer patches under it: error, LOD-0
+/// Each patch covers the four finer patches under it: errors, LOD-0
 /// representation error and height range; LOD 0 covers its refinement.
 fn make_monotone(levels: &mut [LevelPatches]) {
     for p in 0..levels[0].error.len() {
         levels[0].error[p] = levels[0].error[p].max(levels[0].refine[p]);
+        levels[0].error_q[p] = levels[0].error_q[p].max(levels[0].refine_q[p]);
     }
     for k in 1..levels.len() {
         let (fine, coarse) = levels.split_at_mut(k);
@@ -163,6 +189,7 @@ fn make_monotone(levels: &mut [LevelPatches]) {
                 for c in 0..4 {
                     let s = (2 * j + c / 2) * fine.side + 2 * i + c % 2;
                     coarse.error[d] = coarse.error[d].max(fine.error[s]);
+                    coarse.error_q[d] = coarse.error_q[d].max(fine.error_q[s]);
                     coarse.repr[d] = coarse.repr[d].max(fine.repr[s]);
                     coarse.lo[d] = coarse.lo[d].min(fine.lo[s]);
                     coarse.hi[d] = coarse.hi[d].max(fine.hi[s]);
@@ -220,6 +247,7 @@ impl Block {
         // 4 rows qy - 1 ..= qy + 2 around the current quad row (a window).
         let mut xrows: Vec<Vec<f64>> = (0..4).map(|k| self.x_row(k)).collect();
         let mut fine = vec![[0.0; 5]; w4];
+        let mut hists = vec![[Histogram::default(), Histogram::default()]; level0.error.len()];
         for qy in 0..quads {
             if qy > 0 {
                 xrows.rotate_left(1);
@@ -236,9 +264,15 @@ impl Block {
                 let p = (qy / patch0) * level0.side + qx / patch0;
                 level0.error[p] = level0.error[p].max(q.gap0 as f32);
                 level0.refine[p] = level0.refine[p].max(q.gap1 as f32);
+                hists[p][0].add(q.gap0 as f32);
+                hists[p][1].add(q.gap1 as f32);
                 level0.lo[p] = level0.lo[p].min(q.lo);
                 level0.hi[p] = level0.hi[p].max(q.hi);
             }
+        }
+        for (p, [h0, h1]) in hists.iter().enumerate() {
+            level0.error_q[p] = h0.quantile(level0.error[p]);
+            level0.refine_q[p] = h1.quantile(level0.refine[p]);
         }
         level0.repr.clone_from(&level0.error);
         let mut out = vec![level0];
@@ -247,13 +281,24 @@ impl Block {
             self.level_deviation(k, &mut dev);
             let patch_q = patch0 << k;
             let mut level = LevelPatches::new(quads.div_ceil(patch_q));
+            let mut hists = vec![Histogram::default(); level.error.len()];
             for qy in 0..quads {
                 for qx in 0..quads {
                     let d = |i: usize, j: usize| dev[j * (quads + 1) + i];
                     let m = d(qx, qy).max(d(qx + 1, qy)).max(d(qx, qy + 1)).max(d(qx + 1, qy + 1));
                     let p = (qy / patch_q) * level.side + qx / patch_q;
-                    level.error[p] = level.error[p].max(m + gap0[qy * quads + qx]);
+                    let e = m + gap0[qy * quads + qx];
+                    level.error[p] = level.error[p].max(e);
+                    hists[p].add(e);
                 }
+            }
+            if patch_q <= quads {
+                for (p, h) in hists.iter().enumerate() {
+                    level.error_q[p] = h.quantile(level.error[p]);
+                }
+            } else {
+                // Part of a patch larger than the block: summed in compute_root.
+                level.partial = hists;
             }
             out.push(level);
         }

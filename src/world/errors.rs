@@ -3,11 +3,17 @@
 //! diamond-split triangles of its own samples) and the finest surface vista
 //! can draw (the Catmull-Rom surface of the LOD-0 samples, tessellated 4x
 //! denser than LOD 0: where the refinement below the samples stops), over
-//! the patch's whole area. Conservative (an upper bound, from exact
-//! per-sample gaps and the triangle inequality; [`super::error_tile`]) and
-//! monotone by construction: a patch's error and height range cover those
-//! of every finer patch under it, so a test that passes for a patch passes
-//! for all its descendants.
+//! the patch's whole area, and a bound of its 99th percentile over the
+//! patch's LOD-0 quads. Conservative (upper bounds, from exact per-sample
+//! gaps and the triangle inequality; [`super::error_tile`]) and monotone by
+//! construction: a patch's errors and height range cover those of every
+//! finer patch under it, so a test that passes for a patch passes for all
+//! its descendants.
+//!
+//! What the target error bounds is the *selection error*, the larger of the
+//! 99th percentile and half the largest error ([`selection_error`]): a patch
+//! drawn within a target T px has 99 % of its area within T and all of it
+//! within 2 T, which is the promise `vista bench accuracy` checks.
 //!
 //! A root's numbers need every LOD-0 sample under it, so they are computed
 //! a root at a time (in parallel blocks), kept in memory and, with a cache
@@ -34,19 +40,29 @@ use super::source::HeightSource;
 
 const MAGIC: [u8; 4] = *b"VERR";
 /// Bumped whenever the tile layout or the error definition changes.
-const TILE_VERSION: u32 = 1;
+const TILE_VERSION: u32 = 2;
 
 /// One root's patches of every level (index = LOD).
 type Tile = Arc<Vec<LevelPatches>>;
 
+/// The number a target bounds, from a patch's largest error and its 99th
+/// percentile: both halves of the promise (p99 within the target, the
+/// largest within twice it) hold where it does.
+pub fn selection_error(max_m: f32, p99_m: f32) -> f32 {
+    p99_m.max(0.5 * max_m)
+}
+
 /// One node's numbers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeErrors {
-    /// Largest patch error (m).
+    /// Largest patch selection error (m).
     pub node_m: f32,
-    /// Per patch: [error drawn at this node's level, error drawn 2x
-    /// refined below the samples (LOD 0 only, else 0)], metres.
+    /// Per patch: the selection errors ([`selection_error`]) drawn at this
+    /// node's level and drawn 2x refined below the samples (LOD 0 only,
+    /// else 0), metres. What the renderer reads.
     pub patch_m: Vec<[f32; 2]>,
+    /// Per patch: the largest errors, as `patch_m`.
+    pub patch_max_m: Vec<[f32; 2]>,
     /// Per patch: the finest surface's height range, R16 (rounded outwards
     /// by one step for the GPU's f32 evaluation).
     pub bounds: Vec<[u16; 2]>,
@@ -160,17 +176,21 @@ impl ErrorTree {
         let (mut node_m, mut repr_m) = (0f32, 0f32);
         let l = &tile[usize::from(id.lod)];
         let mut patch_m = Vec::with_capacity(PATCHES_PER_NODE);
+        let mut patch_max_m = Vec::with_capacity(PATCHES_PER_NODE);
         let mut bounds = Vec::with_capacity(PATCHES_PER_NODE);
         for p in node_patches(&tile, root, id) {
-            patch_m.push([l.error[p], if id.lod == 0 { l.refine[p] } else { 0.0 }]);
-            node_m = node_m.max(l.error[p]);
+            let (refine, refine_q) = if id.lod == 0 { (l.refine[p], l.refine_q[p]) } else { (0.0, 0.0) };
+            let sel = selection_error(l.error[p], l.error_q[p]);
+            patch_m.push([sel, selection_error(refine, refine_q)]);
+            patch_max_m.push([l.error[p], refine]);
+            node_m = node_m.max(sel);
             repr_m = repr_m.max(l.repr[p]);
             let steps = |z: f64| (z - f64::from(range[0])) / step;
             let lo = (steps(l.lo[p]).floor() - 1.0).clamp(0.0, 65535.0) as u16;
             let hi = (steps(l.hi[p]).ceil() + 1.0).clamp(0.0, 65535.0) as u16;
             bounds.push([lo, hi]);
         }
-        Ok(NodeErrors { node_m, patch_m, bounds, repr_m })
+        Ok(NodeErrors { node_m, patch_m, patch_max_m, bounds, repr_m })
     }
 
     /// Writes `node`'s errors and bounds into it: `max_error_m`,
@@ -254,12 +274,12 @@ fn node_key(id: NodeId) -> u64 {
     Fnv64::new().u64(u64::from(id.lod)).u64(u64::from(id.x)).u64(u64::from(id.y)).finish()
 }
 
-/// Little-endian: per level, every patch's error, refine, repr (f32) and
-/// lo, hi (f64).
+/// Little-endian: per level, every patch's error, refine, error_q,
+/// refine_q, repr (f32) and lo, hi (f64).
 fn encode_levels(levels: &[LevelPatches]) -> Vec<u8> {
     let mut out = Vec::new();
     for l in levels {
-        for v in l.error.iter().chain(&l.refine).chain(&l.repr) {
+        for v in l.error.iter().chain(&l.refine).chain(&l.error_q).chain(&l.refine_q).chain(&l.repr) {
             out.extend_from_slice(&v.to_le_bytes());
         }
         for v in l.lo.iter().chain(&l.hi) {
@@ -283,12 +303,12 @@ fn decode_levels(raw: &[u8], root: NodeId) -> Option<Vec<LevelPatches>> {
         let mut f32s = || -> Option<Vec<f32>> {
             Some(take(4 * n)?.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect())
         };
-        let (error, refine, repr) = (f32s()?, f32s()?, f32s()?);
+        let (error, refine, error_q, refine_q, repr) = (f32s()?, f32s()?, f32s()?, f32s()?, f32s()?);
         let mut f64s = || -> Option<Vec<f64>> {
             Some(take(8 * n)?.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect())
         };
         let (lo, hi) = (f64s()?, f64s()?);
-        levels.push(LevelPatches { side, error, refine, repr, lo, hi });
+        levels.push(LevelPatches { side, error, refine, error_q, refine_q, repr, lo, hi, partial: Vec::new() });
     }
     (pos == raw.len()).then_some(levels)
 }

@@ -6,6 +6,7 @@ mod bake;
 mod cache;
 mod cones;
 mod error;
+mod error_quantile;
 mod error_tile;
 mod errors;
 mod exr_source;
@@ -33,7 +34,7 @@ pub use cache::{estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, Mis
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
 pub use error_tile::diamond;
-pub use errors::{ErrorTree, NodeErrors, PreparedErrors};
+pub use errors::{selection_error, ErrorTree, NodeErrors, PreparedErrors};
 pub use exr_source::{write_height_exr, ExrSource};
 pub use geotiff::{GeoTiffInfo, GeoTiffSource};
 pub use holes::{holes_hash, Hole};

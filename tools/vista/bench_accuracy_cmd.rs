@@ -216,8 +216,8 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         );
     }
     println!(
-        "bound: the largest projected error of any drawn patch (px; above the target when the slot budget could not \
-         meet it); tri/px: triangles drawn per screen pixel; want+: drawn nodes the camera wants finer whose children \
+        "bound: the largest projected selection error of any drawn patch (px: 99 % of each patch within it, all of it \
+         within twice it; above the target when the slot budget could not meet it); tri/px: triangles drawn per screen pixel; want+: drawn nodes the camera wants finer whose children \
          are not resident; d: relative depth error; silh: pixels terrain in one image only; geo: vertical error to \
          the source surface projected on screen (px), split into lod (drawn surface vs the finest surface vista can \
          draw: what the target bounds) and repr (finest surface vs the source: what no LOD choice removes); PSNR, \
