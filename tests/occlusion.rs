@@ -92,12 +92,12 @@ fn occlusion_changes_no_pixel_over_100_poses_with_teleports_and_turns() {
             phase2 += u64::from(k.drawn_phase2);
         }
         // Not vacuous: the pyramid culled patches and phase 2 drew some
-        // (measured 363 culled and 2822 drawn in phase 2 on lavapipe at
-        // 0.5 px; floors a little below). Per-patch LOD draws coarse
-        // ancestors' patches where they meet the target: fewer, larger
-        // patches, which a ridge hides whole less often (997 culled when
-        // every patch was its node's).
-        assert!(culled > 300, "occlusion culled only {culled} patches over 100 poses");
+        // (measured 292 culled on lavapipe at 0.5 px; floors below). Per-patch
+        // LOD draws coarse ancestors' patches where they meet the target:
+        // fewer, larger patches, which a ridge hides whole less often (997
+        // culled when every patch was its node's, 363 when patches were
+        // chosen by their largest error, not the promise).
+        assert!(culled > 200, "occlusion culled only {culled} patches over 100 poses");
         assert!(phase2 > 100, "phase 2 drew only {phase2} patches over 100 poses");
     });
 }
