@@ -93,7 +93,7 @@ mod tests {
         values.iter().for_each(|&v| h.add(v));
         let q = h.quantile(1.0);
         // 990 of the 1000 values are <= 0.990.
-        assert!(q >= 0.990 && q <= 0.990 * 1.25, "{q}");
+        assert!((0.990..=0.990 * 1.25).contains(&q), "{q}");
         assert!(values.iter().filter(|&&v| v <= q).count() >= 990);
         // A few outliers do not move it; the largest caps it.
         let mut h = Histogram::default();
