@@ -1,15 +1,8 @@
 //! Baking node payloads from a height source.
 
-use std::path::Path;
-use std::sync::Arc;
-use std::time::Instant;
-
 use rayon::prelude::*;
 
-use super::cache::{CacheOutcome, NodeCache};
 use super::cones::{fit_cone, patch_triangle_normals};
-use super::error::Result;
-use super::errors::PreparedErrors;
 use super::hash::Fnv64;
 use super::holes::Hole;
 use super::layout::{
@@ -18,8 +11,6 @@ use super::layout::{
 };
 use super::material_rules::MaterialRules;
 use super::payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
-use super::plan::{Limits, WorldPlan};
-use super::progress::{Progress, Reporter, Work};
 use super::source::HeightSource;
 use super::texels::{pack_normal, texel_index, PayloadFormat, TexelKind, ATLAS_BORDER, ATLAS_SIDE, ATLAS_TEXELS};
 
@@ -211,98 +202,4 @@ fn material_look(m: Material, slope_deg: f32) -> ([u8; 3], u8) {
     };
     let shade = 1.0 - 0.25 * (slope_deg / 90.0).clamp(0.0, 1.0);
     (rgb.map(|c| (c * shade * 255.0).round() as u8), smooth)
-}
-
-/// Valid nodes of every LOD overlapping `region` ([min x, min y, max x,
-/// max y] metres; `None` = everything), coarsest LOD first.
-pub fn nodes_in_region(world: &WorldDesc, region: Option<[f64; 4]>) -> Vec<NodeId> {
-    let mut out = Vec::new();
-    for lod in (0..world.lod_count as u8).rev() {
-        let s = world.node_size_m(lod);
-        let [gx, gy] = world.grid(lod);
-        let (x0, y0, x1, y1) = match region {
-            None => (0, 0, gx, gy),
-            Some(r) => {
-                let [ox, oy] = world.grid_origin_m;
-                let cell = |v: f64, o: f64, g: u32| (((v - o) / s).floor().max(0.0) as u32).min(g);
-                let end = |v: f64, o: f64, g: u32| (((v - o) / s).ceil().max(0.0) as u32).min(g);
-                (cell(r[0], ox, gx), cell(r[1], oy, gy), end(r[2], ox, gx), end(r[3], oy, gy))
-            }
-        };
-        for y in y0..y1 {
-            for x in x0..x1 {
-                out.push(NodeId::new(lod, x, y));
-            }
-        }
-    }
-    out
-}
-
-/// What a [`bake_world`] run did.
-#[derive(Clone, Debug, Default)]
-pub struct BakeStats {
-    /// Nodes per LOD (index = LOD).
-    pub nodes_per_lod: Vec<usize>,
-    /// Nodes baked now; the rest came from the cache.
-    pub baked: usize,
-    pub cached: usize,
-    pub seconds: f64,
-    /// Bytes of the node files of this region on disk.
-    pub bytes_on_disk: u64,
-    /// The error tree of the roots over the region, made before the nodes
-    /// (its seconds are not in `seconds`).
-    pub errors: PreparedErrors,
-    /// LOD-0 quads under those roots, inside the world: what the error
-    /// tree's time scales with.
-    pub error_quads: u64,
-}
-
-/// Bakes (or validates from cache) every valid node of every LOD
-/// overlapping `region` into `cache_dir`, in parallel.
-pub fn bake_world(
-    source: Arc<dyn HeightSource>,
-    world: &WorldDesc,
-    holes: &[Hole],
-    settings: &BakeSettings,
-    region: Option<[f64; 4]>,
-    cache_dir: &Path,
-    progress: impl Into<Progress>,
-) -> Result<BakeStats> {
-    let cache = NodeCache::with_settings(cache_dir, *world, source, holes.to_vec(), *settings)?;
-    // Before the node list, which grows with the world.
-    let plan = WorldPlan::new(world, region);
-    plan.check(&Limits::default())?;
-    let nodes = nodes_in_region(world, region);
-    // Each root's error tile first, so node bakes never wait for one.
-    let progress = progress.into();
-    let roots: Vec<NodeId> = nodes.iter().filter(|n| n.lod == world.root_lod()).copied().collect();
-    let errors = cache.errors().prepare_roots(roots, progress);
-    let start = Instant::now();
-    let bar = Reporter::new(progress, nodes.len() as u64, Work::Nodes);
-    let outcomes = nodes
-        .par_iter()
-        .map(|&id| {
-            let (_, outcome) = cache.get_or_bake(id)?;
-            bar.inc();
-            let bytes = std::fs::metadata(cache.path(id)).map(|m| m.len()).unwrap_or(0);
-            Ok((id, outcome, bytes))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    bar.finish();
-    let mut stats = BakeStats {
-        nodes_per_lod: vec![0; world.lod_count as usize],
-        errors,
-        error_quads: plan.error_quads,
-        ..BakeStats::default()
-    };
-    for (id, outcome, bytes) in outcomes {
-        stats.nodes_per_lod[id.lod as usize] += 1;
-        stats.bytes_on_disk += bytes;
-        match outcome {
-            CacheOutcome::Hit => stats.cached += 1,
-            CacheOutcome::Baked(_) => stats.baked += 1,
-        }
-    }
-    stats.seconds = start.elapsed().as_secs_f64();
-    Ok(stats)
 }

@@ -129,6 +129,26 @@ impl NodeCache {
         &self.errors
     }
 
+    /// The world, source, hole set and bake settings hashes every node file
+    /// carries: what a file must match to be read.
+    pub fn keys(&self) -> [u64; 4] {
+        self.keys
+    }
+
+    /// A node file's size and its trailing crc32 (of every byte before it),
+    /// read from its last four bytes: what a shard's manifest records.
+    pub fn file_summary(&self, id: NodeId) -> Result<(u64, u32)> {
+        use std::io::{Read, Seek, SeekFrom};
+        let path = self.path(id);
+        let mut file = std::fs::File::open(&path).map_err(|e| WorldError::io(&path, e))?;
+        let mut crc = [0u8; CRC_BYTES];
+        let len = file
+            .seek(SeekFrom::End(-(CRC_BYTES as i64)))
+            .and_then(|at| file.read_exact(&mut crc).map(|()| at + CRC_BYTES as u64))
+            .map_err(|e| WorldError::io(&path, e))?;
+        Ok((len, u32::from_le_bytes(crc)))
+    }
+
     /// `DIR/lod{k}/{x}_{y}.vnode`.
     pub fn path(&self, id: NodeId) -> PathBuf {
         self.dir.join(format!("lod{}", id.lod)).join(format!("{}_{}.vnode", id.x, id.y))

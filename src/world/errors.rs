@@ -77,8 +77,9 @@ pub struct ErrorTree {
     source: Arc<dyn HeightSource>,
     dir: Option<PathBuf>,
     keys: [u64; 2],
+    /// Tiles by node: the roots', and any made below them.
     roots: Mutex<HashMap<NodeId, Arc<OnceLock<Tile>>>>,
-    /// Root tiles computed by this tree (not read from the folder).
+    /// Tiles computed by this tree (not read from the folder).
     computed: AtomicUsize,
     /// A tile could not be cached: reported once, then not tried again.
     unwritable: AtomicBool,
@@ -96,6 +97,8 @@ pub struct PreparedErrors {
     pub roots: usize,
     /// Of those, read from the cache folder; the rest were computed.
     pub read: usize,
+    /// Tiles of nodes below the roots, computed ([`ErrorTree::prepare_tiles`]).
+    pub below_roots: usize,
     pub seconds: f64,
 }
 
@@ -138,23 +141,37 @@ impl ErrorTree {
     }
 
     /// As [`Self::prepare`], for the tiles of `roots` only.
-    pub fn prepare_roots(&self, mut roots: Vec<NodeId>, progress: Progress) -> PreparedErrors {
+    pub fn prepare_roots(&self, roots: Vec<NodeId>, progress: Progress) -> PreparedErrors {
+        assert!(roots.iter().all(|r| r.lod == self.world.root_lod()), "not roots: {roots:?}");
+        self.prepare_tiles(roots, progress)
+    }
+
+    /// As [`Self::prepare_roots`], where a tile may also be that of a node
+    /// below the roots (a shard's part of a root another shard makes): its
+    /// levels 0 up to its LOD over its area, the same numbers as its root's
+    /// tile there, kept in memory only (the folder holds whole roots). A
+    /// node whose root's tile is not made takes its numbers from such a
+    /// tile above it when one is made.
+    pub fn prepare_tiles(&self, mut tiles: Vec<NodeId>, progress: Progress) -> PreparedErrors {
+        assert!(tiles.iter().all(|r| self.world.is_valid(*r)), "tiles of nodes outside the world: {tiles:?}");
         let start = Instant::now();
-        if !roots.is_empty() {
-            let shift = std::process::id() as usize % roots.len();
-            roots.rotate_left(shift);
+        if !tiles.is_empty() {
+            let shift = std::process::id() as usize % tiles.len();
+            tiles.rotate_left(shift);
         }
         let before = self.computed.load(Ordering::Relaxed);
-        let bar = Reporter::new(progress, roots.len() as u64, Work::ErrorRoots);
-        roots.par_iter().with_max_len(1).for_each(|r| {
+        let bar = Reporter::new(progress, tiles.len() as u64, Work::ErrorRoots);
+        tiles.par_iter().with_max_len(1).for_each(|r| {
             self.tile(*r);
             bar.inc();
         });
         bar.finish();
         let computed = self.computed.load(Ordering::Relaxed) - before;
+        let (roots, below) = (tiles.len(), tiles.iter().filter(|t| t.lod < self.world.root_lod()).count());
         PreparedErrors {
-            roots: roots.len(),
-            read: roots.len().saturating_sub(computed),
+            roots: roots - below,
+            below_roots: below,
+            read: tiles.len().saturating_sub(computed),
             seconds: start.elapsed().as_secs_f64(),
         }
     }
@@ -169,8 +186,7 @@ impl ErrorTree {
         if !self.world.is_valid(id) {
             return Err(WorldError::InvalidNode(id));
         }
-        let root = self.root_of(id);
-        let tile = self.tile(root);
+        let (root, tile) = self.tile_for(id);
         let range = self.world.height_range_m;
         let step = f64::from(range[1] - range[0]) / 65535.0;
         let (mut node_m, mut repr_m) = (0f32, 0f32);
@@ -212,17 +228,34 @@ impl ErrorTree {
         NodeId::new(self.world.root_lod(), id.x >> shift, id.y >> shift)
     }
 
-    /// The root's tile: from memory, the cache folder, or computed now
-    /// (other threads asking for the same root wait for it).
+    /// The tile holding `id`'s numbers and the node it is of: its root's
+    /// if made, else a made tile of a node between them, else its root's,
+    /// made now.
+    fn tile_for(&self, id: NodeId) -> (NodeId, Tile) {
+        let root = self.root_of(id);
+        {
+            let tiles = self.roots.lock().unwrap_or_else(|e| e.into_inner());
+            let made = |n: NodeId| tiles.get(&n).and_then(|c| c.get()).map(Arc::clone);
+            let mut above = (id.lod..root.lod).map(|l| NodeId::new(l, id.x >> (l - id.lod), id.y >> (l - id.lod)));
+            if let Some(found) = made(root).map(|t| (root, t)).or_else(|| above.find_map(|n| Some((n, made(n)?)))) {
+                return found;
+            }
+        }
+        (root, self.tile(root))
+    }
+
+    /// A node's tile: from memory, the cache folder (roots only), or
+    /// computed now (other threads asking for the same tile wait for it).
     fn tile(&self, root: NodeId) -> Tile {
+        let is_root = root.lod == self.world.root_lod();
         let cell = Arc::clone(self.roots.lock().unwrap_or_else(|e| e.into_inner()).entry(root).or_default());
         Arc::clone(cell.get_or_init(|| {
-            if let Some(tile) = self.read(root) {
+            if let Some(tile) = is_root.then(|| self.read(root)).flatten() {
                 return Arc::new(tile);
             }
             let tile = compute_root(&self.world, self.source.as_ref(), root);
             self.computed.fetch_add(1, Ordering::Relaxed);
-            if !self.unwritable.load(Ordering::Relaxed) {
+            if is_root && !self.unwritable.load(Ordering::Relaxed) {
                 if let Err(e) = self.write(root, &tile) {
                     if !self.unwritable.swap(true, Ordering::Relaxed) {
                         log::warn!("{e}; the error tree is not cached");

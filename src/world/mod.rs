@@ -3,6 +3,7 @@
 //! here; the GPU layer consumes [`BakedNode`]s and [`ResidencyChanges`].
 
 mod bake;
+mod bake_run;
 mod cache;
 mod cones;
 mod error;
@@ -16,6 +17,7 @@ mod holes;
 mod input_file;
 mod layout;
 mod loader;
+mod manifest;
 mod material_rules;
 mod memory;
 mod payload;
@@ -25,11 +27,13 @@ mod procedural;
 mod progress;
 mod projection;
 mod resample_bound;
+mod shard;
 mod source;
 mod streaming;
 mod texels;
 
-pub use bake::{bake_node, bake_node_with, bake_world, nodes_in_region, BakeSettings, BakeStats};
+pub use bake::{bake_node, bake_node_with, BakeSettings};
+pub use bake_run::{bake_shard, bake_world, nodes_in_region, BakeStats, NodeFile};
 pub use cache::{estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache};
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
@@ -45,6 +49,9 @@ pub use layout::{
     PATCH_SAMPLES, SPLAT_RES,
 };
 pub use loader::{LoadFn, Loader};
+pub use manifest::{
+    manifest_path, verify, ForeignManifest, ShardManifest, ShardVerdict, VerifyReport, MANIFEST_VERSION,
+};
 pub use material_rules::MaterialRules;
 pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
 pub use payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
@@ -57,6 +64,7 @@ pub use procedural::ProceduralSource;
 pub use progress::{Progress, Reporter, Work};
 pub use projection::TraverseCamera;
 pub use resample_bound::RangeFit;
+pub use shard::{ShardError, ShardPlan, ShardSplit, MAX_SHARDS, UNITS_PER_SHARD};
 pub use source::{GridSource, HeightSource};
 pub use streaming::{
     Arrival, FailureCounts, LoadFate, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer,

@@ -318,8 +318,12 @@ impl WorldPlan {
         if x0 == x1 || y0 == y1 {
             return;
         }
-        let q = NODE_QUADS as usize;
         let root = self.world.root_lod();
+        // A block spans at least one quad of the root level, as the tree's
+        // blocks do (1024 quads): a level's triangles need their corners.
+        let q = (NODE_QUADS as usize).max(1 << root);
+        let per = (q / NODE_QUADS as usize) as u64;
+        let (x0, y0, x1, y1) = (x0 / per, y0 / per, x1.div_ceil(per), y1.div_ceil(per));
         let sector = |k: u64| {
             let at = |v: f64, lo: u64, hi: u64| (lo + ((hi - lo) as f64 * v) as u64) as usize * q;
             [at(halton(k, 2), x0, x1), at(halton(k, 3), y0, y1)]

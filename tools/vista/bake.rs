@@ -9,10 +9,11 @@ use anyhow::{Context as _, Result};
 use clap::Args;
 use serde::Serialize;
 use vista::world::{
-    bake_world, uncompressed_file_bytes, Limits, MemoryReport, PayloadFormat, PayloadSize, Progress, WorldDesc,
-    WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES,
+    bake_shard, bake_world, uncompressed_file_bytes, Limits, MemoryReport, NodeCache, PayloadFormat, PayloadSize,
+    Progress, ShardManifest, ShardPlan, WorldDesc, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES,
 };
 
+use crate::bake_shard::ShardArg;
 use crate::world_args::{parse_f64, parse_list, LoadedWorld, WorldArgs};
 
 /// Resident slots the bake's memory report assumes (the streamer's default
@@ -33,8 +34,21 @@ pub struct BakeArgs {
     /// Cache folder for the node files (DIR/lod{k}/{x}_{y}.vnode); files
     /// already there and valid for this world are reused, not rebaked.
     /// Not needed with --dry-run.
-    #[arg(long, value_name = "DIR", required_unless_present = "dry_run")]
+    #[arg(long, value_name = "DIR", required_unless_present_any = ["dry_run", "verify"])]
     pub out: Option<PathBuf>,
+    /// Bake shard I of N (0-based) of the whole world: a deterministic,
+    /// cost-balanced share that needs no other shard's output; N shards
+    /// baking into one folder (at once or not) make the whole bake, each
+    /// writing DIR/manifest/shard-I-of-N.json. `auto/N` reads the index from
+    /// SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX; `all/N` (with --dry-run)
+    /// prints every shard's plan.
+    #[arg(long, value_name = "I/N", value_parser = crate::bake_shard::parse_shard, conflicts_with = "region")]
+    pub shard: Option<ShardArg>,
+    /// Check the bake in DIR against the plan of this world (give the same
+    /// world and options as the bake): every node present and valid, every
+    /// shard manifest's files unchanged; names the shards to rerun.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "dry_run", "shard", "region", "json"])]
+    pub verify: Option<PathBuf>,
     /// Bake only nodes (of every LOD) overlapping this rectangle, metres;
     /// the report then extrapolates time and disk size to the whole world.
     #[arg(long, value_name = "MINX,MINY,MAXX,MAXY", value_parser = parse_region, allow_hyphen_values = true)]
@@ -129,6 +143,10 @@ struct BakeReport {
     /// Uncompressed node files over the bytes on disk (zstd's ratio).
     compression_ratio: f64,
     full_world_nodes: usize,
+    /// `[index, count]` of a `--shard` bake.
+    shard: Option<[u32; 2]>,
+    /// The manifest written (a shard or a whole-world bake).
+    manifest: Option<PathBuf>,
     /// The error tree of the region's roots, made before the nodes (not in
     /// `seconds`).
     error_tree: ErrorTreeJson,
@@ -141,6 +159,8 @@ struct BakeReport {
 #[derive(Serialize)]
 struct ErrorTreeJson {
     roots: usize,
+    /// Tiles of a shard's units in roots other shards own (computed).
+    unit_tiles: usize,
     read: usize,
     seconds: f64,
     /// LOD-0 quads under those roots, inside the world.
@@ -176,6 +196,9 @@ impl MemoryJson {
 
 pub fn bake(args: BakeArgs) -> Result<()> {
     let spec = args.world.resolve()?;
+    if let Some(dir) = &args.verify {
+        return crate::bake_shard::run_verify(&spec.open()?, dir);
+    }
     if let Some(r) = args.region {
         let [ex, ey] = spec.desc.extent_m;
         if r[2] <= 0.0 || r[3] <= 0.0 || r[0] >= ex || r[1] >= ey {
@@ -186,9 +209,21 @@ pub fn bake(args: BakeArgs) -> Result<()> {
             return Err(crate::InputError(message).into());
         }
     }
+    if matches!(args.shard, Some(ShardArg::All { .. })) && !args.dry_run {
+        let message = "--shard all/N prints every shard's plan: only with --dry-run".to_string();
+        return Err(crate::InputError(message).into());
+    }
+    // A whole-world bake is shard 0 of 1: it too leaves a manifest.
+    let shard = match (args.shard, args.region) {
+        (Some(s), _) => Some((crate::bake_shard::split(&spec.desc, s.count())?, s.index()?)),
+        (None, None) if !args.dry_run => Some((crate::bake_shard::split(&spec.desc, 1)?, Some(0))),
+        _ => None,
+    };
     let mut plan = spec.plan(args.region).with_slots(REPORT_SLOTS as u32);
     let cap = (!args.yes).then_some(args.max_disk);
-    let limits = Limits { max_bake_disk_bytes: cap, ..spec.limits.clone() };
+    // A shard's cap is on what it writes.
+    let whole_cap = if args.shard.is_some() { None } else { cap };
+    let limits = Limits { max_bake_disk_bytes: whole_cap, ..spec.limits.clone() };
     if let Some(json) = &args.json {
         crate::out_path::check_out_file(json, "--json")?;
     }
@@ -206,11 +241,20 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         let mut out = String::new();
         writeln!(out, "{}", world_line(&w))?;
         write!(out, "{plan}")?;
+        if let Some((split, index)) = &shard {
+            crate::bake_shard::write_plans(&mut out, split, *index, &plan)?;
+            if let Some(i) = index {
+                check_shard_disk(&split.shard_plan(*i, &plan), cap)?;
+            }
+        }
         writeln!(out, "dry run: nothing baked")?;
         emit(&out)?;
         return write_plan_json(args.json.as_deref(), &w.label, &plan, None);
     }
     spec.check(&plan, &limits)?;
+    if let (Some((split, Some(i))), Some(_)) = (&shard, args.shard) {
+        check_shard_disk(&split.shard_plan(*i, &plan), cap)?;
+    }
     // clap asks for --out unless --dry-run.
     let dir = args.out.clone().context("--out DIR is needed to bake")?;
     crate::out_path::prepare_out_dir(&dir, "--out", "the node cache: lod{k}/{x}_{y}.vnode")?;
@@ -223,10 +267,29 @@ pub fn bake(args: BakeArgs) -> Result<()> {
     if progress != Progress::Hidden {
         // Timed as the dry run times it, so both say the same.
         plan.measure_bake(&*w.source, &w.holes, &w.bake, PLAN_SAMPLES);
-        eprintln!("baking {} (`vista bake --dry-run` prints the plan)", plan.summary());
+        let what = match (&shard, args.shard) {
+            (Some((split, Some(i))), Some(_)) => {
+                let s = split.shard_plan(*i, &plan);
+                format!("shard {i} of {}: {} nodes, about {}", s.count, s.nodes(), minutes(s.seconds()))
+            }
+            _ => plan.summary(),
+        };
+        eprintln!("baking {what} (`vista bake --dry-run` prints the plan)");
     }
-    let stats = bake_world(w.source.clone(), &w.desc, &w.holes, &w.bake, args.region, &dir, progress)
-        .with_context(|| format!("baking into {}", dir.display()))?;
+    let (stats, manifest) = match &shard {
+        Some((split, Some(i))) => {
+            let stats = bake_shard(w.source.clone(), &w.desc, &w.holes, &w.bake, split, *i, &dir, progress)
+                .with_context(|| format!("baking into {}", dir.display()))?;
+            let cache = NodeCache::with_settings(&dir, w.desc, w.source.clone(), w.holes.clone(), w.bake)?;
+            let path = ShardManifest::new(&cache, split, *i, &stats).write(&dir)?;
+            (stats, Some(path))
+        }
+        _ => {
+            let stats = bake_world(w.source.clone(), &w.desc, &w.holes, &w.bake, args.region, &dir, progress)
+                .with_context(|| format!("baking into {}", dir.display()))?;
+            (stats, None)
+        }
+    };
     let nodes = stats.baked + stats.cached;
     let per_node = |v: f64| if nodes == 0 { 0.0 } else { v / nodes as f64 };
     let full_world_nodes = plan.world_nodes as usize;
@@ -246,6 +309,11 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         compression_ratio: (nodes as u64 * uncompressed_file_bytes(w.bake.format)) as f64
             / (stats.bytes_on_disk.max(1) as f64),
         full_world_nodes,
+        shard: match (&shard, args.shard) {
+            (Some((split, Some(i))), Some(_)) => Some([*i, split.count()]),
+            _ => None,
+        },
+        manifest,
         extrapolated: args.region.map(|_| {
             let e = &stats.errors;
             // Per LOD-0 sample of the tree made now (none computed: reads).
@@ -258,6 +326,7 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         }),
         error_tree: ErrorTreeJson {
             roots: stats.errors.roots,
+            unit_tiles: stats.errors.below_roots,
             read: stats.errors.read,
             seconds: stats.errors.seconds,
             quads: stats.error_quads,
@@ -277,7 +346,34 @@ pub fn bake(args: BakeArgs) -> Result<()> {
     emit(&out)
 }
 
-/// Writes a report to stdout; a reader that went away early is not an error.
+/// A shard over `--max-disk` (unless --yes), naming the options.
+fn check_shard_disk(s: &ShardPlan, cap: Option<u64>) -> Result<()> {
+    match cap {
+        Some(cap) if s.disk_bytes > cap => {
+            let message = format!(
+                "shard {} of {} would write about {} ({} nodes, about {}); the cap is {}: raise --max-disk GIB, \
+                 use more shards or pass --yes",
+                s.index,
+                s.count,
+                bytes(s.disk_bytes as f64),
+                s.nodes(),
+                minutes(s.seconds()),
+                bytes(cap as f64)
+            );
+            Err(crate::InputError(message).into())
+        }
+        _ => Ok(()),
+    }
+}
+
+fn minutes(s: f64) -> String {
+    if s < 5400.0 {
+        format!("{:.0} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
+    }
+}
+
 /// `bake --dry-run --json FILE`: the plan as printed, and the refusal if
 /// the plan was refused.
 fn write_plan_json(path: Option<&Path>, source: &str, plan: &WorldPlan, refused: Option<&anyhow::Error>) -> Result<()> {
@@ -292,7 +388,8 @@ fn write_plan_json(path: Option<&Path>, source: &str, plan: &WorldPlan, refused:
     write_json(path, &json)
 }
 
-fn emit(text: &str) -> Result<()> {
+/// Writes a report to stdout; a reader that went away early is not an error.
+pub(crate) fn emit(text: &str) -> Result<()> {
     match std::io::stdout().lock().write_all(text.as_bytes()) {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         r => r.context("writing to stdout"),
@@ -317,9 +414,12 @@ fn world_line(w: &LoadedWorld) -> String {
 
 fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
     writeln!(out, "{}", world_line(w))?;
-    match r.region {
-        Some(g) => writeln!(out, "region:   {},{} .. {},{} m", g[0], g[1], g[2], g[3]),
-        None => writeln!(out, "region:   whole world"),
+    match (r.region, r.shard) {
+        (Some(g), _) => writeln!(out, "region:   {},{} .. {},{} m", g[0], g[1], g[2], g[3]),
+        (None, Some([i, n])) => {
+            writeln!(out, "shard:    {i} of {n} (0-based), {} of the world's {} nodes", r.nodes, r.full_world_nodes)
+        }
+        (None, None) => writeln!(out, "region:   whole world"),
     }?;
     let per_lod: Vec<String> = r.nodes_per_lod.iter().enumerate().map(|(l, n)| format!("lod{l} {n}")).collect();
     writeln!(out, "nodes:    {} ({})", r.nodes, per_lod.join(", "))?;
@@ -327,13 +427,17 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
     let e = &r.error_tree;
     writeln!(
         out,
-        "time:     {:.2} s for the nodes ({:.2} ms per node), {:.2} s before them for the error tree ({} roots: {} read, {} computed)",
+        "time:     {:.2} s for the nodes ({:.2} ms per node), {:.2} s before them for the error tree ({} roots: {} read, {} computed{})",
         r.seconds,
         1000.0 * r.seconds / r.nodes.max(1) as f64,
         e.seconds,
         e.roots,
         e.read,
-        e.roots - e.read
+        e.roots - e.read,
+        match e.unit_tiles {
+            0 => String::new(),
+            n => format!("; {n} tiles of its units in roots other shards own"),
+        }
     )?;
     writeln!(
         out,
@@ -343,6 +447,9 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
         bytes(r.bytes_per_node),
         r.compression_ratio
     )?;
+    if let Some(m) = &r.manifest {
+        writeln!(out, "manifest: {} (`vista bake --verify DIR` checks the whole bake)", m.display())?;
+    }
     if let Some(x) = &r.extrapolated {
         // Cached nodes only measure validation, so say which time this is.
         let basis = if r.baked == 0 && e.read == e.roots { "cache reads" } else { "this run" };
@@ -358,7 +465,7 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
 }
 
 /// Human byte count in binary units.
-fn bytes(b: f64) -> String {
+pub(crate) fn bytes(b: f64) -> String {
     const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
     let mut v = b;
     let mut u = 0;

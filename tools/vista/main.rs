@@ -3,6 +3,7 @@
 
 mod accuracy_plot;
 mod bake;
+mod bake_shard;
 mod bench_accuracy_cmd;
 mod bench_cmd;
 mod bench_cull_cmd;
