@@ -164,7 +164,8 @@ fn rust_twins_match_reflected_layouts() {
         "TerrainViewGpu",
         fields!(TerrainViewGpu: view_proj, frustum, sun_dir, sun_color, sky_color, camera_sample, camera_frac,
             camera_z, spacing_m, height_lo, height_scale, height_range, lod_map_w, lod_map_h, pad, inv_view_proj,
-            viewport, camera_world, shade_bands, shade_slope, shade_flags, lod_forward, lod_params, lod_right, lod_up),
+            viewport, camera_world, shade_bands, shade_slope, shade_flags, lod_forward, lod_params, lod_right, lod_up,
+            image),
         layouts::TERRAIN_VIEW,
         structs::TERRAIN_VIEW,
     );

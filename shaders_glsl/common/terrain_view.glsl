@@ -37,6 +37,8 @@ struct TerrainView {
                             // z: refinement levels below LOD 0 allowed; w: 1 = no stitching (tests only)
     vec4 lod_right;         // xyz: the camera's right axis (world); w: tan of the frustum's half width
     vec4 lod_up;            // xyz: the camera's up axis (world); w: tan of the frustum's half height
+    // The display image (render/tonemap.rs).
+    vec4 image;             // x: exposure scale (2^EV); y: tonemapper (Tonemap::gpu_id: 0 clip, 1 ACES fitted); zw: unused
 };
 
 // LOD-0 sample index -> camera-relative metres (x, y). Takes fields, not

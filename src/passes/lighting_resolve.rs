@@ -1,7 +1,8 @@
 //! `lighting_resolve`: the lit output of the tools and tests, from the
 //! G-buffer: sun plus sky ambient (variant LIGHTING, the `lighting` effect)
-//! or unlit albedo, into the caller's colour target (display-encoded) and
-//! the renderer's HDR image, one full-screen triangle stencil-tested
+//! or unlit albedo, into the caller's colour target (display-encoded: the
+//! lit image exposed and through the scene's tonemapper, `render/tonemap.rs`;
+//! unlit albedo clipped) and the renderer's HDR image, one full-screen triangle stencil-tested
 //! against the terrain bit so the background keeps the clear colour. It
 //! leaves the depth target in its frame layout. An engine lights the
 //! G-buffer itself and can leave this pass out of its frame.

@@ -9,6 +9,7 @@ pub mod occlusion;
 pub mod octahedral;
 pub mod raycast;
 pub mod sector_data;
+pub mod tonemap;
 pub mod traverse;
 
 pub use classify::classify_tiles_cpu;

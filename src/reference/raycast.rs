@@ -169,7 +169,7 @@ impl<'a> RayCaster<'a> {
 
     /// Casts one ray through every pixel centre of `view`. The lit colour
     /// is `clay_albedo` lit by `light` (sun plus sky ambient, as the lit
-    /// output), clipped and gamma-encoded like the display image.
+    /// output), exposed and tonemapped like the display image.
     pub fn image(&self, view: &View, light: &Lighting, clay_albedo: f32, clear: [f32; 4]) -> ReferenceImage {
         image(self, view, light, clay_albedo, clear)
     }
@@ -290,7 +290,6 @@ fn image(rc: &RayCaster, view: &View, light: &Lighting, clay_albedo: f32, clear:
     let footprint = 2.0 / (view.focal() * f64::from(hgt));
     let sun = light.sun_dir();
     let h = 0.5 * rc.bounds.spacing_m;
-    let encode = |v: f64| v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0;
     let clear_px = [0, 1, 2, 3].map(|i| (f64::from(clear[i]).clamp(0.0, 1.0) * 255.0).round() as u8);
     let empty = || ReferenceImage {
         size: view.size,
@@ -315,9 +314,10 @@ fn image(rc: &RayCaster, view: &View, light: &Lighting, clay_albedo: f32, clear:
         let lit = |i: usize| {
             let sunlit = f64::from(light.sun_color[i]) * n.dot(sun).max(0.0);
             let sky = f64::from(light.sky_color[i]) * (0.5 + 0.5 * n.z);
-            encode(f64::from(clay_albedo) * (sunlit + sky))
+            f64::from(clay_albedo) * (sunlit + sky)
         };
-        ([lit(0), lit(1), lit(2), 255.0], Some((t, p, n)))
+        let [r, g, b] = super::tonemap::display(light.tonemap, light.exposure_ev, [lit(0), lit(1), lit(2)]);
+        ([255.0 * r, 255.0 * g, 255.0 * b, 255.0], Some((t, p, n)))
     };
     let offsets: &[[f64; 2]] = if rc.cfg.colour_samples >= 4 { &ROTATED_GRID } else { &[[0.5, 0.5]] };
     let rows: Vec<ReferenceImage> = (0..hgt)

@@ -15,6 +15,7 @@
 
 use crate::error::{Error, Result};
 use crate::render::shading::ShadeRules;
+use crate::render::tonemap::Tonemap;
 use crate::render::view::Lighting;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -109,7 +110,15 @@ impl Effect {
     /// Parameter names a table may give besides `enabled`.
     fn parameters(self) -> &'static [&'static str] {
         match self {
-            Effect::Lighting => &["sun_azimuth_deg", "sun_elevation_deg", "sun_color", "sky_color", "clay_albedo"],
+            Effect::Lighting => &[
+                "sun_azimuth_deg",
+                "sun_elevation_deg",
+                "sun_color",
+                "sky_color",
+                "clay_albedo",
+                "tonemap",
+                "exposure_ev",
+            ],
             Effect::Cliffs => &["slope_deg", "band_deg", "near_far_m", "stochastic", "hash_seed"],
             Effect::Splat => &["materials", "far_start_m", "far_band_m"],
             Effect::VirtualTexture => &["cache_mb"],
@@ -222,6 +231,15 @@ impl Effects {
                 "sky_color" => self.lighting.sky_color = colour(&key, v)?,
                 // Zero would read as "off" on the GPU: the range starts above it.
                 "clay_albedo" => self.lighting.clay_albedo = Some(number(&key, v, 1e-3, 1.0)? as f32),
+                "tonemap" => {
+                    let names: Vec<&str> = Tonemap::ALL.iter().map(|t| t.name()).collect();
+                    let expected = format!("one of {}", names.join(", "));
+                    let name = v.as_str().ok_or_else(|| wrong(&key, &expected, v))?;
+                    self.lighting.tonemap = Tonemap::from_name(name)
+                        .ok_or_else(|| bad(format!("{key} = {name:?} is not a tonemapper ({expected})")))?;
+                }
+                // 2^20 either way keeps the exposed image finite in f32.
+                "exposure_ev" => self.lighting.exposure_ev = number(&key, v, -20.0, 20.0)? as f32,
                 "slope_deg" => self.shade.cliff_slope_deg = number(&key, v, 0.0, 90.0)? as f32,
                 "band_deg" => self.shade.cliff_band_deg = number(&key, v, 0.0, 45.0)? as f32,
                 "near_far_m" => {
@@ -374,6 +392,9 @@ mod tests {
         assert_eq!(fx.lighting.sky_color, [0.1, 0.2, 0.3]);
         assert_eq!(fx.lighting.clay_albedo, None);
         assert_eq!(parse("lighting = { clay_albedo = 0.5 }\n").unwrap().lighting.clay_albedo, Some(0.5));
+        assert_eq!((fx.lighting.tonemap, fx.lighting.exposure_ev), (Tonemap::Aces, 0.5));
+        let clip = parse("lighting = { tonemap = \"clip\", exposure_ev = -1.5 }\n").unwrap();
+        assert_eq!((clip.lighting.tonemap, clip.lighting.exposure_ev), (Tonemap::Clip, -1.5));
         assert!(!parse("[lighting]\nenabled = false\n").unwrap().is_on(Effect::Lighting));
     }
 
@@ -389,6 +410,12 @@ mod tests {
             ("lighting = { sun_elevation_deg = 95 }", "outside"),
             // 0 would mean "no clay" on the GPU.
             ("lighting = { clay_albedo = 0 }", "effects.lighting.clay_albedo = 0 is outside"),
+            (
+                "lighting = { tonemap = \"agx\" }",
+                "effects.lighting.tonemap = \"agx\" is not a tonemapper (one of aces, clip)",
+            ),
+            ("lighting = { tonemap = 1 }", "effects.lighting.tonemap must be one of aces, clip"),
+            ("lighting = { exposure_ev = 40 }", "effects.lighting.exposure_ev = 40 is outside"),
         ] {
             let e = parse(text).unwrap_err().to_string();
             assert!(e.contains(key) && !e.contains('\n'), "{text}: {e}");

@@ -17,6 +17,7 @@ pub mod report;
 pub mod shading;
 pub mod stats;
 pub mod telemetry;
+pub mod tonemap;
 pub mod view;
 
 pub use crate::passes::terrain_geometry::RenderTargets;
@@ -24,4 +25,5 @@ pub use effects::{Effect, EffectDecision, Effects};
 pub use renderer::{memory_for, LodOptions, RendererOptions, TerrainRenderer};
 pub use report::{frame_report, FrameReport, PassState};
 pub use shading::Shading;
+pub use tonemap::Tonemap;
 pub use view::{linear_depth, overview_camera, Camera, Lighting, TerrainViewGpu, View, DEFAULT_NEAR_M};
