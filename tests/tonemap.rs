@@ -34,7 +34,7 @@ fn the_display_image_is_the_hdr_image_through_the_tonemapper() {
             // Bright clay: sunlit slopes reach 1.3 to 1.6, above the clip.
             fx.lighting.clay_albedo = Some(0.8);
             fx.lighting.tonemap = tonemap;
-            fx.lighting.exposure_ev = ev;
+            fx.lighting.exposure_ev = Some(ev);
             let options = RendererOptions { effects: fx, ..RendererOptions::default() };
             let mut rig = Rig::with_options(ctx, world(), Surface::Hills, vec![], SIZE, false, options);
             let shot = rig.shot(ctx, &view([512.0, 120.0, 520.0], 10.0, -25.0, SIZE, 1.0), CullStages::ALL);

@@ -316,7 +316,7 @@ fn image(rc: &RayCaster, view: &View, light: &Lighting, clay_albedo: f32, clear:
             let sky = f64::from(light.sky_color[i]) * (0.5 + 0.5 * n.z);
             f64::from(clay_albedo) * (sunlit + sky)
         };
-        let [r, g, b] = super::tonemap::display(light.tonemap, light.exposure_ev, [lit(0), lit(1), lit(2)]);
+        let [r, g, b] = super::tonemap::display(light.tonemap, light.exposure_ev(), [lit(0), lit(1), lit(2)]);
         ([255.0 * r, 255.0 * g, 255.0 * b, 255.0], Some((t, p, n)))
     };
     let offsets: &[[f64; 2]] = if rc.cfg.colour_samples >= 4 { &ROTATED_GRID } else { &[[0.5, 0.5]] };

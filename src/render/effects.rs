@@ -239,7 +239,7 @@ impl Effects {
                         .ok_or_else(|| bad(format!("{key} = {name:?} is not a tonemapper ({expected})")))?;
                 }
                 // 2^20 either way keeps the exposed image finite in f32.
-                "exposure_ev" => self.lighting.exposure_ev = number(&key, v, -20.0, 20.0)? as f32,
+                "exposure_ev" => self.lighting.exposure_ev = Some(number(&key, v, -20.0, 20.0)? as f32),
                 "slope_deg" => self.shade.cliff_slope_deg = number(&key, v, 0.0, 90.0)? as f32,
                 "band_deg" => self.shade.cliff_band_deg = number(&key, v, 0.0, 45.0)? as f32,
                 "near_far_m" => {
@@ -392,9 +392,11 @@ mod tests {
         assert_eq!(fx.lighting.sky_color, [0.1, 0.2, 0.3]);
         assert_eq!(fx.lighting.clay_albedo, None);
         assert_eq!(parse("lighting = { clay_albedo = 0.5 }\n").unwrap().lighting.clay_albedo, Some(0.5));
-        assert_eq!((fx.lighting.tonemap, fx.lighting.exposure_ev), (Tonemap::Aces, 0.5));
+        assert_eq!((fx.lighting.tonemap, fx.lighting.exposure_ev()), (Tonemap::Aces, 0.5));
         let clip = parse("lighting = { tonemap = \"clip\", exposure_ev = -1.5 }\n").unwrap();
-        assert_eq!((clip.lighting.tonemap, clip.lighting.exposure_ev), (Tonemap::Clip, -1.5));
+        assert_eq!((clip.lighting.tonemap, clip.lighting.exposure_ev()), (Tonemap::Clip, -1.5));
+        // The clip's own default keeps the earlier image.
+        assert_eq!(parse("lighting = { tonemap = \"clip\" }\n").unwrap().lighting.exposure_ev(), 0.0);
         assert!(!parse("[lighting]\nenabled = false\n").unwrap().is_on(Effect::Lighting));
     }
 

@@ -1,6 +1,6 @@
 //! How the display image (`image.png`) is made from the linear HDR image
 //! (`lit.exr`): an exposure, then a named tonemapper. A scene picks both
-//! (`lighting = { tonemap = "aces", exposure_ev = 0 }`); the CPU reference
+//! (`lighting = { tonemap = "aces", exposure_ev = 0.5 }`); the CPU reference
 //! ([`crate::reference::tonemap`]) applies the same curve from its
 //! published definition, so a test can compare the two.
 
@@ -33,6 +33,18 @@ impl Tonemap {
 
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|t| t.name() == name)
+    }
+
+    /// The exposure a scene gets unless it gives one. ACES maps mid-tones
+    /// darker than a clip: +0.5 EV gives the default world's terrain the
+    /// clipped image's mean brightness (151 against 148 of 255 at 960x540,
+    /// default camera), with values above 1 rolled off instead of clipped.
+    /// The clip keeps 0, so it reproduces vista's earlier image exactly.
+    pub fn default_exposure_ev(self) -> f32 {
+        match self {
+            Tonemap::Aces => 0.5,
+            Tonemap::Clip => 0.0,
+        }
     }
 
     /// The number `lighting_resolve` switches on (`TerrainView.image.y`).

@@ -241,7 +241,7 @@ impl View {
                 let u = self.camera.basis()[2];
                 [u.x as f32, u.y as f32, u.z as f32, (self.fov_y_deg.to_radians() / 2.0).tan() as f32]
             },
-            image: [2f32.powf(light.exposure_ev), light.tonemap.gpu_id() as f32, 0.0, 0.0],
+            image: [2f32.powf(light.exposure_ev()), light.tonemap.gpu_id() as f32, 0.0, 0.0],
         }
     }
 }
@@ -272,9 +272,10 @@ pub struct Lighting {
     /// image with its reference, which knows the surface but not the textures.
     pub clay_albedo: Option<f32>,
     /// The display image's transform of the linear image, and the exposure
-    /// (stops) applied before it.
+    /// (stops) applied before it; `None`: the tonemapper's own default
+    /// ([`Tonemap::default_exposure_ev`]).
     pub tonemap: Tonemap,
-    pub exposure_ev: f32,
+    pub exposure_ev: Option<f32>,
 }
 
 impl Default for Lighting {
@@ -287,16 +288,17 @@ impl Default for Lighting {
             sky_color: [0.35, 0.42, 0.55],
             clay_albedo: None,
             tonemap: Tonemap::default(),
-            // ACES maps mid-tones darker than a clip: +0.5 EV gives the
-            // default world's terrain the clipped image's mean brightness
-            // (151 against 148 of 255 at 960x540), with highlights above 1
-            // rolled off instead of clipped.
-            exposure_ev: 0.5,
+            exposure_ev: None,
         }
     }
 }
 
 impl Lighting {
+    /// The exposure in stops: the scene's, else the tonemapper's default.
+    pub fn exposure_ev(&self) -> f32 {
+        self.exposure_ev.unwrap_or(self.tonemap.default_exposure_ev())
+    }
+
     /// Unit vector toward the sun.
     pub fn sun_dir(&self) -> DVec3 {
         let (sa, ca) = self.sun_azimuth_deg.to_radians().sin_cos();
