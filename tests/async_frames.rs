@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::terrain::{view, Rig, Surface};
+use common::terrain::{small_world as world, view, Rig, Surface};
 use common::{gpu_test, gpu_test_with};
 use std::collections::HashMap;
 use vista::frame::QueueKind;
@@ -16,17 +16,6 @@ use vista::gpu::{vk, Buffer, BufferDesc, ContextOptions, FrameRing, MemoryLocati
 use vista::passes::cull_patches::CullStages;
 use vista::render::offscreen::Offscreen;
 use vista::render::telemetry::FrameCounters;
-use vista::world::WorldDesc;
-
-fn world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [1024.0, 1024.0],
-        height_range_m: [100.0, 500.0],
-        spacing_m: 1.0,
-        lod_count: 4,
-        ..WorldDesc::default()
-    }
-}
 
 const SIZE: [u32; 2] = [96, 64];
 

@@ -7,23 +7,11 @@
 mod common;
 
 use common::gpu_test;
-use common::terrain::{view, Rig, Surface, MAGENTA_RGBA};
+use common::terrain::{small_world as world, view, Rig, Surface, MAGENTA_RGBA};
 use vista::gpu::{Context, LiveObjects};
 use vista::passes::cull_patches::CullStages;
 use vista::render::{frame_report, Effect, Effects, FrameReport, PassState, RendererOptions, View};
-use vista::world::{Hole, WorldDesc};
-
-/// 1024 m at 1 m spacing with 4 LODs: the 1024 m root node tiles it exactly,
-/// so without hole regions the world has nothing for the hole path to cut.
-fn world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [1024.0, 1024.0],
-        height_range_m: [100.0, 500.0],
-        spacing_m: 1.0,
-        lod_count: 4,
-        ..WorldDesc::default()
-    }
-}
+use vista::world::Hole;
 
 const SIZE: [u32; 2] = [96, 64];
 

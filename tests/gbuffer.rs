@@ -7,7 +7,7 @@
 mod common;
 
 use common::gpu_test;
-use common::terrain::{view, Rig, Surface};
+use common::terrain::{small_world as world, view, Rig, Surface};
 use vista::passes::cull_patches::CullStages;
 use vista::reference::classify_tiles_cpu;
 use vista::render::gbuffer::GBufferCapture;
@@ -15,17 +15,6 @@ use vista::render::{Effect, Effects, RendererOptions, Shading, View};
 use vista::shaders::consts::{
     FLAVOUR_FAR_ATLAS, FLAVOUR_FAR_CLIFF, FLAVOUR_NEAR_CLIFF, FLAVOUR_SPLAT, FLAVOUR_VARIANTS, TILE_SIZE,
 };
-use vista::world::WorldDesc;
-
-fn world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [1024.0, 1024.0],
-        height_range_m: [100.0, 500.0],
-        spacing_m: 1.0,
-        lod_count: 4,
-        ..WorldDesc::default()
-    }
-}
 
 /// Not a multiple of the tile size: the last tile column and row are partial.
 const SIZE: [u32; 2] = [100, 60];

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::terrain::{view, Rig, Surface};
+use common::terrain::{small_world as world, view, Rig, Surface};
 use common::{gpu_test, Rng};
 use glam::{Mat4, Vec3};
 use vista::gpu::{
@@ -17,19 +17,6 @@ use vista::passes::cull_patches::CullStages;
 use vista::reference::occlusion::{box_visible_cpu, level0_cpu, pyramid_cpu, reduce_cpu, Pyramid};
 use vista::render::{Effect, Effects, RendererOptions, View};
 use vista::shaders::occlusion_probe as probe_sh;
-use vista::world::WorldDesc;
-
-/// 1024 m at 1 m spacing, 4 LODs: small enough to keep every wanted node
-/// resident, so two renderers can share one resident set.
-fn world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [1024.0, 1024.0],
-        height_range_m: [100.0, 500.0],
-        spacing_m: 1.0,
-        lod_count: 4,
-        ..WorldDesc::default()
-    }
-}
 
 fn effects(occlusion: bool) -> RendererOptions {
     let mut fx = Effects::default();

@@ -8,23 +8,12 @@
 mod common;
 
 use common::gpu_test;
-use common::terrain::{view, Rig, Surface};
+use common::terrain::{small_world as world, view, Rig, Surface};
 use vista::passes::cull_patches::CullStages;
 use vista::reference::tonemap::display;
 use vista::render::{Effect, Effects, RendererOptions, Tonemap};
-use vista::world::WorldDesc;
 
 const SIZE: [u32; 2] = [96, 64];
-
-fn world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [1024.0, 1024.0],
-        height_range_m: [100.0, 500.0],
-        spacing_m: 1.0,
-        lod_count: 4,
-        ..WorldDesc::default()
-    }
-}
 
 #[test]
 fn the_display_image_is_the_hdr_image_through_the_tonemapper() {

@@ -175,6 +175,21 @@ pub fn view(position: [f64; 3], yaw: f64, pitch: f64, size: [u32; 2], target_err
     }
 }
 
+/// The GPU tests' small world: 1024 m at 1 m spacing over 100..500 m with
+/// 4 LODs. Its one 1024 m root tiles it exactly (so without hole regions
+/// the hole path has nothing to cut), and every node a view wants stays
+/// resident in the default slots (so two renderers can share a resident
+/// set).
+pub fn small_world() -> WorldDesc {
+    WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [100.0, 500.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    }
+}
+
 pub struct Rig {
     pub renderer: TerrainRenderer,
     pub off: Offscreen,
