@@ -6,7 +6,7 @@
 mod common;
 
 use common::gpu_test;
-use common::terrain::{view, Rig, Surface, MAGENTA_RGBA};
+use common::terrain::{small_world as hills_world, view, Rig, Surface, MAGENTA_RGBA};
 use common::Rng;
 use glam::DVec3;
 use std::collections::BTreeSet;
@@ -281,16 +281,6 @@ fn hill_poses(n: usize, size: [u32; 2]) -> Vec<View> {
         out.push(view([x, y, z], rng.unit() * 360.0, -60.0 + rng.unit() * 75.0, size, 1.0));
     }
     out
-}
-
-fn hills_world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [1024.0, 1024.0],
-        height_range_m: [100.0, 500.0],
-        spacing_m: 1.0,
-        lod_count: 4,
-        ..WorldDesc::default()
-    }
 }
 
 #[test]
