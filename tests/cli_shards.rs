@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 mod vista_cmd;
 
@@ -110,9 +110,9 @@ fn two_shards_at_once_equal_one_process_and_a_killed_shard_resumes() {
     assert!(ok, "{err}");
     let before = node_files(&three);
     let mut b = shard_cmd(&three, "1/2").stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
-    let start = Instant::now();
+    // No time bound: the shard either writes a node or ends, and ending
+    // first fails here.
     while node_files(&three) == before {
-        assert!(start.elapsed() < Duration::from_secs(300), "shard 1 wrote no node in 5 minutes");
         assert!(b.try_wait().unwrap().is_none(), "shard 1 ended before writing a node");
         std::thread::sleep(Duration::from_millis(2));
     }

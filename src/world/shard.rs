@@ -122,13 +122,13 @@ impl ShardSplit {
         let want = u64::from(count) * UNITS_PER_SHARD;
         let split_lod = (0..=world.root_lod()).rev().find(|&l| cells(l) >= want).unwrap_or(0);
         let units = ordered_units(world, split_lod);
-        let root_of = |u: NodeId| (u.x >> (world.root_lod() - split_lod), u.y >> (world.root_lod() - split_lod));
-        let mut first_of_root = Vec::with_capacity(units.len());
-        for (i, &u) in units.iter().enumerate() {
-            let same = i > 0 && root_of(units[i - 1]) == root_of(u);
-            first_of_root.push(if same { first_of_root[i - 1] } else { i });
+        let mut split =
+            ShardSplit { world: *world, count, split_lod, units, first_of_root: Vec::new(), starts: Vec::new() };
+        for i in 0..split.units.len() {
+            let same = i > 0 && split.root_of(split.units[i - 1]) == split.root_of(split.units[i]);
+            let first = if same { split.first_of_root[i - 1] } else { i };
+            split.first_of_root.push(first);
         }
-        let mut split = ShardSplit { world: *world, count, split_lod, units, first_of_root, starts: Vec::new() };
         split.starts = split.balance(&plan);
         Ok(split)
     }
@@ -190,18 +190,13 @@ impl ShardSplit {
     /// owns, and its units in roots it does not (see the module docs).
     pub fn tiles(&self, index: u32) -> Vec<NodeId> {
         let [a, b] = self.unit_range(index);
-        let mut tiles: Vec<NodeId> = (a..b)
-            .filter_map(|i| {
-                let root = self.root_of(self.units[i]);
-                match self.owner_unit(i) {
-                    first if first == i => Some(root),
-                    first if first < a => Some(self.units[i]),
-                    _ => None,
-                }
+        (a..b)
+            .filter_map(|i| match self.first_of_root[i] {
+                first if first == i => Some(self.root_of(self.units[i])),
+                first if first < a => Some(self.units[i]),
+                _ => None,
             })
-            .collect();
-        tiles.dedup();
-        tiles
+            .collect()
     }
 
     /// LOD-0 quads the tiles of shard `index` cover, each counted for the
@@ -241,11 +236,6 @@ impl ShardSplit {
 
     fn shard_units(&self, index: u32) -> &[NodeId] {
         &self.units[self.starts[index as usize]..self.starts[index as usize + 1]]
-    }
-
-    /// The first unit of unit `i`'s root: the one whose shard owns it.
-    fn owner_unit(&self, i: usize) -> usize {
-        self.first_of_root[i]
     }
 
     fn root_of(&self, unit: NodeId) -> NodeId {
