@@ -1,12 +1,18 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// variants: LIGHTING
+// variants: LIGHTING SHADOWS ATMOSPHERE
 // The lit output of the tools and tests (an engine lights the G-buffer
 // itself): sun plus sky ambient on the G-buffer's albedo and normal
 // (variant LIGHTING, the `lighting` effect; without it, unlit albedo).
 // Writes linear HDR radiance and the display image: exposed and through the
 // scene's tonemapper (render/tonemap.rs; the unlit albedo view is clipped).
-// Stencil-tested: the background keeps the clear colour.
+// With SHADOWS (the `shadows` effect), the sun term is scaled by how much
+// of the sun the pixel sees: its height against the bilinear threshold of
+// the finest resident node's shadow texture (sun_shadow.glsl).
+// With ATMOSPHERE (the `atmosphere` effect), the terrain is seen through
+// the height fog of atmosphere.glsl and the background is its sky; without
+// it the pass is stencil-tested and the background keeps the clear colour.
+// SHADOWS and ATMOSPHERE need LIGHTING.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
 
@@ -35,25 +41,69 @@ layout(set = 0, binding = 1) uniform texture2D gb_albedo;
 layout(set = 0, binding = 2) uniform texture2D gb_normal;
 layout(set = 0, binding = 3) uniform sampler nearest;
 
+#if defined(SHADOWS) || defined(ATMOSPHERE)
+#define NEEDS_POSITION
+#include "reconstruct.glsl"
+layout(set = 0, binding = 4) uniform texture2D depth_target;
+#define VISTA_TERRAIN_DECLARE_ONLY
+#include "terrain_sample.glsl"
+#undef VISTA_TERRAIN_DECLARE_ONLY
+// shadow: x the penumbra's height per metre of occluder distance, y the
+// shadow texture's side; fog, haze, zenith: atmosphere.glsl's parameters.
+layout(push_constant, std430) uniform LightingPush {
+    VistaTerrain terrain;
+    vec4 shadow;
+    vec4 fog;
+    vec4 haze;
+    vec4 zenith;
+} pc;
+#endif
+
+#ifdef SHADOWS
+#include "sun_shadow.glsl"
+layout(set = 0, binding = 5, std430) readonly buffer SectorData { uint words[]; } sector_data;
+layout(set = 0, binding = 6) uniform texture2DArray height_atlas;
+layout(set = 0, binding = 7) uniform texture2DArray shadow_atlas;
+
+#define VISTA_SECTOR_WORD(i) sector_data.words[i]
+#define VISTA_HEIGHT_ATLAS height_atlas
+#define VISTA_NORMAL_ATLAS height_atlas
+#define VISTA_ATLAS_SAMPLER nearest
+#define VISTA_NO_MATERIAL_QUERY
+#define VISTA_TERRAIN pc.terrain
+#include "terrain_sample.glsl"
+
+vec2 shadow_texel(ivec2 t, uint slot) {
+    return texelFetch(sampler2DArray(shadow_atlas, nearest), ivec3(t, int(slot)), 0).rg;
+}
+
+// How much of the sun the terrain point `p` (world metres) sees: 1 where no
+// resident node covers it.
+float sun_seen(vec3 p) {
+    VistaNodeHit hit = vista_find_node(p.xy);
+    if (!hit.found) {
+        return 1.0;
+    }
+    int last = int(pc.shadow.y) - 1;
+    vec2 f = hit.local * (float(last) / 128.0);
+    ivec2 i0 = min(ivec2(floor(f)), ivec2(last - 1));
+    vec2 w = f - vec2(i0);
+    vec2 a = mix(shadow_texel(i0, hit.slot), shadow_texel(i0 + ivec2(1, 0), hit.slot), w.x);
+    vec2 b = mix(shadow_texel(i0 + ivec2(0, 1), hit.slot), shadow_texel(i0 + ivec2(1, 1), hit.slot), w.x);
+    vec2 s = mix(a, b, w.y);
+    return sun_visibility(p.z, s.x, s.y, pc.shadow.x);
+}
+#endif
+
+#ifdef ATMOSPHERE
+#include "atmosphere.glsl"
+#endif
+
 layout(location = 0) out vec4 display;
 layout(location = 1) out vec4 hdr;
 
-void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
-    // The albedo target is sRGB: texelFetch returns linear values.
-    vec3 albedo = texelFetch(sampler2D(gb_albedo, nearest), px, 0).rgb;
-    // The "lighting only" view: a uniform albedo.
-    if (view.v.shade_flags.w != 0u) {
-        albedo = vec3(uintBitsToFloat(view.v.shade_flags.w));
-    }
-#ifdef LIGHTING
-    vec3 n = oct_decode(texelFetch(sampler2D(gb_normal, nearest), px, 0).xy);
-    vec3 light = view.v.sun_color.rgb * max(dot(n, view.v.sun_dir.xyz), 0.0)
-               + view.v.sky_color.rgb * (0.5 + 0.5 * n.z);
-    vec3 lit = albedo * light;
-#else
-    vec3 lit = albedo;
-#endif
+// Writes the linear radiance and its display encoding.
+void emit(vec3 lit) {
     hdr = vec4(lit, 1.0);
 #ifdef LIGHTING
     vec3 exposed = lit * view.v.image.x;
@@ -65,4 +115,48 @@ void main() {
 #else
     display = vec4(pow(clamp(lit, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
 #endif
+}
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+#ifdef NEEDS_POSITION
+    float depth = texelFetch(sampler2D(depth_target, nearest), px, 0).r;
+#endif
+#ifdef ATMOSPHERE
+    vec3 view_dir = normalize(eye_ray(view.v.inv_view_proj, gl_FragCoord.xy, view.v.viewport));
+    vec3 scatter = fog_inscatter(pc.fog, pc.haze.rgb, view_dir, view.v.sun_dir.xyz, view.v.sun_color.rgb,
+                                 view.v.sky_color.rgb);
+    // Reversed-Z: the background keeps the clear depth 0.
+    if (depth == 0.0) {
+        float t = fog_sky_transmittance(pc.fog, pc.zenith.w, view.v.camera_world.xyz, view_dir);
+        emit(pc.zenith.rgb * t + scatter * (1.0 - t));
+        return;
+    }
+#endif
+    // The albedo target is sRGB: texelFetch returns linear values.
+    vec3 albedo = texelFetch(sampler2D(gb_albedo, nearest), px, 0).rgb;
+    // The "lighting only" view: a uniform albedo.
+    if (view.v.shade_flags.w != 0u) {
+        albedo = vec3(uintBitsToFloat(view.v.shade_flags.w));
+    }
+#ifdef NEEDS_POSITION
+    vec3 rel = reconstruct_position(view.v.inv_view_proj, gl_FragCoord.xy, view.v.viewport, depth);
+#endif
+#ifdef LIGHTING
+    vec3 n = oct_decode(texelFetch(sampler2D(gb_normal, nearest), px, 0).xy);
+    float sun = max(dot(n, view.v.sun_dir.xyz), 0.0);
+#ifdef SHADOWS
+    sun *= sun_seen(view.v.camera_world.xyz + rel);
+#endif
+    vec3 light = view.v.sun_color.rgb * sun
+               + view.v.sky_color.rgb * (0.5 + 0.5 * n.z);
+    vec3 lit = albedo * light;
+#else
+    vec3 lit = albedo;
+#endif
+#ifdef ATMOSPHERE
+    float t = exp(-fog_optical_depth(pc.fog, view.v.camera_world.xyz, view.v.camera_world.xyz + rel));
+    lit = lit * t + scatter * (1.0 - t);
+#endif
+    emit(lit);
 }

@@ -108,5 +108,10 @@
 #define SPLAT_TEXELS 65u
 // The largest octahedral normal code (octahedral.glsl): 255 codes per axis.
 #define OCT_CODE_LAST 254u
+// Sun shadows (render/sun_shadows.rs): node shadow jobs one sun_shadows
+// dispatch takes (the update budget plus a frame's uploads); the largest
+// shadow texture side per node.
+#define SUN_SHADOW_MAX_JOBS 80u
+#define SUN_SHADOW_MAX_SIDE 257u
 
 #endif

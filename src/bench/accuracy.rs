@@ -15,6 +15,7 @@
 //! reference does not model looking through holes.
 
 use super::accuracy_error::{accuracy_error, AccuracyError};
+use super::accuracy_shadows::{shadow_rows, ShadowPoint, ShadowSweep};
 use crate::error::Result;
 use crate::frame::profiler::summarize;
 use crate::frame::FrameTimings;
@@ -60,6 +61,9 @@ pub struct AccuracyBenchConfig {
     pub raycast: RaycastConfig,
     /// Keep, per view, the reference and the frame at the shading target.
     pub keep_images: bool,
+    /// Shadow rows (when the scene has the `shadows` effect), at the
+    /// shading target.
+    pub shadows: Option<ShadowSweep>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -122,6 +126,9 @@ pub struct AccuracyBench {
     pub points: Vec<AccuracyPoint>,
     /// Why shading rows are absent, when they are.
     pub shading_skipped: Option<String>,
+    pub shadow_points: Vec<ShadowPoint>,
+    /// Why shadow rows are absent, when they are.
+    pub shadows_skipped: Option<String>,
     #[serde(skip)]
     pub images: Vec<ViewImages>,
 }
@@ -179,12 +186,12 @@ const SHADING_SETTINGS: [ShadingSetting; 6] = [
 ];
 
 /// Everything a bench run shares.
-struct Run<'a> {
-    ctx: &'a Context,
-    world: &'a WorldDesc,
-    source: &'a Arc<dyn HeightSource>,
-    cfg: &'a AccuracyBenchConfig,
-    off: Offscreen,
+pub(super) struct Run<'a> {
+    pub ctx: &'a Context,
+    pub world: &'a WorldDesc,
+    pub source: &'a Arc<dyn HeightSource>,
+    pub cfg: &'a AccuracyBenchConfig,
+    pub off: Offscreen,
 }
 
 pub fn bench_accuracy(
@@ -196,10 +203,19 @@ pub fn bench_accuracy(
     cfg: &AccuracyBenchConfig,
 ) -> Result<AccuracyBench> {
     let start = Instant::now();
-    let caster = RayCaster::new(&*source, world, cfg.raycast);
+    // The reference sees the scene's atmosphere when the frames do.
+    let fog = (effects.is_on(Effect::Atmosphere) && effects.is_on(Effect::Lighting)).then_some(effects.atmosphere);
+    let raycast = RaycastConfig { shadow_rays: false, atmosphere: fog, ..cfg.raycast };
+    let mut caster = RayCaster::new(&*source, world, raycast);
     let bounds_seconds = start.elapsed().as_secs_f64();
-    let mut fx = effects.clone();
+    // The geometry and shading rows compare with an unshadowed reference;
+    // the shadow rows have their own.
+    let mut fx = effects.clone().with(Effect::Shadows, false);
     fx.lighting.clay_albedo = Some(CLAY_ALBEDO);
+    let shadows_skipped = (!effects.is_on(Effect::Shadows))
+        .then(|| "the scene does not ask for effect shadows".to_string())
+        .or_else(|| (!effects.is_on(Effect::Lighting)).then(|| "the scene's lighting is off".to_string()))
+        .or_else(|| cfg.shadows.is_none().then(|| "not asked for".to_string()));
     let shading_skipped = (!(fx.is_on(Effect::Splat) || fx.is_on(Effect::Cliffs)))
         .then(|| "the scene has neither splat nor cliffs: every shading setting draws the same".to_string())
         .or_else(|| (!cfg.shading).then(|| "not asked for".to_string()));
@@ -224,6 +240,8 @@ pub fn bench_accuracy(
         bounds_seconds,
         points: Vec::new(),
         shading_skipped,
+        shadow_points: Vec::new(),
+        shadows_skipped,
         images: Vec::new(),
     };
     for (name, camera) in views {
@@ -267,12 +285,21 @@ pub fn bench_accuracy(
         if out.shading_skipped.is_none() {
             out.points.extend(run.shading_rows(&options, &view(cfg.shading_target_px), &reference, name)?);
         }
+        if let (None, Some(sweep)) = (&out.shadows_skipped, &cfg.shadows) {
+            caster.cfg.shadow_rays = true;
+            let shadowed = caster.image(&view(1.0), &fx.lighting, CLAY_ALBEDO, SKY);
+            caster.cfg.shadow_rays = false;
+            let geometry_fx = geometry.effects.clone();
+            let with = |fx: Effects| RendererOptions { effects: fx, ..geometry.clone() };
+            let v = view(cfg.shading_target_px);
+            out.shadow_points.extend(shadow_rows(&mut run, &with, &geometry_fx, sweep, &v, &shadowed, name)?);
+        }
     }
     Ok(out)
 }
 
 impl Run<'_> {
-    fn settle(&mut self, r: &mut TerrainRenderer, view: &View) -> Result<bool> {
+    pub(super) fn settle(&mut self, r: &mut TerrainRenderer, view: &View) -> Result<bool> {
         let s = self.off.settle(self.ctx, r, view, self.cfg.settle_timeout)?;
         if !s.settled {
             log::warn!("streaming did not settle in {:.0} s", self.cfg.settle_timeout.as_secs_f64());

@@ -11,6 +11,7 @@ pub mod prefix_sum;
 pub mod quadtree_update;
 pub mod sector_data;
 pub mod select_patches;
+pub mod sun_shadows;
 pub mod terrain_geometry;
 pub mod terrain_holes;
 pub mod terrain_query;

@@ -1,6 +1,7 @@
 //! CPU references, one per pass, sharing no code with the GPU path beyond
 //! its inputs: tests and benches compare each pass against its twin here.
 
+pub mod atmosphere;
 pub mod classify;
 pub mod finest;
 pub mod image_metric;
@@ -9,6 +10,7 @@ pub mod occlusion;
 pub mod octahedral;
 pub mod raycast;
 pub mod sector_data;
+pub mod sun_shadow;
 pub mod tonemap;
 pub mod traverse;
 

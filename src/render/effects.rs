@@ -14,7 +14,9 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::render::atmosphere::AtmosphereParams;
 use crate::render::shading::ShadeRules;
+use crate::render::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
 use crate::render::tonemap::Tonemap;
 use crate::render::view::Lighting;
 use serde::Serialize;
@@ -45,11 +47,17 @@ pub enum Effect {
     Queries,
     Decals,
     Grass,
+    /// Terrain sun shadows from the height field: the `sun_shadows` pass and
+    /// its per-node shadow atlas, sampled by `lighting_resolve` (needs
+    /// `lighting`).
     Shadows,
+    /// Aerial perspective and sky: `lighting_resolve`'s ATMOSPHERE variant
+    /// (needs `lighting`).
+    Atmosphere,
 }
 
 impl Effect {
-    pub const ALL: [Effect; 11] = [
+    pub const ALL: [Effect; 12] = [
         Effect::Holes,
         Effect::ConeCull,
         Effect::Occlusion,
@@ -61,6 +69,7 @@ impl Effect {
         Effect::Decals,
         Effect::Grass,
         Effect::Shadows,
+        Effect::Atmosphere,
     ];
 
     /// The scene-file key.
@@ -77,6 +86,7 @@ impl Effect {
             Effect::Decals => "decals",
             Effect::Grass => "grass",
             Effect::Shadows => "shadows",
+            Effect::Atmosphere => "atmosphere",
         }
     }
 
@@ -96,14 +106,16 @@ impl Effect {
             Effect::VirtualTexture => {
                 Some("not implemented in this version (its flavour bit exists; splat shading stands in for it)")
             }
-            Effect::Decals | Effect::Grass | Effect::Shadows => Some("not implemented in this version"),
+            Effect::Decals | Effect::Grass => Some("not implemented in this version"),
             Effect::Holes
             | Effect::ConeCull
             | Effect::Occlusion
             | Effect::Lighting
             | Effect::Queries
             | Effect::Cliffs
-            | Effect::Splat => None,
+            | Effect::Splat
+            | Effect::Shadows
+            | Effect::Atmosphere => None,
         }
     }
 
@@ -123,6 +135,10 @@ impl Effect {
             Effect::Splat => &["materials", "far_start_m", "far_band_m"],
             Effect::VirtualTexture => &["cache_mb"],
             Effect::Decals => &["file"],
+            Effect::Shadows => &["resolution", "steps", "update_budget", "softness_deg", "reach_m"],
+            Effect::Atmosphere => {
+                &["visibility_km", "scale_height_m", "haze_color", "sun_g", "zenith_color", "air_depth"]
+            }
             _ => &[],
         }
     }
@@ -142,6 +158,8 @@ pub struct Effects {
     pub splat_materials: Option<PathBuf>,
     pub virtual_texture_cache_mb: u32,
     pub decals_file: Option<PathBuf>,
+    pub shadows: ShadowParams,
+    pub atmosphere: AtmosphereParams,
 }
 
 impl Default for Effects {
@@ -155,6 +173,8 @@ impl Default for Effects {
             splat_materials: None,
             virtual_texture_cache_mb: 256,
             decals_file: None,
+            shadows: ShadowParams::default(),
+            atmosphere: AtmosphereParams::default(),
         }
     }
 }
@@ -263,6 +283,26 @@ impl Effects {
                     self.virtual_texture_cache_mb =
                         mb.ok_or_else(|| wrong(&key, "a whole number 1..=65536", v))? as u32;
                 }
+                "resolution" => {
+                    let max = i64::from(crate::shaders::consts::SUN_SHADOW_MAX_SIDE);
+                    self.shadows.resolution = whole(&key, v, 2, max)?;
+                }
+                "steps" => self.shadows.steps = whole(&key, v, 1, 1024)?,
+                "update_budget" => self.shadows.update_budget = whole(&key, v, 1, i64::from(MAX_UPDATE_BUDGET))?,
+                "softness_deg" => self.shadows.softness_deg = number(&key, v, 0.0, 10.0)? as f32,
+                "reach_m" => self.shadows.reach_m = number(&key, v, 1.0, 1e7)? as f32,
+                "visibility_km" => self.atmosphere.visibility_km = number(&key, v, 0.01, 1e5)? as f32,
+                "scale_height_m" => self.atmosphere.scale_height_m = number(&key, v, 1.0, 1e5)? as f32,
+                "haze_color" => {
+                    let c = colour(&key, v)?;
+                    if c.iter().any(|&x| x > 1.0) {
+                        return Err(bad(format!("{key} = {c:?}: a share of the light scattered, each 0..=1")));
+                    }
+                    self.atmosphere.haze_color = c;
+                }
+                "sun_g" => self.atmosphere.sun_g = number(&key, v, 0.0, 0.95)? as f32,
+                "zenith_color" => self.atmosphere.zenith_color = colour(&key, v)?,
+                "air_depth" => self.atmosphere.air_depth = number(&key, v, 0.0, 10.0)? as f32,
                 "materials" => self.splat_materials = Some(file(&key, v, base)?),
                 "file" => self.decals_file = Some(file(&key, v, base)?),
                 _ => unreachable!("{key} is in the parameter list but not read"),
@@ -300,6 +340,14 @@ fn number(key: &str, v: &toml::Value, lo: f64, hi: f64) -> Result<f64> {
         Some(x) => Err(bad(format!("{key} = {x} is outside {lo}..={hi}"))),
         None => Err(wrong(key, "a number", v)),
     }
+}
+
+fn whole(key: &str, v: &toml::Value, lo: i64, hi: i64) -> Result<u32> {
+    let n = v.as_integer().filter(|n| (lo..=hi).contains(n));
+    Ok(n.ok_or_else(|| match v.as_integer() {
+        Some(n) => bad(format!("{key} = {n} is outside {lo}..={hi}")),
+        None => wrong(key, &format!("a whole number {lo}..={hi}"), v),
+    })? as u32)
 }
 
 fn colour(key: &str, v: &toml::Value) -> Result<[f32; 3]> {
@@ -354,6 +402,12 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                 (false, format!("requested, but {why}"))
             } else {
                 match (effect, &content.holes_missing) {
+                    (Effect::Shadows, _) if !fx.is_on(Effect::Lighting) => {
+                        (false, "requested, but it shades the sun's light and effect lighting is off".into())
+                    }
+                    (Effect::Atmosphere, _) if !fx.is_on(Effect::Lighting) => {
+                        (false, "requested, but it hazes the lit image and effect lighting is off".into())
+                    }
                     (Effect::Holes, Some(why)) if force => (true, format!("forced on (test override) although {why}")),
                     (Effect::Holes, Some(why)) => (false, format!("requested, but {why}")),
                     (Effect::Holes, None) => (true, format!("requested{how}: {}", content.holes_present)),
@@ -418,6 +472,13 @@ mod tests {
             ),
             ("lighting = { tonemap = 1 }", "effects.lighting.tonemap must be one of aces, clip"),
             ("lighting = { exposure_ev = 40 }", "effects.lighting.exposure_ev = 40 is outside"),
+            ("shadows = { resolution = 1 }", "effects.shadows.resolution = 1 is outside 2..=257"),
+            ("shadows = { steps = 2.5 }", "effects.shadows.steps must be a whole number 1..=1024"),
+            ("shadows = { update_budget = 0 }", "effects.shadows.update_budget = 0 is outside 1..=64"),
+            ("shadows = { softness_deg = -1 }", "effects.shadows.softness_deg = -1 is outside"),
+            ("atmosphere = { visibility_km = 0 }", "effects.atmosphere.visibility_km = 0 is outside"),
+            ("atmosphere = { haze_color = [1, 2, 0] }", "effects.atmosphere.haze_color = [1.0, 2.0, 0.0]: a share"),
+            ("atmosphere = { sun_g = 1 }", "effects.atmosphere.sun_g = 1 is outside"),
         ] {
             let e = parse(text).unwrap_err().to_string();
             assert!(e.contains(key) && !e.contains('\n'), "{text}: {e}");

@@ -1,7 +1,7 @@
 //! One frame's passes after streaming, recorded phase by phase: the LOD
 //! phase (traverse, lod_map, sector_data, select_patches, cull_patches),
 //! the draws (terrain_geometry, terrain_holes and occlusion's phase 2) and
-//! the shading (classify_tiles, gbuffer_tiles, lighting_resolve). The
+//! the shading (classify_tiles, gbuffer_tiles, sun_shadows, lighting_resolve). The
 //! renderer lends its passes apart from the frame executor and the
 //! streaming state ([`FramePasses`]); each pass is logged in the frame's
 //! [`FrameLog`] as the graph expects.
@@ -11,10 +11,11 @@ use crate::gpu::{vk, Buffer, Recorder};
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_patches::{CullPatches, CullStages};
 use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles};
-use crate::passes::lighting_resolve::LightingResolve;
+use crate::passes::lighting_resolve::{LightingResolve, ResolveInputs};
 use crate::passes::lod_map::LodMap;
 use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
+use crate::passes::sun_shadows::SunShadows;
 use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
@@ -23,6 +24,7 @@ use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FrameLog, FramePass, Skip};
 use crate::render::materials_gpu::MaterialResources;
 use crate::render::renderer::Occlusion;
+use crate::render::sun_shadows::SunShadowJob;
 use crate::render::view::TerrainViewGpu;
 use crate::terrain::gpu_quadtree::GpuQuadtree;
 use crate::terrain::selection::TraverseParams;
@@ -41,6 +43,11 @@ pub(crate) struct FramePasses<'a> {
     pub classify: &'a ClassifyTiles,
     pub gbuffer_tiles: &'a GbufferTiles,
     pub resolve: &'a LightingResolve,
+    /// Effect `shadows`, with this frame's jobs (empty: skipped), the unit
+    /// vector towards the sun and its elevation (degrees).
+    pub shadows: Option<(&'a SunShadows, &'a [SunShadowJob], glam::DVec3, f64)>,
+    /// Effect `atmosphere`: the fog's push vectors.
+    pub fog: Option<[[f32; 4]; 3]>,
     pub materials: Option<&'a MaterialResources>,
     pub view_buffer: &'a Buffer,
     pub stages: CullStages,
@@ -149,7 +156,24 @@ impl FramePasses<'_> {
             });
         }
         log.ran(FramePass::GbufferTiles, None);
+        match self.shadows {
+            Some((_, [], _, _)) => log.skipped(FramePass::SunShadows, Skip::ShadowsCurrent),
+            Some((s, jobs, sun, _)) => {
+                frame.pass(FramePass::SunShadows.name(), false, QueueKind::Graphics, |r| {
+                    s.record(r, jobs, sun, terrain, self.sector_data, tree)
+                });
+                log.ran(FramePass::SunShadows, Some(jobs.len() as u64));
+            }
+            None => {}
+        }
         let resolve = self.resolve;
-        pass(frame, log, FramePass::LightingResolve, |r| resolve.record(r, targets, gb, self.view_buffer));
+        let inputs = ResolveInputs {
+            terrain,
+            sector_data: self.sector_data,
+            tree,
+            shadows: self.shadows.map(|(s, _, _, elevation)| (s, elevation)),
+            fog: self.fog,
+        };
+        pass(frame, log, FramePass::LightingResolve, |r| resolve.record(r, targets, gb, self.view_buffer, &inputs));
     }
 }

@@ -9,13 +9,14 @@
 //! nothing to do. Occlusion culling draws twice: the drawing passes appear
 //! again as phase 2 after `hiz_build` and `cull_occluded`. Shading follows:
 //! `classify_tiles`, `gbuffer_tiles` (one timed draw per variant built) and
-//! `lighting_resolve`.
+//! `sun_shadows` (effect `shadows`: skipped while every resident node's
+//! shadow is current) and `lighting_resolve`.
 
 use crate::frame::QueueKind;
 use crate::passes::{
     classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches, gbuffer_tiles::GbufferTiles,
     hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap, quadtree_update::QuadtreeUpdatePass,
-    sector_data::SectorData, select_patches::SelectPatches, terrain_geometry::TerrainGeometry,
+    sector_data::SectorData, select_patches::SelectPatches, sun_shadows::SunShadows, terrain_geometry::TerrainGeometry,
     terrain_holes::TerrainHoles, traverse::Traverse,
 };
 use crate::render::effects::{Effect, EffectDecision};
@@ -40,11 +41,13 @@ pub enum FramePass {
     ClassifyTiles,
     /// One draw per variant built, each timed on its own.
     GbufferTiles,
+    /// Effect `shadows`: the shadow textures of arrived and stale nodes.
+    SunShadows,
     LightingResolve,
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 15] = [
+    pub const ALL: [FramePass; 16] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -59,6 +62,7 @@ impl FramePass {
         FramePass::TerrainHolesLate,
         FramePass::ClassifyTiles,
         FramePass::GbufferTiles,
+        FramePass::SunShadows,
         FramePass::LightingResolve,
     ];
 
@@ -77,6 +81,7 @@ impl FramePass {
             FramePass::CullOccluded => CullOccluded::NAME,
             FramePass::ClassifyTiles => ClassifyTiles::NAME,
             FramePass::GbufferTiles => GbufferTiles::NAME,
+            FramePass::SunShadows => SunShadows::NAME,
             FramePass::LightingResolve => LightingResolve::NAME,
         }
     }
@@ -112,6 +117,7 @@ impl FramePass {
             FramePass::TerrainHoles => &[Effect::Holes],
             FramePass::HizBuild | FramePass::CullOccluded | FramePass::TerrainGeometryLate => &[Effect::Occlusion],
             FramePass::TerrainHolesLate => &[Effect::Holes, Effect::Occlusion],
+            FramePass::SunShadows => &[Effect::Shadows],
             _ => &[],
         }
     }
@@ -123,6 +129,8 @@ pub enum Skip {
     NothingToUpload,
     /// Occlusion is built but switched off this frame (`CullStages`).
     OcclusionOff,
+    /// No node arrived and every resident node's shadow was made for this sun.
+    ShadowsCurrent,
 }
 
 impl Skip {
@@ -130,6 +138,7 @@ impl Skip {
         match self {
             Skip::NothingToUpload => "no node arrived or left this frame (known on the CPU)",
             Skip::OcclusionOff => "occlusion switched off this frame (culling stages)",
+            Skip::ShadowsCurrent => "idle: every resident node's shadow is made for this sun (known on the CPU)",
         }
     }
 }

@@ -4,6 +4,7 @@
 //! [`View`]; [`report`] says what was built and what ran; [`offscreen`] is
 //! the headless frame loop of the tools and tests.
 
+pub mod atmosphere;
 pub mod detail_textures;
 pub mod effects;
 mod frame_passes;
@@ -16,6 +17,7 @@ pub mod renderer;
 pub mod report;
 pub mod shading;
 pub mod stats;
+pub mod sun_shadows;
 pub mod telemetry;
 pub mod tonemap;
 pub mod view;

@@ -120,7 +120,7 @@ impl Offscreen {
         loop {
             self.frame(ctx, renderer, view)?;
             frames += 1;
-            calm = if renderer.terrain.settled() { calm + 1 } else { 0 };
+            calm = if renderer.settled() { calm + 1 } else { 0 };
             if calm >= 2 {
                 return Ok(Settle { frames, seconds: start.elapsed().as_secs_f64(), settled: true });
             }

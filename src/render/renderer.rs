@@ -26,6 +26,7 @@ use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
+use crate::passes::sun_shadows::SunShadows;
 use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::traverse::Traverse;
@@ -36,13 +37,14 @@ use crate::render::graph::{FramePass, PassGraph, Skip};
 use crate::render::materials_gpu::MaterialResources;
 use crate::render::shading::{ShadeRules, Shading};
 use crate::render::stats::TRIANGLES_PER_PATCH;
+use crate::render::sun_shadows::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
 use crate::shaders::structs;
 use crate::terrain::gpu_quadtree::{AtlasSet, ATLAS_NORMAL, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_SPLAT};
 use crate::terrain::quadtree::texture_extent;
 use crate::terrain::{Terrain, TerrainOptions};
-use crate::world::{HeightSource, Hole, WorldDesc};
+use crate::world::{HeightSource, Hole, NodeId, WorldDesc};
 use std::sync::Arc;
 
 #[derive(Debug, Clone, Default)]
@@ -105,6 +107,9 @@ pub struct TerrainRenderer {
     pub classify: ClassifyTiles,
     pub gbuffer_tiles: GbufferTiles,
     pub resolve: LightingResolve,
+    /// Effect `shadows`: the pass, its atlas, and which nodes it redoes when.
+    pub sun_shadows: Option<SunShadows>,
+    pub shadow_schedule: ShadowSchedule,
     /// Effects `splat` or `cliffs`: the material table and detail textures.
     pub materials: Option<MaterialResources>,
     /// Made for the view size on the first frame (remade when it changes).
@@ -287,7 +292,13 @@ impl TerrainRenderer {
             holes: holes_pass,
             classify: ClassifyTiles::new(ctx)?,
             gbuffer_tiles,
-            resolve: LightingResolve::new(ctx, on(Effect::Lighting))?,
+            resolve: LightingResolve::new(ctx, on(Effect::Lighting), on(Effect::Shadows), on(Effect::Atmosphere))?,
+            sun_shadows: if on(Effect::Shadows) {
+                Some(SunShadows::new(ctx, options.effects.shadows, options.terrain.slots)?)
+            } else {
+                None
+            },
+            shadow_schedule: ShadowSchedule::default(),
             materials,
             gbuffer: None,
             shade,
@@ -398,6 +409,7 @@ impl TerrainRenderer {
         gpu.lod_params[3] = if self.lod.stitching { 0.0 } else { 1.0 };
         let params = view.traverse_params();
         self.terrain.stream(&params)?;
+        let fog = self.effect_on(Effect::Atmosphere).then(|| self.effects.atmosphere.gpu(world.height_range_m[0]));
         let mut frame = self.exec.begin(cmds, mode);
         let number = frame.number();
         self.terrain.tree.begin_frame(number);
@@ -412,6 +424,20 @@ impl TerrainRenderer {
             log.skipped(FramePass::QuadtreeUpdate, Skip::NothingToUpload);
         }
         let tree = &self.terrain.tree;
+        let sun = self.effects.lighting.sun_dir();
+        let jobs = match &self.sun_shadows {
+            Some(s) => {
+                let march = MarchSun { dir: sun.as_vec3().to_array(), reach_m: f64::from(s.params.reach_m) };
+                let extent = |n: NodeId| {
+                    let slot = tree.shadow.slot_of(n)?;
+                    let [lo, hi] = tree.shadow.height_range(slot);
+                    let [x0, y0, x1, y1] = world.bounds_m(n);
+                    Some((slot, NodeExtent { bounds_m: [x0, y0, x1, y1], min_m: lo, max_m: hi }))
+                };
+                self.shadow_schedule.plan(march, s.params.update_budget, tree.arrived(), extent)
+            }
+            None => Vec::new(),
+        };
         let passes = FramePasses {
             traverse: &self.traverse,
             lod_map: &self.lod_map,
@@ -424,6 +450,11 @@ impl TerrainRenderer {
             classify: &self.classify,
             gbuffer_tiles: &self.gbuffer_tiles,
             resolve: &self.resolve,
+            shadows: self
+                .sun_shadows
+                .as_ref()
+                .map(|s| (s, jobs.as_slice(), sun, self.effects.lighting.sun_elevation_deg)),
+            fog,
             materials: self.materials.as_ref(),
             view_buffer: &self.view_buffer,
             stages: self.stages,
@@ -485,6 +516,12 @@ impl TerrainRenderer {
         Ok(out)
     }
 
+    /// Streaming rests and every resident node's sun shadow is current: a
+    /// frame now shows what more frames would.
+    pub fn settled(&self) -> bool {
+        self.terrain.settled() && self.shadow_schedule.stale() == 0
+    }
+
     /// How the last frame was submitted (None before the first).
     pub fn queue_mode(&self) -> Option<QueueMode> {
         self.mode
@@ -502,6 +539,11 @@ impl TerrainRenderer {
         self.telemetry.harvest(ctx);
         self.exec.poll();
         self.exec.latest()
+    }
+
+    /// What became of each built pass in the last recorded frame.
+    pub fn last_frame_log(&self) -> Option<&crate::render::graph::FrameLog> {
+        self.graph.last_frame()
     }
 
     /// Frames recorded so far (the number of the last one).
@@ -528,6 +570,9 @@ impl TerrainRenderer {
         }
         out.push(self.classify.pipeline_label().to_string());
         out.extend(self.gbuffer_tiles.pipeline_labels());
+        if let Some(s) = &self.sun_shadows {
+            out.push(s.pipeline_label().to_string());
+        }
         out.push(self.resolve.pipeline_label().to_string());
         out
     }
@@ -577,6 +622,9 @@ impl TerrainRenderer {
         }
         if let Some(l) = &self.classify.lists {
             out.push((l.buffer.name.clone(), l.buffer.memory_bytes(), Vec::new()));
+        }
+        for (name, bytes) in self.sun_shadows.iter().flat_map(|s| s.memory()) {
+            out.push((name, bytes, vec![Effect::Shadows]));
         }
         if let Some(m) = &self.materials {
             let users: Vec<Effect> =

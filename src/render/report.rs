@@ -47,6 +47,9 @@ pub struct PassWork {
     /// those phase 1 did not draw).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub patches_tested: Option<u64>,
+    /// Nodes whose sun shadow texture was made (sun_shadows).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shadow_nodes: Option<u64>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -165,6 +168,7 @@ fn work_text(w: &PassWork) -> String {
         }
     };
     add(w.writes, "writes");
+    add(w.shadow_nodes, "shadow nodes");
     add(w.dispatch_groups, "groups");
     add(w.patches_tested, "patches tested");
     add(w.instances, "instances");
@@ -308,6 +312,13 @@ fn work_of(
         }
         // Reported per variant by the caller.
         FramePass::GbufferTiles => (PassWork::default(), None),
+        FramePass::SunShadows => {
+            let jobs = cpu_work.unwrap_or(0);
+            let side = r.sun_shadows.as_ref().map_or(0, |s| u64::from(s.params.resolution));
+            let [wx, wy, _] = crate::shaders::sun_shadows::WORKGROUP_SIZE;
+            let per_node = side.div_ceil(u64::from(wx)) * side.div_ceil(u64::from(wy));
+            (PassWork { shadow_nodes: Some(jobs), ..groups(jobs * per_node) }, None)
+        }
         FramePass::LightingResolve => (PassWork::default(), None),
     }
 }

@@ -161,6 +161,8 @@ pub struct GpuQuadtree {
     current: usize,
     waiting: VecDeque<(BakedNode, i8)>,
     update_capacity: u32,
+    /// Nodes made resident by this frame's `prepare_frame`, with their slots.
+    arrived: Vec<(NodeId, u32)>,
 }
 
 impl GpuQuadtree {
@@ -305,6 +307,7 @@ impl GpuQuadtree {
             current: 0,
             waiting: VecDeque::new(),
             update_capacity,
+            arrived: Vec::new(),
         })
     }
 
@@ -389,6 +392,12 @@ impl GpuQuadtree {
         assert!(frame > self.frame, "frame {frame} after {}", self.frame);
         self.frame = frame;
         self.shadow.begin_frame(frame);
+        self.arrived.clear();
+    }
+
+    /// Nodes this frame made resident (empty before `prepare_frame`).
+    pub fn arrived(&self) -> &[(NodeId, u32)] {
+        &self.arrived
     }
 
     /// The ring slot the current frame's uploads use.
@@ -443,6 +452,7 @@ impl GpuQuadtree {
                 rec.transition(img, ATLAS_LAYOUT);
             }
         }
+        self.arrived = uploaded.iter().map(|(n, slot)| (n.id, *slot)).collect();
         let updates = self.shadow.take_updates();
         assert!(updates.len() as u32 <= self.update_capacity, "{} updates exceed the ring", updates.len());
         let bytes: &[u8] = bytemuck::cast_slice::<QuadtreeUpdate, u8>(&updates);

@@ -233,6 +233,13 @@ impl QuadtreeShadow {
         Some(slot)
     }
 
+    /// Lowest and highest height (m) of the node in `slot`.
+    pub fn height_range(&self, slot: u32) -> [f64; 2] {
+        let w = self.descs[slot as usize][0];
+        let decode = |v: u32| f64::from(self.world.decode_height(v as u16));
+        [decode(w & 0xFFFF), decode(w >> k::HALF_BITS)]
+    }
+
     /// Whether any write waits for `take_updates`.
     pub fn has_updates(&self) -> bool {
         !(self.texels.is_empty() && self.desc_writes.is_empty() && self.error_writes.is_empty())

@@ -6,6 +6,7 @@ use anyhow::{bail, Result};
 use std::path::Path;
 use std::time::{Duration, Instant};
 use vista::bench::accuracy::CLAY_ALBEDO;
+use vista::bench::accuracy_shadows::ShadowSweep;
 use vista::bench::{bench_accuracy, cull_views, AccuracyBench, AccuracyBenchConfig};
 use vista::gpu::Context;
 use vista::reference::{flip_magma, flip_map, RaycastConfig};
@@ -18,15 +19,25 @@ fn view_key(name: &str) -> String {
     name.replace(' ', "-")
 }
 
-pub fn accuracy(
-    ctx: &Context,
-    args: &ViewBench,
-    targets: &[f32],
-    views: Option<&[String]>,
-    plot: Option<&Path>,
-    images: Option<&Path>,
-    slots: u32,
-) -> Result<()> {
+/// What `bench accuracy` takes beyond the view benches' arguments.
+pub struct AccuracyArgs<'a> {
+    pub targets: &'a [f32],
+    pub views: Option<&'a [String]>,
+    pub plot: Option<&'a Path>,
+    pub images: Option<&'a Path>,
+    pub slots: u32,
+    pub shadows: ShadowSweep,
+}
+
+pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()> {
+    let AccuracyArgs { targets, views, plot, images, slots, .. } = *a;
+    let max_side = vista::shaders::consts::SUN_SHADOW_MAX_SIDE;
+    if a.shadows.resolutions.is_empty() || a.shadows.resolutions.iter().any(|r| !(2..=max_side).contains(r)) {
+        bail!("--shadow-resolutions must be texels per node side, 2..={max_side}");
+    }
+    if a.shadows.steps.is_empty() || a.shadows.steps.iter().any(|s| !(1..=1024).contains(s)) {
+        bail!("--shadow-steps must be whole numbers 1..=1024");
+    }
     if targets.is_empty() || targets.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         bail!("--targets must be positive numbers of pixels");
     }
@@ -68,6 +79,7 @@ pub fn accuracy(
         // One ray per pixel: the renderer samples each pixel once too.
         raycast: RaycastConfig { colour_samples: 1, ..RaycastConfig::default() },
         keep_images: images.is_some(),
+        shadows: Some(a.shadows.clone()),
     };
     let start = Instant::now();
     let result = bench_accuracy(ctx, &d, world.source.clone(), &world.effects, &all, &cfg);
@@ -230,5 +242,45 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
     if let Some(why) = &b.shading_skipped {
         println!("shading rows skipped: {why}");
     }
+    print_shadows(b);
     println!("({seconds:.0} s in all)");
+}
+
+fn print_shadows(b: &AccuracyBench) {
+    if let Some(why) = &b.shadows_skipped {
+        println!("shadow rows skipped: {why}");
+        return;
+    }
+    println!(
+        "{:<12} {:<10} {:>9} {:>10} {:>10} {:>8} {:>9} {:>11} {:>9} {:>9}",
+        "view", "shadows", "compared", "mismatch", "frame dark", "FLIP", "resident", "ms/node", "full ms", "resolve"
+    );
+    for p in &b.shadow_points {
+        let setting = match (p.resolution, p.steps) {
+            (Some(r), Some(s)) => format!("{r}x{r} {s}"),
+            _ => "off".to_string(),
+        };
+        let ms = |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |v| format!("{v:.digits$}"));
+        println!(
+            "{:<12} {:<10} {:>9} {:>9.2}% {:>9.2}% {:>8.4} {:>9} {:>11} {:>9} {:>9.2}{}",
+            p.view,
+            setting,
+            p.compared_pixels,
+            100.0 * p.state_mismatch,
+            100.0 * p.mismatch_frame_dark,
+            p.flip_mean,
+            p.resident_nodes,
+            ms(p.ms_per_node, 3),
+            ms(p.full_update_ms, 1),
+            p.resolve_ms,
+            if p.settled { "" } else { " (not settled)" }
+        );
+    }
+    println!(
+        "shadow rows: against a reference casting an exact shadow ray from every lit hit, at the shading target; \
+         shadows: texels per node side and march steps; mismatch: pixels facing the sun (n.l >= 0.15 in both) lit in \
+         one image and shadowed in the other (frame dark: of them, shadowed in the frame only); FLIP: the clay-lit image vs that reference; ms/node: sun_shadows GPU ms \
+         per node re-marched while the sun moves; full: for every resident node (a static sun costs nothing once \
+         settled: the pass is idle); resolve: lighting_resolve's GPU ms"
+    );
 }

@@ -55,6 +55,14 @@ pub struct BenchArgs {
     /// shading target and their FLIP map into this folder.
     #[arg(long)]
     images: Option<PathBuf>,
+    /// `bench accuracy`: shadow texture resolutions of the shadow rows
+    /// (texels per node side, 2..=257) [default: 33,65,129].
+    #[arg(long, value_delimiter = ',', value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
+    shadow_resolutions: Option<Vec<u32>>,
+    /// `bench accuracy`: march steps of the shadow rows (1..=1024)
+    /// [default: 8,24,64].
+    #[arg(long, value_delimiter = ',', value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
+    shadow_steps: Option<Vec<u32>>,
     /// `bench accuracy`: resident node slots of the renderers (at most
     /// 1023) [default: the renderer's default].
     #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
@@ -197,15 +205,20 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
         BenchKind::Accuracy => {
             let targets = args.targets.clone().unwrap_or(crate::bench_accuracy_cmd::DEFAULT_TARGETS.to_vec());
             let bench = ViewBench::new(&args, 3)?;
-            crate::bench_accuracy_cmd::accuracy(
-                ctx,
-                &bench,
-                &targets,
-                args.views.as_deref(),
-                args.plot.as_deref(),
-                args.images.as_deref(),
-                args.slots.unwrap_or(vista::terrain::TerrainOptions::default().slots),
-            )
+            let default = vista::bench::accuracy_shadows::ShadowSweep::default();
+            let shadows = vista::bench::accuracy_shadows::ShadowSweep {
+                resolutions: args.shadow_resolutions.clone().unwrap_or(default.resolutions),
+                steps: args.shadow_steps.clone().unwrap_or(default.steps),
+            };
+            let a = crate::bench_accuracy_cmd::AccuracyArgs {
+                targets: &targets,
+                views: args.views.as_deref(),
+                plot: args.plot.as_deref(),
+                images: args.images.as_deref(),
+                slots: args.slots.unwrap_or(vista::terrain::TerrainOptions::default().slots),
+                shadows,
+            };
+            crate::bench_accuracy_cmd::accuracy(ctx, &bench, &a)
         }
     }
 }

@@ -1,0 +1,75 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Sun shadow textures of the nodes in the job list (one per z workgroup):
+// per texel, the height below which that point is in the sun's shadow,
+// max_i(H(p + u t_i) - t_i tan(elevation)), and the t_i that sets it, over
+// geometric steps towards the
+// sun, H being the finest resident height anywhere (sector data), so a
+// ridge in another node casts its shadow here. The march ends where the ray
+// clears the world's highest point or at the reach.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#include "constants.glsl"
+#include "sun_shadow.glsl"
+
+struct SunShadowJob {
+    uint slot;
+    uint lod;
+    uint x;
+    uint y;
+};
+
+layout(set = 0, binding = 0, std430) readonly buffer SectorData { uint words[]; } sector_data;
+layout(set = 0, binding = 1) uniform texture2DArray height_atlas;
+layout(set = 0, binding = 2) uniform sampler nearest;
+layout(set = 0, binding = 3, rg32f) uniform writeonly image2DArray shadow_atlas;
+layout(set = 0, binding = 4, std430) readonly buffer Jobs { SunShadowJob jobs[]; } jobs;
+
+#define VISTA_SECTOR_WORD(i) sector_data.words[i]
+#define VISTA_HEIGHT_ATLAS height_atlas
+#define VISTA_NORMAL_ATLAS height_atlas
+#define VISTA_ATLAS_SAMPLER nearest
+#define VISTA_NO_MATERIAL_QUERY
+#define VISTA_TERRAIN pc.terrain
+#define VISTA_TERRAIN_DECLARE_ONLY
+#include "terrain_sample.glsl"
+
+// sun: xy the horizontal unit vector towards the sun, z tan(elevation), w
+// the reach (m); params: steps, texture side, jobs, unused.
+layout(push_constant, std430) uniform SunShadowPush { VistaTerrain terrain; vec4 sun; uvec4 params; } pc;
+
+#undef VISTA_TERRAIN_DECLARE_ONLY
+#include "terrain_sample.glsl"
+
+void main() {
+    uint side = pc.params.y;
+    uvec2 t = gl_GlobalInvocationID.xy;
+    if (gl_WorkGroupID.z >= pc.params.z || any(greaterThanEqual(t, uvec2(side)))) {
+        return;
+    }
+    // Field by field: a struct copied out of a block is OpCopyLogical,
+    // which naga cannot parse.
+    uint z = gl_WorkGroupID.z;
+    uint slot = jobs.jobs[z].slot;
+    float spacing = pc.terrain.spacing_m * float(1u << jobs.jobs[z].lod);
+    vec2 origin = vec2(jobs.jobs[z].x, jobs.jobs[z].y) * (128.0 * spacing)
+                + vec2(pc.terrain.grid_origin_x_m, pc.terrain.grid_origin_y_m);
+    vec2 p = origin + sun_shadow_texel_local(vec2(t), side) * spacing;
+    float h0;
+    float result = SUN_SHADOW_NONE;
+    float at = 0.0;
+    float rise = pc.sun.z;
+    if (vista_terrain_height(p, h0)) {
+        float ceiling = pc.terrain.height_lo + pc.terrain.height_range;
+        float last = rise > 0.0 ? min(pc.sun.w, (ceiling - h0) / rise) : pc.sun.w;
+        for (uint i = 0u; i < pc.params.x && last > spacing; ++i) {
+            float d = sun_shadow_step(i, pc.params.x, spacing, last);
+            float h;
+            if (vista_terrain_height(p + pc.sun.xy * d, h) && h - d * rise > result) {
+                result = h - d * rise;
+                at = d;
+            }
+        }
+    }
+    imageStore(shadow_atlas, ivec3(t, slot), vec4(result, at, 0.0, 0.0));
+}
