@@ -77,8 +77,10 @@ vec2 shadow_texel(ivec2 t, uint slot) {
     return texelFetch(sampler2DArray(shadow_atlas, nearest), ivec3(t, int(slot)), 0).rg;
 }
 
-// How much of the sun the terrain point `p` (world metres) sees: 1 where no
-// resident node covers it.
+// How much of the sun the ground under `p` (world metres) sees: 1 where no
+// resident node covers it. The ground, not the pixel's drawn height: the
+// threshold is relative to the finest resident ground, from which a
+// coarser patch drawn there strays by up to its LOD error.
 float sun_seen(vec3 p) {
     VistaNodeHit hit = vista_find_node(p.xy);
     if (!hit.found) {
@@ -91,7 +93,7 @@ float sun_seen(vec3 p) {
     vec2 a = mix(shadow_texel(i0, hit.slot), shadow_texel(i0 + ivec2(1, 0), hit.slot), w.x);
     vec2 b = mix(shadow_texel(i0 + ivec2(0, 1), hit.slot), shadow_texel(i0 + ivec2(1, 1), hit.slot), w.x);
     vec2 s = mix(a, b, w.y);
-    return sun_visibility(p.z, s.x, s.y, pc.shadow.x);
+    return sun_visibility(0.0, s.x, s.y, pc.shadow.x);
 }
 #endif
 

@@ -1,9 +1,9 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Sun shadow textures of the nodes in the job list (one per z workgroup):
-// per texel, the height below which that point is in the sun's shadow,
-// max_i(H(p + u t_i) - t_i tan(elevation)), and the t_i that sets it, over
-// geometric steps towards the
+// per texel, how far above the terrain there the sun's shadow reaches,
+// max_i(H(p + u t_i) - t_i tan(elevation)) - H(p), and the t_i that sets
+// it, over steps towards the
 // sun, H being the finest resident height anywhere (sector data), so a
 // ridge in another node casts its shadow here. The march ends where the ray
 // clears the world's highest point or at the reach.
@@ -71,5 +71,9 @@ void main() {
             }
         }
     }
-    imageStore(shadow_atlas, ivec3(t, slot), vec4(result, at, 0.0, 0.0));
+    // Relative to the ground: between texels the ground curves, the
+    // shadow's depth below it hardly (an absolute height, interpolated
+    // across a valley, would rise above the ground and shadow a lit slope).
+    float depth = result == SUN_SHADOW_NONE ? SUN_SHADOW_NONE : result - h0;
+    imageStore(shadow_atlas, ivec3(t, slot), vec4(depth, at, 0.0, 0.0));
 }

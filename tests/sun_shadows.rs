@@ -121,7 +121,8 @@ fn check_against_twin_and_geometry(ctx: &Context, rig: &Rig, elevation: f64, sun
             if (q - DVec2::from(c)).length() < r + 2.0 * texel {
                 continue;
             }
-            let gpu_dark = f64::from(*h) > 100.0;
+            // Relative to the ground: above it, the ground is in shadow.
+            let gpu_dark = *h > 0.0;
             let exact_dark = in_exact_shadow(q, away, rise);
             shadowed += usize::from(gpu_dark);
             exact += usize::from(exact_dark);

@@ -1,8 +1,9 @@
 // Terrain sun shadows after REDengine 3 (seed 004): per resident node, a
 // texture whose texel holds the height below which a point there is in the
-// sun's shadow, and how far towards the sun the occluder that sets it lies.
+// sun's shadow, relative to the ground there (positive: the ground is in
+// shadow), and how far towards the sun the occluder that sets it lies.
 // sun_shadows.comp makes it by marching towards the sun through the height
-// data; lighting_resolve compares a pixel's height with it. The occluder's
+// data; lighting_resolve shades the ground under each pixel by it. The occluder's
 // distance sizes the penumbra: the sun is a disc, so the heights from where
 // its top edge to where its bottom edge is hidden span distance x the
 // disc's spread in slope (`penumbra`, render/sun_shadows.rs). The CPU twin
@@ -34,8 +35,9 @@ vec2 sun_shadow_texel_local(vec2 t, uint side) {
 }
 
 // How much of the sun a point at height `z` sees given the threshold `h` set
-// by an occluder `dist` metres away: a ramp `dist * penumbra` metres wide
-// centred on the threshold (a hard step where that is 0).
+// by an occluder `dist` metres away (both heights relative to the same
+// ground): a ramp `dist * penumbra` metres wide centred on the threshold (a
+// hard step where that is 0).
 float sun_visibility(float z, float h, float dist, float penumbra) {
     float width = dist * penumbra;
     if (width <= 0.0) {

@@ -41,8 +41,8 @@ impl March {
         March { dir: h / len, rise: sun.z / len, steps, reach_m, ceiling_m }
     }
 
-    /// (threshold height, occluder distance) at `p`, whose own height is
-    /// `height(p)`; `first` is the node's sample spacing.
+    /// (threshold height relative to the ground `height(p)`, occluder
+    /// distance) at `p`; `first` is the node's sample spacing.
     pub fn threshold(&self, p: DVec2, first: f64, height: impl Fn(DVec2) -> Option<f64>) -> (f64, f64) {
         let Some(h0) = height(p) else { return (NONE, 0.0) };
         let last = if self.rise > 0.0 { self.reach_m.min((self.ceiling_m - h0) / self.rise) } else { self.reach_m };
@@ -58,7 +58,10 @@ impl March {
                 }
             }
         }
-        best
+        if best.0 == NONE {
+            return best;
+        }
+        (best.0 - h0, best.1)
     }
 }
 
@@ -94,7 +97,7 @@ mod tests {
     #[test]
     fn a_wall_shadows_below_its_top_minus_the_rise() {
         // A 30 m wall starting 19.5 m towards a 45-degree sun: its near
-        // face's top sets the threshold, 30 - 19.5 m.
+        // face's top sets the threshold, 30 - 19.5 m above the ground.
         let sun = DVec3::new(1.0, 0.0, 1.0).normalize();
         let m = March::new(sun, 4096, 1000.0, 40.0);
         let wall = |p: DVec2| Some(if (19.5..=40.0).contains(&p.x) { 30.0 } else { 0.0 });
