@@ -11,9 +11,9 @@ use common::terrain::{view, Rig, Surface};
 use glam::{DVec2, DVec3};
 use vista::gpu::{Context, LiveObjects};
 use vista::passes::cull_patches::CullStages;
+use vista::passes::sun_shadows::ShadowParams;
 use vista::reference::sun_shadow::{texel_position, March, NONE};
 use vista::render::graph::{FramePass, Outcome, Skip};
-use vista::render::sun_shadows::ShadowParams;
 use vista::render::{frame_report, Effect, Effects, PassState, RendererOptions, View};
 use vista::world::{NodeId, WorldDesc};
 

@@ -132,8 +132,6 @@ pub fn accuracy_error(
         .map(|((a, b), _)| (0..3).map(|i| (f64::from(a[i]) - f64::from(b[i])).powi(2)).sum::<f64>())
         .sum::<f64>()
         / (3.0 * counted);
-    let flip = flip_map(&reference.rgba, &capture.rgba, capture.size);
-    let flip_sum: f64 = flip.iter().zip(&terrain).filter(|(_, &t)| t).map(|(&e, _)| f64::from(e)).sum();
     let pixels = u64::from(capture.size[0]) * u64::from(capture.size[1]);
     AccuracyError {
         terrain_pixels: rel.len() as u64,
@@ -151,6 +149,16 @@ pub fn accuracy_error(
         repr_px_max: repr.iter().copied().fold(0.0, f64::max),
         repr_px_p99: quantile(&mut repr, 0.99),
         psnr_db: 10.0 * (255.0f64.powi(2) / mse).log10(),
-        flip_mean: flip_sum / counted,
+        flip_mean: terrain_flip_mean(capture, reference),
     }
+}
+
+/// Mean FLIP of the frame against the reference over the pixels where
+/// either has terrain (the sky, identical in both, left out).
+pub fn terrain_flip_mean(capture: &Capture, reference: &ReferenceImage) -> f64 {
+    let flip = flip_map(&reference.rgba, &capture.rgba, capture.size);
+    let terrain = capture.depth.iter().zip(&reference.depth_m).map(|(&d, &r)| d > 0.0 || r > 0.0);
+    let (sum, n) =
+        flip.iter().zip(terrain).filter(|(_, t)| *t).fold((0.0, 0u64), |(s, n), (&e, _)| (s + f64::from(e), n + 1));
+    sum / n.max(1) as f64
 }

@@ -14,12 +14,13 @@
 //! the sun term is dark either way.
 
 use super::accuracy::{Run, CLAY_ALBEDO};
+use super::accuracy_error::terrain_flip_mean;
 use crate::error::Result;
 use crate::frame::profiler::summarize;
+use crate::passes::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
 use crate::reference::octahedral::oct_decode_unorm8;
-use crate::reference::{flip_map, ReferenceImage};
+use crate::reference::ReferenceImage;
 use crate::render::effects::{Effect, Effects};
-use crate::render::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
 use crate::render::view::{Lighting, View};
 use crate::render::{RendererOptions, TerrainRenderer};
 use glam::DVec3;
@@ -112,10 +113,7 @@ fn row(
     let resident = r.terrain.tree.shadow.resident_count();
     let (mismatch, frame_dark, compared) =
         state_mismatch(&capture.depth, &gbuffer.hdr, &gbuffer.normal, reference, &r.effects.lighting);
-    let terrain: Vec<bool> = capture.depth.iter().zip(&reference.depth_m).map(|(&d, &e)| d > 0.0 || e > 0.0).collect();
-    let flip = flip_map(&reference.rgba, &capture.rgba, capture.size);
-    let counted = terrain.iter().filter(|&&t| t).count().max(1) as f64;
-    let flip_mean = flip.iter().zip(&terrain).filter(|(_, &t)| t).map(|(&e, _)| f64::from(e)).sum::<f64>() / counted;
+    let flip_mean = terrain_flip_mean(&capture, reference);
     let ms_per_node = if setting.is_some() {
         Some(moving_sun_ms(run, r, view)? / f64::from(resident.clamp(1, MAX_UPDATE_BUDGET)))
     } else {

@@ -1,9 +1,11 @@
 //! `sun_shadows`: makes the sun shadow texture of each node in this frame's
-//! job list (render/sun_shadows.rs decides which): per texel the height
-//! below which that point is in shadow, marched towards the sun through the
-//! finest resident heights (sun_shadows.comp). The atlas has one layer per
+//! job list (render/sun_shadows.rs decides which): per texel how far above
+//! the ground there the sun's shadow reaches, and the occluder's distance,
+//! marched towards the sun through the finest resident heights
+//! (sun_shadows.comp). The atlas has one layer per
 //! node slot, like the payload atlases, and rests in GENERAL (written here,
-//! read by `lighting_resolve`).
+//! read by `lighting_resolve`). The effect's parameters and the job list's
+//! entries live here with the pass; `render::sun_shadows` schedules it.
 
 use crate::error::Result;
 use crate::gpu::{
@@ -13,11 +15,68 @@ use crate::gpu::{
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::sector_data::SectorData;
 use crate::passes::terrain_query::VistaTerrain;
-use crate::render::sun_shadows::{ShadowParams, SunShadowJob};
 use crate::shaders::{consts, sun_shadows as sh};
-use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT};
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, MAX_UPLOADS_PER_FRAME};
 use crate::terrain::quadtree::FIRST_SLOT;
+use crate::world::NodeId;
 use glam::DVec3;
+
+/// Largest `update_budget`: the job list holds the budget plus a frame's
+/// uploads.
+pub const MAX_UPDATE_BUDGET: u32 = consts::SUN_SHADOW_MAX_JOBS - MAX_UPLOADS_PER_FRAME as u32;
+
+/// Parameters of the `shadows` effect (scene keys of the same names).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowParams {
+    /// Texels per node side (2..=SUN_SHADOW_MAX_SIDE), corner-aligned: texel
+    /// 0 and the last lie on the node's edges.
+    pub resolution: u32,
+    /// Height samples per texel's march towards the sun.
+    pub steps: u32,
+    /// Nodes re-marched per frame while the sun moves.
+    pub update_budget: u32,
+    /// The sun's angular diameter (degrees): the penumbra widens with the
+    /// occluder's distance by this spread ([`ShadowParams::penumbra`]); 0: a
+    /// hard edge.
+    pub softness_deg: f32,
+    /// Farthest a march looks (m); it also stops where the ray clears the
+    /// world's highest point.
+    pub reach_m: f32,
+}
+
+impl Default for ShadowParams {
+    fn default() -> Self {
+        // The real sun is 0.53 degrees across.
+        ShadowParams { resolution: 65, steps: 24, update_budget: 16, softness_deg: 0.53, reach_m: 20_000.0 }
+    }
+}
+
+impl ShadowParams {
+    /// Penumbra height per metre of occluder distance with the sun at
+    /// `elevation_deg`: the spread of tan(elevation) over the sun's disc.
+    pub fn penumbra(&self, elevation_deg: f64) -> f32 {
+        let half = f64::from(self.softness_deg) * 0.5;
+        let top = (elevation_deg + half).clamp(-89.9, 89.9).to_radians().tan();
+        let bottom = (elevation_deg - half).clamp(-89.9, 89.9).to_radians().tan();
+        (top - bottom) as f32
+    }
+}
+
+/// One node's march this frame (`SunShadowJob` in sun_shadows.comp).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SunShadowJob {
+    pub slot: u32,
+    pub lod: u32,
+    pub x: u32,
+    pub y: u32,
+}
+
+impl SunShadowJob {
+    pub fn new(node: NodeId, slot: u32) -> Self {
+        SunShadowJob { slot, lod: u32::from(node.lod), x: node.x, y: node.y }
+    }
+}
 
 /// Host twin of `SunShadowPush` (sun_shadows.comp).
 #[repr(C)]
@@ -46,7 +105,7 @@ pub fn march_sun(sun_dir: DVec3) -> [f32; 3] {
 pub struct SunShadows {
     pipeline: Pipeline,
     nearest: Sampler,
-    /// R32G32_SFLOAT (threshold height, occluder distance), `resolution`
+    /// R32G32_SFLOAT (threshold above the ground, occluder distance), `resolution`
     /// square, one layer per slot; GENERAL.
     pub atlas: Image,
     jobs: Buffer,
@@ -136,5 +195,18 @@ impl SunShadows {
         let [wx, wy, _] = sh::WORKGROUP_SIZE;
         rec.dispatch(p.resolution.div_ceil(wx), p.resolution.div_ceil(wy), jobs.len() as u32);
         rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::ALL_COMMANDS);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn penumbra_is_the_slope_spread_of_the_disc() {
+        let p = ShadowParams { softness_deg: 2.0, ..ShadowParams::default() };
+        let want = 31f64.to_radians().tan() - 29f64.to_radians().tan();
+        assert!((f64::from(p.penumbra(30.0)) - want).abs() < 1e-6);
+        assert_eq!(ShadowParams { softness_deg: 0.0, ..p }.penumbra(30.0), 0.0);
     }
 }

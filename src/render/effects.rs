@@ -14,9 +14,9 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::passes::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
 use crate::render::atmosphere::AtmosphereParams;
 use crate::render::shading::ShadeRules;
-use crate::render::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
 use crate::render::tonemap::Tonemap;
 use crate::render::view::Lighting;
 use serde::Serialize;
@@ -402,11 +402,9 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                 (false, format!("requested, but {why}"))
             } else {
                 match (effect, &content.holes_missing) {
-                    (Effect::Shadows, _) if !fx.is_on(Effect::Lighting) => {
-                        (false, "requested, but it shades the sun's light and effect lighting is off".into())
-                    }
-                    (Effect::Atmosphere, _) if !fx.is_on(Effect::Lighting) => {
-                        (false, "requested, but it hazes the lit image and effect lighting is off".into())
+                    // Both change the lit image, which lighting off does not make.
+                    (Effect::Shadows | Effect::Atmosphere, _) if !fx.is_on(Effect::Lighting) => {
+                        (false, "requested, but it changes the lit image and effect lighting is off".into())
                     }
                     (Effect::Holes, Some(why)) if force => (true, format!("forced on (test override) although {why}")),
                     (Effect::Holes, Some(why)) => (false, format!("requested, but {why}")),

@@ -1,7 +1,8 @@
-//! The `shadows` effect's parameters and its update schedule: which resident
-//! nodes get their sun shadow texture (re)made this frame. A node that
-//! arrives is shadowed in the frame it becomes resident (at most
-//! `MAX_UPLOADS_PER_FRAME` a frame), so every resident slot always holds its
+//! The `shadows` effect's update schedule (its parameters are the pass's,
+//! `passes::sun_shadows`): which resident nodes get their sun shadow texture
+//! (re)made this frame. A node that arrives is shadowed in the frame it
+//! becomes resident (at most `MAX_UPLOADS_PER_FRAME` a frame), so every
+//! resident slot always holds its
 //! own node's texture. Its heights also change what the nodes down-sun of
 //! it see (a march reads the finest resident heights: a ridge drawn coarse
 //! when they were marched may be finer now), so every resident node whose
@@ -16,67 +17,9 @@
 //! that moves costs nothing; a clipmap would re-march its rings as the
 //! camera moves and resolve distant terrain no better than a node does.
 
-use crate::shaders::consts;
-use crate::terrain::gpu_quadtree::MAX_UPLOADS_PER_FRAME;
+use crate::passes::sun_shadows::{march_sun, SunShadowJob};
 use crate::world::NodeId;
 use std::collections::BTreeMap;
-
-/// Largest `update_budget`: the job list holds the budget plus a frame's
-/// uploads.
-pub const MAX_UPDATE_BUDGET: u32 = consts::SUN_SHADOW_MAX_JOBS - MAX_UPLOADS_PER_FRAME as u32;
-
-/// Parameters of the `shadows` effect (scene keys of the same names).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ShadowParams {
-    /// Texels per node side (2..=SUN_SHADOW_MAX_SIDE), corner-aligned: texel
-    /// 0 and the last lie on the node's edges.
-    pub resolution: u32,
-    /// Height samples per texel's march towards the sun.
-    pub steps: u32,
-    /// Nodes re-marched per frame while the sun moves.
-    pub update_budget: u32,
-    /// The sun's angular diameter (degrees): the penumbra widens with the
-    /// occluder's distance by this spread ([`ShadowParams::penumbra`]); 0: a
-    /// hard edge.
-    pub softness_deg: f32,
-    /// Farthest a march looks (m); it also stops where the ray clears the
-    /// world's highest point.
-    pub reach_m: f32,
-}
-
-impl Default for ShadowParams {
-    fn default() -> Self {
-        // The real sun is 0.53 degrees across.
-        ShadowParams { resolution: 65, steps: 24, update_budget: 16, softness_deg: 0.53, reach_m: 20_000.0 }
-    }
-}
-
-impl ShadowParams {
-    /// Penumbra height per metre of occluder distance with the sun at
-    /// `elevation_deg`: the spread of tan(elevation) over the sun's disc.
-    pub fn penumbra(&self, elevation_deg: f64) -> f32 {
-        let half = f64::from(self.softness_deg) * 0.5;
-        let top = (elevation_deg + half).clamp(-89.9, 89.9).to_radians().tan();
-        let bottom = (elevation_deg - half).clamp(-89.9, 89.9).to_radians().tan();
-        (top - bottom) as f32
-    }
-}
-
-/// One node's march this frame (`SunShadowJob` in sun_shadows.comp).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct SunShadowJob {
-    pub slot: u32,
-    pub lod: u32,
-    pub x: u32,
-    pub y: u32,
-}
-
-impl SunShadowJob {
-    pub fn new(node: NodeId, slot: u32) -> Self {
-        SunShadowJob { slot, lod: u32::from(node.lod), x: node.x, y: node.y }
-    }
-}
 
 /// What the schedule knows of a resident node: where it lies (x0, y0, x1,
 /// y1 in metres) and its lowest and highest height.
@@ -99,8 +42,8 @@ impl MarchSun {
     /// How far towards the sun a march from a point at `low_m` can still
     /// meet terrain as high as `high_m`.
     fn reach_between(&self, low_m: f64, high_m: f64) -> f64 {
-        let [x, y, z] = self.dir.map(f64::from);
-        let rise = z / x.hypot(y).max(1e-12);
+        let [_, _, rise] = march_sun(glam::DVec3::from(self.dir.map(f64::from)));
+        let rise = f64::from(rise);
         if rise <= 0.0 {
             return self.reach_m;
         }
@@ -179,14 +122,6 @@ impl ShadowSchedule {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn penumbra_is_the_slope_spread_of_the_disc() {
-        let p = ShadowParams { softness_deg: 2.0, ..ShadowParams::default() };
-        let want = 31f64.to_radians().tan() - 29f64.to_radians().tan();
-        assert!((f64::from(p.penumbra(30.0)) - want).abs() < 1e-6);
-        assert_eq!(ShadowParams { softness_deg: 0.0, ..p }.penumbra(30.0), 0.0);
-    }
 
     /// Node (0, i, 0) is the 100 m square at x = 100 i, 0..10 m high,
     /// resident in slot i + 1.
