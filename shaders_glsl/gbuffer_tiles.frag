@@ -8,9 +8,10 @@
 // classification bits, so a tiled variant and the all-flavour pipeline give
 // the same pixel. Position and derivatives come from depth and the
 // triangle normal (reconstruct.glsl); materials from the splat map of the
-// finest resident node (terrain_sample.glsl). Without MATERIALS (no splat
-// or cliffs effect) only the far atlas flavour exists and no material
-// resource is bound or built.
+// finest resident node (terrain_sample.glsl); a silhouette pixel takes its
+// geometric normal from the surface in front of the edge (silhouette.glsl).
+// Without MATERIALS (no splat or cliffs effect) only the far atlas flavour
+// exists and no material resource is bound or built.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
 #include "atlas_texels.glsl"
@@ -47,6 +48,10 @@ layout(set = 0, binding = 15) uniform sampler detail_sampler;
 layout(set = 0, binding = 13) uniform sampler nearest;
 layout(set = 0, binding = 14) uniform sampler linear_clamp;
 layout(set = 0, binding = 16) uniform texture2DArray height_atlas;
+
+#define VISTA_SILHOUETTE_DEPTH(q) texelFetch(sampler2D(depth_target, nearest), q, 0).r
+#define VISTA_SILHOUETTE_NORMAL(q) oct_decode8(texelFetch(usampler2D(normals, nearest), q, 0).xy)
+#include "silhouette.glsl"
 
 #define VISTA_SECTOR_WORD(i) sector_data.words[i]
 #define VISTA_HEIGHT_ATLAS height_atlas
@@ -284,6 +289,8 @@ void main() {
     }
     shares /= total;
     splat_share /= total;
+    // After the shares, which follow the geometry pass's classification.
+    ng = silhouette_normal(px, depth, ng, normalize(-p));
 
     Surface s = Surface(vec3(0.0), vec3(0.0), 0.0);
     uint material = 0u;

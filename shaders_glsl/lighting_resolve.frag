@@ -8,7 +8,8 @@
 // scene's tonemapper (render/tonemap.rs; the unlit albedo view is clipped).
 // With SHADOWS (the `shadows` effect), the sun term is scaled by how much
 // of the sun the pixel sees: its height against the bilinear threshold of
-// the finest resident node's shadow texture (sun_shadow.glsl).
+// the finest resident node's shadow texture (sun_shadow.glsl), at a
+// silhouette pixel the one of the surface in front (silhouette.glsl).
 // With ATMOSPHERE (the `atmosphere` effect), the terrain is seen through
 // the height fog of atmosphere.glsl and the background is its sky; without
 // it the pass is stencil-tested and the background keeps the clear colour.
@@ -72,6 +73,9 @@ layout(set = 0, binding = 7) uniform texture2DArray shadow_atlas;
 #define VISTA_NO_MATERIAL_QUERY
 #define VISTA_TERRAIN pc.terrain
 #include "terrain_sample.glsl"
+
+#define VISTA_SILHOUETTE_DEPTH(q) texelFetch(sampler2D(depth_target, nearest), q, 0).r
+#include "silhouette.glsl"
 
 vec2 shadow_texel(ivec2 t, uint slot) {
     return texelFetch(sampler2DArray(shadow_atlas, nearest), ivec3(t, int(slot)), 0).rg;
@@ -148,7 +152,13 @@ void main() {
     vec3 n = oct_decode(texelFetch(sampler2D(gb_normal, nearest), px, 0).xy);
     float sun = max(dot(n, view.v.sun_dir.xyz), 0.0);
 #ifdef SHADOWS
-    sun *= sun_seen(view.v.camera_world.xyz + rel);
+    // A silhouette pixel's position lies past the horizon, often in the
+    // crest's own shadow: the sun it sees is the surface's in front.
+    ivec2 front[3];
+    ivec2 source = silhouette_sources(px, depth, front) > 0 ? front[0] : px;
+    vec3 shadow_at = source == px ? rel
+        : reconstruct_position(view.v.inv_view_proj, vec2(source) + 0.5, view.v.viewport, VISTA_SILHOUETTE_DEPTH(source));
+    sun *= sun_seen(view.v.camera_world.xyz + shadow_at);
 #endif
     vec3 light = view.v.sun_color.rgb * sun
                + view.v.sky_color.rgb * (0.5 + 0.5 * n.z);

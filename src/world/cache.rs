@@ -35,6 +35,18 @@ const HEADER_BYTES: usize = 4 + 4 + 8 * 4 + 1 + 4 + 4 + 4;
 const ZSTD_LEVEL: i32 = 3;
 /// Trailing crc32.
 const CRC_BYTES: usize = 4;
+/// The user's vista cache (error trees, and node files where a tool bakes
+/// into it): `$VISTA_CACHE` (empty: none, everything in memory), else
+/// `$XDG_CACHE_HOME/vista`, else `~/.cache/vista`; `None` without any.
+pub fn default_cache_dir() -> Option<PathBuf> {
+    if let Some(v) = std::env::var_os("VISTA_CACHE") {
+        return (!v.is_empty()).then(|| PathBuf::from(v));
+    }
+    let xdg = std::env::var_os("XDG_CACHE_HOME").filter(|v| !v.is_empty()).map(PathBuf::from);
+    xdg.or_else(|| std::env::var_os("HOME").filter(|v| !v.is_empty()).map(|h| Path::new(&h).join(".cache")))
+        .map(|d| d.join("vista"))
+}
+
 /// Bytes a node file of `format` would take without compression: what the
 /// cache's compression ratio is measured against.
 pub fn uncompressed_file_bytes(format: PayloadFormat) -> u64 {

@@ -34,7 +34,9 @@ mod texels;
 
 pub use bake::{bake_node, bake_node_with, BakeSettings};
 pub use bake_run::{bake_shard, bake_world, nodes_in_region, BakeStats, NodeFile};
-pub use cache::{estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache};
+pub use cache::{
+    default_cache_dir, estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache,
+};
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
 pub use error_tile::diamond;

@@ -125,22 +125,10 @@ pub fn check_slots(slots: u32, world: &WorldDesc) -> Result<()> {
     Ok(())
 }
 
-/// Where error trees are cached when no `--cache` is given: `$VISTA_CACHE`
-/// (empty: nowhere, computed in memory every run), else
-/// `$XDG_CACHE_HOME/vista`, else `~/.cache/vista`.
-pub fn default_cache_dir() -> Option<PathBuf> {
-    if let Some(v) = std::env::var_os("VISTA_CACHE") {
-        return (!v.is_empty()).then(|| PathBuf::from(v));
-    }
-    let xdg = std::env::var_os("XDG_CACHE_HOME").filter(|v| !v.is_empty()).map(PathBuf::from);
-    xdg.or_else(|| std::env::var_os("HOME").filter(|v| !v.is_empty()).map(|h| Path::new(&h).join(".cache")))
-        .map(|d| d.join("vista"))
-}
-
 impl LoadedWorld {
     /// The world's error tree (every node's error needs every LOD-0 sample
     /// under its root, so the whole tree is made before rendering), read
-    /// from `cache/errors` (`--cache`, else [`default_cache_dir`]) or
+    /// from `cache/errors` (`--cache`, else [`vista::world::default_cache_dir`]) or
     /// computed there, with progress on stderr and one line saying which.
     /// The world is first checked against the device (as
     /// `TerrainRenderer::new` would), so a world no renderer can hold is
@@ -152,7 +140,7 @@ impl LoadedWorld {
             ..vista::terrain::TerrainOptions::default()
         };
         vista::terrain::check_plan(ctx, &self.desc, &terrain).map_err(plan_error_is_input)?;
-        let dir = cache.map(Path::to_path_buf).or_else(default_cache_dir);
+        let dir = cache.map(Path::to_path_buf).or_else(vista::world::default_cache_dir);
         let tree = ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?;
         let p = tree.prepare(Progress::auto());
         let place = match tree.dir() {
