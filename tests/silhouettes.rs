@@ -123,7 +123,7 @@ fn cases() -> Vec<Case> {
     let mb_camera = overview_camera(&mb_world, &*mb);
     let case = |name, world: &WorldDesc, source: &Arc<dyn HeightSource>, camera, effects| Case {
         name,
-        world: world.clone(),
+        world: *world,
         source: source.clone(),
         camera,
         effects,
