@@ -153,12 +153,15 @@ void main() {
     float sun = max(dot(n, view.v.sun_dir.xyz), 0.0);
 #ifdef SHADOWS
     // A silhouette pixel's position lies past the horizon, often in the
-    // crest's own shadow: the sun it sees is the surface's in front.
-    ivec2 front[3];
-    ivec2 source = silhouette_sources(px, depth, front) > 0 ? front[0] : px;
-    vec3 shadow_at = source == px ? rel
-        : reconstruct_position(view.v.inv_view_proj, vec2(source) + 0.5, view.v.viewport, VISTA_SILHOUETTE_DEPTH(source));
-    sun *= sun_seen(view.v.camera_world.xyz + shadow_at);
+    // crest's own shadow: the sun it sees is the surface's in front. Where
+    // the pixel turns from the sun neither matters.
+    if (sun > 0.0) {
+        ivec2 front[3];
+        ivec2 source = silhouette_sources(px, depth, front) > 0 ? front[0] : px;
+        vec3 shadow_at = source == px ? rel
+            : reconstruct_position(view.v.inv_view_proj, vec2(source) + 0.5, view.v.viewport, VISTA_SILHOUETTE_DEPTH(source));
+        sun *= sun_seen(view.v.camera_world.xyz + shadow_at);
+    }
 #endif
     vec3 light = view.v.sun_color.rgb * sun
                + view.v.sky_color.rgb * (0.5 + 0.5 * n.z);
