@@ -27,7 +27,7 @@ fn moving(i: u32) -> vista::render::View {
 
 #[test]
 fn split_submission_is_clean_under_synchronization_validation() {
-    let options = ContextOptions { validation: true, sync_validation: true, device_name: None };
+    let options = ContextOptions { validation: true, sync_validation: true, ..Default::default() };
     gpu_test_with(&options, |ctx| {
         let mut images = Vec::new();
         for mode in [QueueMode::Single, QueueMode::SplitOneQueue] {

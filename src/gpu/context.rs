@@ -30,6 +30,30 @@ pub struct ContextOptions {
     /// Pick the first device whose name contains this; the env var
     /// `VISTA_DEVICE` does the same when this is `None`.
     pub device_name: Option<String>,
+    /// The display a window will present on (feature `window`): the
+    /// instance gets its surface extensions and the device
+    /// VK_KHR_swapchain, for [`super::present::Presenter`].
+    #[cfg(feature = "window")]
+    pub display: Option<raw_window_handle::RawDisplayHandle>,
+}
+
+impl ContextOptions {
+    /// The instance extensions a window needs.
+    fn surface_extensions(&self) -> Result<&'static [*const std::ffi::c_char]> {
+        #[cfg(feature = "window")]
+        if let Some(display) = self.display {
+            return ash_window::enumerate_required_extensions(display)
+                .map_err(|e| Error::Unsupported(format!("no Vulkan surface for this display: {e}")));
+        }
+        Ok(&[])
+    }
+
+    fn presents(&self) -> bool {
+        #[cfg(feature = "window")]
+        return self.display.is_some();
+        #[cfg(not(feature = "window"))]
+        false
+    }
 }
 
 /// An engine's Vulkan objects, shaped like Dear ImGui's
@@ -112,6 +136,7 @@ fn create_instance(entry: &ash::Entry, options: &ContextOptions, log: &Validatio
     if options.sync_validation {
         ext_names.push(ash::ext::validation_features::NAME.as_ptr());
     }
+    ext_names.extend_from_slice(options.surface_extensions()?);
     let layer_names = if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
     let app = vk::ApplicationInfo::default()
         .application_name(c"vista")
@@ -202,7 +227,10 @@ impl Context {
             );
         }
         let mut feats = device_info::required_features();
-        let ext_names: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        let mut ext_names: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        if options.presents() {
+            ext_names.push(ash::khr::swapchain::NAME.as_ptr());
+        }
         let dinfo = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_extension_names(&ext_names)

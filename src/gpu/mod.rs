@@ -12,6 +12,8 @@ pub mod context;
 pub mod device_info;
 pub mod fault;
 pub mod pipeline;
+#[cfg(feature = "window")]
+pub mod present;
 pub mod query;
 pub mod resources;
 pub mod shader;
@@ -29,5 +31,5 @@ pub use resources::{
     depth_layout, has_stencil, Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation, Sampler, SamplerDesc,
 };
 pub use shader::{Binding, BindingKind, ShaderInfo, ShaderStage};
-pub use submit::{FrameCommands, FrameRing, QueueMode};
+pub use submit::{BinarySync, CommandPool, FrameCommands, FrameRing, QueueMode};
 pub use validation::{Severity, ValidationLog, ValidationMessage};

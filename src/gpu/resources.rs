@@ -68,7 +68,9 @@ pub(crate) fn inc(c: &AtomicI64) {
 /// A Vulkan object waiting for the frames that may use it to finish.
 pub(crate) enum Garbage {
     Buffer(vk::Buffer, Allocation),
-    Image(vk::Image, Vec<vk::ImageView>, Allocation),
+    /// No allocation: an image someone else owns (a swapchain's, an
+    /// engine's); only the views vista made for it are destroyed.
+    Image(vk::Image, Vec<vk::ImageView>, Option<Allocation>),
     Pipeline(vk::Pipeline, vk::PipelineLayout, vk::DescriptorSetLayout),
     QueryPool(vk::QueryPool),
     Sampler(vk::Sampler),
@@ -97,8 +99,10 @@ impl Garbage {
                     for v in views {
                         d.destroy_image_view(v, None);
                     }
-                    d.destroy_image(i, None);
-                    free(a);
+                    if let Some(a) = a {
+                        d.destroy_image(i, None);
+                        free(a);
+                    }
                     dec(&s.live.images);
                 }
                 Garbage::Pipeline(p, l, sl) => {
@@ -262,6 +266,8 @@ pub struct Image {
     /// depth-only view (a sampled view may have one aspect only).
     pub(crate) views: Vec<vk::ImageView>,
     allocation: Option<Allocation>,
+    /// Made by [`Image::from_raw`]: the VkImage is not vista's to destroy.
+    foreign: bool,
     pub format: vk::Format,
     pub extent: [u32; 2],
     pub mip_levels: u32,
@@ -300,7 +306,80 @@ pub fn depth_layout(format: vk::Format, read_only: bool) -> vk::ImageLayout {
     }
 }
 
+/// The whole image's view; one per mip when it has several (storage writes
+/// address a single mip); last, for depth-stencil formats, a depth-only view
+/// (a sampled view may have one aspect only). On failure none is left.
+fn create_views(
+    d: &ash::Device,
+    raw: vk::Image,
+    desc: &ImageDesc,
+) -> std::result::Result<Vec<vk::ImageView>, vk::Result> {
+    let view_type = if desc.array_layers > 1 { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D };
+    let view_info = |base_mip: u32, mips: u32, aspect: vk::ImageAspectFlags| {
+        vk::ImageViewCreateInfo::default().image(raw).view_type(view_type).format(desc.format).subresource_range(
+            vk::ImageSubresourceRange::default()
+                .aspect_mask(aspect)
+                .base_mip_level(base_mip)
+                .level_count(mips)
+                .layer_count(desc.array_layers),
+        )
+    };
+    let aspect = aspect_of(desc.format);
+    let mut infos = vec![view_info(0, desc.mip_levels, aspect)];
+    if desc.mip_levels > 1 {
+        infos.extend((0..desc.mip_levels).map(|m| view_info(m, 1, aspect)));
+    }
+    if has_stencil(desc.format) {
+        infos.push(view_info(0, desc.mip_levels, vk::ImageAspectFlags::DEPTH));
+    }
+    let mut views = Vec::with_capacity(infos.len());
+    for info in &infos {
+        // SAFETY: the image is bound (or owned by the caller); the view
+        // covers existing subresources.
+        match unsafe { d.create_image_view(info, None) } {
+            Ok(v) => views.push(v),
+            Err(e) => {
+                // SAFETY: nothing uses these views yet.
+                views.iter().for_each(|v| unsafe { d.destroy_image_view(*v, None) });
+                return Err(e);
+            }
+        }
+    }
+    Ok(views)
+}
+
 impl Image {
+    /// Wraps an image someone else created and owns (an engine's target, a
+    /// swapchain image): vista makes and destroys only its views, tracks its
+    /// layout from `layout` on, and never frees it.
+    ///
+    /// # Safety
+    /// `raw` must be a live image of `ctx`'s device created with `desc`'s
+    /// format, extent, mips, layers and usage (at least), 2D, one sample,
+    /// optimal tiling, every subresource in `layout` once the commands
+    /// recorded so far execute, and it must outlive the returned `Image`
+    /// and every frame that uses it.
+    pub unsafe fn from_raw(ctx: &Context, raw: vk::Image, desc: &ImageDesc, layout: vk::ImageLayout) -> Result<Image> {
+        let s = &ctx.shared;
+        let views = create_views(&s.device, raw, desc).map_err(vk_err("vkCreateImageView"))?;
+        inc(&s.live.images);
+        views.iter().for_each(|v| ctx.set_name(*v, desc.name));
+        Ok(Image {
+            raw,
+            views,
+            allocation: None,
+            foreign: true,
+            format: desc.format,
+            extent: desc.extent,
+            mip_levels: desc.mip_levels,
+            array_layers: desc.array_layers,
+            usage: desc.usage,
+            name: desc.name.to_string(),
+            layout: AtomicI32::new(layout.as_raw()),
+            shared: s.clone(),
+        })
+    }
+
     /// The layout every subresource is in once the commands recorded so far
     /// have executed. The recorder sets it on each transition and checks it
     /// wherever a command needs a layout. It follows recording order, which
@@ -361,48 +440,18 @@ impl Image {
                 return Err(e);
             }
         };
-        let view_type =
-            if desc.array_layers > 1 { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D };
-        let view_info = |base_mip: u32, mips: u32, aspect: vk::ImageAspectFlags| {
-            vk::ImageViewCreateInfo::default().image(raw).view_type(view_type).format(desc.format).subresource_range(
-                vk::ImageSubresourceRange::default()
-                    .aspect_mask(aspect)
-                    .base_mip_level(base_mip)
-                    .level_count(mips)
-                    .layer_count(desc.array_layers),
-            )
+        // SAFETY: binding a fresh allocation sized by the image's requirements.
+        let bound = unsafe { s.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) };
+        let views = bound.and_then(|()| create_views(&s.device, raw, desc));
+        let views = match views {
+            Ok(v) => v,
+            Err(e) => {
+                // SAFETY: nothing uses the image yet; its views are gone.
+                unsafe { s.device.destroy_image(raw, None) };
+                let _ = s.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(allocation);
+                return Err(Error::vk("vkBindImageMemory/vkCreateImageView", e));
+            }
         };
-        let aspect = aspect_of(desc.format);
-        let mut infos = vec![view_info(0, desc.mip_levels, aspect)];
-        if desc.mip_levels > 1 {
-            infos.extend((0..desc.mip_levels).map(|m| view_info(m, 1, aspect)));
-        }
-        if has_stencil(desc.format) {
-            infos.push(view_info(0, desc.mip_levels, vk::ImageAspectFlags::DEPTH));
-        }
-        let mut views = Vec::with_capacity(infos.len());
-        // SAFETY: binding a fresh allocation sized by the image's requirements,
-        // then viewing the bound image.
-        let mut result = unsafe { s.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) };
-        for info in &infos {
-            if result.is_err() {
-                break;
-            }
-            // SAFETY: the image is bound; the view covers existing subresources.
-            match unsafe { s.device.create_image_view(info, None) } {
-                Ok(v) => views.push(v),
-                Err(e) => result = Err(e),
-            }
-        }
-        if let Err(e) = result {
-            // SAFETY: nothing uses these objects yet.
-            unsafe {
-                views.iter().for_each(|v| s.device.destroy_image_view(*v, None));
-                s.device.destroy_image(raw, None);
-            }
-            let _ = s.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(allocation);
-            return Err(Error::vk("vkBindImageMemory/vkCreateImageView", e));
-        }
         inc(&s.live.images);
         ctx.set_name(raw, desc.name);
         views.iter().for_each(|v| ctx.set_name(*v, desc.name));
@@ -410,6 +459,7 @@ impl Image {
             raw,
             views,
             allocation: Some(allocation),
+            foreign: false,
             format: desc.format,
             extent: desc.extent,
             mip_levels: desc.mip_levels,
@@ -458,8 +508,9 @@ impl Image {
 
 impl Drop for Image {
     fn drop(&mut self) {
-        if let Some(a) = self.allocation.take() {
-            self.shared.retire(Garbage::Image(self.raw, std::mem::take(&mut self.views), a));
+        let allocation = self.allocation.take();
+        if allocation.is_some() || self.foreign {
+            self.shared.retire(Garbage::Image(self.raw, std::mem::take(&mut self.views), allocation));
         }
     }
 }

@@ -182,7 +182,8 @@ fn end_and_submit_with(
     let _q = s.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
     // SAFETY: the buffer is in the recording state; the fence is signalled
     // and unused; the queue is externally synchronized by `queue_lock` (one
-    // lock for both queues); the semaphores are live timeline semaphores.
+    // lock for both queues); the semaphores are live (timeline, or binary
+    // ones their owner signals and waits for once per use).
     unsafe {
         s.device.end_command_buffer(slot.cmd).map_err(vk_err("vkEndCommandBuffer"))?;
         s.device.reset_fences(&[slot.fence]).map_err(vk_err("vkResetFences"))?;
@@ -219,7 +220,18 @@ pub struct FrameRing {
     /// Frames recorded through this ring (timeline values derive from it).
     frames: u64,
     next: usize,
+    /// Binary semaphores of the frame being recorded ([`FrameRing::record_synced`]).
+    sync: Option<BinarySync>,
     shared: Arc<Shared>,
+}
+
+/// A frame's binary semaphores: waited for at `wait_stage` (a swapchain
+/// image's acquisition), signalled at the end (its presentation).
+#[derive(Debug, Clone, Copy)]
+pub struct BinarySync {
+    pub wait: vk::Semaphore,
+    pub wait_stage: vk::PipelineStageFlags2,
+    pub signal: vk::Semaphore,
 }
 
 /// The command buffers of one frame: one, or compute and graphics.
@@ -244,6 +256,7 @@ impl FrameRing {
             mode,
             frames: 0,
             next: 0,
+            sync: None,
             shared: ctx.shared.clone(),
         };
         // On error, Drop frees whatever was created.
@@ -276,6 +289,30 @@ impl FrameRing {
             FrameCommands::One(rec) => f(rec),
             FrameCommands::Split { .. } => unreachable!(),
         })
+    }
+
+    /// Waits until the slot the next frame records into is free: its last
+    /// frame completed, so a semaphore that frame waited on may be signalled
+    /// again (acquire the swapchain image after this).
+    pub fn wait_next(&self, ctx: &Context) -> Result<()> {
+        let slot = &self.slots[self.next];
+        wait_fence(&ctx.shared, slot.fence)?;
+        ctx.frame_completed(slot.frame);
+        Ok(())
+    }
+
+    /// Like [`FrameRing::record`], for a frame that waits for and signals
+    /// the binary semaphores of `sync` (`Single` mode).
+    pub fn record_synced<'c>(
+        &mut self,
+        ctx: &'c Context,
+        sync: BinarySync,
+        f: impl FnOnce(&mut Recorder<'c>) -> Result<()>,
+    ) -> Result<u64> {
+        self.sync = Some(sync);
+        let frame = self.record(ctx, f);
+        self.sync = None;
+        frame
     }
 
     /// Waits for the slot's previous frame, then records the next frame into
@@ -357,6 +394,12 @@ impl FrameRing {
             self.frames = k;
             end_and_submit_with(s, &self.slots[i], s.graphics.raw, &[info(2 * k - 1)], &[info(2 * k)])
                 .map_err(|e| (e, true))?;
+        } else if let Some(b) = self.sync {
+            let wait = [vk::SemaphoreSubmitInfo::default().semaphore(b.wait).stage_mask(b.wait_stage)];
+            let signal = [vk::SemaphoreSubmitInfo::default()
+                .semaphore(b.signal)
+                .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+            end_and_submit_with(s, &self.slots[i], s.graphics.raw, &wait, &signal).map_err(early)?;
         } else {
             end_and_submit(s, &self.slots[i]).map_err(early)?;
         }
@@ -490,5 +533,35 @@ fn block_bytes(format: vk::Format) -> Option<u64> {
         vk::Format::BC1_RGBA_UNORM_BLOCK | vk::Format::BC1_RGB_UNORM_BLOCK => Some(8),
         vk::Format::BC3_UNORM_BLOCK => Some(16),
         _ => None,
+    }
+}
+
+/// A command pool of the graphics family for code that allocates and
+/// submits its own command buffers (a UI library's texture uploads).
+pub struct CommandPool {
+    raw: vk::CommandPool,
+    shared: Arc<Shared>,
+}
+
+impl CommandPool {
+    pub fn new(ctx: &Context, name: &str) -> Result<CommandPool> {
+        let s = &ctx.shared;
+        let info = vk::CommandPoolCreateInfo::default().queue_family_index(s.graphics.family);
+        // SAFETY: valid device and create info; the pool is counted and
+        // owned by the returned value.
+        let raw = unsafe { s.device.create_command_pool(&info, None) }.map_err(vk_err("vkCreateCommandPool"))?;
+        inc(&s.live.command_pools);
+        ctx.set_name(raw, name);
+        Ok(CommandPool { raw, shared: s.clone() })
+    }
+
+    pub fn raw(&self) -> vk::CommandPool {
+        self.raw
+    }
+}
+
+impl Drop for CommandPool {
+    fn drop(&mut self) {
+        self.shared.retire(Garbage::CommandPool(self.raw));
     }
 }

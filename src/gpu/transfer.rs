@@ -100,6 +100,33 @@ impl Recorder<'_> {
         };
     }
 
+    /// Copies mip 0 of `src` (TRANSFER_SRC_OPTIMAL) over mip 0 of `dst`
+    /// (TRANSFER_DST_OPTIMAL), scaled to fit and converted between colour
+    /// formats (e.g. RGBA to a swapchain's BGRA), nearest texel.
+    pub fn blit(&mut self, src: &Image, dst: &Image) {
+        self.outside_rendering("blit");
+        assert_eq!(src.layout(), vk::ImageLayout::TRANSFER_SRC_OPTIMAL, "blit from {}", src.name);
+        assert_eq!(dst.layout(), vk::ImageLayout::TRANSFER_DST_OPTIMAL, "blit into {}", dst.name);
+        let corner = |e: [u32; 2]| [vk::Offset3D::default(), vk::Offset3D { x: e[0] as i32, y: e[1] as i32, z: 1 }];
+        let layer = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
+        let region = vk::ImageBlit2::default()
+            .src_subresource(layer)
+            .src_offsets(corner(src.extent))
+            .dst_subresource(layer)
+            .dst_offsets(corner(dst.extent));
+        let regions = [region];
+        let info = vk::BlitImageInfo2::default()
+            .src_image(src.raw)
+            .src_image_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+            .dst_image(dst.raw)
+            .dst_image_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .regions(&regions)
+            .filter(vk::Filter::NEAREST);
+        // SAFETY: live images in the layouts named (checked); the layer
+        // validates formats and usage.
+        unsafe { self.d().cmd_blit_image2(self.cmd, &info) };
+    }
+
     /// Copies tightly packed texels at `offset` of `src` into one mip of one
     /// layer of `img`, which must be in TRANSFER_DST_OPTIMAL.
     pub fn copy_buffer_to_image(&mut self, src: &Buffer, offset: u64, img: &Image, mip: u32, layer: u32) {

@@ -802,7 +802,7 @@ mod tests {
 
     #[test]
     fn upload_matches_the_cpu_images() {
-        let options = crate::gpu::ContextOptions { validation: true, sync_validation: false, device_name: None };
+        let options = crate::gpu::ContextOptions { validation: true, ..Default::default() };
         let ctx = Context::headless(&options).expect("a Vulkan device (run tools/install-deps)");
         let log = ctx.validation_log();
         let img = DetailImages::build(&MaterialSet::default(), 16).unwrap();

@@ -13,7 +13,7 @@ use vista::world::{
 pub const ALLOWLIST: &[(&str, &str)] = &[];
 
 pub fn validated() -> ContextOptions {
-    ContextOptions { validation: true, sync_validation: false, device_name: None }
+    ContextOptions { validation: true, ..Default::default() }
 }
 
 /// Runs `f` on a fresh validated context and checks teardown.

@@ -16,6 +16,8 @@ mod render_cmd;
 mod scene;
 mod scene_words;
 mod stability_cmd;
+#[cfg(feature = "view")]
+mod view;
 mod world_args;
 
 use anyhow::{bail, Context as _, Result};
@@ -57,6 +59,10 @@ enum Command {
     /// Render the golden views and compare them with their references (FLIP);
     /// `--update` rewrites the references and prints what changed.
     Golden(golden_cmd::GoldenArgs),
+    /// Open a window over the world: a fly camera (WASD, mouse, wheel) and a
+    /// live overlay of per-pass GPU times, counters and switches.
+    #[cfg(feature = "view")]
+    View(view::ViewArgs),
     /// Run the hard cases (far from the origin, depth, octahedral normals,
     /// grazing angles, NaN hygiene, seams, determinism, faults, fuzzing,
     /// soak) under the validation layer and print the table; exits 1 when a
@@ -139,8 +145,7 @@ fn exit_on_usage_error(e: clap::Error) -> ! {
 }
 
 fn run(cli: Cli) -> Result<()> {
-    let options =
-        ContextOptions { validation: cli.validation, sync_validation: false, device_name: cli.device.clone() };
+    let options = ContextOptions { validation: cli.validation, device_name: cli.device.clone(), ..Default::default() };
     match cli.command {
         Command::Info { json } => with_gpu(&options, |ctx| info(ctx, json)),
         Command::Render(args) => {
@@ -161,6 +166,12 @@ fn run(cli: Cli) -> Result<()> {
         Command::Golden(args) => {
             golden_cmd::check(&args)?;
             with_gpu(&options, |ctx| golden_cmd::golden(ctx, &args))
+        }
+        #[cfg(feature = "view")]
+        Command::View(args) => {
+            // A bad world, view or path fails before the window opens.
+            let (world, path) = view::check(&args).map_err(|e| InputError(format!("{e:#}")))?;
+            view::view(options, args, world, path)
         }
         Command::Stability(args) => stability_cmd::stability(cli.device.clone(), &args),
     }

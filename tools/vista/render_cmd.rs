@@ -124,7 +124,7 @@ pub(crate) fn parse_position(s: &str) -> Result<[f64; 3], String> {
     }
 }
 
-fn parse_camera(s: &str) -> Result<CameraArg, String> {
+pub(crate) fn parse_camera(s: &str) -> Result<CameraArg, String> {
     match numbers(s, "camera")?[..] {
         [x, y, z] => Ok(CameraArg { position: [x, y, z], angles: None }),
         [x, y, z, yaw, pitch] if (-90.0..=90.0).contains(&pitch) => {
@@ -188,7 +188,20 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
     if !(args.settle_seconds.is_finite() && args.settle_seconds >= 0.0) {
         bail!("--settle-seconds must be a non-negative number");
     }
-    let camera = match args.camera {
+    let view = View {
+        camera: camera_of(args.camera, world),
+        fov_y_deg: args.fov,
+        size: args.size,
+        target_error_px: args.target_error,
+        near_m: DEFAULT_NEAR_M,
+    };
+    check_view(&view, world)?;
+    Ok(view)
+}
+
+/// `--camera`, or the default view above the south edge.
+pub fn camera_of(arg: Option<CameraArg>, world: &LoadedWorld) -> Camera {
+    match arg {
         None => {
             let mut c = overview_camera(&world.desc, &*world.source);
             c.position_m[0] += world.origin_m[0];
@@ -199,14 +212,11 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
             let [yaw_deg, pitch_deg] = angles.unwrap_or([0.0, -20.0]);
             Camera { position_m: position, yaw_deg, pitch_deg }
         }
-    };
-    let view = View {
-        camera,
-        fov_y_deg: args.fov,
-        size: args.size,
-        target_error_px: args.target_error,
-        near_m: DEFAULT_NEAR_M,
-    };
+    }
+}
+
+/// What a user can get wrong in a view, in the options' words.
+pub fn check_view(view: &View, world: &LoadedWorld) -> Result<()> {
     if let Err(e) = view.validate() {
         let message = e.to_string().replace("field of view", "--fov").replace("target error", "--target-error");
         bail!("{}", message.trim_start_matches("bad input: "));
@@ -221,8 +231,8 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
             show_m(p[2])
         );
     }
-    note_camera_place(&view, world);
-    Ok(view)
+    note_camera_place(view, world);
+    Ok(())
 }
 
 /// Placement and camera coordinates `vista stability` case 1 renders

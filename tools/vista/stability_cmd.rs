@@ -32,7 +32,7 @@ pub struct StabilityArgs {
 const ALL: [u8; 11] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11];
 
 pub fn stability(device: Option<String>, args: &StabilityArgs) -> Result<()> {
-    let options = ContextOptions { validation: true, sync_validation: false, device_name: device };
+    let options = ContextOptions { validation: true, device_name: device, ..Default::default() };
     if args.script_hashes {
         let ctx = Context::headless(&options).context("creating the Vulkan context")?;
         let hashes = determinism::script_hashes(&ctx)?;

@@ -1,0 +1,115 @@
+//! `vista view` in a real window under Xvfb (lavapipe presents to it),
+//! under the validation layer: a scripted flight, resized on the way,
+//! exits cleanly with no message and no live object; its screenshot, read back from the
+//! swapchain image, is `vista render`'s picture of the same camera; the
+//! overlay is drawn over it when shown.
+
+mod vista_cmd;
+
+use std::path::{Path, PathBuf};
+use vista::reference::{flip_map, flip_stats};
+use vista_cmd::vista_cmd;
+
+/// A small procedural world: its error tree takes a second, and lavapipe
+/// renders it at a few frames per second.
+const WORLD: [&str; 6] = ["--extent", "2048", "--spacing", "2", "--lods", "4"];
+const SIZE: &str = "256x144";
+const CAMERA: &str = "1024,200,420,0,-25";
+
+fn dir() -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("view-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs `vista --validation ARGS` on a private X server (xvfb-run -a);
+/// returns stdout, failing the test with stderr on a non-zero exit.
+fn on_xvfb(args: &[&str]) -> String {
+    let vista = vista_cmd();
+    let mut c = std::process::Command::new("xvfb-run");
+    c.args(["-a", "-s", "-screen 0 640x480x24", vista.get_program().to_str().unwrap(), "--validation"]);
+    c.args(args).args(WORLD);
+    c.envs(vista.get_envs().filter_map(|(k, v)| v.map(|v| (k, v))));
+    let out = c.output().expect("xvfb-run (tools/install-deps installs xvfb)");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "vista {args:?} failed:\n{stdout}\n{stderr}");
+    stdout.into_owned()
+}
+
+fn png(path: &Path) -> (Vec<u8>, [u32; 2]) {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8();
+    let size = [img.width(), img.height()];
+    (img.into_raw(), size)
+}
+
+#[test]
+fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() {
+    let d = dir();
+    let path = d.join("flight.txt");
+    // Resized half-way (the swapchain, the targets and the G-buffer are
+    // remade mid-flight), back to its size for the screenshot.
+    let flight = "# south edge, over the middle turning east, back\n1024,100,420,0,-20\nsize 200x100\n\
+                  1024,900,380,60,-30\nsize 256x144\n1024,600,400,30,-25\n";
+    std::fs::write(&path, flight).unwrap();
+    let flown = d.join("flown.png");
+    let out = on_xvfb(&[
+        "view",
+        "--size",
+        SIZE,
+        "--frames",
+        "60",
+        "--path",
+        path.to_str().unwrap(),
+        "--screenshot",
+        flown.to_str().unwrap(),
+    ]);
+    // Validation messages or live objects would have failed the run.
+    assert!(out.contains("0 Vulkan objects alive at exit"), "{out}");
+    for size in ["200x100", "256x144"] {
+        assert!(out.contains(&format!("resized: swapchain {size}")), "no resize to {size}:\n{out}");
+    }
+    let (flown_rgba, size) = png(&flown);
+    assert_eq!(size, [256, 144]);
+
+    // The same camera without the overlay, and `vista render`'s picture of it.
+    let shot = d.join("shot.png");
+    on_xvfb(&[
+        "view",
+        "--size",
+        SIZE,
+        "--camera",
+        CAMERA,
+        "--frames",
+        "3",
+        "--no-overlay",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    let rendered = d.join("render");
+    let render = vista_cmd()
+        .args(["--validation", "render", "--size", SIZE, "--camera", CAMERA, "--frames", "3", "--out"])
+        .arg(&rendered)
+        .args(WORLD)
+        .output()
+        .unwrap();
+    assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
+    let (shot_rgba, shot_size) = png(&shot);
+    let (want, want_size) = png(&rendered.join("image.png"));
+    assert_eq!(shot_size, want_size);
+    // The golden images' tolerance (tools/vista/golden_cmd.rs): the same
+    // renderer and view, so only rounding may differ; the blit into the
+    // swapchain's BGRA UNORM image keeps every 8-bit value.
+    let stats = flip_stats(flip_map(&want, &shot_rgba, want_size));
+    assert!(stats.mean <= 0.005 && stats.p99 <= 0.05, "screenshot against vista render: {stats:?}");
+
+    // The overlay (shown during the flight) is egui's dark window in the
+    // top-left corner: grey pixels, darker than any sky or lit terrain.
+    let grey = (4..24)
+        .flat_map(|y| (4..24).map(move |x| ((y * size[0] + x) * 4) as usize))
+        .filter(|&i| {
+            let [r, g, b] = [flown_rgba[i], flown_rgba[i + 1], flown_rgba[i + 2]].map(i32::from);
+            r < 70 && (r - g).abs() <= 4 && (r - b).abs() <= 4
+        })
+        .count();
+    assert!(grey > 300, "the overlay is missing from the flight's screenshot ({grey} of 400 pixels grey)");
+}

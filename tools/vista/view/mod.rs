@@ -1,0 +1,421 @@
+//! `vista view`: a window (winit, X11) presenting `TerrainRenderer`'s output
+//! every frame, a fly camera, and a live overlay of per-pass GPU times and
+//! counters (egui, drawn by egui-ash-renderer). `--frames N` runs N frames
+//! and exits, `--path` flies a scripted path, `--screenshot` writes the
+//! last presented image read back from the swapchain image.
+
+mod fly;
+mod overlay;
+mod viewer;
+
+use crate::render_cmd::{camera_of, check_view, parse_camera, parse_size, parse_stages, CameraArg};
+use crate::world_args::{LoadedWorld, WorldArgs};
+use anyhow::{anyhow, bail, Context as _, Result};
+use clap::Args;
+use fly::{FlightPath, FlyCamera};
+use overlay::{Overlay, Settings};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+use viewer::{Frame, OverlayFrame, Viewer};
+use vista::gpu::present::Presenter;
+use vista::gpu::{Context, ContextOptions};
+use vista::passes::cull_patches::CullStages;
+use vista::render::{RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
+use vista::terrain::TerrainOptions;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use winit::window::{Window, WindowId};
+
+#[derive(Args)]
+pub struct ViewArgs {
+    /// Window size, e.g. 1280x720.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size, allow_hyphen_values = true)]
+    pub size: [u32; 2],
+    /// Start camera X,Y,Z[,YAW,PITCH] as `vista render --camera` takes it
+    /// (P prints the current one in this form). Default: the overview.
+    #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
+    pub camera: Option<CameraArg>,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = 60.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
+    pub fov: f64,
+    /// Largest accepted projected vertical error in pixels (a slider in the overlay).
+    #[arg(long, default_value_t = 1.0, value_parser = crate::numbers::number_f32, allow_negative_numbers = true)]
+    pub target_error: f32,
+    /// Culling stages at the start: any of frustum,cone,hole,occlusion, or none.
+    #[arg(long, default_value = "frustum,cone,hole,occlusion", value_parser = parse_stages)]
+    pub cull: CullStages,
+    /// Resident node slots (at most 1023: slots are 10-bit).
+    #[arg(long, default_value_t = 512, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
+    pub slots: u32,
+    /// Cache baked nodes here across runs (as `vista render --cache`).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// Present N frames, then exit (0: until the window is closed or Esc).
+    /// With --screenshot, the camera then waits at its last position until
+    /// streaming settled, and the last of those frames is written.
+    #[arg(long, default_value_t = 0, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
+    pub frames: u32,
+    /// A scripted flight over --frames: one X,Y,Z,YAW,PITCH per line (#
+    /// comments), flown through at even spacing; a line `size WxH` resizes
+    /// the window when the flight gets there.
+    #[arg(long, value_name = "FILE")]
+    pub path: Option<PathBuf>,
+    /// Write the last presented frame (PNG), read back from the swapchain
+    /// image; needs --frames.
+    #[arg(long, value_name = "FILE.png")]
+    pub screenshot: Option<PathBuf>,
+    /// Start with the overlay hidden (F1 shows it).
+    #[arg(long)]
+    pub no_overlay: bool,
+    /// Present without waiting for the vertical blank (mailbox or
+    /// immediate where the display offers one).
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Longest wait for streaming to settle before --screenshot's frame.
+    #[arg(long, default_value_t = 120.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
+    pub settle_seconds: f64,
+    #[command(flatten)]
+    pub world: WorldArgs,
+}
+
+/// Checks what needs no window: the world, the view, the files.
+pub fn check(args: &ViewArgs) -> Result<(LoadedWorld, Option<FlightPath>)> {
+    if args.screenshot.is_some() && args.frames == 0 {
+        bail!("--screenshot needs --frames N (the run must end for the last frame to be written)");
+    }
+    if args.path.is_some() && args.frames == 0 {
+        bail!("--path needs --frames N (the flight is spread over them)");
+    }
+    if let Some(shot) = &args.screenshot {
+        crate::out_path::check_out_file(shot, "--screenshot")?;
+    }
+    if !(args.settle_seconds.is_finite() && args.settle_seconds >= 0.0) {
+        bail!("--settle-seconds must be a non-negative number");
+    }
+    let path = args.path.as_deref().map(FlightPath::load).transpose()?;
+    let world = args.world.load()?;
+    crate::world_args::check_slots(args.slots, &world.desc)?;
+    Ok((world, path))
+}
+
+pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: Option<FlightPath>) -> Result<()> {
+    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window ({e}); is DISPLAY set?"))?;
+    let camera = path.as_ref().map_or_else(|| camera_of(args.camera, &world), FlightPath::first);
+    let view = View {
+        camera,
+        fov_y_deg: args.fov,
+        size: args.size,
+        target_error_px: args.target_error,
+        near_m: DEFAULT_NEAR_M,
+    };
+    check_view(&view, &world)?;
+    let mut app = App {
+        fly: FlyCamera::new(camera, world.desc.extent_m),
+        settings: Settings { target_error_px: args.target_error, stages: args.cull, lighting: world.effects.lighting },
+        show_overlay: !args.no_overlay,
+        args,
+        world,
+        path,
+        options,
+        view,
+        state: None,
+        failure: None,
+        presented: 0,
+        presented_all: 0,
+        started: None,
+        settling_since: None,
+        last: Instant::now(),
+        fps: 0.0,
+        overlay: Overlay::default(),
+        cursor: None,
+        looking: false,
+        resized_at: None,
+        result: None,
+    };
+    event_loop.run_app(&mut app).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
+    if let Some(e) = app.failure {
+        return Err(e);
+    }
+    app.result.unwrap_or_else(|| Err(anyhow!("the window closed before vista started")))
+}
+
+/// The window and everything drawn into it.
+struct Open {
+    egui_state: egui_winit::State,
+    egui: egui::Context,
+    viewer: Viewer,
+    /// Dropped last: the presenter's surface belongs to it.
+    window: Window,
+}
+
+struct App {
+    args: ViewArgs,
+    world: LoadedWorld,
+    path: Option<FlightPath>,
+    options: ContextOptions,
+    view: View,
+    fly: FlyCamera,
+    settings: Settings,
+    overlay: Overlay,
+    show_overlay: bool,
+    state: Option<Open>,
+    failure: Option<anyhow::Error>,
+    /// Frames of --frames presented (settling before a screenshot excluded).
+    presented: u32,
+    /// Every frame presented.
+    presented_all: u64,
+    started: Option<Instant>,
+    /// When --frames ended with a screenshot pending: waiting for streaming.
+    settling_since: Option<Instant>,
+    last: Instant,
+    fps: f64,
+    cursor: Option<[f64; 2]>,
+    looking: bool,
+    /// The scripted frame whose `size` line was applied.
+    resized_at: Option<u32>,
+    result: Option<Result<()>>,
+}
+
+impl App {
+    fn open(&mut self, el: &ActiveEventLoop) -> Result<Open> {
+        let [w, h] = self.args.size;
+        let attrs = Window::default_attributes()
+            .with_title(format!("vista: {}", self.world.label))
+            .with_inner_size(winit::dpi::PhysicalSize::new(w, h));
+        let window = el.create_window(attrs).context("creating the window")?;
+        let display = window.display_handle().context("the window's display")?.as_raw();
+        let options = ContextOptions { display: Some(display), ..self.options.clone() };
+        let ctx = Context::headless(&options).context("creating the Vulkan context")?;
+        let errors = self.world.errors(&ctx, self.args.cache.as_deref())?;
+        let ropts = RendererOptions {
+            terrain: TerrainOptions {
+                slots: self.args.slots,
+                cache_dir: self.args.cache.clone(),
+                errors: Some(errors),
+                bake: self.world.bake,
+                limits: self.world.limits.clone(),
+                ..TerrainOptions::default()
+            },
+            stages: self.args.cull,
+            effects: self.world.effects.clone(),
+            origin_m: self.world.origin_m,
+            ..RendererOptions::default()
+        };
+        let d = &self.world.desc;
+        let renderer = TerrainRenderer::new(&ctx, d, self.world.source.clone(), self.world.holes.clone(), &ropts)
+            .map_err(crate::world_args::plan_error_is_input)?;
+        let depth = ropts.terrain.frames_in_flight;
+        let size = [window.inner_size().width, window.inner_size().height];
+        let raw_window = window.window_handle().context("the window's handle")?.as_raw();
+        // SAFETY: the handles are the live window's, on the display the
+        // context was made for; `Open` drops the viewer before the window.
+        let presenter = unsafe { Presenter::new(&ctx, display, raw_window, size, depth, !self.args.no_vsync) }?;
+        self.view.size = presenter.extent();
+        let viewer = Viewer::new(ctx, renderer, presenter, depth)?;
+        let egui = egui::Context::default();
+        let egui_state = egui_winit::State::new(egui.clone(), egui::ViewportId::ROOT, &window, None, None, Some(4096));
+        Ok(Open { egui_state, egui, viewer, window })
+    }
+
+    fn fail(&mut self, el: &ActiveEventLoop, e: anyhow::Error) {
+        self.failure.get_or_insert(e);
+        el.exit();
+    }
+
+    /// One frame: camera, overlay, render, present; ends the run when its
+    /// frames are done.
+    fn redraw(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        let now = Instant::now();
+        let dt = now.duration_since(self.last).as_secs_f64();
+        self.last = now;
+        if dt > 0.0 {
+            self.fps = if self.fps == 0.0 { 1.0 / dt } else { 0.9 * self.fps + 0.1 / dt };
+        }
+        let frames = self.args.frames;
+        let scripted_frame = self.presented.min(frames.saturating_sub(1));
+        let Some(open) = self.state.as_mut() else { return Ok(()) };
+        match &self.path {
+            Some(p) => {
+                self.fly.camera = p.at(scripted_frame, frames);
+                let asked = p.size_at(scripted_frame, frames).filter(|_| self.settling_since.is_none());
+                if let Some([w, h]) = asked.filter(|_| self.resized_at != Some(scripted_frame)) {
+                    self.resized_at = Some(scripted_frame);
+                    let _ = open.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
+                }
+            }
+            None => self.fly.update(dt.min(0.25)),
+        }
+        self.view.camera = self.fly.camera;
+        viewer::apply(&mut open.viewer.renderer, &self.settings, &mut self.view);
+        self.view.size = open.viewer.presenter.extent();
+        if self.view.size == [0, 0] {
+            // Minimised: nothing to present to; wait for the window to return.
+            return Ok(());
+        }
+        let overlay = if self.show_overlay { Some(self.run_overlay()?) } else { None };
+        let open = self.state.as_mut().expect("checked above");
+        let final_frame = frames > 0 && self.presented + 1 >= frames;
+        let settled = open.viewer.renderer.settled()
+            || self.settling_since.is_some_and(|t| t.elapsed() > Duration::from_secs_f64(self.args.settle_seconds));
+        let shoot = final_frame && self.args.screenshot.is_some() && settled;
+        let shot = if shoot { Some(open.viewer.readback()?) } else { None };
+        if !open.viewer.frame(&self.view, overlay.as_ref(), shot.as_ref())? {
+            let s = open.window.inner_size();
+            open.viewer.resize([s.width, s.height])?;
+            return Ok(());
+        }
+        self.started.get_or_insert(now);
+        self.presented_all += 1;
+        if !final_frame {
+            self.presented += 1;
+            return Ok(());
+        }
+        if self.args.screenshot.is_some() && !shoot {
+            // The camera holds while the streamed set catches up.
+            self.settling_since.get_or_insert(now);
+            return Ok(());
+        }
+        self.presented += 1;
+        if let (Some(shot), Some(file)) = (shot, &self.args.screenshot) {
+            let (rgba, size) = open.viewer.read(&shot)?;
+            vista::output::write_png(file, &rgba, size, image::ExtendedColorType::Rgba8)?;
+            println!("screenshot: {} ({}x{})", file.display(), size[0], size[1]);
+        }
+        el.exit();
+        Ok(())
+    }
+
+    fn run_overlay(&mut self) -> Result<OverlayFrame> {
+        let open = self.state.as_mut().expect("open");
+        let raw = open.egui_state.take_egui_input(&open.window);
+        if let Some(t) = open.viewer.renderer.latest_timings() {
+            self.overlay.observe(t);
+        }
+        let f = Frame {
+            fps: self.fps,
+            camera: self.fly.camera.to_string(),
+            speed_mps: self.fly.speed_mps,
+            size: self.view.size,
+            slots: self.args.slots,
+        };
+        let shown = viewer::shown(&open.viewer, f);
+        let (overlay, settings) = (&mut self.overlay, &mut self.settings);
+        let out = open.egui.run_ui(raw, |ui| overlay.ui(&ui.ctx().clone(), &shown, settings));
+        open.egui_state.handle_platform_output(&open.window, out.platform_output);
+        open.viewer.overlay_textures(&out.textures_delta)?;
+        let primitives = open.egui.tessellate(out.shapes, out.pixels_per_point);
+        Ok(OverlayFrame { primitives, pixels_per_point: out.pixels_per_point })
+    }
+
+    fn key(&mut self, el: &ActiveEventLoop, code: KeyCode, pressed: bool) {
+        match code {
+            KeyCode::Escape if pressed => el.exit(),
+            KeyCode::F1 if pressed => self.show_overlay = !self.show_overlay,
+            KeyCode::KeyP if pressed => println!("--camera {}", self.fly.camera),
+            _ => self.fly.key(code, pressed),
+        }
+    }
+
+    /// Ends the run: every object destroyed, none left alive.
+    fn finish(&mut self) -> Result<()> {
+        let Some(open) = self.state.take() else { return Ok(()) };
+        let Open { egui_state, egui, viewer, window } = open;
+        drop((egui_state, egui));
+        let (ctx, live) = viewer.close()?;
+        drop(window);
+        if live.total() != 0 {
+            bail!("{} Vulkan objects still alive at exit: {live:?}", live.total());
+        }
+        let log = ctx.validation_log();
+        drop(ctx);
+        let messages = log.messages();
+        if !messages.is_empty() {
+            bail!(
+                "{} validation message(s); the first: [{}] {}",
+                messages.len(),
+                messages[0].id_name,
+                messages[0].text
+            );
+        }
+        if let Some(t) = self.started {
+            let s = t.elapsed().as_secs_f64();
+            let n = self.presented_all;
+            println!("presented {n} frames in {s:.1} s ({:.2} fps); 0 Vulkan objects alive at exit", n as f64 / s);
+        }
+        Ok(())
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.state.is_some() || self.failure.is_some() {
+            return;
+        }
+        match self.open(el) {
+            Ok(open) => {
+                open.window.request_redraw();
+                self.state = Some(open);
+            }
+            Err(e) => self.fail(el, e),
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(open) = self.state.as_mut() else { return };
+        let consumed = self.show_overlay && open.egui_state.on_window_event(&open.window, &event).consumed;
+        match event {
+            WindowEvent::CloseRequested => el.exit(),
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.redraw(el) {
+                    self.fail(el, e);
+                }
+            }
+            WindowEvent::Resized(s) => match open.viewer.resize([s.width, s.height]) {
+                Ok(()) if self.path.is_some() => {
+                    let [w, h] = open.viewer.presenter.extent();
+                    println!("resized: swapchain {w}x{h} after frame {}", self.presented);
+                }
+                Ok(()) => {}
+                Err(e) => self.fail(el, e),
+            },
+            WindowEvent::Focused(false) => self.fly.release_all(),
+            WindowEvent::KeyboardInput { event, .. } if !consumed => {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    self.key(el, code, event.state == ElementState::Pressed);
+                }
+            }
+            WindowEvent::MouseInput { button: MouseButton::Right, state, .. } => {
+                self.looking = state == ElementState::Pressed && !consumed;
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let p = [position.x, position.y];
+                if let (true, Some(c)) = (self.looking, self.cursor) {
+                    self.fly.look(p[0] - c[0], p[1] - c[1]);
+                }
+                self.cursor = Some(p);
+            }
+            WindowEvent::MouseWheel { delta, .. } if !consumed => match delta {
+                MouseScrollDelta::LineDelta(_, y) => self.fly.wheel(f64::from(y)),
+                MouseScrollDelta::PixelDelta(p) => self.fly.wheel(p.y / 50.0),
+            },
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, _el: &ActiveEventLoop) {
+        if let Some(open) = &self.state {
+            open.window.request_redraw();
+        }
+    }
+
+    fn exiting(&mut self, _el: &ActiveEventLoop) {
+        let r = self.finish();
+        self.result = Some(match self.failure.take() {
+            Some(e) => Err(e),
+            None => r,
+        });
+    }
+}

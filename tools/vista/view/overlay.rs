@@ -1,0 +1,189 @@
+//! The live overlay of `vista view` (egui, drawn by egui-ash-renderer into
+//! the swapchain image): per-pass GPU ms as bars with a short history,
+//! culling, LOD and streaming counters, memory, and the per-frame switches
+//! (target error, culling stages, sun) applied on the next frame.
+
+use std::collections::VecDeque;
+use vista::frame::FrameTimings;
+use vista::passes::cull_patches::CullStages;
+use vista::render::telemetry::FrameCounters;
+use vista::render::{EffectDecision, Lighting};
+use vista::terrain::TerrainStats;
+
+/// Frames of history kept per pass.
+const HISTORY: usize = 120;
+
+/// What the overlay may change; read by the viewer each frame.
+pub struct Settings {
+    pub target_error_px: f32,
+    pub stages: CullStages,
+    pub lighting: Lighting,
+}
+
+/// What the overlay shows of one frame (all of it data the renderer
+/// returned frames late, never waited for).
+pub struct Shown<'a> {
+    pub device: &'a str,
+    pub fps: f64,
+    pub camera: String,
+    pub speed_mps: f64,
+    pub size: [u32; 2],
+    pub timings: Option<&'a FrameTimings>,
+    pub counters: Option<&'a FrameCounters>,
+    pub stream: TerrainStats,
+    pub slots: u32,
+    pub effects: &'a [EffectDecision],
+    /// Culling stages the renderer built (a switch for the others would do nothing).
+    pub built: CullStages,
+    pub memory_mb: f64,
+}
+
+#[derive(Default)]
+pub struct Overlay {
+    /// Per pass label, the last frames' GPU ms (newest last).
+    history: Vec<(String, VecDeque<f32>)>,
+    last_frame: u64,
+}
+
+impl Overlay {
+    /// Adds a finished frame's timings to the history (once per frame).
+    pub fn observe(&mut self, t: &FrameTimings) {
+        if t.frame <= self.last_frame {
+            return;
+        }
+        self.last_frame = t.frame;
+        for p in &t.passes {
+            let label = vista::frame::pass_label(p.name, p.late);
+            let i = match self.history.iter().position(|(l, _)| *l == label) {
+                Some(i) => i,
+                None => {
+                    self.history.push((label, VecDeque::new()));
+                    self.history.len() - 1
+                }
+            };
+            let h = &mut self.history[i].1;
+            h.push_back(p.gpu_ms as f32);
+            if h.len() > HISTORY {
+                h.pop_front();
+            }
+        }
+    }
+
+    pub fn ui(&mut self, ctx: &egui::Context, shown: &Shown, settings: &mut Settings) {
+        egui::Window::new("vista").default_pos([8.0, 8.0]).default_width(360.0).resizable(false).show(ctx, |ui| {
+            ui.label(format!("{}  {}x{}  {:.1} fps", shown.device, shown.size[0], shown.size[1], shown.fps));
+            ui.label(format!("camera {}  speed {:.0} m/s", shown.camera, shown.speed_mps));
+            ui.label("WASD/QE move, right drag looks, wheel speed, Shift fast, P prints camera, F1 hides, Esc quits");
+            egui::CollapsingHeader::new("GPU ms per pass").default_open(true).show(ui, |ui| self.timings(ui, shown));
+            egui::CollapsingHeader::new("culling and LOD").default_open(true).show(ui, |ui| counters(ui, shown));
+            egui::CollapsingHeader::new("streaming and memory").default_open(false).show(ui, |ui| streaming(ui, shown));
+            egui::CollapsingHeader::new("switches (next frame)")
+                .default_open(true)
+                .show(ui, |ui| switches(ui, shown, settings));
+        });
+    }
+
+    fn timings(&self, ui: &mut egui::Ui, shown: &Shown) {
+        let Some(t) = shown.timings else {
+            ui.label("no timings yet (they arrive frames late)");
+            return;
+        };
+        let total: f64 = t.passes.iter().map(|p| p.gpu_ms).sum();
+        ui.label(format!("frame {}: {total:.2} ms in {} passes ({})", t.frame, t.passes.len(), t.mode.name()));
+        let scale = self.history.iter().flat_map(|(_, h)| h.iter().copied()).fold(0.1f32, f32::max);
+        // The passes of the newest frame, in frame order: a pass that did
+        // not run (e.g. no upload) is not listed.
+        egui::Grid::new("passes").num_columns(3).show(ui, |ui| {
+            for p in &t.passes {
+                let label = vista::frame::pass_label(p.name, p.late);
+                let Some((_, h)) = self.history.iter().find(|(l, _)| *l == label) else { continue };
+                ui.label(label);
+                ui.label(format!("{:7.2}", p.gpu_ms));
+                bar_with_history(ui, h, scale);
+                ui.end_row();
+            }
+        });
+    }
+}
+
+/// A bar for the newest value over a sparkline of the history, both
+/// scaled to `scale` ms.
+fn bar_with_history(ui: &mut egui::Ui, h: &VecDeque<f32>, scale: f32) {
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(140.0, 14.0), egui::Sense::hover());
+    let p = ui.painter();
+    p.rect_filled(rect, 0.0, egui::Color32::from_gray(40));
+    if let Some(now) = h.back() {
+        let w = rect.width() * (now / scale).min(1.0);
+        let bar = egui::Rect::from_min_size(rect.min, egui::vec2(w, rect.height()));
+        p.rect_filled(bar, 0.0, egui::Color32::from_rgb(70, 130, 200));
+    }
+    let n = HISTORY as f32;
+    let points: Vec<egui::Pos2> = h
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let x = rect.left() + rect.width() * (i as f32 + (n - h.len() as f32)) / n;
+            egui::pos2(x, rect.bottom() - rect.height() * (v / scale).min(1.0))
+        })
+        .collect();
+    p.add(egui::Shape::line(points, egui::Stroke::new(1.0, egui::Color32::from_rgb(240, 200, 80))));
+}
+
+fn counters(ui: &mut egui::Ui, shown: &Shown) {
+    let Some(c) = shown.counters else {
+        ui.label("no counters yet");
+        return;
+    };
+    let p = &c.cull;
+    ui.label(format!(
+        "patches {} in, {} after frustum, {} after cone, {} after hole, {} drawn",
+        p.patches_in, p.after_frustum, p.after_cone, p.after_hole, p.drawn
+    ));
+    if shown.built.occlusion {
+        ui.label(format!(
+            "occlusion: {} drawn in phase 1, {} tested, {} drawn in phase 2",
+            p.drawn_phase1, p.occlusion_tested, p.drawn_phase2
+        ));
+    }
+    let tri_per_px = c.triangles as f64 / f64::from(shown.size[0] * shown.size[1]);
+    ui.label(format!("triangles {} ({tri_per_px:.2} per pixel)", c.triangles));
+    ui.label(format!("error bound {:.2} px (the largest projected error of any drawn patch)", p.bound_px));
+    let lods: Vec<String> = c.traverse.nodes_per_lod.iter().enumerate().map(|(l, n)| format!("LOD{l} {n}")).collect();
+    ui.label(format!("nodes {}: {}", c.traverse.nodes, lods.join(", ")));
+    let s = &c.select;
+    ui.label(format!(
+        "{} patches from an ancestor, {} refined below the samples, {} seam conflicts",
+        s.coarsened,
+        s.refined - s.refine_capped,
+        s.conflicts
+    ));
+}
+
+fn streaming(ui: &mut egui::Ui, shown: &Shown) {
+    let s = &shown.stream;
+    ui.label(format!(
+        "{} of {} slots resident, {} loading, {} waiting upload, {} arrived in all",
+        s.resident, shown.slots, s.loading, s.waiting_upload, s.arrived_total
+    ));
+    if s.failed > 0 {
+        ui.label(format!("{} failed loads, {} retried, {} given up", s.failed, s.retried, s.gave_up));
+    }
+    ui.label(format!("GPU memory {:.1} MiB (renderer's resources)", shown.memory_mb));
+    for d in shown.effects {
+        let state = if d.on { "on" } else { "off" };
+        ui.label(format!("effect {} {state}: {}", d.effect.name(), d.reason));
+    }
+}
+
+fn switches(ui: &mut egui::Ui, shown: &Shown, s: &mut Settings) {
+    ui.add(egui::Slider::new(&mut s.target_error_px, 0.25..=16.0).logarithmic(true).text("target error px"));
+    ui.horizontal(|ui| {
+        let b = shown.built;
+        ui.checkbox(&mut s.stages.frustum, "frustum");
+        ui.add_enabled(b.cone, egui::Checkbox::new(&mut s.stages.cone, "cone"));
+        ui.add_enabled(b.hole, egui::Checkbox::new(&mut s.stages.hole, "hole"));
+        ui.add_enabled(b.occlusion, egui::Checkbox::new(&mut s.stages.occlusion, "occlusion"));
+    });
+    ui.add(egui::Slider::new(&mut s.lighting.sun_elevation_deg, -5.0..=90.0).text("sun elevation"));
+    ui.add(egui::Slider::new(&mut s.lighting.sun_azimuth_deg, 0.0..=360.0).text("sun azimuth"));
+}
