@@ -4,11 +4,31 @@
 mod common;
 
 use common::gpu_test;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use vista::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, RawHandles};
 use vista::passes::prefix_sum::PrefixSum;
 
 /// A context around `engine`'s handles, as an engine would make one.
 fn wrap(engine: &Context) -> Context {
+    wrap_with(engine, None)
+}
+
+/// The engine's queue as a test sees it: every vista submission goes through
+/// this function, which counts it.
+fn counting_submitter(engine: &Context) -> (vista::gpu::Submitter, Arc<AtomicU64>) {
+    let count = Arc::new(AtomicU64::new(0));
+    let (device, seen) = (engine.device().clone(), count.clone());
+    let submit: vista::gpu::Submitter = Box::new(move |queue, info, fence| {
+        seen.fetch_add(1, Ordering::AcqRel);
+        // SAFETY (the engine's side): the test submits from one thread,
+        // so the queue is externally synchronized.
+        unsafe { device.queue_submit2(queue, std::slice::from_ref(info), fence) }
+    });
+    (submit, count)
+}
+
+fn wrap_with(engine: &Context, submit: Option<vista::gpu::Submitter>) -> Context {
     // SAFETY (the engine's side of the contract): the handles are live,
     // belong together, and `engine` outlives the wrapper.
     unsafe {
@@ -22,6 +42,7 @@ fn wrap(engine: &Context) -> Context {
             compute_queue_family: engine.compute_queue().family,
             compute_queue: engine.compute_queue().raw,
             debug_utils: true,
+            submit,
         })
     }
     .expect("wrap the engine's handles")
@@ -65,7 +86,9 @@ fn from_raw_wraps_an_engines_device_without_owning_it() {
 
 /// An engine records vista's frame into a command buffer of its own, on its
 /// own device (wrapped with `Context::from_raw`), submits it itself and
-/// gets terrain in its colour target.
+/// gets terrain in its colour target. vista's own submissions (uploads while
+/// it is made and reads) go through the engine's submit function: vista
+/// never calls vkQueueSubmit on the engine's queue.
 #[test]
 fn terrain_renderer_records_into_the_engines_command_buffer() {
     use common::terrain::{view, Surface, MAGENTA, MAGENTA_RGBA};
@@ -75,7 +98,8 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
     use vista::world::WorldDesc;
 
     gpu_test(|engine| {
-        let wrapped = wrap(engine);
+        let (submit, engine_submits) = counting_submitter(engine);
+        let wrapped = wrap_with(engine, Some(submit));
         let device = engine.device();
         let size = [64, 64];
         {
@@ -164,6 +188,10 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
             assert!(renderer.terrain.settled(), "streaming never settled");
             assert!(renderer.latest_timings().is_some_and(|t| t.passes.iter().any(|p| p.name == "terrain_geometry")));
             let rgba = wrapped.read_image(&color, 0, 0, 4).unwrap();
+            let made = wrapped.submissions();
+            assert_eq!(made.direct, 0, "vista submitted to the engine's queue itself");
+            assert!(made.through_engine > 0, "vista made and read back without a submission?");
+            assert_eq!(made.through_engine, engine_submits.load(Ordering::Acquire));
             let terrain_px = rgba.chunks(4).filter(|p| *p != MAGENTA_RGBA).count();
             // Looking 30 degrees down from 190 m over the tilted plane: the
             // lower half of the image at least is ground.

@@ -113,3 +113,44 @@ fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() 
         .count();
     assert!(grey > 300, "the overlay is missing from the flight's screenshot ({grey} of 400 pixels grey)");
 }
+
+/// `examples/embed`: an engine with its own device, swapchain, targets and
+/// frame loop (on a render thread) records vista between its own passes.
+#[test]
+fn the_embedding_example_draws_terrain_and_its_marker_and_vista_never_submits_itself() {
+    // `cargo test` builds the examples beside the test binaries
+    // (target/*/examples); with a target filter (`--test view`) it does not:
+    // build them first (`cargo build --release --examples`).
+    let exe = std::env::current_exe().unwrap();
+    let example = exe.parent().unwrap().parent().unwrap().join("examples").join("embed");
+    assert!(example.exists(), "{} was not built (cargo build --release --examples)", example.display());
+    let shot = dir().join("embed.png");
+    let out = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 800x600x24"])
+        .arg(&example)
+        .args(["--validation", "--frames", "40", "--screenshot"])
+        .arg(&shot)
+        .output()
+        .expect("xvfb-run (tools/install-deps installs xvfb)");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "embed failed:\n{stdout}\n{stderr}");
+    // Every vista submission went through the engine's submit function.
+    let line = stdout.lines().find(|l| l.starts_with("vista submissions:")).expect("the submissions line");
+    assert!(line.contains(", 0 of its own;"), "{line}");
+    assert!(!line.starts_with("vista submissions: 0 through"), "{line}");
+    assert!(stdout.contains("validation messages: 0"), "{stdout}\n{stderr}");
+    let (rgba, size) = png(&shot);
+    assert_eq!(size, [640, 360]);
+    let px = |i: usize| [rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]];
+    let n = (size[0] * size[1]) as usize;
+    // The engine's markers are pure magenta (vista never draws it): one 30 m
+    // above the ground, a 19 x 19 px quad (361 px), and one 100 m under it,
+    // which the depth test against vista's depth hides (with the test off,
+    // 741 px are magenta: both quads, measured).
+    let magenta = (0..n).filter(|&i| px(i) == [255, 0, 255]).count();
+    assert!((300..=450).contains(&magenta), "{magenta} marker pixels: one quad expected");
+    // Terrain: the lower half is ground, not the clear colour.
+    let sky = [140, 173, 217];
+    let ground = (n / 2..n).filter(|&i| px(i).iter().zip(sky).any(|(a, b)| a.abs_diff(b) > 8)).count();
+    assert!(ground > n / 2 * 9 / 10, "{ground} ground pixels in the lower half");
+}

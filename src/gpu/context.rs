@@ -72,6 +72,24 @@ pub struct RawHandles {
     pub compute_queue: vk::Queue,
     /// Whether the instance was created with VK_EXT_debug_utils (names and labels).
     pub debug_utils: bool,
+    /// Where vista's submissions go: `None`, vista calls vkQueueSubmit2 on
+    /// the queues above itself (behind a lock of its own, which an engine
+    /// submitting from another thread does not take); `Some`, every one
+    /// goes through the engine's function, which owns the queue.
+    pub submit: Option<Submitter>,
+}
+
+/// Submits to `queue` (one of the context's) what vista recorded, signalling
+/// `fence` on completion: the engine's queue, its lock, its thread.
+pub type Submitter = Box<dyn Fn(vk::Queue, &vk::SubmitInfo2, vk::Fence) -> ash::prelude::VkResult<()> + Send + Sync>;
+
+/// How many submissions vista made, and how.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Submissions {
+    /// vkQueueSubmit2 called by vista itself.
+    pub direct: u64,
+    /// Handed to `RawHandles::submit`.
+    pub through_engine: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -96,6 +114,10 @@ pub(crate) struct Shared {
     pub compute: Queue,
     /// vkQueueSubmit needs external synchronization of the queue.
     pub queue_lock: Mutex<()>,
+    /// The engine's submit function ([`RawHandles::submit`]).
+    pub submitter: Option<Submitter>,
+    pub submissions_direct: AtomicU64,
+    pub submissions_engine: AtomicU64,
     pub owns_handles: bool,
     pub live: LiveCounters,
     pub faults: super::fault::FaultInjector,
@@ -260,6 +282,7 @@ impl Context {
             compute_queue_family: info.compute_family,
             compute_queue: cq,
             debug_utils,
+            submit: None,
         };
         Self::build(handles, info, true, log)
     }
@@ -318,6 +341,9 @@ impl Context {
             push_descriptor,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             queue_lock: Mutex::new(()),
+            submitter: h.submit,
+            submissions_direct: AtomicU64::new(0),
+            submissions_engine: AtomicU64::new(0),
             owns_handles,
             live: LiveCounters::default(),
             faults: Default::default(),
@@ -375,6 +401,14 @@ impl Context {
     #[doc(hidden)]
     pub fn faults(&self) -> &super::fault::FaultInjector {
         &self.shared.faults
+    }
+
+    /// Submissions vista made so far, by itself and through the engine.
+    pub fn submissions(&self) -> Submissions {
+        Submissions {
+            direct: self.shared.submissions_direct.load(Ordering::Acquire),
+            through_engine: self.shared.submissions_engine.load(Ordering::Acquire),
+        }
     }
 
     pub fn live_objects(&self) -> LiveObjects {

@@ -140,14 +140,16 @@ pub(crate) fn query(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
     })
 }
 
-/// The features vista enables; `missing_features` checks the same list.
-pub(crate) struct FeatureChain {
+/// The features vista enables (an engine enables at least these on the
+/// device it hands to `Context::from_raw`); `missing_features` checks the
+/// same list. Chain `v12` and `v13` into `VkDeviceCreateInfo`.
+pub struct FeatureChain {
     pub core: vk::PhysicalDeviceFeatures,
     pub v12: vk::PhysicalDeviceVulkan12Features<'static>,
     pub v13: vk::PhysicalDeviceVulkan13Features<'static>,
 }
 
-pub(crate) fn required_features() -> FeatureChain {
+pub fn required_features() -> FeatureChain {
     FeatureChain {
         core: vk::PhysicalDeviceFeatures::default()
             .multi_draw_indirect(true)

@@ -23,8 +23,10 @@ pub mod validation;
 
 pub use ash::vk;
 pub use commands::{ColorTarget, DepthTarget, Recorder, Resource};
-pub use context::{Context, ContextOptions, Queue, RawHandles};
-pub use device_info::{DeviceInfo, Limits, QueueFamilyInfo};
+pub use context::{Context, ContextOptions, Queue, RawHandles, Submissions, Submitter};
+pub use device_info::{
+    required_features, DeviceInfo, FeatureChain, Limits, QueueFamilyInfo, REQUIRED_DEVICE_EXTENSIONS,
+};
 pub use pipeline::{ComputePipelineDesc, GraphicsPipelineDesc, Pipeline, StencilDesc};
 pub use query::TimestampPool;
 pub use resources::{

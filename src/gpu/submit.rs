@@ -10,6 +10,7 @@ use super::resources::{inc, Buffer, BufferDesc, Garbage, Image, MemoryLocation};
 use crate::error::{vk_err, Error, Result};
 use ash::vk;
 use serde::Serialize;
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
 /// How a frame's terrain work reaches the GPU.
@@ -179,16 +180,23 @@ fn end_and_submit_with(
         // nobody waits on it forever and teardown destroys the slot as is.
         return Err(Error::DeviceLost);
     }
-    let _q = s.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
     // SAFETY: the buffer is in the recording state; the fence is signalled
-    // and unused; the queue is externally synchronized by `queue_lock` (one
-    // lock for both queues); the semaphores are live (timeline, or binary
-    // ones their owner signals and waits for once per use).
+    // and unused.
     unsafe {
         s.device.end_command_buffer(slot.cmd).map_err(vk_err("vkEndCommandBuffer"))?;
         s.device.reset_fences(&[slot.fence]).map_err(vk_err("vkResetFences"))?;
-        s.device.queue_submit2(queue, &[submit], slot.fence).map_err(vk_err("vkQueueSubmit2"))
     }
+    if let Some(engine) = &s.submitter {
+        s.submissions_engine.fetch_add(1, Ordering::AcqRel);
+        return engine(queue, &submit, slot.fence).map_err(vk_err("the engine's submit (RawHandles::submit)"));
+    }
+    let _q = s.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
+    s.submissions_direct.fetch_add(1, Ordering::AcqRel);
+    // SAFETY: the buffer was ended above; the queue is externally
+    // synchronized by `queue_lock` (one lock for both queues); the
+    // semaphores are live (timeline, or binary ones their owner signals and
+    // waits for once per use).
+    unsafe { s.device.queue_submit2(queue, &[submit], slot.fence).map_err(vk_err("vkQueueSubmit2")) }
 }
 
 fn create_timeline(ctx: &Context, name: &str) -> Result<vk::Semaphore> {
