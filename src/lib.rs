@@ -10,9 +10,12 @@
 //!   streaming), no Vulkan; [`terrain`]: streaming feeding the GPU quadtree;
 //! - [`passes`]: one pass per file; [`reference`]: a CPU twin per pass;
 //! - [`render`]: the renderer an engine records into
-//!   ([`render::TerrainRenderer`]) and the frame order; [`bench`]: the
-//!   `vista bench` kinds.
+//!   ([`render::TerrainRenderer`]) and the frame order; `bench` (feature
+//!   `bench`): the `vista bench` kinds; `stability` (feature `stability`):
+//!   the hard cases. An engine that links only the renderer turns both off
+//!   (`default-features = false`) and with them NVIDIA FLIP (C++).
 
+#[cfg(feature = "bench")]
 pub mod bench;
 pub mod error;
 pub mod frame;
@@ -22,6 +25,7 @@ pub mod passes;
 pub mod reference;
 pub mod render;
 pub mod shaders;
+#[cfg(feature = "stability")]
 pub mod stability;
 pub mod terrain;
 pub mod world;

@@ -91,3 +91,24 @@ fn terrain_and_sky_follow_the_height_fog_model() {
         assert!(worst < 5e-3, "a channel {worst} (relative) from the model");
     });
 }
+
+/// The overlay's toggle: a renderer built with the atmosphere, switched off
+/// for a frame, draws exactly what a renderer built without it draws (the
+/// variant without it, made on first use) and says so in its report.
+#[test]
+fn switching_the_atmosphere_off_for_a_frame_draws_the_clear_picture() {
+    gpu_test(|ctx| {
+        let (clear, _, _) = shot(ctx, false);
+        let mut rig = Rig::with_options(ctx, world(), Surface::Plane(GROUND), vec![], SIZE, false, options(true));
+        rig.shot(ctx, &over_plane(), CullStages::ALL);
+        let built = rig.renderer.pipelines().len();
+        rig.renderer.switches.atmosphere = false;
+        rig.again(ctx, &over_plane(), CullStages::ALL);
+        let hdr = rig.renderer.gbuffer.as_ref().unwrap().capture(ctx).unwrap().hdr;
+        assert!(hdr == clear, "switched off, the picture is not the one without the atmosphere");
+        assert_eq!(rig.renderer.pipelines().len(), built + 1, "one more variant of lighting_resolve");
+        let report = vista::render::frame_report(ctx, &rig.renderer, None).unwrap();
+        assert_eq!(report.switched_off, [Effect::Atmosphere]);
+        assert!(report.pass("lighting_resolve").unwrap().reason.contains("without atmosphere"));
+    });
+}

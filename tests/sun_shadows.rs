@@ -236,3 +236,62 @@ fn shadows_off_build_nothing_and_on_darken_only_the_shadow() {
         assert!(darker > 100 && lighter == 0, "{darker} darker, {lighter} lighter pixels");
     });
 }
+
+/// The overlay's toggle: shadows switched off for a frame skip their pass
+/// (built, nothing destroyed) and the lighting goes without them; switched
+/// back on, every resident node is marched again (its slot may hold another
+/// node's texture by then) and the shadows show only once all are done.
+#[test]
+fn switched_off_shadows_skip_their_pass_and_return_once_every_node_is_redone() {
+    use vista::passes::sun_shadows::MAX_UPDATE_BUDGET;
+    gpu_test(|ctx| {
+        let mut rig = Rig::with_options(ctx, world(), CONE, vec![], SIZE, false, options(15.0, true));
+        let v = over_cone();
+        let lit = rig.shot(ctx, &v, CullStages::ALL);
+        let outcome = |rig: &Rig| rig.renderer.last_frame_log().and_then(|l| l.outcome(FramePass::SunShadows)).cloned();
+        let objects = ctx.live_objects();
+        rig.renderer.switches.shadows = false;
+        let off = rig.again(ctx, &v, CullStages::ALL);
+        assert_eq!(outcome(&rig), Some(Outcome::Skipped(Skip::ShadowsOff)));
+        let timings = rig.renderer.poll_timings(ctx).cloned();
+        let report = frame_report(ctx, &rig.renderer, timings.as_ref()).unwrap();
+        assert_eq!(report.switched_off, [Effect::Shadows]);
+        let resolve = report.pass("lighting_resolve").unwrap();
+        assert!(resolve.reason.contains("without shadows"), "{resolve:?}");
+        assert!(report.to_text().contains("switched off this frame (built, FrameSwitches): shadows"));
+        // Off: only the shadowed pixels change, and only get lighter.
+        let sum = |p: &[u8]| p[..3].iter().map(|&c| u32::from(c)).sum::<u32>();
+        let (mut darker, mut lighter) = (0, 0);
+        for (a, b) in lit.rgba.chunks_exact(4).zip(off.rgba.chunks_exact(4)) {
+            darker += usize::from(sum(b) < sum(a));
+            lighter += usize::from(sum(b) > sum(a) + 3);
+        }
+        assert!(lighter > 100 && darker == 0, "{lighter} lighter, {darker} darker pixels");
+        // The only new object: the lighting variant without shadows.
+        let added = ctx.live_objects();
+        assert_eq!((added.pipelines - objects.pipelines, added.images - objects.images), (1, 0));
+        // Back on: every resident node redone, MAX_UPDATE_BUDGET a frame,
+        // the lighting without shadows until the last one is done.
+        rig.renderer.switches.shadows = true;
+        let resident = rig.renderer.terrain.tree.shadow.resident_count();
+        let (mut redone, mut frames) = (0, 0);
+        let back = loop {
+            let img = rig.again(ctx, &v, CullStages::ALL);
+            frames += 1;
+            let Some(Outcome::Recorded { cpu_work: Some(n) }) = outcome(&rig) else {
+                panic!("frame {frames}: not run")
+            };
+            assert!(n <= u64::from(MAX_UPDATE_BUDGET), "{n} jobs");
+            redone += n;
+            let shown = !rig.renderer.last_frame_log().unwrap().switched_off.contains(&Effect::Shadows);
+            if shown {
+                break img;
+            }
+            assert!(frames < 100, "shadows never came back");
+        };
+        assert_eq!(redone, u64::from(resident), "every resident node redone once");
+        assert_eq!(frames as u32, resident.div_ceil(MAX_UPDATE_BUDGET));
+        // The same sun and nodes: the same picture as before the switch.
+        assert!(back.rgba == lit.rgba, "shadows back on differ from before");
+    });
+}

@@ -51,10 +51,50 @@ pub struct ResolveInputs<'a> {
 }
 
 pub struct LightingResolve {
-    pipeline: Pipeline,
+    /// Per combination of shadows (bit 0) and atmosphere (bit 1) on, of
+    /// those built: its variant, once asked for (the built one at once).
+    pipelines: [Option<Pipeline>; 4],
     nearest: Sampler,
-    shadows: bool,
-    atmosphere: bool,
+    lighting: bool,
+    /// Built with (the most a frame may ask for).
+    built: usize,
+    /// What this frame's `record` draws (`prepare`).
+    current: usize,
+}
+
+const SHADOWS: usize = 1;
+const ATMOSPHERE: usize = 2;
+
+/// The index of a combination in `LightingResolve::pipelines`.
+fn combination(shadows: bool, atmosphere: bool) -> usize {
+    (usize::from(shadows) * SHADOWS) | (usize::from(atmosphere) * ATMOSPHERE)
+}
+
+fn pipeline(ctx: &Context, lighting: bool, on: usize) -> Result<Pipeline> {
+    let (shadows, atmosphere) = (on & SHADOWS != 0, on & ATMOSPHERE != 0);
+    let mut variant = 0;
+    for (on, bit) in
+        [(lighting, fs::VARIANT_LIGHTING), (shadows, fs::VARIANT_SHADOWS), (atmosphere, fs::VARIANT_ATMOSPHERE)]
+    {
+        if on {
+            variant |= bit;
+        }
+    }
+    let desc = GraphicsPipelineDesc {
+        name: LightingResolve::NAME,
+        vertex: &vs::SHADER,
+        fragment: fs::variant(variant),
+        specialization: &[],
+        color_formats: &[COLOR_FORMAT, HDR_FORMAT],
+        depth_format: Some(DEPTH_FORMAT),
+        depth_compare: vk::CompareOp::ALWAYS,
+        depth_write: false,
+        // The atmosphere's sky covers the background too.
+        stencil: if atmosphere { None } else { Some(TERRAIN_ONLY) },
+        cull_mode: vk::CullModeFlags::NONE,
+        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+    };
+    Pipeline::graphics(ctx, &desc)
 }
 
 impl LightingResolve {
@@ -63,38 +103,32 @@ impl LightingResolve {
     /// `shadows` and `atmosphere` need `lighting`.
     pub fn new(ctx: &Context, lighting: bool, shadows: bool, atmosphere: bool) -> Result<Self> {
         assert!(lighting || !(shadows || atmosphere), "shadows and atmosphere need the lit image");
-        let mut variant = 0;
-        for (on, bit) in
-            [(lighting, fs::VARIANT_LIGHTING), (shadows, fs::VARIANT_SHADOWS), (atmosphere, fs::VARIANT_ATMOSPHERE)]
-        {
-            if on {
-                variant |= bit;
-            }
-        }
-        let desc = GraphicsPipelineDesc {
-            name: Self::NAME,
-            vertex: &vs::SHADER,
-            fragment: fs::variant(variant),
-            specialization: &[],
-            color_formats: &[COLOR_FORMAT, HDR_FORMAT],
-            depth_format: Some(DEPTH_FORMAT),
-            depth_compare: vk::CompareOp::ALWAYS,
-            depth_write: false,
-            // The atmosphere's sky covers the background too.
-            stencil: if atmosphere { None } else { Some(TERRAIN_ONLY) },
-            cull_mode: vk::CullModeFlags::NONE,
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-        };
+        let built = combination(shadows, atmosphere);
+        let mut pipelines = [None, None, None, None];
+        pipelines[built] = Some(pipeline(ctx, lighting, built)?);
         Ok(LightingResolve {
-            pipeline: Pipeline::graphics(ctx, &desc)?,
+            pipelines,
             nearest: nearest_sampler(ctx, "lighting_resolve_nearest")?,
-            shadows,
-            atmosphere,
+            lighting,
+            built,
+            current: built,
         })
     }
 
-    pub fn pipeline_label(&self) -> &str {
-        &self.pipeline.label
+    /// Labels of the variants made.
+    pub fn pipeline_labels(&self) -> Vec<String> {
+        self.pipelines.iter().flatten().map(|p| p.label.clone()).collect()
+    }
+
+    /// The next frame draws with `shadows` and `atmosphere` (each only if
+    /// built); makes that variant the first time.
+    pub fn prepare(&mut self, ctx: &Context, shadows: bool, atmosphere: bool) -> Result<()> {
+        let on = self.built & combination(shadows, atmosphere);
+        if self.pipelines[on].is_none() {
+            self.pipelines[on] = Some(pipeline(ctx, self.lighting, on)?);
+        }
+        self.current = on;
+        Ok(())
     }
 
     /// Expects the depth target in DEPTH_STENCIL_READ_ONLY_OPTIMAL (after
@@ -119,7 +153,9 @@ impl LightingResolve {
             ],
             Some(DepthTarget { image: targets.depth, clear: None, read_only: true }),
         );
-        rec.bind_pipeline(&self.pipeline);
+        let pipeline = self.pipelines[self.current].as_ref().expect("made by prepare or new");
+        let (shadows_on, atmosphere_on) = (self.current & SHADOWS != 0, self.current & ATMOSPHERE != 0);
+        rec.bind_pipeline(pipeline);
         let mut bindings = vec![
             (fs::VIEW, Resource::Buffer(view)),
             (fs::GB_ALBEDO, Resource::Image(&gbuffer.albedo, read)),
@@ -127,11 +163,11 @@ impl LightingResolve {
             (fs::NEAREST, Resource::Sampler(self.nearest.raw())),
         ];
         let mut push = LightingPush { terrain: inputs.terrain, shadow: [0.0; 4], fog: [[0.0; 4]; 3] };
-        if self.shadows || self.atmosphere {
+        if shadows_on || atmosphere_on {
             let depth_read = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
             bindings.push((fs::DEPTH_TARGET, Resource::Image(targets.depth, depth_read)));
         }
-        if self.shadows {
+        if shadows_on {
             let (shadows, elevation_deg) = inputs.shadows.expect("built with shadows");
             bindings.extend([
                 (fs::SECTOR_DATA, Resource::Buffer(&inputs.sector_data.buffer)),
@@ -141,12 +177,12 @@ impl LightingResolve {
             let p = &shadows.params;
             push.shadow = [p.penumbra(elevation_deg), p.resolution as f32, 0.0, 0.0];
         }
-        if self.atmosphere {
+        if atmosphere_on {
             push.fog = inputs.fog.expect("built with the atmosphere");
         }
-        rec.push_descriptors(&self.pipeline, &bindings);
-        if self.shadows || self.atmosphere {
-            rec.push_constants(&self.pipeline, &push);
+        rec.push_descriptors(pipeline, &bindings);
+        if shadows_on || atmosphere_on {
+            rec.push_constants(pipeline, &push);
         }
         rec.draw(3, 1);
         rec.end_rendering();

@@ -4,6 +4,7 @@
 pub mod atmosphere;
 pub mod classify;
 pub mod finest;
+#[cfg(feature = "bench")]
 pub mod image_metric;
 pub mod lod_map;
 pub mod occlusion;
@@ -16,6 +17,7 @@ pub mod traverse;
 
 pub use classify::classify_tiles_cpu;
 pub use finest::FinestSurface;
+#[cfg(feature = "bench")]
 pub use image_metric::{flip_magma, flip_map, flip_stats, FlipStats};
 pub use lod_map::lod_map_cpu;
 pub use raycast::{HeightBounds, RayCaster, RaycastConfig, ReferenceImage, Trace};

@@ -162,6 +162,24 @@ pub struct Effects {
     pub atmosphere: AtmosphereParams,
 }
 
+/// Effects a built renderer switches off for a frame without rebuilding
+/// anything (`TerrainRenderer::switches`; `vista view`'s toggles): off,
+/// their passes are skipped and the lighting uses the variant without them
+/// (made the first time it is asked for). The culling stages switch the
+/// same way through `CullStages`. Switching on an effect the renderer did
+/// not build does nothing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameSwitches {
+    pub shadows: bool,
+    pub atmosphere: bool,
+}
+
+impl Default for FrameSwitches {
+    fn default() -> Self {
+        FrameSwitches { shadows: true, atmosphere: true }
+    }
+}
+
 impl Default for Effects {
     /// Every effect at its default (see [`Effect::default_on`]).
     fn default() -> Self {

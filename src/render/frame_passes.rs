@@ -45,6 +45,8 @@ pub(crate) struct FramePasses<'a> {
     /// Effect `shadows`, with this frame's jobs (empty: skipped), the unit
     /// vector towards the sun and its elevation (degrees).
     pub shadows: Option<(&'a SunShadows, &'a [SunShadowJob], glam::DVec3, f64)>,
+    /// Effect `shadows` is built but switched off this frame.
+    pub shadows_off: bool,
     /// Effect `atmosphere`: the fog's push vectors.
     pub fog: Option<[[f32; 4]; 3]>,
     pub materials: Option<&'a MaterialResources>,
@@ -163,6 +165,7 @@ impl FramePasses<'_> {
                 });
                 log.ran(FramePass::SunShadows, Some(jobs.len() as u64));
             }
+            None if self.shadows_off => log.skipped(FramePass::SunShadows, Skip::ShadowsOff),
             None => {}
         }
         let resolve = self.resolve;

@@ -131,6 +131,8 @@ pub enum Skip {
     OcclusionOff,
     /// No node arrived and every resident node's shadow was made for this sun.
     ShadowsCurrent,
+    /// Effect `shadows` is built but switched off this frame (`FrameSwitches`).
+    ShadowsOff,
 }
 
 impl Skip {
@@ -139,6 +141,7 @@ impl Skip {
             Skip::NothingToUpload => "no node arrived or left this frame (known on the CPU)",
             Skip::OcclusionOff => "occlusion switched off this frame (culling stages)",
             Skip::ShadowsCurrent => "idle: every resident node's shadow is made for this sun (known on the CPU)",
+            Skip::ShadowsOff => "shadows switched off this frame (FrameSwitches; built, redone when back on)",
         }
     }
 }
@@ -166,6 +169,8 @@ pub struct FrameLog {
     /// The frame executor's frame number.
     pub frame: u64,
     pub entries: Vec<(FramePass, Outcome)>,
+    /// Built effects switched off this frame (`FrameSwitches`).
+    pub switched_off: Vec<Effect>,
 }
 
 impl FrameLog {
@@ -217,7 +222,7 @@ impl PassGraph {
     }
 
     pub fn begin_frame(&self, frame: u64) -> FrameLog {
-        FrameLog { frame, entries: Vec::new() }
+        FrameLog { frame, entries: Vec::new(), switched_off: Vec::new() }
     }
 
     /// Keeps the log; every built pass must have been accounted for, in

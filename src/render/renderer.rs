@@ -26,11 +26,11 @@ use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
-use crate::passes::sun_shadows::SunShadows;
+use crate::passes::sun_shadows::{SunShadowJob, SunShadows};
 use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::traverse::Traverse;
-use crate::render::effects::{decide, Effect, EffectDecision, Effects, WorldContent};
+use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, WorldContent};
 use crate::render::frame_passes::FramePasses;
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FramePass, PassGraph, Skip};
@@ -124,6 +124,11 @@ pub struct TerrainRenderer {
     pub(crate) graph: PassGraph,
     /// Culling stages of the next recorded frame (of those built).
     pub stages: CullStages,
+    /// Effects of the next recorded frame that a built renderer can switch
+    /// off without rebuilding (of those built).
+    pub switches: FrameSwitches,
+    /// Shadows were switched off in an earlier frame and not back on yet.
+    shadows_were_off: bool,
     pub effects: Effects,
     /// See [`RendererOptions::origin_m`]; may change between frames.
     pub origin_m: [f64; 2],
@@ -309,6 +314,8 @@ impl TerrainRenderer {
             exec,
             graph,
             stages: options.stages,
+            switches: FrameSwitches::default(),
+            shadows_were_off: false,
             effects: options.effects.clone(),
             origin_m: options.origin_m,
             decisions,
@@ -370,37 +377,12 @@ impl TerrainRenderer {
         view: &View,
         targets: &RenderTargets,
     ) -> Result<()> {
-        view.validate()?;
-        if !self.origin_m.iter().all(|v| v.is_finite()) {
-            return Err(Error::BadInput(format!("world origin {:?} is not finite", self.origin_m)));
-        }
-        let view = &view.relative_to(self.origin_m);
-        for (what, image, format) in [("colour", targets.color, COLOR_FORMAT), ("depth", targets.depth, DEPTH_FORMAT)] {
-            if image.extent != view.size || image.format != format {
-                return Err(Error::BadInput(format!(
-                    "{what} target {} is {:?} {}x{}, the view needs {format:?} {}x{}",
-                    image.name, image.format, image.extent[0], image.extent[1], view.size[0], view.size[1]
-                )));
-            }
-        }
+        let view = &self.check_frame(view, targets)?;
         let ctx = match &mut cmds {
             FrameCommands::One(r) => r.context(),
             FrameCommands::Split { graphics, .. } => graphics.context(),
         };
-        if let Some(o) = &mut self.occlusion {
-            HizBuild::check_target(targets.depth)?;
-            o.hiz.prepare(ctx, targets.depth.extent)?;
-        }
-        if !targets.depth.usage.contains(vk::ImageUsageFlags::SAMPLED) {
-            return Err(Error::BadInput(format!(
-                "depth target {} lacks SAMPLED usage, which the G-buffer tile shading needs to read it",
-                targets.depth.name
-            )));
-        }
-        if self.gbuffer.as_ref().is_none_or(|g| g.size() != view.size) {
-            self.gbuffer = Some(GBuffer::new(ctx, view.size)?);
-        }
-        self.classify.prepare(ctx, view.size)?;
+        self.prepare_frame(ctx, view, targets)?;
         let ctx_frame = ctx.frame_recording();
         self.telemetry.harvest(ctx);
         let world = self.terrain.world;
@@ -409,11 +391,14 @@ impl TerrainRenderer {
         gpu.lod_params[3] = if self.lod.stitching { 0.0 } else { 1.0 };
         let params = view.traverse_params();
         self.terrain.stream(&params)?;
-        let fog = self.effect_on(Effect::Atmosphere).then(|| self.effects.atmosphere.gpu(world.height_range_m[0]));
+        let fog = (self.effect_on(Effect::Atmosphere) && self.switches.atmosphere)
+            .then(|| self.effects.atmosphere.gpu(world.height_range_m[0]));
+        let switched_off = self.switched_off();
         let mut frame = self.exec.begin(cmds, mode);
         let number = frame.number();
         self.terrain.tree.begin_frame(number);
         let mut log = self.graph.begin_frame(number);
+        log.switched_off = switched_off;
         let visibility = self.occlusion.as_ref().map(|o| &o.cull.visibility);
         if self.terrain.tree.has_work() {
             let (tree, update) = (&mut self.terrain.tree, &self.update);
@@ -423,21 +408,22 @@ impl TerrainRenderer {
         } else {
             log.skipped(FramePass::QuadtreeUpdate, Skip::NothingToUpload);
         }
-        let tree = &self.terrain.tree;
         let sun = self.effects.lighting.sun_dir();
-        let jobs = match &self.sun_shadows {
-            Some(s) => {
-                let march = MarchSun { dir: sun.as_vec3().to_array(), reach_m: f64::from(s.params.reach_m) };
-                let extent = |n: NodeId| {
-                    let slot = tree.shadow.slot_of(n)?;
-                    let [lo, hi] = tree.shadow.height_range(slot);
-                    let [x0, y0, x1, y1] = world.bounds_m(n);
-                    Some((slot, NodeExtent { bounds_m: [x0, y0, x1, y1], min_m: lo, max_m: hi }))
-                };
-                self.shadow_schedule.plan(march, s.params.update_budget, tree.arrived(), extent)
-            }
-            None => Vec::new(),
+        let shadows = ShadowState {
+            pass: self.sun_shadows.as_ref(),
+            on: self.switches.shadows,
+            schedule: &mut self.shadow_schedule,
+            were_off: &mut self.shadows_were_off,
         };
+        let jobs = shadows.jobs(&self.terrain, sun);
+        // Switched back on, the shadows show once every slot holds its own
+        // node's texture again; until then the lighting goes without them.
+        let shadows_shown = self.switches.shadows && self.shadow_schedule.ready();
+        if self.sun_shadows.is_some() && self.switches.shadows && !shadows_shown {
+            log.switched_off.insert(0, Effect::Shadows);
+        }
+        self.resolve.prepare(ctx, shadows_shown, self.switches.atmosphere)?;
+        let tree = &self.terrain.tree;
         let passes = FramePasses {
             traverse: &self.traverse,
             lod_map: &self.lod_map,
@@ -453,7 +439,9 @@ impl TerrainRenderer {
             shadows: self
                 .sun_shadows
                 .as_ref()
+                .filter(|_| self.switches.shadows)
                 .map(|s| (s, jobs.as_slice(), sun, self.effects.lighting.sun_elevation_deg)),
+            shadows_off: self.sun_shadows.is_some() && !self.switches.shadows,
             fog,
             materials: self.materials.as_ref(),
             view_buffer: &self.view_buffer,
@@ -476,6 +464,49 @@ impl TerrainRenderer {
         self.graph.end_frame(log);
         self.mode = Some(mode);
         Ok(())
+    }
+
+    /// What a user can get wrong in a frame's view and targets; returns the
+    /// view relative to the world's origin.
+    fn check_frame(&self, view: &View, targets: &RenderTargets) -> Result<View> {
+        view.validate()?;
+        if !self.origin_m.iter().all(|v| v.is_finite()) {
+            return Err(Error::BadInput(format!("world origin {:?} is not finite", self.origin_m)));
+        }
+        let view = view.relative_to(self.origin_m);
+        for (what, image, format) in [("colour", targets.color, COLOR_FORMAT), ("depth", targets.depth, DEPTH_FORMAT)] {
+            if image.extent != view.size || image.format != format {
+                return Err(Error::BadInput(format!(
+                    "{what} target {} is {:?} {}x{}, the view needs {format:?} {}x{}",
+                    image.name, image.format, image.extent[0], image.extent[1], view.size[0], view.size[1]
+                )));
+            }
+        }
+        if !targets.depth.usage.contains(vk::ImageUsageFlags::SAMPLED) {
+            return Err(Error::BadInput(format!(
+                "depth target {} lacks SAMPLED usage, which the G-buffer tile shading needs to read it",
+                targets.depth.name
+            )));
+        }
+        Ok(view)
+    }
+
+    /// Sizes the per-view resources before anything is recorded.
+    fn prepare_frame(&mut self, ctx: &Context, view: &View, targets: &RenderTargets) -> Result<()> {
+        if let Some(o) = &mut self.occlusion {
+            HizBuild::check_target(targets.depth)?;
+            o.hiz.prepare(ctx, targets.depth.extent)?;
+        }
+        if self.gbuffer.as_ref().is_none_or(|g| g.size() != view.size) {
+            self.gbuffer = Some(GBuffer::new(ctx, view.size)?);
+        }
+        self.classify.prepare(ctx, view.size)
+    }
+
+    /// Built effects switched off for the next frame.
+    pub fn switched_off(&self) -> Vec<Effect> {
+        let switch = [(Effect::Shadows, self.switches.shadows), (Effect::Atmosphere, self.switches.atmosphere)];
+        switch.into_iter().filter(|&(e, on)| !on && self.effect_on(e)).map(|(e, _)| e).collect()
     }
 
     /// GPU counters of the newest frame that came back (frames late; never
@@ -573,7 +604,7 @@ impl TerrainRenderer {
         if let Some(s) = &self.sun_shadows {
             out.push(s.pipeline_label().to_string());
         }
-        out.push(self.resolve.pipeline_label().to_string());
+        out.extend(self.resolve.pipeline_labels());
         out
     }
 
@@ -632,5 +663,45 @@ impl TerrainRenderer {
             out.push(("material_table + detail textures".into(), m.memory_bytes(), users));
         }
         out
+    }
+}
+
+/// The renderer's shadow state for one frame's planning.
+struct ShadowState<'a> {
+    pass: Option<&'a SunShadows>,
+    on: bool,
+    schedule: &'a mut ShadowSchedule,
+    were_off: &'a mut bool,
+}
+
+impl ShadowState<'_> {
+    /// This frame's sun shadow jobs. Switched off, none; switched back on,
+    /// every resident node's shadow is stale (nodes arrived meanwhile were
+    /// not marched) and they are redone as fast as the job list allows.
+    fn jobs(self, terrain: &Terrain, sun: glam::DVec3) -> Vec<SunShadowJob> {
+        let Some(s) = self.pass else { return Vec::new() };
+        let tree = &terrain.tree;
+        if !self.on {
+            *self.were_off = true;
+            return Vec::new();
+        }
+        let mut budget = s.params.update_budget;
+        if std::mem::take(self.were_off) {
+            let resident: Vec<_> =
+                terrain.resident_nodes().into_iter().filter_map(|n| Some((n, tree.shadow.slot_of(n)?))).collect();
+            self.schedule.restart(&resident);
+        }
+        if !self.schedule.ready() {
+            budget = crate::passes::sun_shadows::MAX_UPDATE_BUDGET;
+        }
+        let world = terrain.world;
+        let march = MarchSun { dir: sun.as_vec3().to_array(), reach_m: f64::from(s.params.reach_m) };
+        let extent = |n: NodeId| {
+            let slot = tree.shadow.slot_of(n)?;
+            let [lo, hi] = tree.shadow.height_range(slot);
+            let [x0, y0, x1, y1] = world.bounds_m(n);
+            Some((slot, NodeExtent { bounds_m: [x0, y0, x1, y1], min_m: lo, max_m: hi }))
+        };
+        self.schedule.plan(march, budget, tree.arrived(), extent)
     }
 }

@@ -84,6 +84,8 @@ pub struct FrameReport {
     /// How the frame was submitted.
     pub queue_mode: QueueMode,
     pub effects: Vec<EffectDecision>,
+    /// Built effects switched off this frame (`FrameSwitches`).
+    pub switched_off: Vec<Effect>,
     pub pipelines: Vec<String>,
     pub passes: Vec<PassReport>,
     pub memory: Vec<ResourceMemory>,
@@ -125,6 +127,10 @@ impl FrameReport {
         let _ = writeln!(s, "effects:");
         for d in &self.effects {
             let _ = writeln!(s, "  {:<16} {:<4} {}", d.effect.name(), if d.on { "on" } else { "off" }, d.reason);
+        }
+        if !self.switched_off.is_empty() {
+            let names: Vec<&str> = self.switched_off.iter().map(|e| e.name()).collect();
+            let _ = writeln!(s, "switched off this frame (built, FrameSwitches): {}", names.join(", "));
         }
         let _ = writeln!(s, "pipelines ({}): {}", self.pipelines.len(), self.pipelines.join(", "));
         let _ = writeln!(s, "passes of frame {} (queues: {}):", self.frame, self.queue_mode.name());
@@ -237,6 +243,10 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
                 let (work, idle) = work_of(r, pass, *cpu_work, &counters);
                 report.state = if idle.is_some() { PassState::Idle } else { PassState::Ran };
                 report.reason = idle.map(|i| format!("recorded with nothing to do: {i}")).unwrap_or_default();
+                if pass == FramePass::LightingResolve && !log.switched_off.is_empty() {
+                    let names: Vec<&str> = log.switched_off.iter().map(|e| e.name()).collect();
+                    report.reason = format!("the variant without {} (switched off this frame)", names.join(" and "));
+                }
                 report.work = work;
             }
         }
@@ -247,6 +257,7 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
         frame: log.frame,
         queue_mode: mode,
         effects: r.effects().to_vec(),
+        switched_off: log.switched_off.clone(),
         pipelines: r.pipelines(),
         passes,
         memory,

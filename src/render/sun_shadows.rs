@@ -57,6 +57,8 @@ pub struct ShadowSchedule {
     /// Slot -> (node, sun version its texture was made for; 0: stale for
     /// another reason, redone first).
     made: BTreeMap<u32, (NodeId, u64)>,
+    /// Slots holding another node's texture (after `restart`), until made.
+    unmade: std::collections::BTreeSet<u32>,
     sun: Option<[f32; 3]>,
     version: u64,
 }
@@ -87,6 +89,8 @@ impl ShadowSchedule {
             self.version += 1;
         }
         self.made.retain(|slot, (node, _)| resident(*node).map(|(s, _)| s) == Some(*slot));
+        let made = &self.made;
+        self.unmade.retain(|slot| made.contains_key(slot));
         let [x, y, _] = sun.dir.map(f64::from);
         let len = x.hypot(y);
         let u = if len > 1e-12 { [x / len, y / len] } else { [0.0, 0.0] };
@@ -102,6 +106,7 @@ impl ShadowSchedule {
         let mut jobs: Vec<SunShadowJob> = arrived.iter().map(|&(node, slot)| SunShadowJob::new(node, slot)).collect();
         for &(node, slot) in arrived {
             self.made.insert(slot, (node, self.version));
+            self.unmade.remove(&slot);
         }
         let mut stale: Vec<(u64, u32, NodeId)> =
             self.made.iter().filter(|(_, (_, v))| *v != self.version).map(|(&s, &(n, v))| (v, s, n)).collect();
@@ -109,8 +114,23 @@ impl ShadowSchedule {
         for (_, slot, node) in stale.into_iter().take(budget as usize) {
             jobs.push(SunShadowJob::new(node, slot));
             self.made.insert(slot, (node, self.version));
+            self.unmade.remove(&slot);
         }
         jobs
+    }
+
+    /// Forgets what was made: every node of `resident` (node, slot) is
+    /// stale, its slot perhaps holding another node's texture (after frames
+    /// that made no shadows, where nodes arrived unmarched), until made.
+    pub fn restart(&mut self, resident: &[(NodeId, u32)]) {
+        self.made = resident.iter().map(|&(node, slot)| (slot, (node, 0))).collect();
+        self.unmade = self.made.keys().copied().collect();
+    }
+
+    /// Every resident slot holds its own node's texture (none is left
+    /// from before a `restart`): the shadows may be shown.
+    pub fn ready(&self) -> bool {
+        self.unmade.is_empty()
     }
 
     /// Resident nodes whose texture predates the current sun.

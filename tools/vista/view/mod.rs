@@ -114,7 +114,12 @@ pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: O
     check_view(&view, &world)?;
     let mut app = App {
         fly: FlyCamera::new(camera, world.desc.extent_m),
-        settings: Settings { target_error_px: args.target_error, stages: args.cull, lighting: world.effects.lighting },
+        settings: Settings {
+            target_error_px: args.target_error,
+            stages: args.cull,
+            switches: vista::render::FrameSwitches::default(),
+            lighting: world.effects.lighting,
+        },
         show_overlay: !args.no_overlay,
         args,
         world,

@@ -7,7 +7,7 @@ use std::collections::VecDeque;
 use vista::frame::FrameTimings;
 use vista::passes::cull_patches::CullStages;
 use vista::render::telemetry::FrameCounters;
-use vista::render::{EffectDecision, Lighting};
+use vista::render::{Effect, EffectDecision, FrameSwitches, Lighting};
 use vista::terrain::TerrainStats;
 
 /// Frames of history kept per pass.
@@ -17,6 +17,7 @@ const HISTORY: usize = 120;
 pub struct Settings {
     pub target_error_px: f32,
     pub stages: CullStages,
+    pub switches: FrameSwitches,
     pub lighting: Lighting,
 }
 
@@ -35,6 +36,9 @@ pub struct Shown<'a> {
     pub effects: &'a [EffectDecision],
     /// Culling stages the renderer built (a switch for the others would do nothing).
     pub built: CullStages,
+    /// Built effects the last frame went without (switched off, or shadows
+    /// still being redone after being switched back on).
+    pub switched_off: Vec<Effect>,
     pub memory_mb: f64,
 }
 
@@ -184,6 +188,14 @@ fn switches(ui: &mut egui::Ui, shown: &Shown, s: &mut Settings) {
         ui.add_enabled(b.hole, egui::Checkbox::new(&mut s.stages.hole, "hole"));
         ui.add_enabled(b.occlusion, egui::Checkbox::new(&mut s.stages.occlusion, "occlusion"));
     });
+    let built = |e: Effect| shown.effects.iter().any(|d| d.effect == e && d.on);
+    ui.horizontal(|ui| {
+        ui.add_enabled(built(Effect::Shadows), egui::Checkbox::new(&mut s.switches.shadows, "shadows"));
+        ui.add_enabled(built(Effect::Atmosphere), egui::Checkbox::new(&mut s.switches.atmosphere, "atmosphere"));
+    });
+    if s.switches.shadows && shown.switched_off.contains(&Effect::Shadows) {
+        ui.label("shadows: redoing every resident node before showing them");
+    }
     ui.add(egui::Slider::new(&mut s.lighting.sun_elevation_deg, -5.0..=90.0).text("sun elevation"));
     ui.add(egui::Slider::new(&mut s.lighting.sun_azimuth_deg, 0.0..=360.0).text("sun azimuth"));
 }

@@ -240,6 +240,7 @@ pub fn shown<'a>(v: &'a Viewer, f: Frame) -> Shown<'a> {
         slots: f.slots,
         effects: r.effects(),
         built,
+        switched_off: r.last_frame_log().map(|l| l.switched_off.clone()).unwrap_or_default(),
         memory_mb: memory as f64 / (1024.0 * 1024.0),
     }
 }
@@ -248,5 +249,6 @@ pub fn shown<'a>(v: &'a Viewer, f: Frame) -> Shown<'a> {
 pub fn apply(renderer: &mut TerrainRenderer, settings: &Settings, view: &mut View) {
     view.target_error_px = settings.target_error_px;
     renderer.stages = settings.stages;
+    renderer.switches = settings.switches;
     renderer.effects.lighting = settings.lighting;
 }
