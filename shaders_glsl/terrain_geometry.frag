@@ -5,7 +5,8 @@
 // flavours it needs (classification, shade_rules.glsl) and two octahedral
 // normals as 8-bit codes: the node's baked (smooth, geometric) normal and
 // the normal of the triangle drawn, from the screen derivatives of its
-// position. gbuffer_tiles shades from these; nothing is lit here.
+// position. gbuffer_tiles shades from these; nothing is lit here. The
+// patch info (level, refinement, phase, grid edge) is for the debug views.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
 #include "atlas_texels.glsl"
@@ -18,8 +19,11 @@ layout(set = 0, binding = 6) uniform sampler linear_clamp;
 layout(location = 0) in vec2 atlas_uv;
 layout(location = 1) flat in uint atlas_layer;
 layout(location = 2) in vec3 rel_pos;
+layout(location = 3) flat in uint patch_code;
+layout(location = 4) in vec2 patch_uv;
 layout(location = 0) out uint classification;
 layout(location = 1) out uvec4 normals;
+layout(location = 2) out uint patch_info;
 
 void main() {
     vec3 uvw = vec3(atlas_uv, float(atlas_layer));
@@ -36,4 +40,7 @@ void main() {
     vec4 shares = flavour_shares(depth_m, geometric.z, view.v.shade_bands, view.v.shade_slope, view.v.shade_flags.x, splat);
     classification = flavour_bits(shares, splat);
     normals = uvec4(oct_encode8(geometric), oct_encode8(triangle));
+    // Within a pixel of the patch grid's edge (the debug views' outlines).
+    vec2 edge = min(patch_uv, 1.0 - patch_uv) / max(fwidth(patch_uv), vec2(1e-6));
+    patch_info = patch_code | (uint(min(edge.x, edge.y) < 1.0) << PATCH_INFO_EDGE_SHIFT);
 }

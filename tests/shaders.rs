@@ -79,12 +79,13 @@ fn check_layout(what: &str, rust: (usize, Vec<(&str, usize, usize)>), glsl: &[(&
 #[test]
 fn rust_twins_match_reflected_layouts() {
     use vista::passes::cull_patches::{CullPush, PatchListHeader};
+    use vista::passes::debug_view::DebugViewPush;
     use vista::passes::hiz_build::HizPush;
     use vista::passes::prefix_sum::PrefixSumPush;
     use vista::passes::quadtree_update::QuadtreeUpdatePush;
     use vista::passes::sector_data::SectorDataPush;
     use vista::passes::select_patches::{SelectHeader, SelectPush};
-    use vista::passes::terrain_holes::HolesPush;
+    use vista::passes::terrain_geometry::TerrainDrawPush;
     use vista::passes::terrain_query::{TerrainQueryPush, VistaTerrain};
     use vista::passes::traverse::{LevelArgs, TraverseHeader, TraversePush};
     use vista::render::TerrainViewGpu;
@@ -158,7 +159,18 @@ fn rust_twins_match_reflected_layouts() {
         structs::SELECT_HEADER,
     );
     check_layout("SelectPush", fields!(SelectPush: phase, lod_count, pad), layouts::SELECT_PUSH, structs::SELECT_PUSH);
-    check_layout("HolesPush", fields!(HolesPush: nan_bits, pad), layouts::HOLES_PUSH, structs::HOLES_PUSH);
+    check_layout(
+        "TerrainDrawPush",
+        fields!(TerrainDrawPush: nan_bits, phase, pad),
+        layouts::TERRAIN_DRAW_PUSH,
+        structs::TERRAIN_DRAW_PUSH,
+    );
+    check_layout(
+        "DebugViewPush",
+        fields!(DebugViewPush: colours, mode, pad),
+        layouts::DEBUG_VIEW_PUSH,
+        structs::DEBUG_VIEW_PUSH,
+    );
     check_layout("HizPush", fields!(HizPush: src_size, dst_size, level, pad), layouts::HIZ_PUSH, structs::HIZ_PUSH);
     check_layout(
         "TerrainViewGpu",
@@ -174,7 +186,9 @@ fn rust_twins_match_reflected_layouts() {
     assert_eq!(shaders::traverse::PUSH_CONSTANT_SIZE, shaders::traverse_level::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<CullPush>() as u32, shaders::cull_patches::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<SelectPush>() as u32, shaders::select_patches::PUSH_CONSTANT_SIZE);
-    assert_eq!(size_of::<HolesPush>() as u32, shaders::terrain_holes_vert::PUSH_CONSTANT_SIZE);
+    assert_eq!(size_of::<TerrainDrawPush>() as u32, shaders::terrain_holes_vert::PUSH_CONSTANT_SIZE);
+    assert_eq!(size_of::<TerrainDrawPush>() as u32, shaders::terrain_geometry_vert::PUSH_CONSTANT_SIZE);
+    assert_eq!(size_of::<DebugViewPush>() as u32, shaders::debug_view_frag::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<SectorDataPush>() as u32, shaders::sector_data::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<TerrainQueryPush>() as u32, shaders::terrain_query::PUSH_CONSTANT_SIZE);
 }

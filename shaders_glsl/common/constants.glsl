@@ -102,6 +102,18 @@
 #define TILE_SIZE 8u
 // Stencil bit the terrain geometry writes and the tile passes test.
 #define TERRAIN_STENCIL 1u
+// The geometry pass's patch info (R8_UINT, for the debug views): bits 0-3
+// the node's LOD, 4-5 the levels refined below LOD 0, 6 drawn in
+// occlusion culling's phase 2, 7 within a pixel of the patch grid's edge.
+#define PATCH_INFO_LOD_MASK 15u
+#define PATCH_INFO_REFINE_SHIFT 4u
+#define PATCH_INFO_PHASE_SHIFT 6u
+#define PATCH_INFO_EDGE_SHIFT 7u
+// The debug views (debug_view.frag's modes).
+#define DEBUG_VIEW_LOD 0u
+#define DEBUG_VIEW_CLASSIFICATION 1u
+#define DEBUG_VIEW_EDGES 2u
+#define DEBUG_VIEW_PHASE 3u
 // Entries of the splat material table.
 #define MATERIAL_COUNT 256u
 // Splat map texels per node side (65x65: one per two height samples).

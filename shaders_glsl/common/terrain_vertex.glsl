@@ -33,19 +33,23 @@ layout(set = 0, binding = 4) uniform sampler nearest;
 #ifdef TERRAIN_HOLES
 // Hole mask: the albedo's alpha (below 0.5 = hole).
 layout(set = 0, binding = 3) uniform texture2DArray albedo_atlas;
+#endif
 
-layout(push_constant, std430) uniform HolesPush {
-    uint nan_bits;  // a quiet NaN's bits, passed in so no compiler folds it
+layout(push_constant, std430) uniform TerrainDrawPush {
+    uint nan_bits;  // a quiet NaN's bits, passed in so no compiler folds it (holes)
+    uint phase;     // 0: phase 1's draw, 1: occlusion culling's phase 2
     uint pad0;
     uint pad1;
-    uint pad2;
 } pc;
-#endif
 
 layout(location = 0) out vec2 atlas_uv;
 layout(location = 1) flat out uint atlas_layer;
 // Camera-relative position: its screen derivatives give the triangle normal.
 layout(location = 2) out vec3 rel_pos;
+// For the debug views (debug_view.frag): the patch's level (PATCH_INFO_*
+// bits) and where in its grid the vertex lies (0..1; 0 or 1 on an edge).
+layout(location = 3) flat out uint patch_code;
+layout(location = 4) out vec2 patch_uv;
 
 // Nearest point of the grid 2^delta coarser, ties toward the lower one.
 uint snap(uint i, uint delta) {
@@ -143,6 +147,8 @@ void main() {
 #endif
     atlas_uv = atlas_texel_uv(local);
     atlas_layer = slot;
+    patch_code = lod | (r << PATCH_INFO_REFINE_SHIFT) | (pc.phase << PATCH_INFO_PHASE_SHIFT);
+    patch_uv = vec2(i, j) / float(quads);
 }
 
 #endif

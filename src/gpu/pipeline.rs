@@ -57,6 +57,10 @@ pub struct GraphicsPipelineDesc<'a> {
     pub stencil: Option<StencilDesc>,
     pub cull_mode: vk::CullModeFlags,
     pub topology: vk::PrimitiveTopology,
+    /// Blends the colour attachments over what they hold by the fragment's
+    /// alpha (0 keeps the target: a full-screen pass that draws only some
+    /// pixels, without `discard`, which naga cannot parse).
+    pub blend: bool,
 }
 
 /// One stencil state for both faces: pass when `reference & compare_mask`
@@ -252,7 +256,20 @@ impl Pipeline {
         let attachments: Vec<_> = desc
             .color_formats
             .iter()
-            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+            .map(|_| {
+                let a =
+                    vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
+                if !desc.blend {
+                    return a;
+                }
+                a.blend_enable(true)
+                    .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+                    .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                    .color_blend_op(vk::BlendOp::ADD)
+                    .src_alpha_blend_factor(vk::BlendFactor::ZERO)
+                    .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                    .alpha_blend_op(vk::BlendOp::ADD)
+            })
             .collect();
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];

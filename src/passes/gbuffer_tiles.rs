@@ -87,6 +87,7 @@ impl GbufferTiles {
                     stencil: Some(TERRAIN_ONLY),
                     cull_mode: vk::CullModeFlags::NONE,
                     topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                    blend: false,
                 };
                 Ok((bits, Pipeline::graphics(ctx, &desc)?))
             })

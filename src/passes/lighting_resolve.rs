@@ -93,6 +93,7 @@ fn pipeline(ctx: &Context, lighting: bool, on: usize) -> Result<Pipeline> {
         stencil: if atmosphere { None } else { Some(TERRAIN_ONLY) },
         cull_mode: vk::CullModeFlags::NONE,
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+        blend: false,
     };
     Pipeline::graphics(ctx, &desc)
 }

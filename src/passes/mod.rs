@@ -3,6 +3,7 @@
 pub mod classify_tiles;
 pub mod cull_occluded;
 pub mod cull_patches;
+pub mod debug_view;
 pub mod gbuffer_tiles;
 pub mod hiz_build;
 pub mod lighting_resolve;

@@ -12,7 +12,7 @@ use crate::gpu::{
     depth_layout, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image,
     MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo, StencilDesc,
 };
-use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT};
+use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT};
 use crate::shaders::consts::TERRAIN_STENCIL;
 use crate::shaders::{terrain_geometry_frag as fs, terrain_geometry_vert as vs};
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
@@ -45,6 +45,26 @@ pub fn patch_indices() -> Vec<u32> {
     meshopt::optimize_vertex_cache(&idx, vertices)
 }
 
+/// Host twin of `TerrainDrawPush` (terrain_vertex.glsl), both draws'.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TerrainDrawPush {
+    /// A quiet NaN's bits (`terrain_holes` makes hole vertices of them).
+    pub nan_bits: u32,
+    /// 1 in occlusion culling's phase 2 (the debug views show it).
+    pub phase: u32,
+    pub pad: [u32; 2],
+}
+
+/// Bits of a quiet NaN, passed as data so no compiler folds it.
+pub const QUIET_NAN_BITS: u32 = 0x7FC0_0000;
+
+impl TerrainDrawPush {
+    pub fn new(late: bool) -> Self {
+        TerrainDrawPush { nan_bits: QUIET_NAN_BITS, phase: u32::from(late), pad: [0; 2] }
+    }
+}
+
 /// The colour and depth images a frame renders into, and the clear colour.
 /// Layouts on entry and exit: COLOR_ATTACHMENT_OPTIMAL and [`DEPTH_LAYOUT`].
 pub struct RenderTargets<'a> {
@@ -61,7 +81,7 @@ pub(crate) fn terrain_pipeline(ctx: &Context, name: &str, vertex: &'static Shade
         vertex,
         fragment: &fs::SHADER,
         specialization: &spec,
-        color_formats: &[CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT],
+        color_formats: &[CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT],
         depth_format: Some(DEPTH_FORMAT),
         depth_compare: vk::CompareOp::GREATER,
         depth_write: true,
@@ -73,6 +93,7 @@ pub(crate) fn terrain_pipeline(ctx: &Context, name: &str, vertex: &'static Shade
         }),
         cull_mode: vk::CullModeFlags::BACK,
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+        blend: false,
     };
     Pipeline::graphics(ctx, &desc)
 }
@@ -152,7 +173,7 @@ impl TerrainGeometry {
     }
 
     /// Draws patch list `list` (phase 1's, after clearing the targets, or
-    /// phase 2's over them).
+    /// phase 2's over them: `clear` is false only there).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -166,24 +187,30 @@ impl TerrainGeometry {
     ) {
         begin_geometry(rec, targets, gbuffer, clear);
         self.bind(rec, &self.pipeline, view, list, tree, &[]);
+        rec.push_constants(&self.pipeline, &TerrainDrawPush::new(!clear));
         rec.draw_indexed_indirect(&self.indices, list, 0);
         rec.end_rendering();
     }
 }
 
 /// Opens the geometry pass's rendering scope: classification (cleared to
-/// 0 = no terrain), geometry normals, depth and stencil (cleared to far, 0).
+/// 0 = no terrain), geometry normals, patch info, depth and stencil
+/// (cleared to far, 0).
 pub(crate) fn begin_geometry(rec: &mut Recorder, targets: &RenderTargets, gbuffer: &GBuffer, clear: bool) {
-    let (class, normals) = (&gbuffer.classification, &gbuffer.geometry_normals);
+    let (class, normals, info) = (&gbuffer.classification, &gbuffer.geometry_normals, &gbuffer.patch_info);
     if clear {
-        rec.discard_to(class, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-        rec.discard_to(normals, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+        for target in [class, normals, info] {
+            rec.discard_to(target, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+        }
+    } else if info.layout() != vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL {
+        rec.transition(info, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
     }
     debug_assert_eq!(depth_layout(DEPTH_FORMAT, false), DEPTH_LAYOUT);
     rec.begin_rendering(
         &[
             ColorTarget { image: class, clear: clear.then_some([0.0; 4]) },
             ColorTarget { image: normals, clear: clear.then_some([0.0; 4]) },
+            ColorTarget { image: info, clear: clear.then_some([0.0; 4]) },
         ],
         Some(DepthTarget { image: targets.depth, clear: clear.then_some(0.0), read_only: false }),
     );

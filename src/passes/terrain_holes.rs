@@ -8,21 +8,12 @@
 use crate::error::Result;
 use crate::gpu::{Context, Pipeline, Recorder, Resource};
 use crate::passes::cull_patches::PatchLists;
-use crate::passes::terrain_geometry::{begin_geometry, terrain_pipeline, RenderTargets, TerrainGeometry};
+use crate::passes::terrain_geometry::{
+    begin_geometry, terrain_pipeline, RenderTargets, TerrainDrawPush, TerrainGeometry,
+};
 use crate::render::gbuffer::GBuffer;
 use crate::shaders::terrain_holes_vert as vs;
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_LAYOUT};
-
-/// Bits of a quiet NaN, passed as data so no compiler folds it.
-pub const QUIET_NAN_BITS: u32 = 0x7FC0_0000;
-
-/// Host twin of `HolesPush` (terrain_vertex.glsl).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct HolesPush {
-    pub nan_bits: u32,
-    pub pad: [u32; 3],
-}
 
 pub struct TerrainHoles {
     pipeline: Pipeline,
@@ -39,8 +30,8 @@ impl TerrainHoles {
         &self.pipeline.label
     }
 
-    /// Draws a hole list (phase 1's or phase 2's) over the targets (kept,
-    /// not cleared).
+    /// Draws a hole list (phase 1's, or phase 2's when `late`) over the
+    /// targets (kept, not cleared).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -51,12 +42,13 @@ impl TerrainHoles {
         lists: &PatchLists,
         geometry: &TerrainGeometry,
         tree: &GpuQuadtree,
+        late: bool,
     ) {
         let list = lists.hole_list.as_ref().expect("terrain_holes is built only with the hole list");
         begin_geometry(rec, targets, gbuffer, false);
         let albedo = (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT));
         geometry.bind(rec, &self.pipeline, view, list, tree, &[albedo]);
-        rec.push_constants(&self.pipeline, &HolesPush { nan_bits: QUIET_NAN_BITS, pad: [0; 3] });
+        rec.push_constants(&self.pipeline, &TerrainDrawPush::new(late));
         rec.draw_indexed_indirect(geometry.indices(), list, 0);
         rec.end_rendering();
     }

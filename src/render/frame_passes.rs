@@ -10,6 +10,7 @@ use crate::frame::{Frame, QueueKind};
 use crate::gpu::{vk, Buffer, Recorder};
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_patches::{CullPatches, CullStages};
+use crate::passes::debug_view::{DebugView, DebugViewPass};
 use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles};
 use crate::passes::lighting_resolve::{LightingResolve, ResolveInputs};
 use crate::passes::lod_map::LodMap;
@@ -47,6 +48,8 @@ pub(crate) struct FramePasses<'a> {
     pub shadows: Option<(&'a SunShadows, &'a [SunShadowJob], glam::DVec3, f64)>,
     /// Effect `shadows` is built but switched off this frame.
     pub shadows_off: bool,
+    /// The debug view asked for, and its pass (made when first asked).
+    pub debug: Option<(&'a DebugViewPass, DebugView)>,
     /// Effect `atmosphere`: the fog's push vectors.
     pub fog: Option<[[f32; 4]; 3]>,
     pub materials: Option<&'a MaterialResources>,
@@ -102,7 +105,7 @@ impl FramePasses<'_> {
         });
         if let Some(holes) = self.holes {
             pass(frame, log, FramePass::TerrainHoles, |r| {
-                holes.record(r, targets, gb, view, &self.cull.lists, geometry, tree)
+                holes.record(r, targets, gb, view, &self.cull.lists, geometry, tree, false)
             });
         }
         let Some(o) = self.occlusion else { return };
@@ -128,7 +131,9 @@ impl FramePasses<'_> {
             geometry.record(r, targets, gb, view, &late.list, tree, false)
         });
         if let Some(holes) = self.holes {
-            pass(frame, log, FramePass::TerrainHolesLate, |r| holes.record(r, targets, gb, view, late, geometry, tree));
+            pass(frame, log, FramePass::TerrainHolesLate, |r| {
+                holes.record(r, targets, gb, view, late, geometry, tree, true)
+            });
         }
     }
 
@@ -177,5 +182,9 @@ impl FramePasses<'_> {
             fog: self.fog,
         };
         pass(frame, log, FramePass::LightingResolve, |r| resolve.record(r, targets, gb, self.view_buffer, &inputs));
+        match self.debug {
+            Some((p, view)) => pass(frame, log, FramePass::DebugView, |r| p.record(r, targets, gb, view)),
+            None => log.skipped(FramePass::DebugView, Skip::NoDebugView),
+        }
     }
 }

@@ -9,6 +9,9 @@ use crate::gpu::{vk, Context, Image, ImageDesc};
 
 /// One bit per flavour the pixel needs (0 = no terrain).
 pub const CLASSIFICATION_FORMAT: vk::Format = vk::Format::R8_UINT;
+/// The patch info of the debug views (PATCH_INFO_* bits: LOD, refinement,
+/// phase, grid edge).
+pub const PATCH_INFO_FORMAT: vk::Format = vk::Format::R8_UINT;
 /// Two octahedral normals as 8-bit codes: geometric (baked), triangle.
 pub const GEOMETRY_NORMALS_FORMAT: vk::Format = vk::Format::R8G8B8A8_UINT;
 /// rgb albedo.
@@ -23,6 +26,7 @@ pub const HDR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub struct GBuffer {
     pub classification: Image,
     pub geometry_normals: Image,
+    pub patch_info: Image,
     pub albedo: Image,
     pub normal: Image,
     pub material: Image,
@@ -49,6 +53,7 @@ impl GBuffer {
         Ok(GBuffer {
             classification: image("classification", CLASSIFICATION_FORMAT)?,
             geometry_normals: image("geometry_normals", GEOMETRY_NORMALS_FORMAT)?,
+            patch_info: image("patch_info", PATCH_INFO_FORMAT)?,
             albedo: image("gbuffer_albedo", ALBEDO_FORMAT)?,
             normal: image("gbuffer_normal", NORMAL_FORMAT)?,
             material: image("gbuffer_material", MATERIAL_FORMAT)?,
@@ -60,8 +65,16 @@ impl GBuffer {
         self.classification.extent
     }
 
-    pub fn images(&self) -> [&Image; 6] {
-        [&self.classification, &self.geometry_normals, &self.albedo, &self.normal, &self.material, &self.hdr]
+    pub fn images(&self) -> [&Image; 7] {
+        [
+            &self.classification,
+            &self.geometry_normals,
+            &self.patch_info,
+            &self.albedo,
+            &self.normal,
+            &self.material,
+            &self.hdr,
+        ]
     }
 
     pub fn memory_bytes(&self) -> u64 {
@@ -77,6 +90,8 @@ pub struct GBufferCapture {
     pub classification: Vec<u8>,
     /// Two octahedral codes each: geometric normal, triangle normal.
     pub geometry_normals: Vec<[u8; 4]>,
+    /// PATCH_INFO_* bits.
+    pub patch_info: Vec<u8>,
     /// sRGB-encoded albedo.
     pub albedo: Vec<[u8; 4]>,
     pub normal: Vec<[u8; 4]>,
@@ -97,6 +112,7 @@ impl GBuffer {
             hdr,
             classification: ctx.read_image(&self.classification, 0, 0, 1)?,
             geometry_normals: rgba8(&self.geometry_normals)?,
+            patch_info: ctx.read_image(&self.patch_info, 0, 0, 1)?,
             albedo: rgba8(&self.albedo)?,
             normal: rgba8(&self.normal)?,
             material: bytemuck::pod_collect_to_vec(&ctx.read_image(&self.material, 0, 0, 2)?),
@@ -104,22 +120,30 @@ impl GBuffer {
     }
 }
 
-/// Debug colour of a classification value: the mean of its flavours'
-/// colours (far atlas blue, splat green, near cliff red, far cliff orange,
-/// virtual texture violet); black where no terrain.
-pub fn classification_colour(bits: u8) -> [u8; 3] {
+/// The classification's colour of each flavour bit (bit 0 first): virtual
+/// texture violet, far atlas blue, near cliff red, far cliff orange, splat
+/// green (`debug_view` shows the same).
+pub fn classification_palette() -> [[u8; 3]; 5] {
     use crate::shaders::consts::*;
-    let palette = [
-        (FLAVOUR_FAR_ATLAS, [60.0, 100.0, 255.0]),
-        (FLAVOUR_SPLAT, [60.0, 220.0, 60.0]),
-        (FLAVOUR_NEAR_CLIFF, [255.0, 50.0, 40.0]),
-        (FLAVOUR_FAR_CLIFF, [255.0, 190.0, 30.0]),
-        (FLAVOUR_VIRTUAL_TEXTURE, [200.0, 60.0, 255.0]),
-    ];
-    let on: Vec<[f32; 3]> = palette.iter().filter(|(b, _)| u32::from(bits) & b != 0).map(|(_, c)| *c).collect();
+    let colour = |bit: u32| match bit {
+        FLAVOUR_VIRTUAL_TEXTURE => [200, 60, 255],
+        FLAVOUR_FAR_ATLAS => [60, 100, 255],
+        FLAVOUR_NEAR_CLIFF => [255, 50, 40],
+        FLAVOUR_FAR_CLIFF => [255, 190, 30],
+        FLAVOUR_SPLAT => [60, 220, 60],
+        _ => unreachable!("flavour bit {bit}"),
+    };
+    [0, 1, 2, 3, 4].map(|b| colour(1 << b))
+}
+
+/// Debug colour of a classification value: the mean of its flavours'
+/// colours ([`classification_palette`]); black where no terrain.
+pub fn classification_colour(bits: u8) -> [u8; 3] {
+    let palette = classification_palette();
+    let on: Vec<[u8; 3]> = (0..5).filter(|b| bits & (1 << b) != 0).map(|b| palette[b]).collect();
     if on.is_empty() {
         return [0, 0, 0];
     }
     let n = on.len() as f32;
-    [0, 1, 2].map(|i| (on.iter().map(|c| c[i]).sum::<f32>() / n).round() as u8)
+    [0, 1, 2].map(|i| (on.iter().map(|c| f32::from(c[i])).sum::<f32>() / n).round() as u8)
 }

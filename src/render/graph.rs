@@ -10,14 +10,15 @@
 //! again as phase 2 after `hiz_build` and `cull_occluded`. Shading follows:
 //! `classify_tiles`, `gbuffer_tiles` (one timed draw per variant built) and
 //! `sun_shadows` (effect `shadows`: skipped while every resident node's
-//! shadow is current) and `lighting_resolve`.
+//! shadow is current), `lighting_resolve` and, when one is asked for,
+//! `debug_view`.
 
 use crate::frame::QueueKind;
 use crate::passes::{
-    classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches, gbuffer_tiles::GbufferTiles,
-    hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap, quadtree_update::QuadtreeUpdatePass,
-    sector_data::SectorData, select_patches::SelectPatches, sun_shadows::SunShadows, terrain_geometry::TerrainGeometry,
-    terrain_holes::TerrainHoles, traverse::Traverse,
+    classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches, debug_view::DebugViewPass,
+    gbuffer_tiles::GbufferTiles, hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap,
+    quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, select_patches::SelectPatches,
+    sun_shadows::SunShadows, terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
 };
 use crate::render::effects::{Effect, EffectDecision};
 use serde::Serialize;
@@ -44,10 +45,12 @@ pub enum FramePass {
     /// Effect `shadows`: the shadow textures of arrived and stale nodes.
     SunShadows,
     LightingResolve,
+    /// A debug view over the display image, when one is asked for.
+    DebugView,
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 16] = [
+    pub const ALL: [FramePass; 17] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -64,6 +67,7 @@ impl FramePass {
         FramePass::GbufferTiles,
         FramePass::SunShadows,
         FramePass::LightingResolve,
+        FramePass::DebugView,
     ];
 
     /// Pass, shader and timer label (from the shader bank).
@@ -83,6 +87,7 @@ impl FramePass {
             FramePass::GbufferTiles => GbufferTiles::NAME,
             FramePass::SunShadows => SunShadows::NAME,
             FramePass::LightingResolve => LightingResolve::NAME,
+            FramePass::DebugView => DebugViewPass::NAME,
         }
     }
 
@@ -133,6 +138,8 @@ pub enum Skip {
     ShadowsCurrent,
     /// Effect `shadows` is built but switched off this frame (`FrameSwitches`).
     ShadowsOff,
+    /// No debug view asked for (`TerrainRenderer::debug_view`).
+    NoDebugView,
 }
 
 impl Skip {
@@ -142,6 +149,7 @@ impl Skip {
             Skip::OcclusionOff => "occlusion switched off this frame (culling stages)",
             Skip::ShadowsCurrent => "idle: every resident node's shadow is made for this sun (known on the CPU)",
             Skip::ShadowsOff => "shadows switched off this frame (FrameSwitches; built, redone when back on)",
+            Skip::NoDebugView => "no debug view asked for (TerrainRenderer::debug_view)",
         }
     }
 }

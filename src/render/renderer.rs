@@ -19,6 +19,7 @@ use crate::gpu::{vk, Buffer, BufferDesc, Context, FrameCommands, MemoryLocation,
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
+use crate::passes::debug_view::{DebugView, DebugViewPass};
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lighting_resolve::LightingResolve;
@@ -129,6 +130,10 @@ pub struct TerrainRenderer {
     pub switches: FrameSwitches,
     /// Shadows were switched off in an earlier frame and not back on yet.
     shadows_were_off: bool,
+    /// What the next frame shows over its picture (`vista view`'s selector).
+    pub debug_view: Option<DebugView>,
+    /// Its pass, made the first time a view is asked for.
+    debug_pass: Option<DebugViewPass>,
     pub effects: Effects,
     /// See [`RendererOptions::origin_m`]; may change between frames.
     pub origin_m: [f64; 2],
@@ -316,6 +321,8 @@ impl TerrainRenderer {
             stages: options.stages,
             switches: FrameSwitches::default(),
             shadows_were_off: false,
+            debug_view: None,
+            debug_pass: None,
             effects: options.effects.clone(),
             origin_m: options.origin_m,
             decisions,
@@ -442,6 +449,7 @@ impl TerrainRenderer {
                 .filter(|_| self.switches.shadows)
                 .map(|s| (s, jobs.as_slice(), sun, self.effects.lighting.sun_elevation_deg)),
             shadows_off: self.sun_shadows.is_some() && !self.switches.shadows,
+            debug: self.debug_pass.as_ref().zip(self.debug_view),
             fog,
             materials: self.materials.as_ref(),
             view_buffer: &self.view_buffer,
@@ -500,7 +508,11 @@ impl TerrainRenderer {
         if self.gbuffer.as_ref().is_none_or(|g| g.size() != view.size) {
             self.gbuffer = Some(GBuffer::new(ctx, view.size)?);
         }
-        self.classify.prepare(ctx, view.size)
+        self.classify.prepare(ctx, view.size)?;
+        if self.debug_view.is_some() && self.debug_pass.is_none() {
+            self.debug_pass = Some(DebugViewPass::new(ctx)?);
+        }
+        Ok(())
     }
 
     /// Built effects switched off for the next frame.
@@ -605,6 +617,7 @@ impl TerrainRenderer {
             out.push(s.pipeline_label().to_string());
         }
         out.extend(self.resolve.pipeline_labels());
+        out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
     }
 

@@ -243,6 +243,9 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
                 let (work, idle) = work_of(r, pass, *cpu_work, &counters);
                 report.state = if idle.is_some() { PassState::Idle } else { PassState::Ran };
                 report.reason = idle.map(|i| format!("recorded with nothing to do: {i}")).unwrap_or_default();
+                if let (FramePass::DebugView, Some(v)) = (pass, r.debug_view) {
+                    report.reason = format!("showing {}", v.name());
+                }
                 if pass == FramePass::LightingResolve && !log.switched_off.is_empty() {
                     let names: Vec<&str> = log.switched_off.iter().map(|e| e.name()).collect();
                     report.reason = format!("the variant without {} (switched off this frame)", names.join(" and "));
@@ -330,6 +333,6 @@ fn work_of(
             let per_node = side.div_ceil(u64::from(wx)) * side.div_ceil(u64::from(wy));
             (PassWork { shadow_nodes: Some(jobs), ..groups(jobs * per_node) }, None)
         }
-        FramePass::LightingResolve => (PassWork::default(), None),
+        FramePass::LightingResolve | FramePass::DebugView => (PassWork::default(), None),
     }
 }

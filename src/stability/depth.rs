@@ -97,6 +97,7 @@ impl Probe {
                 stencil: None,
                 cull_mode: vk::CullModeFlags::NONE,
                 topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                blend: false,
             },
         )?;
         let image = |name, format, usage| {

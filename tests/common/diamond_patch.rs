@@ -46,6 +46,7 @@ impl DiamondPatch {
             stencil: None,
             cull_mode: vk::CullModeFlags::NONE,
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            blend: false,
         };
         let pipeline = Pipeline::graphics(ctx, &desc)?;
         let idx = diamond_indices(quads_per_side);

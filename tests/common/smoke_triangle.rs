@@ -35,6 +35,7 @@ impl SmokeTriangle {
             stencil: None,
             cull_mode: vk::CullModeFlags::NONE,
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            blend: false,
         };
         Ok(SmokeTriangle { pipeline: Pipeline::graphics(ctx, &desc)? })
     }

@@ -20,6 +20,7 @@ use viewer::{Frame, OverlayFrame, Viewer};
 use vista::gpu::present::Presenter;
 use vista::gpu::{Context, ContextOptions};
 use vista::passes::cull_patches::CullStages;
+use vista::passes::debug_view::DebugView;
 use vista::render::{RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
 use vista::terrain::TerrainOptions;
 use winit::application::ApplicationHandler;
@@ -67,6 +68,10 @@ pub struct ViewArgs {
     /// image; needs --frames.
     #[arg(long, value_name = "FILE.png")]
     pub screenshot: Option<PathBuf>,
+    /// Start with a debug view over the picture: lod, classification,
+    /// edges or phase (the overlay's selector changes it).
+    #[arg(long, value_parser = parse_debug_view)]
+    pub debug_view: Option<DebugView>,
     /// Start with the overlay hidden (F1 shows it).
     #[arg(long)]
     pub no_overlay: bool,
@@ -79,6 +84,16 @@ pub struct ViewArgs {
     pub settle_seconds: f64,
     #[command(flatten)]
     pub world: WorldArgs,
+}
+
+fn parse_debug_view(s: &str) -> Result<DebugView, String> {
+    match s {
+        "lod" => Ok(DebugView::Lod),
+        "classification" => Ok(DebugView::Classification),
+        "edges" => Ok(DebugView::PatchEdges),
+        "phase" => Ok(DebugView::OcclusionPhase),
+        _ => Err(format!("debug view {s:?} is not one of lod, classification, edges, phase")),
+    }
 }
 
 /// Checks what needs no window: the world, the view, the files.
@@ -119,6 +134,7 @@ pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: O
             stages: args.cull,
             switches: vista::render::FrameSwitches::default(),
             lighting: world.effects.lighting,
+            debug_view: args.debug_view,
         },
         show_overlay: !args.no_overlay,
         args,

@@ -6,6 +6,7 @@
 use std::collections::VecDeque;
 use vista::frame::FrameTimings;
 use vista::passes::cull_patches::CullStages;
+use vista::passes::debug_view::DebugView;
 use vista::render::telemetry::FrameCounters;
 use vista::render::{Effect, EffectDecision, FrameSwitches, Lighting};
 use vista::terrain::TerrainStats;
@@ -19,6 +20,7 @@ pub struct Settings {
     pub stages: CullStages,
     pub switches: FrameSwitches,
     pub lighting: Lighting,
+    pub debug_view: Option<DebugView>,
 }
 
 /// What the overlay shows of one frame (all of it data the renderer
@@ -196,6 +198,12 @@ fn switches(ui: &mut egui::Ui, shown: &Shown, s: &mut Settings) {
     if s.switches.shadows && shown.switched_off.contains(&Effect::Shadows) {
         ui.label("shadows: redoing every resident node before showing them");
     }
+    let name = |v: Option<DebugView>| v.map_or("off (the picture)", DebugView::name);
+    egui::ComboBox::from_label("debug view").selected_text(name(s.debug_view)).show_ui(ui, |ui| {
+        for v in std::iter::once(None).chain(DebugView::ALL.map(Some)) {
+            ui.selectable_value(&mut s.debug_view, v, name(v));
+        }
+    });
     ui.add(egui::Slider::new(&mut s.lighting.sun_elevation_deg, -5.0..=90.0).text("sun elevation"));
     ui.add(egui::Slider::new(&mut s.lighting.sun_azimuth_deg, 0.0..=360.0).text("sun azimuth"));
 }

@@ -250,5 +250,6 @@ pub fn apply(renderer: &mut TerrainRenderer, settings: &Settings, view: &mut Vie
     view.target_error_px = settings.target_error_px;
     renderer.stages = settings.stages;
     renderer.switches = settings.switches;
+    renderer.debug_view = settings.debug_view;
     renderer.effects.lighting = settings.lighting;
 }

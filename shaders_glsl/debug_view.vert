@@ -1,0 +1,6 @@
+#version 460
+// One triangle covering the target (the debug views, debug_view.frag).
+void main() {
+    vec2 uv = vec2((gl_VertexIndex << 1) & 2, gl_VertexIndex & 2);
+    gl_Position = vec4(uv * 2.0 - 1.0, 0.0, 1.0);
+}
