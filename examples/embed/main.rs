@@ -91,8 +91,12 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
     let markers = engine::marker_positions(&desc, &*source).map(|p| engine.marker_push(&view, p));
     let mut frame = 0u64;
     let mut shot = None;
-    while !done.load(Ordering::Acquire) && (args.frames == 0 || frame < args.frames) {
-        let last = args.frames > 0 && frame + 1 == args.frames;
+    let started = std::time::Instant::now();
+    while !done.load(Ordering::Acquire) && (args.frames == 0 || frame < args.frames || shot.is_none()) {
+        // The last frame waits for streaming to settle (at most 2 minutes),
+        // so the screenshot shows the finished terrain.
+        let settled = renderer.settled() || started.elapsed().as_secs() > 120;
+        let last = args.frames > 0 && frame + 1 >= args.frames && settled;
         let Some((slot, image)) = engine.begin_frame(&ctx)? else { continue };
         let cmd = engine.cmds[slot];
         // SAFETY: `cmd` is recording (begin_frame), from the graphics
@@ -107,14 +111,14 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
         // vista leaves the targets in their attachment layouts: the engine
         // draws its markers into them, depth tested against the terrain.
         engine.draw_markers(cmd, &markers);
-        if last && args.screenshot.is_some() {
-            shot = Some(engine.readback_buffer()?);
+        if last {
+            shot = Some(args.screenshot.as_ref().map(|_| engine.readback_buffer()).transpose()?);
         }
-        engine.end_frame(&ctx, slot, image, shot.as_ref())?;
+        engine.end_frame(&ctx, slot, image, shot.as_ref().and_then(Option::as_ref))?;
         frame += 1;
     }
     engine.wait_idle();
-    if let (Some(buffer), Some(file)) = (shot, &args.screenshot) {
+    if let (Some(Some(buffer)), Some(file)) = (shot, &args.screenshot) {
         engine.write_png(&buffer, file)?;
         println!("screenshot: {}", file.display());
     }

@@ -316,6 +316,7 @@ impl App {
             self.overlay.observe(t);
         }
         let f = Frame {
+            view: &self.view,
             fps: self.fps,
             camera: self.fly.camera.to_string(),
             speed_mps: self.fly.speed_mps,

@@ -34,6 +34,9 @@ pub struct Shown<'a> {
     pub timings: Option<&'a FrameTimings>,
     pub counters: Option<&'a FrameCounters>,
     pub stream: TerrainStats,
+    /// Per LOD, drawn nodes the camera wants finer whose children are not
+    /// resident (a CPU traversal of this frame's view).
+    pub wanted_finer: Vec<u32>,
     pub slots: u32,
     pub effects: &'a [EffectDecision],
     /// Culling stages the renderer built (a switch for the others would do nothing).
@@ -154,8 +157,17 @@ fn counters(ui: &mut egui::Ui, shown: &Shown) {
     let tri_per_px = c.triangles as f64 / f64::from(shown.size[0] * shown.size[1]);
     ui.label(format!("triangles {} ({tri_per_px:.2} per pixel)", c.triangles));
     ui.label(format!("error bound {:.2} px (the largest projected error of any drawn patch)", p.bound_px));
-    let lods: Vec<String> = c.traverse.nodes_per_lod.iter().enumerate().map(|(l, n)| format!("LOD{l} {n}")).collect();
-    ui.label(format!("nodes {}: {}", c.traverse.nodes, lods.join(", ")));
+    let lods: Vec<String> = c
+        .traverse
+        .nodes_per_lod
+        .iter()
+        .enumerate()
+        .map(|(l, n)| match shown.wanted_finer.get(l) {
+            Some(&w) if w > 0 => format!("LOD{l} {n} ({w}+)"),
+            _ => format!("LOD{l} {n}"),
+        })
+        .collect();
+    ui.label(format!("nodes {}: {}  (+: wanted finer)", c.traverse.nodes, lods.join(", ")));
     let s = &c.select;
     ui.label(format!(
         "{} patches from an ancestor, {} refined below the samples, {} seam conflicts",

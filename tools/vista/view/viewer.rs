@@ -210,7 +210,8 @@ fn compose(
     Ok(())
 }
 
-pub struct Frame {
+pub struct Frame<'v> {
+    pub view: &'v View,
     pub fps: f64,
     pub camera: String,
     pub speed_mps: f64,
@@ -220,6 +221,9 @@ pub struct Frame {
 
 /// What the overlay shows now.
 pub fn shown<'a>(v: &'a Viewer, f: Frame) -> Shown<'a> {
+    let t = &v.renderer.terrain;
+    let params = f.view.relative_to(v.renderer.origin_m).traverse_params();
+    let wanted = vista::reference::wanted_finer_cpu(&t.tree.shadow, &t.world, &params);
     let r = &v.renderer;
     let built = vista::passes::cull_patches::CullStages {
         frustum: true,
@@ -237,6 +241,7 @@ pub fn shown<'a>(v: &'a Viewer, f: Frame) -> Shown<'a> {
         timings: r.latest_timings(),
         counters: r.latest_counters(),
         stream: r.terrain.stats(),
+        wanted_finer: wanted[..t.world.lod_count as usize].to_vec(),
         slots: f.slots,
         effects: r.effects(),
         built,
