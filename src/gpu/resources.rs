@@ -364,11 +364,23 @@ impl Image {
         let views = create_views(&s.device, raw, desc).map_err(vk_err("vkCreateImageView"))?;
         inc(&s.live.images);
         views.iter().for_each(|v| ctx.set_name(*v, desc.name));
-        Ok(Image {
+        Ok(Image::assemble(s, raw, views, None, desc, layout))
+    }
+
+    /// Vista's own image when it has an allocation, else someone else's.
+    fn assemble(
+        s: &Arc<Shared>,
+        raw: vk::Image,
+        views: Vec<vk::ImageView>,
+        allocation: Option<Allocation>,
+        desc: &ImageDesc,
+        layout: vk::ImageLayout,
+    ) -> Image {
+        Image {
             raw,
             views,
-            allocation: None,
-            foreign: true,
+            foreign: allocation.is_none(),
+            allocation,
             format: desc.format,
             extent: desc.extent,
             mip_levels: desc.mip_levels,
@@ -377,7 +389,7 @@ impl Image {
             name: desc.name.to_string(),
             layout: AtomicI32::new(layout.as_raw()),
             shared: s.clone(),
-        })
+        }
     }
 
     /// The layout every subresource is in once the commands recorded so far
@@ -455,20 +467,7 @@ impl Image {
         inc(&s.live.images);
         ctx.set_name(raw, desc.name);
         views.iter().for_each(|v| ctx.set_name(*v, desc.name));
-        Ok(Image {
-            raw,
-            views,
-            allocation: Some(allocation),
-            foreign: false,
-            format: desc.format,
-            extent: desc.extent,
-            mip_levels: desc.mip_levels,
-            array_layers: desc.array_layers,
-            usage: desc.usage,
-            name: desc.name.to_string(),
-            layout: AtomicI32::new(vk::ImageLayout::UNDEFINED.as_raw()),
-            shared: s.clone(),
-        })
+        Ok(Image::assemble(s, raw, views, Some(allocation), desc, vk::ImageLayout::UNDEFINED))
     }
 
     /// Device memory bound to it (the allocation, alignment included).

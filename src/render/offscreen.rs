@@ -39,6 +39,26 @@ pub struct Settle {
     pub settled: bool,
 }
 
+/// A colour and a depth target a frame of `size` renders into, named
+/// `{prefix}_color` / `{prefix}_depth`, both readable by transfers.
+pub fn render_targets(ctx: &Context, prefix: &str, size: [u32; 2]) -> Result<(Image, Image)> {
+    let image = |what: &str, format, usage| {
+        let name = format!("{prefix}_{what}");
+        Image::new(ctx, &ImageDesc { name: &name, format, extent: size, mip_levels: 1, array_layers: 1, usage })
+    };
+    let color =
+        image("color", COLOR_FORMAT, vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC)?;
+    let depth = image(
+        "depth",
+        DEPTH_FORMAT,
+        // Sampled: occlusion culling reduces it into a depth pyramid.
+        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::SAMPLED,
+    )?;
+    Ok((color, depth))
+}
+
 pub struct Offscreen {
     pub color: Image,
     pub depth: Image,
@@ -62,22 +82,7 @@ impl Offscreen {
         clear: [f32; 4],
         mode: QueueMode,
     ) -> Result<Self> {
-        let image = |name, format, usage| {
-            Image::new(ctx, &ImageDesc { name, format, extent: size, mip_levels: 1, array_layers: 1, usage })
-        };
-        let color = image(
-            "offscreen_color",
-            COLOR_FORMAT,
-            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-        )?;
-        let depth = image(
-            "offscreen_depth",
-            DEPTH_FORMAT,
-            // Sampled: occlusion culling reduces it into a depth pyramid.
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                | vk::ImageUsageFlags::TRANSFER_SRC
-                | vk::ImageUsageFlags::SAMPLED,
-        )?;
+        let (color, depth) = render_targets(ctx, "offscreen", size)?;
         let ring = FrameRing::with_mode(ctx, frames_in_flight, mode)?;
         Ok(Offscreen { color, depth, ring, initialised: false, clear })
     }

@@ -151,7 +151,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => {
             // A bad world or view fails before the (slow) Vulkan start.
             let world = args.world.load()?;
-            world_args::check_slots(args.slots, &world.desc)?;
+            world_args::check_slots(args.viewpoint.slots, &world.desc)?;
             let view = render_cmd::view_of(&args, &world).map_err(|e| InputError(format!("{e:#}")))?;
             render_cmd::check_paths(&args)?;
             with_gpu(&options, |ctx| render_cmd::render(ctx, &world, &view, &args))

@@ -26,9 +26,6 @@ pub(crate) const SKY_CLEAR: [f32; 4] = [0.55, 0.68, 0.85, 1.0];
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Target size, e.g. 1280x720.
-    #[arg(long, default_value = "1280x720", value_parser = parse_size, allow_hyphen_values = true)]
-    pub size: [u32; 2],
     /// Frames rendered after streaming settled. Of more than 2, the first 2
     /// are warm-up, left out of the medians and timings.json; 1 or 2 frames
     /// are all timed (and include first-use costs).
@@ -45,6 +42,33 @@ pub struct RenderArgs {
     /// memory per effect.
     #[arg(long)]
     pub report: bool,
+    /// How frames are submitted: auto (async where the device has a
+    /// compute-only queue family, else single), single (one command buffer),
+    /// split (compute and graphics command buffers on the graphics queue,
+    /// joined by a timeline semaphore) or async.
+    #[arg(long, default_value = "auto", value_parser = parse_queues)]
+    pub queues: QueuesArg,
+    /// Cache baked nodes and the error tree here across runs (default: bake
+    /// in memory only; the error tree goes to $VISTA_CACHE, else
+    /// $XDG_CACHE_HOME/vista, else ~/.cache/vista).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// Longest wait for the streamed set to become resident before the measured frames.
+    #[arg(long, default_value_t = 120.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
+    pub settle_seconds: f64,
+    #[command(flatten)]
+    pub viewpoint: ViewpointArgs,
+    /// The world to render (default: the procedural world, baked lazily).
+    #[command(flatten)]
+    pub world: WorldArgs,
+}
+
+/// The view and streaming options `vista render` and `vista view` share.
+#[derive(Args)]
+pub struct ViewpointArgs {
+    /// Target (`vista view`: window) size, e.g. 1280x720.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size, allow_hyphen_values = true)]
+    pub size: [u32; 2],
     /// Camera X,Y,Z[,YAW,PITCH]: metres (x east, y north, z up; the world's
     /// south-west corner at --origin, default 0,0); YAW compass degrees (0 = +y, 90 = +x);
     /// PITCH degrees above the horizon (-90 = straight down). Default: above
@@ -54,32 +78,52 @@ pub struct RenderArgs {
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = 60.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
     pub fov: f64,
-    /// Largest accepted projected vertical error in pixels (the accuracy knob).
+    /// Largest accepted projected vertical error in pixels (the accuracy
+    /// knob; a slider in `vista view`'s overlay).
     #[arg(long, default_value_t = 1.0, value_parser = crate::numbers::number_f32, allow_negative_numbers = true)]
     pub target_error: f32,
-    /// How frames are submitted: auto (async where the device has a
-    /// compute-only queue family, else single), single (one command buffer),
-    /// split (compute and graphics command buffers on the graphics queue,
-    /// joined by a timeline semaphore) or async.
-    #[arg(long, default_value = "auto", value_parser = parse_queues)]
-    pub queues: QueuesArg,
     /// Culling stages to run: any of frustum,cone,hole,occlusion, or none.
     #[arg(long, default_value = "frustum,cone,hole,occlusion", value_parser = parse_stages)]
     pub cull: CullStages,
     /// Resident node slots (at most 1023: slots are 10-bit).
     #[arg(long, default_value_t = 512, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub slots: u32,
-    /// Cache baked nodes and the error tree here across runs (default: bake
-    /// in memory only; the error tree goes to $VISTA_CACHE, else
-    /// $XDG_CACHE_HOME/vista, else ~/.cache/vista).
-    #[arg(long)]
-    pub cache: Option<PathBuf>,
-    /// Longest wait for the streamed set to become resident before the measured frames.
-    #[arg(long, default_value_t = 120.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
-    pub settle_seconds: f64,
-    /// The world to render (default: the procedural world, baked lazily).
-    #[command(flatten)]
-    pub world: WorldArgs,
+}
+
+impl ViewpointArgs {
+    /// The view these options ask for (the default camera needs the world).
+    pub fn view(&self, world: &LoadedWorld) -> View {
+        View {
+            camera: camera_of(self.camera, world),
+            fov_y_deg: self.fov,
+            size: self.size,
+            target_error_px: self.target_error,
+            near_m: DEFAULT_NEAR_M,
+        }
+    }
+
+    /// The renderer these options and the world ask for.
+    pub fn renderer_options(
+        &self,
+        world: &LoadedWorld,
+        cache: Option<&Path>,
+        errors: std::sync::Arc<vista::world::ErrorTree>,
+    ) -> RendererOptions {
+        RendererOptions {
+            terrain: TerrainOptions {
+                slots: self.slots,
+                cache_dir: cache.map(Path::to_path_buf),
+                errors: Some(errors),
+                bake: world.bake,
+                limits: world.limits.clone(),
+                ..TerrainOptions::default()
+            },
+            stages: self.cull,
+            effects: world.effects.clone(),
+            origin_m: world.origin_m,
+            ..RendererOptions::default()
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -188,13 +232,7 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
     if !(args.settle_seconds.is_finite() && args.settle_seconds >= 0.0) {
         bail!("--settle-seconds must be a non-negative number");
     }
-    let view = View {
-        camera: camera_of(args.camera, world),
-        fov_y_deg: args.fov,
-        size: args.size,
-        target_error_px: args.target_error,
-        near_m: DEFAULT_NEAR_M,
-    };
+    let view = args.viewpoint.view(world);
     check_view(&view, world)?;
     Ok(view)
 }
@@ -266,20 +304,7 @@ fn note_camera_place(view: &View, world: &LoadedWorld) {
 
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
     let errors = world.errors(ctx, args.cache.as_deref())?;
-    let options = RendererOptions {
-        terrain: TerrainOptions {
-            slots: args.slots,
-            cache_dir: args.cache.clone(),
-            errors: Some(errors),
-            bake: world.bake,
-            limits: world.limits.clone(),
-            ..TerrainOptions::default()
-        },
-        stages: args.cull,
-        effects: world.effects.clone(),
-        origin_m: world.origin_m,
-        ..RendererOptions::default()
-    };
+    let options = args.viewpoint.renderer_options(world, args.cache.as_deref(), errors);
     let d = &world.desc;
     let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
         .map_err(crate::world_args::plan_error_is_input)?;
@@ -336,7 +361,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     println!(
         "stream: {} resident of {} slots, {} loading, {} waiting upload, {} failed loads ({} retried, {} nodes given up); {} after {} frames, {:.2} s (lazy bake)",
         st.resident,
-        args.slots,
+        args.viewpoint.slots,
         st.loading,
         st.waiting_upload,
         st.failed,
@@ -351,10 +376,10 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     }
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
     let built = CullStages {
-        frustum: args.cull.frustum,
-        cone: args.cull.cone && renderer.cull.build.cone,
-        hole: args.cull.hole && renderer.cull.build.holes,
-        occlusion: args.cull.occlusion && renderer.cull.build.occlusion,
+        frustum: args.viewpoint.cull.frustum,
+        cone: args.viewpoint.cull.cone && renderer.cull.build.cone,
+        hole: args.viewpoint.cull.hole && renderer.cull.build.holes,
+        occlusion: args.viewpoint.cull.occlusion && renderer.cull.build.occlusion,
     };
     print_stats(&stats, built, built.occlusion);
     print_timings(timed);

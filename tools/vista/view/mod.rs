@@ -8,7 +8,7 @@ mod fly;
 mod overlay;
 mod viewer;
 
-use crate::render_cmd::{camera_of, check_view, parse_camera, parse_size, parse_stages, CameraArg};
+use crate::render_cmd::{check_view, ViewpointArgs};
 use crate::world_args::{LoadedWorld, WorldArgs};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
@@ -19,10 +19,8 @@ use std::time::{Duration, Instant};
 use viewer::{Frame, OverlayFrame, Viewer};
 use vista::gpu::present::Presenter;
 use vista::gpu::{Context, ContextOptions};
-use vista::passes::cull_patches::CullStages;
 use vista::passes::debug_view::DebugView;
-use vista::render::{RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
-use vista::terrain::TerrainOptions;
+use vista::render::{TerrainRenderer, View};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -32,25 +30,10 @@ use winit::window::{Window, WindowId};
 
 #[derive(Args)]
 pub struct ViewArgs {
-    /// Window size, e.g. 1280x720.
-    #[arg(long, default_value = "1280x720", value_parser = parse_size, allow_hyphen_values = true)]
-    pub size: [u32; 2],
-    /// Start camera X,Y,Z[,YAW,PITCH] as `vista render --camera` takes it
-    /// (P prints the current one in this form). Default: the overview.
-    #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
-    pub camera: Option<CameraArg>,
-    /// Vertical field of view in degrees.
-    #[arg(long, default_value_t = 60.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
-    pub fov: f64,
-    /// Largest accepted projected vertical error in pixels (a slider in the overlay).
-    #[arg(long, default_value_t = 1.0, value_parser = crate::numbers::number_f32, allow_negative_numbers = true)]
-    pub target_error: f32,
-    /// Culling stages at the start: any of frustum,cone,hole,occlusion, or none.
-    #[arg(long, default_value = "frustum,cone,hole,occlusion", value_parser = parse_stages)]
-    pub cull: CullStages,
-    /// Resident node slots (at most 1023: slots are 10-bit).
-    #[arg(long, default_value_t = 512, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
-    pub slots: u32,
+    // Size, camera (P prints the current one in `--camera`'s form), field
+    // of view, target error, culling stages at the start, slots.
+    #[command(flatten)]
+    pub viewpoint: ViewpointArgs,
     /// Cache baked nodes here across runs (as `vista render --cache`).
     #[arg(long)]
     pub cache: Option<PathBuf>,
@@ -112,26 +95,23 @@ pub fn check(args: &ViewArgs) -> Result<(LoadedWorld, Option<FlightPath>)> {
     }
     let path = args.path.as_deref().map(FlightPath::load).transpose()?;
     let world = args.world.load()?;
-    crate::world_args::check_slots(args.slots, &world.desc)?;
+    crate::world_args::check_slots(args.viewpoint.slots, &world.desc)?;
     Ok((world, path))
 }
 
 pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: Option<FlightPath>) -> Result<()> {
     let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window ({e}); is DISPLAY set?"))?;
-    let camera = path.as_ref().map_or_else(|| camera_of(args.camera, &world), FlightPath::first);
-    let view = View {
-        camera,
-        fov_y_deg: args.fov,
-        size: args.size,
-        target_error_px: args.target_error,
-        near_m: DEFAULT_NEAR_M,
-    };
+    let mut view = args.viewpoint.view(&world);
+    if let Some(p) = &path {
+        view.camera = p.first();
+    }
     check_view(&view, &world)?;
+    let camera = view.camera;
     let mut app = App {
         fly: FlyCamera::new(camera, world.desc.extent_m),
         settings: Settings {
-            target_error_px: args.target_error,
-            stages: args.cull,
+            target_error_px: args.viewpoint.target_error,
+            stages: args.viewpoint.cull,
             switches: vista::render::FrameSwitches::default(),
             lighting: world.effects.lighting,
             debug_view: args.debug_view,
@@ -202,7 +182,7 @@ struct App {
 
 impl App {
     fn open(&mut self, el: &ActiveEventLoop) -> Result<Open> {
-        let [w, h] = self.args.size;
+        let [w, h] = self.args.viewpoint.size;
         let attrs = Window::default_attributes()
             .with_title(format!("vista: {}", self.world.label))
             .with_inner_size(winit::dpi::PhysicalSize::new(w, h));
@@ -211,20 +191,7 @@ impl App {
         let options = ContextOptions { display: Some(display), ..self.options.clone() };
         let ctx = Context::headless(&options).context("creating the Vulkan context")?;
         let errors = self.world.errors(&ctx, self.args.cache.as_deref())?;
-        let ropts = RendererOptions {
-            terrain: TerrainOptions {
-                slots: self.args.slots,
-                cache_dir: self.args.cache.clone(),
-                errors: Some(errors),
-                bake: self.world.bake,
-                limits: self.world.limits.clone(),
-                ..TerrainOptions::default()
-            },
-            stages: self.args.cull,
-            effects: self.world.effects.clone(),
-            origin_m: self.world.origin_m,
-            ..RendererOptions::default()
-        };
+        let ropts = self.args.viewpoint.renderer_options(&self.world, self.args.cache.as_deref(), errors);
         let d = &self.world.desc;
         let renderer = TerrainRenderer::new(&ctx, d, self.world.source.clone(), self.world.holes.clone(), &ropts)
             .map_err(crate::world_args::plan_error_is_input)?;
@@ -321,7 +288,7 @@ impl App {
             camera: self.fly.camera.to_string(),
             speed_mps: self.fly.speed_mps,
             size: self.view.size,
-            slots: self.args.slots,
+            slots: self.args.viewpoint.slots,
         };
         let shown = viewer::shown(&open.viewer, f);
         let (overlay, settings) = (&mut self.overlay, &mut self.settings);

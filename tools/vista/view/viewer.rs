@@ -13,9 +13,9 @@ use crate::render_cmd::SKY_CLEAR;
 use anyhow::{Context as _, Result};
 use vista::gpu::present::{Acquired, Presenter};
 use vista::gpu::{
-    vk, Buffer, BufferDesc, ColorTarget, CommandPool, Context, FrameRing, Image, ImageDesc, MemoryLocation, Recorder,
+    vk, Buffer, BufferDesc, ColorTarget, CommandPool, Context, FrameRing, Image, MemoryLocation, Recorder,
 };
-use vista::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT};
+use vista::passes::terrain_geometry::{RenderTargets, DEPTH_LAYOUT};
 use vista::render::{TerrainRenderer, View};
 
 /// The overlay of one frame, tessellated.
@@ -43,17 +43,7 @@ struct Targets {
 
 impl Targets {
     fn new(ctx: &Context, size: [u32; 2]) -> Result<Targets> {
-        let image = |name, format, usage| {
-            Image::new(ctx, &ImageDesc { name, format, extent: size, mip_levels: 1, array_layers: 1, usage })
-        };
-        let color = image(
-            "view_color",
-            COLOR_FORMAT,
-            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-        )?;
-        // Sampled: occlusion culling reduces it into a depth pyramid.
-        let depth_usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
-        let depth = image("view_depth", DEPTH_FORMAT, depth_usage)?;
+        let (color, depth) = vista::render::offscreen::render_targets(ctx, "view", size)?;
         Ok(Targets { color, depth, fresh: true })
     }
 }
