@@ -154,3 +154,28 @@ fn the_embedding_example_draws_terrain_and_its_marker_and_vista_never_submits_it
     let ground = (n / 2..n).filter(|&i| px(i).iter().zip(sky).any(|(a, b)| a.abs_diff(b) > 8)).count();
     assert!(ground > n / 2 * 9 / 10, "{ground} ground pixels in the lower half");
 }
+
+/// Without a display, or with a run that cannot end, one line before any
+/// window or Vulkan device is made.
+#[test]
+fn view_refuses_what_it_cannot_do_in_one_line() {
+    let run = |args: &[&str], display: Option<&str>| {
+        let mut c = vista_cmd();
+        c.arg("view").args(args);
+        match display {
+            Some(d) => c.env("DISPLAY", d),
+            None => c.env_remove("DISPLAY"),
+        };
+        let out = c.output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).trim().to_string())
+    };
+    let (code, err) = run(&["--frames", "1"], None);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("DISPLAY is not set") && !err.contains('\n'), "{err}");
+    let (code, err) = run(&["--screenshot", "x.png"], Some(":0"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--screenshot needs --frames"), "{err}");
+    let (code, err) = run(&["--frames", "2", "--path", "/nonexistent/flight.txt"], Some(":0"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.starts_with("error: --path /nonexistent/flight.txt"), "{err}");
+}

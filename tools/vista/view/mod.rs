@@ -100,7 +100,10 @@ pub fn check(args: &ViewArgs) -> Result<(LoadedWorld, Option<FlightPath>)> {
 }
 
 pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: Option<FlightPath>) -> Result<()> {
-    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window ({e}); is DISPLAY set?"))?;
+    if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
+        bail!("cannot open a window: DISPLAY is not set (no X display; under none, run `xvfb-run -a vista view ...`)");
+    }
+    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window on DISPLAY: {e}"))?;
     let mut view = args.viewpoint.view(&world);
     if let Some(p) = &path {
         view.camera = p.first();
