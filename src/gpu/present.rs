@@ -10,7 +10,7 @@
 //!
 //! Destruction order (`Drop`, and before a swapchain is remade): wait for
 //! the device, the images' views, the swapchain, the semaphores, the
-//! surface last.
+//! surface last. A lost surface is remade from the window's handles.
 
 use super::context::{Context, Shared};
 use super::resources::{inc, Garbage, Image, ImageDesc};
@@ -48,6 +48,12 @@ pub struct Presenter {
     format: vk::Format,
     extent: [u32; 2],
     vsync: bool,
+    /// The window's handles (vouched for in `new`), to remake a lost surface.
+    display: RawDisplayHandle,
+    window: RawWindowHandle,
+    /// Acquiring or presenting said the surface was lost: `resize` makes a
+    /// new one.
+    lost: bool,
     shared: Arc<Shared>,
 }
 
@@ -86,6 +92,9 @@ impl Presenter {
             format: vk::Format::UNDEFINED,
             extent: [0, 0],
             vsync,
+            display,
+            window,
+            lost: false,
             shared: s.clone(),
         };
         // SAFETY: live surface and physical device of this instance.
@@ -122,8 +131,12 @@ impl Presenter {
     }
 
     /// Remakes the swapchain for `size` (after a resize, or when acquiring
-    /// or presenting said it is out of date). Waits for the device.
+    /// or presenting said it is out of date), and the surface first when it
+    /// was lost. Waits for the device.
     pub fn resize(&mut self, ctx: &Context, size: [u32; 2]) -> Result<()> {
+        if self.lost {
+            self.remake_surface(ctx)?;
+        }
         let s = &ctx.shared;
         // SAFETY: live surface and physical device of this instance.
         let caps = unsafe { self.surface_fn.get_physical_device_surface_capabilities(s.physical, self.surface) }
@@ -195,6 +208,27 @@ impl Presenter {
         Ok(())
     }
 
+    /// A new surface for the window after the old one was lost; the old
+    /// swapchain goes with it.
+    fn remake_surface(&mut self, ctx: &Context) -> Result<()> {
+        let s = &ctx.shared;
+        ctx.wait_idle()?;
+        self.release_images();
+        // SAFETY: the device is idle and no view of the swapchain's images
+        // is left; the lost surface is used by nothing else.
+        unsafe {
+            self.swapchain_fn.destroy_swapchain(self.swapchain, None);
+            self.surface_fn.destroy_surface(self.surface, None);
+        }
+        self.swapchain = vk::SwapchainKHR::null();
+        self.surface = vk::SurfaceKHR::null();
+        // SAFETY: the handles `new`'s caller vouched for, still live.
+        self.surface = unsafe { ash_window::create_surface(&s.entry, &s.instance, self.display, self.window, None) }
+            .map_err(vk_err("vkCreate*SurfaceKHR"))?;
+        self.lost = false;
+        Ok(())
+    }
+
     fn pick_format(&self, ctx: &Context) -> Result<vk::SurfaceFormatKHR> {
         // SAFETY: live surface and physical device of this instance.
         let formats = unsafe { self.surface_fn.get_physical_device_surface_formats(ctx.shared.physical, self.surface) }
@@ -224,8 +258,9 @@ impl Presenter {
     }
 
     /// Acquires the next image, once the ring's next slot is free
-    /// (`FrameRing::wait_next`). `None`: the swapchain is out of date or
-    /// the window minimised; call [`Presenter::resize`] and skip the frame.
+    /// (`FrameRing::wait_next`). `None`: the swapchain is out of date, the
+    /// surface lost or the window minimised; call [`Presenter::resize`] and
+    /// skip the frame.
     pub fn acquire(&mut self) -> Result<Option<Acquired>> {
         if self.extent == [0, 0] {
             return Ok(None);
@@ -239,7 +274,8 @@ impl Presenter {
             Ok((index, _suboptimal)) => index,
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => return Ok(None),
             Err(vk::Result::ERROR_SURFACE_LOST_KHR) => {
-                return Err(Error::Unsupported("the window's surface was lost".into()))
+                self.lost = true;
+                return Ok(None);
             }
             Err(e) => return Err(Error::vk("vkAcquireNextImageKHR", e)),
         };
@@ -273,6 +309,10 @@ impl Presenter {
         match unsafe { self.swapchain_fn.queue_present(self.shared.graphics.raw, &info) } {
             Ok(suboptimal) => Ok(!suboptimal),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(false),
+            Err(vk::Result::ERROR_SURFACE_LOST_KHR) => {
+                self.lost = true;
+                Ok(false)
+            }
             Err(e) => Err(Error::vk("vkQueuePresentKHR", e)),
         }
     }
