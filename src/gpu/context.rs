@@ -444,13 +444,7 @@ impl Context {
     /// Waits for all GPU work, then destroys every deferred resource (but
     /// those dropped while a frame was being recorded and not submitted).
     pub fn wait_idle(&self) -> Result<()> {
-        // SAFETY: valid device; the queue lock keeps submissions out meanwhile.
-        let _q = self.shared.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
-        unsafe { self.shared.device.device_wait_idle() }.map_err(vk_err("vkDeviceWaitIdle"))?;
-        let submitted = self.shared.frames_submitted.load(Ordering::Acquire);
-        self.shared.frames_completed.fetch_max(submitted, Ordering::AcqRel);
-        self.shared.collect_garbage();
-        Ok(())
+        self.shared.wait_idle()
     }
 
     /// Gives a Vulkan object a name RenderDoc, Nsight and the layer show.
@@ -512,6 +506,20 @@ impl Shared {
         }
         drop(list);
         self.collect_garbage();
+    }
+
+    /// Waits for the device; every submitted frame has completed then, and
+    /// what they held is destroyed.
+    pub(crate) fn wait_idle(&self) -> Result<()> {
+        {
+            let _q = self.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
+            // SAFETY: valid device; the queue lock keeps vista's submissions out.
+            unsafe { self.device.device_wait_idle() }.map_err(vk_err("vkDeviceWaitIdle"))?;
+        }
+        let submitted = self.frames_submitted.load(Ordering::Acquire);
+        self.frames_completed.fetch_max(submitted, Ordering::AcqRel);
+        self.collect_garbage();
+        Ok(())
     }
 
     pub(crate) fn collect_garbage(&self) {

@@ -18,7 +18,6 @@ use super::submit::BinarySync;
 use crate::error::{vk_err, Error, Result};
 use ash::vk;
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
-use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
 /// What the swapchain images can be used for: drawn into (an overlay),
@@ -317,15 +316,14 @@ impl Presenter {
         }
     }
 
-    /// Drops the image wrappers and their semaphores; the device must be idle.
+    /// Drops the image wrappers and their semaphores; the device must be
+    /// idle (`Shared::wait_idle`), so their views go now, before the
+    /// swapchain that owns their images.
     fn release_images(&mut self) {
         self.images.clear();
         for sem in self.rendered.drain(..) {
             self.shared.retire(Garbage::Semaphore(sem));
         }
-        // The views go now, before the swapchain that owns their images.
-        let submitted = self.shared.frames_submitted.load(Ordering::Acquire);
-        self.shared.frames_completed.fetch_max(submitted, Ordering::AcqRel);
         self.shared.collect_garbage();
     }
 }
@@ -333,11 +331,7 @@ impl Presenter {
 impl Drop for Presenter {
     fn drop(&mut self) {
         let s = self.shared.clone();
-        {
-            let _q = s.queue_lock.lock().unwrap_or_else(|e| e.into_inner());
-            // SAFETY: valid device; the lock keeps submissions out.
-            let _ = unsafe { s.device.device_wait_idle() };
-        }
+        let _ = s.wait_idle();
         self.release_images();
         for sem in self.acquired.drain(..) {
             s.retire(Garbage::Semaphore(sem));

@@ -265,9 +265,9 @@ pub struct Image {
     /// writes address a single mip); last, for depth-stencil formats, a
     /// depth-only view (a sampled view may have one aspect only).
     pub(crate) views: Vec<vk::ImageView>,
+    /// `None` for an image made by [`Image::from_raw`]: the VkImage is not
+    /// vista's to destroy, only its views.
     allocation: Option<Allocation>,
-    /// Made by [`Image::from_raw`]: the VkImage is not vista's to destroy.
-    foreign: bool,
     pub format: vk::Format,
     pub extent: [u32; 2],
     pub mip_levels: u32,
@@ -379,7 +379,6 @@ impl Image {
         Image {
             raw,
             views,
-            foreign: allocation.is_none(),
             allocation,
             format: desc.format,
             extent: desc.extent,
@@ -507,10 +506,8 @@ impl Image {
 
 impl Drop for Image {
     fn drop(&mut self) {
-        let allocation = self.allocation.take();
-        if allocation.is_some() || self.foreign {
-            self.shared.retire(Garbage::Image(self.raw, std::mem::take(&mut self.views), allocation));
-        }
+        let views = std::mem::take(&mut self.views);
+        self.shared.retire(Garbage::Image(self.raw, views, self.allocation.take()));
     }
 }
 
