@@ -238,3 +238,40 @@ fn effects_that_are_not_implemented_are_reported_off_and_cost_nothing() {
         }
     });
 }
+
+/// The overlay's toggles (`FrameSwitches`): a renderer built with holes,
+/// splat, cliffs and lighting, with one of them switched off for a frame,
+/// draws exactly what a renderer built without it draws, says so in its
+/// report, and draws its own picture again once the switch is back on.
+#[test]
+fn an_effect_switched_off_for_a_frame_draws_what_a_renderer_without_it_draws() {
+    gpu_test(|ctx| {
+        let v = toward_hole();
+        let switchable = [Effect::Holes, Effect::Splat, Effect::Cliffs, Effect::Lighting];
+        // With occlusion, so both phases' hole draws are switched.
+        let all = switchable.iter().fold(nothing().with(Effect::Occlusion, true), |fx, &e| fx.with(e, true));
+        let mut rig = Rig::with_options(ctx, world(), Surface::Hills, hole(), SIZE, false, options(all.clone(), false));
+        let (own, _) = shot(ctx, &mut rig, &v);
+        for effect in switchable {
+            let fx = options(all.clone().with(effect, false), false);
+            let mut without = Rig::with_options(ctx, world(), Surface::Hills, hole(), SIZE, false, fx);
+            let (expected, _) = shot(ctx, &mut without, &v);
+            drop(without);
+            assert!(expected != own, "{effect:?} changes this view, or the test shows nothing");
+            *rig.renderer.switches.get_mut(effect).unwrap() = false;
+            let off = rig.again(ctx, &v, CullStages::ALL).rgba;
+            let report = frame_report(ctx, &rig.renderer, None).unwrap();
+            assert_eq!(report.switched_off, [effect]);
+            let differ = off.chunks_exact(4).zip(expected.chunks_exact(4)).filter(|(a, b)| a != b).count();
+            assert_eq!(differ, 0, "{effect:?} switched off: pixels unlike the renderer built without it");
+            if effect == Effect::Holes {
+                for p in [report.pass("terrain_holes").unwrap(), report.late_pass("terrain_holes").unwrap()] {
+                    assert!(p.state == PassState::Idle && !p.recorded && p.reason.contains("switched off"), "{p:?}");
+                }
+            }
+            *rig.renderer.switches.get_mut(effect).unwrap() = true;
+            let back = rig.again(ctx, &v, CullStages::ALL).rgba;
+            assert!(back == own, "{effect:?} switched back on: not the renderer's own picture");
+        }
+    });
+}

@@ -55,6 +55,8 @@
 #define CULL_STAGE_CONE 2u
 #define CULL_STAGE_HOLE 4u
 #define CULL_STAGE_OCCLUSION 8u
+// Not a stage: holes switched off for the frame (FrameSwitches::holes).
+#define CULL_HOLES_OFF 16u
 // Patch hole summary (one texel per patch).
 #define PATCH_HOLE_NONE 0u
 #define PATCH_HOLE_SOME 1u

@@ -180,7 +180,10 @@ PatchCull cull_patch(uint t) {
     c.cone = keep;
     c.holey = false;
 #ifdef HOLE_CULL
-    uint holes = texelFetch(usampler2DArray(patch_holes, nearest), ivec3(dpxy, int(dslot)), 0).r;
+    // Holes switched off this frame: every patch is solid.
+    uint holes = (pc.stages & CULL_HOLES_OFF) != 0u
+        ? PATCH_HOLE_NONE
+        : texelFetch(usampler2DArray(patch_holes, nearest), ivec3(dpxy, int(dslot)), 0).r;
     if (keep && (pc.stages & CULL_STAGE_HOLE) != 0u) {
         keep = holes != PATCH_HOLE_ALL;
     }

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource};
 use crate::gpu::{Binding, Image, Sampler};
 use crate::passes::cull_patches::{
-    list_capacity, nearest_sampler, spec_constants, CullBuild, CullInputs, CullPush, CullStages, PatchLists,
+    list_capacity, nearest_sampler, spec_constants, CullBuild, CullFrame, CullInputs, CullPush, PatchLists,
 };
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lod_map::LodMap;
@@ -96,7 +96,7 @@ impl CullOccluded {
         lod_map: &LodMap,
         select: &SelectPatches,
         view: &Buffer,
-        stages: CullStages,
+        cull: CullFrame,
         hiz: &HizBuild,
         depth: &Image,
     ) {
@@ -107,7 +107,7 @@ impl CullOccluded {
             (sh::HIZ, Resource::Image(pyramid, vk::ImageLayout::GENERAL)),
         ];
         let [depth_w, depth_h] = depth.extent;
-        let push = CullPush { stages: stages.bits(), capacity: self.lists.capacity, depth_w, depth_h };
+        let push = CullPush { stages: cull.bits(), capacity: self.lists.capacity, depth_w, depth_h };
         let inputs = CullInputs { traverse, tree, lod_map, view, select };
         inputs.dispatch(rec, &self.pipeline, CULL_BINDINGS, self.build, &self.sampler, &self.lists, &extra, &push);
     }

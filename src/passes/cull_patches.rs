@@ -50,12 +50,26 @@ impl CullStages {
     pub const NONE: CullStages = CullStages { frustum: false, cone: false, hole: false, occlusion: false };
 
     /// Bits of `CullPush::stages`.
-    pub(crate) fn bits(self) -> u32 {
+    fn bits(self) -> u32 {
         let bit = |on: bool, b: u32| if on { b } else { 0 };
         bit(self.frustum, k::CULL_STAGE_FRUSTUM)
             | bit(self.cone, k::CULL_STAGE_CONE)
             | bit(self.hole, k::CULL_STAGE_HOLE)
             | bit(self.occlusion, k::CULL_STAGE_OCCLUSION)
+    }
+}
+
+/// What one frame's culling does: the stages, and whether holes are drawn
+/// (off: every patch is solid, `FrameSwitches::holes`).
+#[derive(Debug, Clone, Copy)]
+pub struct CullFrame {
+    pub stages: CullStages,
+    pub holes: bool,
+}
+
+impl CullFrame {
+    pub(crate) fn bits(self) -> u32 {
+        self.stages.bits() | if self.holes { 0 } else { k::CULL_HOLES_OFF }
     }
 }
 
@@ -426,13 +440,13 @@ impl CullPatches {
         lod_map: &LodMap,
         select: &SelectPatches,
         view: &Buffer,
-        stages: CullStages,
+        cull: CullFrame,
         visibility: Option<&Buffer>,
     ) {
         assert_eq!(visibility.is_some(), self.build.occlusion, "visibility bits exactly with occlusion");
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         let extra: Vec<_> = visibility.map(|v| (sh::VISIBILITY, Resource::Buffer(v))).into_iter().collect();
-        let push = CullPush { stages: stages.bits(), capacity: self.lists.capacity, depth_w: 0, depth_h: 0 };
+        let push = CullPush { stages: cull.bits(), capacity: self.lists.capacity, depth_w: 0, depth_h: 0 };
         let inputs = CullInputs { traverse, tree, lod_map, view, select };
         inputs.dispatch(rec, &self.pipeline, CULL_BINDINGS, self.build, &self.sampler, &self.lists, &extra, &push);
     }

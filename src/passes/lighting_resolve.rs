@@ -51,35 +51,35 @@ pub struct ResolveInputs<'a> {
 }
 
 pub struct LightingResolve {
-    /// Per combination of shadows (bit 0) and atmosphere (bit 1) on, of
-    /// those built: its variant, once asked for (the built one at once).
-    pipelines: [Option<Pipeline>; 4],
+    /// Per combination of lighting (bit 0), shadows (bit 1) and atmosphere
+    /// (bit 2) on, of those built: its variant, once asked for (the built
+    /// one at once).
+    pipelines: [Option<Pipeline>; 8],
     nearest: Sampler,
-    lighting: bool,
     /// Built with (the most a frame may ask for).
     built: usize,
     /// What this frame's `record` draws (`prepare`).
     current: usize,
 }
 
-const SHADOWS: usize = 1;
-const ATMOSPHERE: usize = 2;
+const LIGHTING: usize = 1;
+const SHADOWS: usize = 2;
+const ATMOSPHERE: usize = 4;
 
-/// The index of a combination in `LightingResolve::pipelines`.
-fn combination(shadows: bool, atmosphere: bool) -> usize {
-    (usize::from(shadows) * SHADOWS) | (usize::from(atmosphere) * ATMOSPHERE)
+/// The index of a combination in `LightingResolve::pipelines`; shadows and
+/// the atmosphere need the lit image.
+fn combination(lighting: bool, shadows: bool, atmosphere: bool) -> usize {
+    let lit = |on: bool, bit: usize| if lighting && on { bit } else { 0 };
+    lit(true, LIGHTING) | lit(shadows, SHADOWS) | lit(atmosphere, ATMOSPHERE)
 }
 
-fn pipeline(ctx: &Context, lighting: bool, on: usize) -> Result<Pipeline> {
-    let (shadows, atmosphere) = (on & SHADOWS != 0, on & ATMOSPHERE != 0);
-    let mut variant = 0;
-    for (on, bit) in
-        [(lighting, fs::VARIANT_LIGHTING), (shadows, fs::VARIANT_SHADOWS), (atmosphere, fs::VARIANT_ATMOSPHERE)]
-    {
-        if on {
-            variant |= bit;
-        }
-    }
+fn pipeline(ctx: &Context, on: usize) -> Result<Pipeline> {
+    let atmosphere = on & ATMOSPHERE != 0;
+    let variant =
+        [(LIGHTING, fs::VARIANT_LIGHTING), (SHADOWS, fs::VARIANT_SHADOWS), (ATMOSPHERE, fs::VARIANT_ATMOSPHERE)]
+            .into_iter()
+            .filter(|&(bit, _)| on & bit != 0)
+            .fold(0, |v, (_, variant)| v | variant);
     let desc = GraphicsPipelineDesc {
         name: LightingResolve::NAME,
         vertex: &vs::SHADER,
@@ -104,13 +104,12 @@ impl LightingResolve {
     /// `shadows` and `atmosphere` need `lighting`.
     pub fn new(ctx: &Context, lighting: bool, shadows: bool, atmosphere: bool) -> Result<Self> {
         assert!(lighting || !(shadows || atmosphere), "shadows and atmosphere need the lit image");
-        let built = combination(shadows, atmosphere);
-        let mut pipelines = [None, None, None, None];
-        pipelines[built] = Some(pipeline(ctx, lighting, built)?);
+        let built = combination(lighting, shadows, atmosphere);
+        let mut pipelines: [Option<Pipeline>; 8] = Default::default();
+        pipelines[built] = Some(pipeline(ctx, built)?);
         Ok(LightingResolve {
             pipelines,
             nearest: nearest_sampler(ctx, "lighting_resolve_nearest")?,
-            lighting,
             built,
             current: built,
         })
@@ -121,12 +120,12 @@ impl LightingResolve {
         self.pipelines.iter().flatten().map(|p| p.label.clone()).collect()
     }
 
-    /// The next frame draws with `shadows` and `atmosphere` (each only if
-    /// built); makes that variant the first time.
-    pub fn prepare(&mut self, ctx: &Context, shadows: bool, atmosphere: bool) -> Result<()> {
-        let on = self.built & combination(shadows, atmosphere);
+    /// The next frame draws with `lighting`, `shadows` and `atmosphere`
+    /// (each only if built); makes that variant the first time.
+    pub fn prepare(&mut self, ctx: &Context, lighting: bool, shadows: bool, atmosphere: bool) -> Result<()> {
+        let on = self.built & combination(lighting, shadows, atmosphere);
         if self.pipelines[on].is_none() {
-            self.pipelines[on] = Some(pipeline(ctx, self.lighting, on)?);
+            self.pipelines[on] = Some(pipeline(ctx, on)?);
         }
         self.current = on;
         Ok(())

@@ -163,20 +163,60 @@ pub struct Effects {
 }
 
 /// Effects a built renderer switches off for a frame without rebuilding
-/// anything (`TerrainRenderer::switches`; `vista view`'s toggles): off,
-/// their passes are skipped and the lighting uses the variant without them
-/// (made the first time it is asked for). The culling stages switch the
-/// same way through `CullStages`. Switching on an effect the renderer did
-/// not build does nothing.
+/// anything (`TerrainRenderer::switches`; `vista view`'s toggles). Off:
+/// - `holes`: `cull_patches` treats every patch as solid (holes and the
+///   trimmed edge drawn filled) and the `terrain_holes` draws are skipped;
+/// - `splat`, `cliffs`: their flavours leave the frame's allowed set, so
+///   the classification never picks them and their tile variants draw
+///   nothing;
+/// - `lighting`: the output is unlit albedo (which also takes `shadows`
+///   and `atmosphere` off);
+/// - `shadows`: `sun_shadows` is skipped; `atmosphere`: no fog or sky.
+///
+/// The lighting uses the variant without what is off (made the first
+/// time it is asked for). The culling stages switch the same way through
+/// `CullStages`. Switching on an effect the renderer did not build does
+/// nothing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FrameSwitches {
+    pub holes: bool,
+    pub cliffs: bool,
+    pub splat: bool,
+    pub lighting: bool,
     pub shadows: bool,
     pub atmosphere: bool,
 }
 
 impl Default for FrameSwitches {
     fn default() -> Self {
-        FrameSwitches { shadows: true, atmosphere: true }
+        FrameSwitches { holes: true, cliffs: true, splat: true, lighting: true, shadows: true, atmosphere: true }
+    }
+}
+
+impl FrameSwitches {
+    /// The effects a frame can switch off, in `Effect::ALL` order.
+    pub const SWITCHABLE: [Effect; 6] =
+        [Effect::Holes, Effect::Cliffs, Effect::Splat, Effect::Lighting, Effect::Shadows, Effect::Atmosphere];
+
+    /// The switch of `effect` (None: not switchable per frame).
+    pub fn get_mut(&mut self, effect: Effect) -> Option<&mut bool> {
+        Some(match effect {
+            Effect::Holes => &mut self.holes,
+            Effect::Cliffs => &mut self.cliffs,
+            Effect::Splat => &mut self.splat,
+            Effect::Lighting => &mut self.lighting,
+            Effect::Shadows => &mut self.shadows,
+            Effect::Atmosphere => &mut self.atmosphere,
+            _ => return None,
+        })
+    }
+
+    /// Whether `effect` runs this frame as far as the switches go: its own
+    /// switch, and for shadows and the atmosphere also `lighting`'s.
+    pub fn on(&self, effect: Effect) -> bool {
+        let mut copy = *self;
+        let own = copy.get_mut(effect).is_none_or(|on| *on);
+        own && (self.lighting || !matches!(effect, Effect::Shadows | Effect::Atmosphere))
     }
 }
 

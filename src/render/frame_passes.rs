@@ -9,7 +9,7 @@
 use crate::frame::{Frame, QueueKind};
 use crate::gpu::{vk, Buffer, Recorder};
 use crate::passes::classify_tiles::ClassifyTiles;
-use crate::passes::cull_patches::{CullPatches, CullStages};
+use crate::passes::cull_patches::{CullFrame, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
 use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles};
 use crate::passes::lighting_resolve::{LightingResolve, ResolveInputs};
@@ -55,6 +55,9 @@ pub(crate) struct FramePasses<'a> {
     pub materials: Option<&'a MaterialResources>,
     pub view_buffer: &'a Buffer,
     pub stages: CullStages,
+    /// Effect `holes` is built but switched off this frame: every patch is
+    /// solid and the hole draws are skipped.
+    pub holes_off: bool,
     /// Shading flavours forced on every tile (the reference shadings), else 0.
     pub force_flavours: u32,
 }
@@ -66,6 +69,19 @@ fn pass<'r>(frame: &mut Frame<'_, 'r>, log: &mut FrameLog, p: FramePass, f: impl
 }
 
 impl FramePasses<'_> {
+    fn cull_frame(&self) -> CullFrame {
+        CullFrame { stages: self.stages, holes: !self.holes_off }
+    }
+
+    /// The hole draw, unless switched off this frame (then logged skipped).
+    fn holes_drawn(&self, log: &mut FrameLog, p: FramePass) -> Option<&TerrainHoles> {
+        if self.holes.is_some() && self.holes_off {
+            log.skipped(p, Skip::HolesOff);
+            return None;
+        }
+        self.holes
+    }
+
     /// The node list, the maps the patches read, each patch's level and
     /// the phase-1 patch lists.
     pub fn record_lod(
@@ -84,8 +100,9 @@ impl FramePasses<'_> {
         pass(frame, log, FramePass::SelectPatches, |r| {
             select.record(r, traverse, tree, lod_map, self.view_buffer, bytemuck::bytes_of(view))
         });
+        let cull = self.cull_frame();
         pass(frame, log, FramePass::CullPatches, |r| {
-            self.cull.record(r, traverse, tree, lod_map, select, self.view_buffer, self.stages, visibility)
+            self.cull.record(r, traverse, tree, lod_map, select, self.view_buffer, cull, visibility)
         });
     }
 
@@ -103,7 +120,7 @@ impl FramePasses<'_> {
         pass(frame, log, FramePass::TerrainGeometry, |r| {
             geometry.record(r, targets, gb, view, &self.cull.lists.list, tree, true)
         });
-        if let Some(holes) = self.holes {
+        if let Some(holes) = self.holes_drawn(log, FramePass::TerrainHoles) {
             pass(frame, log, FramePass::TerrainHoles, |r| {
                 holes.record(r, targets, gb, view, &self.cull.lists, geometry, tree, false)
             });
@@ -121,16 +138,16 @@ impl FramePasses<'_> {
             });
             return;
         }
-        let (traverse, lod_map, select, stages) = (self.traverse, self.lod_map, self.select, self.stages);
+        let (traverse, lod_map, select, cull) = (self.traverse, self.lod_map, self.select, self.cull_frame());
         pass(frame, log, FramePass::HizBuild, |r| o.hiz.record(r, targets.depth));
         pass(frame, log, FramePass::CullOccluded, |r| {
-            o.cull.record(r, traverse, tree, lod_map, select, view, stages, &o.hiz, targets.depth)
+            o.cull.record(r, traverse, tree, lod_map, select, view, cull, &o.hiz, targets.depth)
         });
         let late = &o.cull.lists;
         pass(frame, log, FramePass::TerrainGeometryLate, |r| {
             geometry.record(r, targets, gb, view, &late.list, tree, false)
         });
-        if let Some(holes) = self.holes {
+        if let Some(holes) = self.holes_drawn(log, FramePass::TerrainHolesLate) {
             pass(frame, log, FramePass::TerrainHolesLate, |r| {
                 holes.record(r, targets, gb, view, late, geometry, tree, true)
             });

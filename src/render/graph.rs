@@ -138,6 +138,8 @@ pub enum Skip {
     ShadowsCurrent,
     /// Effect `shadows` is built but switched off this frame (`FrameSwitches`).
     ShadowsOff,
+    /// Effect `holes` is built but switched off this frame (`FrameSwitches`).
+    HolesOff,
     /// No debug view asked for (`TerrainRenderer::debug_view`).
     NoDebugView,
 }
@@ -149,6 +151,7 @@ impl Skip {
             Skip::OcclusionOff => "occlusion switched off this frame (culling stages)",
             Skip::ShadowsCurrent => "idle: every resident node's shadow is made for this sun (known on the CPU)",
             Skip::ShadowsOff => "shadows switched off this frame (FrameSwitches; built, redone when back on)",
+            Skip::HolesOff => "holes switched off this frame (FrameSwitches; every patch drawn solid)",
             Skip::NoDebugView => "no debug view asked for (TerrainRenderer::debug_view)",
         }
     }

@@ -393,12 +393,13 @@ impl TerrainRenderer {
         let ctx_frame = ctx.frame_recording();
         self.telemetry.harvest(ctx);
         let world = self.terrain.world;
-        let mut gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting, &self.shade);
+        let shade = self.frame_shade();
+        let mut gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting, &shade);
         gpu.lod_params[2] = self.lod.refine_levels as f32;
         gpu.lod_params[3] = if self.lod.stitching { 0.0 } else { 1.0 };
         let params = view.traverse_params();
         self.terrain.stream(&params)?;
-        let fog = (self.effect_on(Effect::Atmosphere) && self.switches.atmosphere)
+        let fog = (self.effect_on(Effect::Atmosphere) && self.switches.on(Effect::Atmosphere))
             .then(|| self.effects.atmosphere.gpu(world.height_range_m[0]));
         let switched_off = self.switched_off();
         let mut frame = self.exec.begin(cmds, mode);
@@ -418,18 +419,20 @@ impl TerrainRenderer {
         let sun = self.effects.lighting.sun_dir();
         let shadows = ShadowState {
             pass: self.sun_shadows.as_ref(),
-            on: self.switches.shadows,
+            on: self.switches.on(Effect::Shadows),
             schedule: &mut self.shadow_schedule,
             were_off: &mut self.shadows_were_off,
         };
         let jobs = shadows.jobs(&self.terrain, sun);
         // Switched back on, the shadows show once every slot holds its own
         // node's texture again; until then the lighting goes without them.
-        let shadows_shown = self.switches.shadows && self.shadow_schedule.ready();
-        if self.sun_shadows.is_some() && self.switches.shadows && !shadows_shown {
+        let shadows_on = self.switches.on(Effect::Shadows);
+        let shadows_shown = shadows_on && self.shadow_schedule.ready();
+        if self.sun_shadows.is_some() && shadows_on && !shadows_shown {
             log.switched_off.insert(0, Effect::Shadows);
         }
-        self.resolve.prepare(ctx, shadows_shown, self.switches.atmosphere)?;
+        let sw = self.switches;
+        self.resolve.prepare(ctx, sw.lighting, shadows_shown, sw.on(Effect::Atmosphere))?;
         let tree = &self.terrain.tree;
         let passes = FramePasses {
             traverse: &self.traverse,
@@ -446,15 +449,16 @@ impl TerrainRenderer {
             shadows: self
                 .sun_shadows
                 .as_ref()
-                .filter(|_| self.switches.shadows)
+                .filter(|_| shadows_on)
                 .map(|s| (s, jobs.as_slice(), sun, self.effects.lighting.sun_elevation_deg)),
-            shadows_off: self.sun_shadows.is_some() && !self.switches.shadows,
+            shadows_off: self.sun_shadows.is_some() && !shadows_on,
             debug: self.debug_pass.as_ref().zip(self.debug_view),
             fog,
             materials: self.materials.as_ref(),
             view_buffer: &self.view_buffer,
             stages: self.stages,
-            force_flavours: if self.shading == Shading::Tiled { 0 } else { self.shade.allowed },
+            holes_off: !sw.holes,
+            force_flavours: if self.shading == Shading::Tiled { 0 } else { shade.allowed },
         };
         let gb = self.gbuffer.as_ref().expect("made above");
         passes.record_lod(&mut frame, &mut log, tree, &params, &gpu, visibility);
@@ -517,8 +521,14 @@ impl TerrainRenderer {
 
     /// Built effects switched off for the next frame.
     pub fn switched_off(&self) -> Vec<Effect> {
-        let switch = [(Effect::Shadows, self.switches.shadows), (Effect::Atmosphere, self.switches.atmosphere)];
-        switch.into_iter().filter(|&(e, on)| !on && self.effect_on(e)).map(|(e, _)| e).collect()
+        FrameSwitches::SWITCHABLE.into_iter().filter(|&e| self.effect_on(e) && !self.switches.on(e)).collect()
+    }
+
+    /// The shading rules of the next frame: the built ones less the
+    /// flavours switched off.
+    fn frame_shade(&self) -> ShadeRules {
+        let off = [Effect::Splat, Effect::Cliffs].into_iter().filter(|&e| !self.switches.on(e));
+        off.fold(self.shade, ShadeRules::without)
     }
 
     /// GPU counters of the newest frame that came back (frames late; never

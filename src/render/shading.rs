@@ -4,7 +4,7 @@
 //! shaders through the view (`TerrainView.shade_*`); none is a literal in a
 //! shader. `shade_rules.glsl` states the rule they parameterise.
 
-use crate::render::effects::Effects;
+use crate::render::effects::{Effect, Effects};
 use crate::shaders::consts;
 
 /// Flavour bits, in the classification target's order.
@@ -106,16 +106,30 @@ impl Default for ShadeRules {
     }
 }
 
+/// The shading flavours an effect adds (none for most).
+pub fn effect_flavours(effect: Effect) -> u32 {
+    match effect {
+        Effect::Splat => consts::FLAVOUR_SPLAT,
+        Effect::Cliffs => consts::FLAVOUR_NEAR_CLIFF | consts::FLAVOUR_FAR_CLIFF,
+        _ => 0,
+    }
+}
+
 impl ShadeRules {
     pub fn from_effects(fx: &Effects, splat: bool, cliffs: bool) -> ShadeRules {
         let mut allowed = consts::FLAVOUR_FAR_ATLAS;
-        if splat {
-            allowed |= consts::FLAVOUR_SPLAT;
-        }
-        if cliffs {
-            allowed |= consts::FLAVOUR_NEAR_CLIFF | consts::FLAVOUR_FAR_CLIFF;
+        for (effect, on) in [(Effect::Splat, splat), (Effect::Cliffs, cliffs)] {
+            if on {
+                allowed |= effect_flavours(effect);
+            }
         }
         ShadeRules { allowed, ..fx.shade }
+    }
+
+    /// These rules with `effect`'s flavours taken out (switched off for a
+    /// frame: the classification then never picks them).
+    pub fn without(self, effect: Effect) -> ShadeRules {
+        ShadeRules { allowed: self.allowed & !effect_flavours(effect), ..self }
     }
 
     /// Every variant a frame can produce: the non-empty subsets of the

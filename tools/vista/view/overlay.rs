@@ -203,9 +203,16 @@ fn switches(ui: &mut egui::Ui, shown: &Shown, s: &mut Settings) {
         ui.add_enabled(b.occlusion, egui::Checkbox::new(&mut s.stages.occlusion, "occlusion"));
     });
     let built = |e: Effect| shown.effects.iter().any(|d| d.effect == e && d.on);
-    ui.horizontal(|ui| {
-        ui.add_enabled(built(Effect::Shadows), egui::Checkbox::new(&mut s.switches.shadows, "shadows"));
-        ui.add_enabled(built(Effect::Atmosphere), egui::Checkbox::new(&mut s.switches.atmosphere, "atmosphere"));
+    // Every effect a frame can switch off; those the scene did not build
+    // (or, for shadows and the atmosphere, with lighting off) are greyed.
+    let lit = s.switches.lighting;
+    ui.horizontal_wrapped(|ui| {
+        for effect in FrameSwitches::SWITCHABLE {
+            let needs_light = matches!(effect, Effect::Shadows | Effect::Atmosphere);
+            let enabled = built(effect) && (lit || !needs_light);
+            let on = s.switches.get_mut(effect).expect("switchable");
+            ui.add_enabled(enabled, egui::Checkbox::new(on, effect.name()));
+        }
     });
     if s.switches.shadows && shown.switched_off.contains(&Effect::Shadows) {
         ui.label("shadows: redoing every resident node before showing them");
