@@ -5,8 +5,8 @@
 // the list of its combined variant, whose indirect instance count is the
 // append counter. The classification target is cleared to 0 by the
 // geometry pass's load op and every terrain pixel has at least one bit, so
-// a zero OR is exactly "no terrain stencil in the tile" without reading the
-// stencil aspect in a second view.
+// a zero OR is exactly "no terrain in the tile" without reading the depth
+// in a second view.
 //
 // Why not an invocation per pixel ORing through shared memory: that needs
 // two workgroup barriers per tile, and on a CPU driver (lavapipe) a barrier

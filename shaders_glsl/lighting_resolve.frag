@@ -12,7 +12,7 @@
 // silhouette pixel the one of the surface in front (silhouette.glsl).
 // With ATMOSPHERE (the `atmosphere` effect), the terrain is seen through
 // the height fog of atmosphere.glsl and the background is its sky; without
-// it the pass is stencil-tested and the background keeps the clear colour.
+// it the pass is depth-tested to terrain pixels and the background keeps the clear colour.
 // SHADOWS and ATMOSPHERE need LIGHTING.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"

@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // The geometry pass of the G-buffer tile shading: besides depth and the
-// terrain stencil bit (pipeline state), each pixel records which shading
+// engine's terrain stencil bit (pipeline state, where asked for), each pixel records which shading
 // flavours it needs (classification, shade_rules.glsl) and two octahedral
 // normals as 8-bit codes: the node's baked (smooth, geometric) normal and
 // the normal of the triangle drawn, from the screen derivatives of its

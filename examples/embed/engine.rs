@@ -7,7 +7,7 @@ use std::ffi::{c_void, CStr};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use vista::gpu::Context;
-use vista::passes::terrain_geometry::{COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT};
+use vista::passes::terrain_geometry::{DepthOptions, COLOR_FORMAT};
 use vista::render::View;
 use vista::world::{HeightSource, WorldDesc};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -21,6 +21,10 @@ pub const COLOR_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
 pub const DEPTH_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
     vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT.as_raw() | vk::ImageUsageFlags::SAMPLED.as_raw(),
 );
+/// The engine's depth: depth-only, as many engines use; vista is told so
+/// (`DepthOptions`, no stencil bit) and draws into it in this layout.
+pub const DEPTH: DepthOptions = DepthOptions { format: vk::Format::D32_SFLOAT, terrain_stencil_bit: None };
+const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL;
 const FRAMES: usize = 2;
 const EXTENT: vk::Extent2D = vk::Extent2D { width: SIZE[0], height: SIZE[1] };
 
@@ -193,8 +197,7 @@ impl Engine {
             let rendered = images.iter().map(|_| sem()).collect::<Result<_, _>>().map_err(e("semaphores"))?;
             let mem = instance.get_physical_device_memory_properties(physical);
             let color = target(&device, &mem, COLOR_FORMAT, COLOR_USAGE, vk::ImageAspectFlags::COLOR)?;
-            let depth_aspect = vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL;
-            let depth = target(&device, &mem, DEPTH_FORMAT, DEPTH_USAGE, depth_aspect)?;
+            let depth = target(&device, &mem, DEPTH.format, DEPTH_USAGE, vk::ImageAspectFlags::DEPTH)?;
             let marker = marker_pipeline(&device)?;
             Ok(Engine {
                 entry,
@@ -592,7 +595,7 @@ fn marker_pipeline(d: &ash::Device) -> Result<(vk::PipelineLayout, vk::Pipeline)
         let formats = [COLOR_FORMAT];
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(&formats)
-            .depth_attachment_format(DEPTH_FORMAT);
+            .depth_attachment_format(DEPTH.format);
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex)

@@ -16,7 +16,7 @@ use engine::{Engine, SIZE};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use vista::gpu::{vk, Context, Image, ImageDesc, RawHandles, Recorder};
-use vista::passes::terrain_geometry::{COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT};
+use vista::passes::terrain_geometry::COLOR_FORMAT;
 use vista::render::{overview_camera, RenderTargets, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
 use vista::world::{ProceduralSource, WorldDesc};
 use winit::application::ApplicationHandler;
@@ -75,8 +75,9 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
     // (dropped before `engine` below); the device enables what vista needs.
     let ctx = unsafe { Context::from_raw(handles) }.map_err(|e| e.to_string())?;
     let (desc, source) = world();
-    let mut renderer = TerrainRenderer::new(&ctx, &desc, source.clone(), Vec::new(), &RendererOptions::default())
-        .map_err(|e| e.to_string())?;
+    let options = RendererOptions { depth: engine::DEPTH, ..RendererOptions::default() };
+    let mut renderer =
+        TerrainRenderer::new(&ctx, &desc, source.clone(), Vec::new(), &options).map_err(|e| e.to_string())?;
     let camera = overview_camera(&desc, &*source);
     let view = View { camera, fov_y_deg: 60.0, size: SIZE, target_error_px: 1.0, near_m: DEFAULT_NEAR_M };
     // The engine's own images, wrapped: vista tracks their layout from here.
@@ -87,7 +88,7 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
         unsafe { Image::from_raw(&ctx, raw, &d, vk::ImageLayout::UNDEFINED) }.map_err(|e| e.to_string())
     };
     let color = wrap("engine_color", engine.color.image, COLOR_FORMAT, engine::COLOR_USAGE)?;
-    let depth = wrap("engine_depth", engine.depth.image, DEPTH_FORMAT, engine::DEPTH_USAGE)?;
+    let depth = wrap("engine_depth", engine.depth.image, engine::DEPTH.format, engine::DEPTH_USAGE)?;
     let markers = engine::marker_positions(&desc, &*source).map(|p| engine.marker_push(&view, p));
     let mut frame = 0u64;
     let mut shot = None;
@@ -104,7 +105,7 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
         let mut rec = unsafe { Recorder::from_raw(&ctx, cmd) };
         if frame == 0 {
             rec.discard_to(&color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-            rec.discard_to(&depth, DEPTH_LAYOUT);
+            rec.discard_to(&depth, engine::DEPTH.layout());
         }
         let targets = RenderTargets { color: &color, depth: &depth, clear: [0.55, 0.68, 0.85, 1.0] };
         renderer.record(&mut rec, &view, &targets).map_err(|e| e.to_string())?;

@@ -102,8 +102,6 @@
 #define FLAVOUR_VARIANTS 32u
 // Screen tiles of classify_tiles (pixels per side).
 #define TILE_SIZE 8u
-// Stencil bit the terrain geometry writes and the tile passes test.
-#define TERRAIN_STENCIL 1u
 // The geometry pass's patch info (R8_UINT, for the debug views): bits 0-3
 // the node's LOD, 4-5 the levels refined below LOD 0, 6 drawn in
 // occlusion culling's phase 2, 7 within a pixel of the patch grid's edge.

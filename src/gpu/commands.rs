@@ -45,12 +45,14 @@ pub struct ColorTarget<'a> {
 }
 
 /// The depth attachment for `begin_rendering`: cleared to `clear`
-/// (reversed-Z: 0 is far; stencil 0) or kept when `None`. A depth-stencil
-/// format is attached as both. `read_only`: in the read-only layout (no
+/// (reversed-Z: 0 is far) or kept when `None`. A depth-stencil format is
+/// attached as both; its stencil is cleared to 0 with the depth when
+/// `clear_stencil`, else kept. `read_only`: in the read-only layout (no
 /// depth or stencil writes; the depth may be sampled meanwhile).
 pub struct DepthTarget<'a> {
     pub image: &'a Image,
     pub clear: Option<f32>,
+    pub clear_stencil: bool,
     pub read_only: bool,
 }
 
@@ -290,7 +292,10 @@ impl<'a> Recorder<'a> {
                 .store_op(store)
                 .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth, stencil: 0 } })
         });
-        let stencil_att = depth_att.filter(|_| depth_target.as_ref().is_some_and(|d| has_stencil(d.image.format)));
+        let stencil_att = depth_target.as_ref().filter(|d| has_stencil(d.image.format)).and_then(|d| {
+            let keep = d.clear.is_none() || !d.clear_stencil;
+            depth_att.map(|a| if keep { a.load_op(vk::AttachmentLoadOp::LOAD) } else { a })
+        });
         let area = vk::Rect2D {
             offset: vk::Offset2D { x: 0, y: 0 },
             extent: vk::Extent2D { width: extent[0], height: extent[1] },

@@ -159,7 +159,9 @@ pub fn required_features() -> FeatureChain {
         v12: vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
             .draw_indirect_count(true)
-            .host_query_reset(true),
+            .host_query_reset(true)
+            // DEPTH_ATTACHMENT_OPTIMAL for a depth-only target (DepthOptions).
+            .separate_depth_stencil_layouts(true),
         v13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true),
     }
 }
@@ -181,6 +183,7 @@ fn missing_features(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
         ("timelineSemaphore", v12.timeline_semaphore),
         ("drawIndirectCount", v12.draw_indirect_count),
         ("hostQueryReset", v12.host_query_reset),
+        ("separateDepthStencilLayouts", v12.separate_depth_stencil_layouts),
         ("synchronization2", v13.synchronization2),
         ("dynamicRendering", v13.dynamic_rendering),
     ];

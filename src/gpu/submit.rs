@@ -533,6 +533,29 @@ impl Context {
         })?;
         Ok(staging.mapped().expect("GpuToCpu buffers are mapped").to_vec())
     }
+
+    /// Reads the stencil of a depth-stencil image, a byte per texel; the
+    /// image returns to its tracked layout afterwards.
+    pub fn read_stencil(&self, img: &Image) -> Result<Vec<u8>> {
+        let layout = img.layout();
+        assert_ne!(layout, vk::ImageLayout::UNDEFINED, "read of {}, which holds nothing yet", img.name);
+        let staging = Buffer::new(
+            self,
+            &BufferDesc {
+                name: "stencil_readback_staging",
+                size: u64::from(img.extent[0]) * u64::from(img.extent[1]),
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuToCpu,
+            },
+        )?;
+        self.submit_and_wait(|rec| {
+            rec.transition(img, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+            rec.copy_stencil_to_buffer(img, &staging);
+            rec.transition(img, layout);
+            Ok(())
+        })?;
+        Ok(staging.mapped().expect("GpuToCpu buffers are mapped").to_vec())
+    }
 }
 
 /// Bytes of one 4x4 block of a block-compressed format vista uses.

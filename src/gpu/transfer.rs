@@ -100,6 +100,27 @@ impl Recorder<'_> {
         };
     }
 
+    /// Copies the stencil aspect of a depth-stencil image (mip 0, layer 0;
+    /// TRANSFER_SRC_OPTIMAL) to `dst`, a byte per texel.
+    pub fn copy_stencil_to_buffer(&mut self, img: &Image, dst: &Buffer) {
+        self.outside_rendering("copy_stencil_to_buffer");
+        assert!(has_stencil(img.format), "{} has no stencil aspect", img.name);
+        assert_eq!(img.layout(), vk::ImageLayout::TRANSFER_SRC_OPTIMAL, "copy from {}", img.name);
+        let mut region = packed_region(img, 0, 0, 0);
+        region.image_subresource.aspect_mask = vk::ImageAspectFlags::STENCIL;
+        // SAFETY: live objects, aspect and layout checked; the layer
+        // validates sizes.
+        unsafe {
+            self.d().cmd_copy_image_to_buffer(
+                self.cmd,
+                img.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw,
+                &[region],
+            )
+        };
+    }
+
     /// Copies mip 0 of `src` (TRANSFER_SRC_OPTIMAL) over mip 0 of `dst`
     /// (TRANSFER_DST_OPTIMAL), scaled to fit and converted between colour
     /// formats (e.g. RGBA to a swapchain's BGRA), nearest texel.

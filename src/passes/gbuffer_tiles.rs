@@ -1,5 +1,5 @@
 //! `gbuffer_tiles`: one indirect draw per shader variant over the tiles
-//! `classify_tiles` listed for it, stencil-tested against the terrain bit,
+//! `classify_tiles` listed for it, depth-tested to terrain pixels,
 //! writing the G-buffer (albedo, normal + roughness, material id + flavour
 //! bits). A variant is a specialization constant (its flavour bits);
 //! pipelines exist only for the variants the scene can produce (every
@@ -11,12 +11,12 @@
 
 use crate::error::Result;
 use crate::gpu::{
-    vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, Pipeline, Recorder, Resource, Sampler,
-    SamplerDesc,
+    depth_layout, vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, Pipeline, Recorder,
+    Resource, Sampler, SamplerDesc,
 };
 use crate::passes::classify_tiles::{TileLists, TilePush};
 use crate::passes::cull_patches::nearest_sampler;
-use crate::passes::terrain_geometry::{RenderTargets, DEPTH_FORMAT, TERRAIN_ONLY};
+use crate::passes::terrain_geometry::{RenderTargets, TERRAIN_ONLY};
 use crate::passes::terrain_query::VistaTerrain;
 use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use crate::render::shading::variant_name;
@@ -69,7 +69,14 @@ impl GbufferTiles {
     /// Pipelines for `variants`; `materials`: the shader with the splat and
     /// cliff paths (bound to material resources at record time);
     /// `every_flavour`: evaluate each variant's every flavour at every pixel.
-    pub fn new(ctx: &Context, variants: &[u32], materials: bool, every_flavour: bool) -> Result<Self> {
+    /// `depth_format`: the renderer's depth target's.
+    pub fn new(
+        ctx: &Context,
+        variants: &[u32],
+        materials: bool,
+        every_flavour: bool,
+        depth_format: vk::Format,
+    ) -> Result<Self> {
         let fragment = fs::variant(if materials { fs::VARIANT_MATERIALS } else { 0 });
         let pipelines = variants
             .iter()
@@ -81,10 +88,10 @@ impl GbufferTiles {
                     fragment,
                     specialization: &spec,
                     color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
-                    depth_format: Some(DEPTH_FORMAT),
-                    depth_compare: vk::CompareOp::ALWAYS,
+                    depth_format: Some(depth_format),
+                    depth_compare: TERRAIN_ONLY,
                     depth_write: false,
-                    stencil: Some(TERRAIN_ONLY),
+                    stencil: None,
                     cull_mode: vk::CullModeFlags::NONE,
                     topology: vk::PrimitiveTopology::TRIANGLE_LIST,
                     blend: false,
@@ -122,7 +129,7 @@ impl GbufferTiles {
     /// G-buffer into attachment layout (before the first variant).
     pub fn begin(rec: &mut Recorder, targets: &RenderTargets, gbuffer: &GBuffer) {
         rec.transition(&gbuffer.geometry_normals, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
-        rec.transition(targets.depth, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+        rec.transition(targets.depth, depth_layout(targets.depth.format, true));
         for img in [&gbuffer.albedo, &gbuffer.normal, &gbuffer.material] {
             rec.discard_to(img, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
         }
@@ -152,14 +159,14 @@ impl GbufferTiles {
                 ColorTarget { image: &gbuffer.normal, clear },
                 ColorTarget { image: &gbuffer.material, clear },
             ],
-            Some(DepthTarget { image: targets.depth, clear: None, read_only: true }),
+            Some(DepthTarget { image: targets.depth, clear: None, clear_stencil: false, read_only: true }),
         );
         rec.bind_pipeline(pipeline);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let mut bindings = vec![
             (fs::VIEW, Resource::Buffer(view)),
             (vs::LISTS, Resource::Buffer(&lists.buffer)),
-            (fs::DEPTH_TARGET, Resource::Image(targets.depth, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL)),
+            (fs::DEPTH_TARGET, Resource::Image(targets.depth, depth_layout(targets.depth.format, true))),
             (fs::CLASSIFICATION, Resource::Image(&gbuffer.classification, read)),
             (fs::NORMALS, Resource::Image(&gbuffer.geometry_normals, read)),
             (fs::SECTOR_DATA, Resource::Buffer(sector_data)),

@@ -104,7 +104,7 @@ impl HizBuild {
         Ok(())
     }
 
-    /// Reduces `depth` (in `DEPTH_LAYOUT`, left so afterwards) into
+    /// Reduces `depth` (in its attachment layout, left so afterwards) into
     /// the pyramid made by `prepare`.
     pub fn record(&self, rec: &mut Recorder, depth: &Image) {
         let pyramid = self.pyramid.as_ref().expect("hiz_build::prepare runs before record");
@@ -132,7 +132,7 @@ impl HizBuild {
             rec.dispatch(dst[0].div_ceil(gx), dst[1].div_ceil(gy), 1);
             rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         }
-        rec.transition(depth, crate::passes::terrain_geometry::DEPTH_LAYOUT);
+        rec.transition(depth, crate::gpu::depth_layout(depth.format, false));
     }
 }
 

@@ -3,11 +3,11 @@
 //! or unlit albedo, into the caller's colour target (display-encoded: the
 //! lit image exposed and through the scene's tonemapper, `render/tonemap.rs`;
 //! unlit albedo clipped) and the renderer's HDR image, one full-screen
-//! triangle stencil-tested against the terrain bit so the background keeps
+//! triangle depth-tested to terrain pixels (`TERRAIN_ONLY`) so the background keeps
 //! the clear colour. With the `shadows` effect (variant SHADOWS) the sun
 //! term is scaled by the pixel's share of the sun from `sun_shadows`; with
 //! `atmosphere` (variant ATMOSPHERE) the terrain is seen through the height
-//! fog of render/atmosphere.rs and the background is its sky (no stencil
+//! fog of render/atmosphere.rs and the background is its sky (no depth
 //! test then: every pixel is written). It
 //! leaves the depth target in its frame layout. An engine lights the
 //! G-buffer itself and can leave this pass out of its frame.
@@ -20,7 +20,7 @@ use crate::gpu::{
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::sector_data::SectorData;
 use crate::passes::sun_shadows::SunShadows;
-use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT, TERRAIN_ONLY};
+use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, TERRAIN_ONLY};
 use crate::passes::terrain_query::VistaTerrain;
 use crate::render::gbuffer::{GBuffer, HDR_FORMAT};
 use crate::shaders::{lighting_resolve_frag as fs, lighting_resolve_vert as vs};
@@ -60,6 +60,7 @@ pub struct LightingResolve {
     built: usize,
     /// What this frame's `record` draws (`prepare`).
     current: usize,
+    depth_format: vk::Format,
 }
 
 const LIGHTING: usize = 1;
@@ -73,7 +74,7 @@ fn combination(lighting: bool, shadows: bool, atmosphere: bool) -> usize {
     lit(true, LIGHTING) | lit(shadows, SHADOWS) | lit(atmosphere, ATMOSPHERE)
 }
 
-fn pipeline(ctx: &Context, on: usize) -> Result<Pipeline> {
+fn pipeline(ctx: &Context, on: usize, depth_format: vk::Format) -> Result<Pipeline> {
     let atmosphere = on & ATMOSPHERE != 0;
     let variant =
         [(LIGHTING, fs::VARIANT_LIGHTING), (SHADOWS, fs::VARIANT_SHADOWS), (ATMOSPHERE, fs::VARIANT_ATMOSPHERE)]
@@ -86,11 +87,11 @@ fn pipeline(ctx: &Context, on: usize) -> Result<Pipeline> {
         fragment: fs::variant(variant),
         specialization: &[],
         color_formats: &[COLOR_FORMAT, HDR_FORMAT],
-        depth_format: Some(DEPTH_FORMAT),
-        depth_compare: vk::CompareOp::ALWAYS,
-        depth_write: false,
+        depth_format: Some(depth_format),
         // The atmosphere's sky covers the background too.
-        stencil: if atmosphere { None } else { Some(TERRAIN_ONLY) },
+        depth_compare: if atmosphere { vk::CompareOp::ALWAYS } else { TERRAIN_ONLY },
+        depth_write: false,
+        stencil: None,
         cull_mode: vk::CullModeFlags::NONE,
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
         blend: false,
@@ -101,17 +102,25 @@ fn pipeline(ctx: &Context, on: usize) -> Result<Pipeline> {
 impl LightingResolve {
     pub const NAME: &'static str = vs::PASS;
 
-    /// `shadows` and `atmosphere` need `lighting`.
-    pub fn new(ctx: &Context, lighting: bool, shadows: bool, atmosphere: bool) -> Result<Self> {
+    /// `shadows` and `atmosphere` need `lighting`; `depth_format`: the
+    /// renderer's depth target's.
+    pub fn new(
+        ctx: &Context,
+        lighting: bool,
+        shadows: bool,
+        atmosphere: bool,
+        depth_format: vk::Format,
+    ) -> Result<Self> {
         assert!(lighting || !(shadows || atmosphere), "shadows and atmosphere need the lit image");
         let built = combination(lighting, shadows, atmosphere);
         let mut pipelines: [Option<Pipeline>; 8] = Default::default();
-        pipelines[built] = Some(pipeline(ctx, built)?);
+        pipelines[built] = Some(pipeline(ctx, built, depth_format)?);
         Ok(LightingResolve {
             pipelines,
             nearest: nearest_sampler(ctx, "lighting_resolve_nearest")?,
             built,
             current: built,
+            depth_format,
         })
     }
 
@@ -125,13 +134,13 @@ impl LightingResolve {
     pub fn prepare(&mut self, ctx: &Context, lighting: bool, shadows: bool, atmosphere: bool) -> Result<()> {
         let on = self.built & combination(lighting, shadows, atmosphere);
         if self.pipelines[on].is_none() {
-            self.pipelines[on] = Some(pipeline(ctx, on)?);
+            self.pipelines[on] = Some(pipeline(ctx, on, self.depth_format)?);
         }
         self.current = on;
         Ok(())
     }
 
-    /// Expects the depth target in DEPTH_STENCIL_READ_ONLY_OPTIMAL (after
+    /// Expects the depth target in its read-only layout (after
     /// `gbuffer_tiles`); leaves it writable again. `inputs` must carry what
     /// the variant built reads.
     pub fn record(
@@ -151,7 +160,7 @@ impl LightingResolve {
                 ColorTarget { image: targets.color, clear: Some(targets.clear) },
                 ColorTarget { image: &gbuffer.hdr, clear: Some(targets.clear) },
             ],
-            Some(DepthTarget { image: targets.depth, clear: None, read_only: true }),
+            Some(DepthTarget { image: targets.depth, clear: None, clear_stencil: false, read_only: true }),
         );
         let pipeline = self.pipelines[self.current].as_ref().expect("made by prepare or new");
         let (shadows_on, atmosphere_on) = (self.current & SHADOWS != 0, self.current & ATMOSPHERE != 0);
@@ -164,7 +173,7 @@ impl LightingResolve {
         ];
         let mut push = LightingPush { terrain: inputs.terrain, shadow: [0.0; 4], fog: [[0.0; 4]; 3] };
         if shadows_on || atmosphere_on {
-            let depth_read = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+            let depth_read = depth_layout(targets.depth.format, true);
             bindings.push((fs::DEPTH_TARGET, Resource::Image(targets.depth, depth_read)));
         }
         if shadows_on {
@@ -186,6 +195,6 @@ impl LightingResolve {
         }
         rec.draw(3, 1);
         rec.end_rendering();
-        rec.transition(targets.depth, depth_layout(DEPTH_FORMAT, false));
+        rec.transition(targets.depth, depth_layout(targets.depth.format, false));
     }
 }

@@ -9,11 +9,11 @@
 
 use crate::error::Result;
 use crate::gpu::{
-    depth_layout, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image,
-    MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo, StencilDesc,
+    depth_layout, has_stencil, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget,
+    GraphicsPipelineDesc, Image, MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo,
+    StencilDesc,
 };
 use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT};
-use crate::shaders::consts::TERRAIN_STENCIL;
 use crate::shaders::{terrain_geometry_frag as fs, terrain_geometry_vert as vs};
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
 use crate::terrain::patch_grid::diamond_indices;
@@ -21,19 +21,72 @@ use crate::world::{PATCHES_PER_NODE_SIDE, PATCH_QUADS};
 
 /// Colour target format of the lit output (gamma-encoded by the shader).
 pub const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-/// Reversed-Z depth, infinite far plane; the stencil holds the terrain bit.
+/// The default depth format: reversed-Z, infinite far plane, with a
+/// stencil aspect for the engine's terrain bit ([`DepthOptions`]).
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT_S8_UINT;
-/// The stencil state of the passes that shade terrain pixels only
-/// (`gbuffer_tiles`, `lighting_resolve`): test the bit, write nothing.
-pub const TERRAIN_ONLY: StencilDesc = StencilDesc {
-    compare: vk::CompareOp::EQUAL,
-    reference: TERRAIN_STENCIL,
-    compare_mask: TERRAIN_STENCIL,
-    write_mask: 0,
-};
 
-/// The depth target's layout on entry to and exit from a frame.
+/// The default depth target's layout on entry to and exit from a frame
+/// (`DepthOptions::layout` for another format).
 pub const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+
+/// The depth test of the passes that shade terrain pixels only
+/// (`gbuffer_tiles`, `lighting_resolve`): their fragments lie at depth 0,
+/// the far plane the target is cleared to, so LESS passes exactly where the
+/// geometry pass wrote terrain (reversed-Z: every finite distance is above
+/// 0). Needs no stencil, so any depth format of [`DepthOptions`] works.
+pub const TERRAIN_ONLY: vk::CompareOp = vk::CompareOp::LESS;
+
+/// The engine's depth target: its format and the stencil bit vista sets
+/// where there is terrain (`RendererOptions::depth`). vista clears the
+/// depth each frame; where it writes a stencil bit it clears the stencil
+/// too, and otherwise leaves the stencil aspect as it was.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DepthOptions {
+    /// `D32_SFLOAT_S8_UINT` (the default) or `D32_SFLOAT`.
+    pub format: vk::Format,
+    /// The stencil bit (0-7) set on terrain pixels; `None`: the stencil is
+    /// not touched (and must be `None` for a format without stencil).
+    pub terrain_stencil_bit: Option<u32>,
+}
+
+impl Default for DepthOptions {
+    fn default() -> Self {
+        DepthOptions { format: DEPTH_FORMAT, terrain_stencil_bit: Some(0) }
+    }
+}
+
+impl DepthOptions {
+    /// The formats vista draws reversed-Z depth into (32-bit float: a
+    /// 24-bit integer depth would lose the far field's precision).
+    pub const FORMATS: [vk::Format; 2] = [vk::Format::D32_SFLOAT_S8_UINT, vk::Format::D32_SFLOAT];
+
+    /// Refuses a format vista cannot use or a bit the format cannot hold.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        if !Self::FORMATS.contains(&self.format) {
+            return Err(format!(
+                "depth format {:?} is not one vista draws into (D32_SFLOAT_S8_UINT or D32_SFLOAT)",
+                self.format
+            ));
+        }
+        match self.terrain_stencil_bit {
+            Some(b) if !has_stencil(self.format) => {
+                Err(format!("terrain stencil bit {b} asked for, but depth format {:?} has no stencil", self.format))
+            }
+            Some(b) if b > 7 => Err(format!("terrain stencil bit {b} is not a bit of an 8-bit stencil (0-7)")),
+            _ => Ok(()),
+        }
+    }
+
+    /// The layout the target is in on entry to and exit from a frame.
+    pub fn layout(&self) -> vk::ImageLayout {
+        depth_layout(self.format, false)
+    }
+
+    /// The stencil mask vista writes (0: none).
+    pub fn stencil_mask(&self) -> u32 {
+        self.terrain_stencil_bit.map_or(0, |b| 1 << b)
+    }
+}
 
 /// The patch's index list: the diamond pattern (every odd/odd vertex the
 /// centre of 8 triangles), triangles reordered for the post-transform
@@ -74,7 +127,12 @@ pub struct RenderTargets<'a> {
 }
 
 /// The terrain pipeline of pass `name` with vertex shader `vertex`.
-pub(crate) fn terrain_pipeline(ctx: &Context, name: &str, vertex: &'static ShaderInfo) -> Result<Pipeline> {
+pub(crate) fn terrain_pipeline(
+    ctx: &Context,
+    name: &str,
+    vertex: &'static ShaderInfo,
+    depth: DepthOptions,
+) -> Result<Pipeline> {
     let spec = [(vs::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (vs::SPEC_PATCH_QUADS, PATCH_QUADS)];
     let desc = GraphicsPipelineDesc {
         name,
@@ -82,14 +140,14 @@ pub(crate) fn terrain_pipeline(ctx: &Context, name: &str, vertex: &'static Shade
         fragment: &fs::SHADER,
         specialization: &spec,
         color_formats: &[CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT],
-        depth_format: Some(DEPTH_FORMAT),
+        depth_format: Some(depth.format),
         depth_compare: vk::CompareOp::GREATER,
         depth_write: true,
-        stencil: Some(StencilDesc {
+        stencil: depth.terrain_stencil_bit.map(|_| StencilDesc {
             compare: vk::CompareOp::ALWAYS,
-            reference: TERRAIN_STENCIL,
+            reference: depth.stencil_mask(),
             compare_mask: 0,
-            write_mask: TERRAIN_STENCIL,
+            write_mask: depth.stencil_mask(),
         }),
         cull_mode: vk::CullModeFlags::BACK,
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
@@ -104,13 +162,14 @@ pub struct TerrainGeometry {
     nearest: Sampler,
     linear: Sampler,
     index_count: u32,
+    depth: DepthOptions,
 }
 
 impl TerrainGeometry {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context) -> Result<Self> {
-        let pipeline = terrain_pipeline(ctx, Self::NAME, &vs::SHADER)?;
+    pub fn new(ctx: &Context, depth: DepthOptions) -> Result<Self> {
+        let pipeline = terrain_pipeline(ctx, Self::NAME, &vs::SHADER, depth)?;
         let idx = patch_indices();
         let indices = Buffer::new(
             ctx,
@@ -131,7 +190,13 @@ impl TerrainGeometry {
             nearest: sampler("terrain_geometry_nearest", vk::Filter::NEAREST)?,
             linear: sampler("terrain_geometry_linear", vk::Filter::LINEAR)?,
             index_count: idx.len() as u32,
+            depth,
         })
+    }
+
+    /// The depth target it draws into.
+    pub fn depth(&self) -> DepthOptions {
+        self.depth
     }
 
     /// Indices of one patch instance.
@@ -185,7 +250,7 @@ impl TerrainGeometry {
         tree: &GpuQuadtree,
         clear: bool,
     ) {
-        begin_geometry(rec, targets, gbuffer, clear);
+        begin_geometry(rec, targets, gbuffer, self.depth, clear);
         self.bind(rec, &self.pipeline, view, list, tree, &[]);
         rec.push_constants(&self.pipeline, &TerrainDrawPush::new(!clear));
         rec.draw_indexed_indirect(&self.indices, list, 0);
@@ -194,9 +259,15 @@ impl TerrainGeometry {
 }
 
 /// Opens the geometry pass's rendering scope: classification (cleared to
-/// 0 = no terrain), geometry normals, patch info, depth and stencil
-/// (cleared to far, 0).
-pub(crate) fn begin_geometry(rec: &mut Recorder, targets: &RenderTargets, gbuffer: &GBuffer, clear: bool) {
+/// 0 = no terrain), geometry normals, patch info, depth (cleared to far)
+/// and, where vista writes a bit of it, stencil (cleared to 0).
+pub(crate) fn begin_geometry(
+    rec: &mut Recorder,
+    targets: &RenderTargets,
+    gbuffer: &GBuffer,
+    depth: DepthOptions,
+    clear: bool,
+) {
     let (class, normals, info) = (&gbuffer.classification, &gbuffer.geometry_normals, &gbuffer.patch_info);
     if clear {
         for target in [class, normals, info] {
@@ -206,13 +277,19 @@ pub(crate) fn begin_geometry(rec: &mut Recorder, targets: &RenderTargets, gbuffe
         rec.transition(info, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
     }
     debug_assert_eq!(depth_layout(DEPTH_FORMAT, false), DEPTH_LAYOUT);
+    assert_eq!(targets.depth.format, depth.format, "the depth target is not in the renderer's depth format");
     rec.begin_rendering(
         &[
             ColorTarget { image: class, clear: clear.then_some([0.0; 4]) },
             ColorTarget { image: normals, clear: clear.then_some([0.0; 4]) },
             ColorTarget { image: info, clear: clear.then_some([0.0; 4]) },
         ],
-        Some(DepthTarget { image: targets.depth, clear: clear.then_some(0.0), read_only: false }),
+        Some(DepthTarget {
+            image: targets.depth,
+            clear: clear.then_some(0.0),
+            clear_stencil: depth.terrain_stencil_bit.is_some(),
+            read_only: false,
+        }),
     );
 }
 

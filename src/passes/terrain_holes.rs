@@ -9,7 +9,7 @@ use crate::error::Result;
 use crate::gpu::{Context, Pipeline, Recorder, Resource};
 use crate::passes::cull_patches::PatchLists;
 use crate::passes::terrain_geometry::{
-    begin_geometry, terrain_pipeline, RenderTargets, TerrainDrawPush, TerrainGeometry,
+    begin_geometry, terrain_pipeline, DepthOptions, RenderTargets, TerrainDrawPush, TerrainGeometry,
 };
 use crate::render::gbuffer::GBuffer;
 use crate::shaders::terrain_holes_vert as vs;
@@ -22,8 +22,8 @@ pub struct TerrainHoles {
 impl TerrainHoles {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context) -> Result<Self> {
-        Ok(TerrainHoles { pipeline: terrain_pipeline(ctx, Self::NAME, &vs::SHADER)? })
+    pub fn new(ctx: &Context, depth: DepthOptions) -> Result<Self> {
+        Ok(TerrainHoles { pipeline: terrain_pipeline(ctx, Self::NAME, &vs::SHADER, depth)? })
     }
 
     pub fn pipeline_label(&self) -> &str {
@@ -45,7 +45,7 @@ impl TerrainHoles {
         late: bool,
     ) {
         let list = lists.hole_list.as_ref().expect("terrain_holes is built only with the hole list");
-        begin_geometry(rec, targets, gbuffer, false);
+        begin_geometry(rec, targets, gbuffer, geometry.depth(), false);
         let albedo = (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT));
         geometry.bind(rec, &self.pipeline, view, list, tree, &[albedo]);
         rec.push_constants(&self.pipeline, &TerrainDrawPush::new(late));

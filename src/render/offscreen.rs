@@ -5,8 +5,8 @@
 
 use crate::error::Result;
 use crate::frame::FrameTimings;
-use crate::gpu::{vk, Context, FrameCommands, FrameRing, Image, ImageDesc, QueueMode};
-use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT};
+use crate::gpu::{depth_layout, vk, Context, FrameCommands, FrameRing, Image, ImageDesc, QueueMode};
+use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::renderer::TerrainRenderer;
 use crate::render::view::{linear_depth, View};
 use std::time::{Duration, Instant};
@@ -39,9 +39,10 @@ pub struct Settle {
     pub settled: bool,
 }
 
-/// A colour and a depth target a frame of `size` renders into, named
-/// `{prefix}_color` / `{prefix}_depth`, both readable by transfers.
-pub fn render_targets(ctx: &Context, prefix: &str, size: [u32; 2]) -> Result<(Image, Image)> {
+/// A colour and a depth target (in `depth_format`) a frame of `size`
+/// renders into, named `{prefix}_color` / `{prefix}_depth`, both readable
+/// by transfers.
+pub fn render_targets(ctx: &Context, prefix: &str, size: [u32; 2], depth_format: vk::Format) -> Result<(Image, Image)> {
     let image = |what: &str, format, usage| {
         let name = format!("{prefix}_{what}");
         Image::new(ctx, &ImageDesc { name: &name, format, extent: size, mip_levels: 1, array_layers: 1, usage })
@@ -50,7 +51,7 @@ pub fn render_targets(ctx: &Context, prefix: &str, size: [u32; 2]) -> Result<(Im
         image("color", COLOR_FORMAT, vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC)?;
     let depth = image(
         "depth",
-        DEPTH_FORMAT,
+        depth_format,
         // Sampled: occlusion culling reduces it into a depth pyramid.
         vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
             | vk::ImageUsageFlags::TRANSFER_SRC
@@ -73,6 +74,18 @@ impl Offscreen {
         Self::with_mode(ctx, size, frames_in_flight, clear, QueueMode::Single)
     }
 
+    /// As `new`, with a depth target in `depth_format` (a renderer built
+    /// with those `DepthOptions`).
+    pub fn with_depth_format(
+        ctx: &Context,
+        size: [u32; 2],
+        frames_in_flight: usize,
+        clear: [f32; 4],
+        depth_format: vk::Format,
+    ) -> Result<Self> {
+        Self::make(ctx, size, frames_in_flight, clear, QueueMode::Single, depth_format)
+    }
+
     /// Submitting in `mode` (split modes: a compute and a graphics command
     /// buffer per frame, joined by the ring's timeline semaphore).
     pub fn with_mode(
@@ -82,7 +95,18 @@ impl Offscreen {
         clear: [f32; 4],
         mode: QueueMode,
     ) -> Result<Self> {
-        let (color, depth) = render_targets(ctx, "offscreen", size)?;
+        Self::make(ctx, size, frames_in_flight, clear, mode, DEPTH_FORMAT)
+    }
+
+    fn make(
+        ctx: &Context,
+        size: [u32; 2],
+        frames_in_flight: usize,
+        clear: [f32; 4],
+        mode: QueueMode,
+        depth_format: vk::Format,
+    ) -> Result<Self> {
+        let (color, depth) = render_targets(ctx, "offscreen", size, depth_format)?;
         let ring = FrameRing::with_mode(ctx, frames_in_flight, mode)?;
         Ok(Offscreen { color, depth, ring, initialised: false, clear })
     }
@@ -102,7 +126,7 @@ impl Offscreen {
                     FrameCommands::Split { graphics, .. } => &mut **graphics,
                 };
                 graphics.discard_to(color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                graphics.discard_to(depth, DEPTH_LAYOUT);
+                graphics.discard_to(depth, depth_layout(depth.format, false));
             }
             renderer.record_frame(cmds, mode, view, &RenderTargets { color, depth, clear })
         })?;

@@ -28,7 +28,7 @@ use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
 use crate::passes::sun_shadows::{SunShadowJob, SunShadows};
-use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeometry, COLOR_FORMAT};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::traverse::Traverse;
 use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, WorldContent};
@@ -69,6 +69,8 @@ pub struct RendererOptions {
     pub force_content_gated: bool,
     /// What the per-patch LOD selection may do.
     pub lod: LodOptions,
+    /// The engine's depth target: format and terrain stencil bit.
+    pub depth: DepthOptions,
 }
 
 /// Per-patch LOD selection settings.
@@ -241,12 +243,14 @@ impl TerrainRenderer {
     ) -> Result<Self> {
         // Before any pass allocates: a world over its limits fails alone.
         crate::terrain::check_plan(ctx, world, &options.terrain)?;
+        options.depth.check().map_err(Error::BadInput)?;
+        let depth = options.depth;
         let decisions =
             decide(&options.effects, &world_content(world, &holes, source.has_holes()), options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         let atlases = atlases_for(&decisions);
         let terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
-        let geometry = TerrainGeometry::new(ctx)?;
+        let geometry = TerrainGeometry::new(ctx, depth)?;
         let shade = ShadeRules::from_effects(&options.effects, on(Effect::Splat), on(Effect::Cliffs));
         let materials = if on(Effect::Splat) || on(Effect::Cliffs) {
             Some(MaterialResources::new(ctx, &options.effects)?)
@@ -255,7 +259,7 @@ impl TerrainRenderer {
         };
         let variants = options.shading.pipelines(&shade);
         let every = options.shading == Shading::OneShaderEveryFlavour;
-        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, materials.is_some(), every)?;
+        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, materials.is_some(), every, depth.format)?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
         let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
         let build =
@@ -267,7 +271,7 @@ impl TerrainRenderer {
         } else {
             None
         };
-        let holes_pass = if build.holes { Some(TerrainHoles::new(ctx)?) } else { None };
+        let holes_pass = if build.holes { Some(TerrainHoles::new(ctx, depth)?) } else { None };
         let sector_data = SectorData::new(ctx, world)?;
         let view_buffer = Buffer::new(
             ctx,
@@ -302,7 +306,13 @@ impl TerrainRenderer {
             holes: holes_pass,
             classify: ClassifyTiles::new(ctx)?,
             gbuffer_tiles,
-            resolve: LightingResolve::new(ctx, on(Effect::Lighting), on(Effect::Shadows), on(Effect::Atmosphere))?,
+            resolve: LightingResolve::new(
+                ctx,
+                on(Effect::Lighting),
+                on(Effect::Shadows),
+                on(Effect::Atmosphere),
+                depth.format,
+            )?,
             sun_shadows: if on(Effect::Shadows) {
                 Some(SunShadows::new(ctx, options.effects.shadows, options.terrain.slots)?)
             } else {
@@ -339,6 +349,11 @@ impl TerrainRenderer {
         &self.decisions
     }
 
+    /// The depth target it was built for.
+    pub fn depth(&self) -> DepthOptions {
+        self.geometry.depth()
+    }
+
     /// Whether `effect` is built.
     pub fn effect_on(&self, effect: Effect) -> bool {
         self.decisions.iter().any(|d| d.effect == effect && d.on)
@@ -347,8 +362,9 @@ impl TerrainRenderer {
     /// Records one frame of `view` into `rec` (the caller submits it, at most
     /// `frames_in_flight` frames ahead of the GPU, and reports its completion
     /// with `Context::frame_completed`). `targets` must match the view's
-    /// size and the formats of [`COLOR_FORMAT`] / [`DEPTH_FORMAT`]; with
-    /// occlusion the depth target needs SAMPLED usage.
+    /// size, [`COLOR_FORMAT`] and the depth format of `RendererOptions::depth`
+    /// (by default [`crate::passes::terrain_geometry::DEPTH_FORMAT`]); the
+    /// depth target needs SAMPLED usage.
     pub fn record(&mut self, rec: &mut Recorder, view: &View, targets: &RenderTargets) -> Result<()> {
         self.record_frame(FrameCommands::One(rec), QueueMode::Single, view, targets)
     }
@@ -486,7 +502,8 @@ impl TerrainRenderer {
             return Err(Error::BadInput(format!("world origin {:?} is not finite", self.origin_m)));
         }
         let view = view.relative_to(self.origin_m);
-        for (what, image, format) in [("colour", targets.color, COLOR_FORMAT), ("depth", targets.depth, DEPTH_FORMAT)] {
+        let depth_format = self.geometry.depth().format;
+        for (what, image, format) in [("colour", targets.color, COLOR_FORMAT), ("depth", targets.depth, depth_format)] {
             if image.extent != view.size || image.format != format {
                 return Err(Error::BadInput(format!(
                     "{what} target {} is {:?} {}x{}, the view needs {format:?} {}x{}",

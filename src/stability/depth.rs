@@ -118,7 +118,7 @@ impl Probe {
             rec.discard_to(&self.depth, DEPTH_LAYOUT);
             rec.begin_rendering(
                 &[ColorTarget { image: &self.color, clear: Some([0.0; 4]) }],
-                Some(DepthTarget { image: &self.depth, clear: Some(0.0), read_only: false }),
+                Some(DepthTarget { image: &self.depth, clear: Some(0.0), clear_stencil: true, read_only: false }),
             );
             rec.bind_pipeline(&self.pipeline);
             rec.push_constants(&self.pipeline, push);

@@ -244,7 +244,7 @@ impl Rig {
             ..options
         };
         let renderer = TerrainRenderer::new(ctx, &world, source, holes, &options).expect("renderer");
-        let off = Offscreen::new(ctx, size, 2, MAGENTA).expect("targets");
+        let off = Offscreen::with_depth_format(ctx, size, 2, MAGENTA, options.depth.format).expect("targets");
         Rig { renderer, off, world }
     }
 

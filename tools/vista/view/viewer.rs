@@ -15,7 +15,7 @@ use vista::gpu::present::{Acquired, Presenter};
 use vista::gpu::{
     vk, Buffer, BufferDesc, ColorTarget, CommandPool, Context, FrameRing, Image, MemoryLocation, Recorder,
 };
-use vista::passes::terrain_geometry::{RenderTargets, DEPTH_LAYOUT};
+use vista::passes::terrain_geometry::{DepthOptions, RenderTargets};
 use vista::render::{TerrainRenderer, View};
 
 /// The overlay of one frame, tessellated.
@@ -42,8 +42,8 @@ struct Targets {
 }
 
 impl Targets {
-    fn new(ctx: &Context, size: [u32; 2]) -> Result<Targets> {
-        let (color, depth) = vista::render::offscreen::render_targets(ctx, "view", size)?;
+    fn new(ctx: &Context, size: [u32; 2], depth: DepthOptions) -> Result<Targets> {
+        let (color, depth) = vista::render::offscreen::render_targets(ctx, "view", size, depth.format)?;
         Ok(Targets { color, depth, fresh: true })
     }
 }
@@ -119,7 +119,7 @@ impl Viewer {
             return Ok(false);
         };
         if self.targets.as_ref().is_none_or(|t| t.color.extent != view.size) {
-            self.targets = Some(Targets::new(&self.ctx, view.size)?);
+            self.targets = Some(Targets::new(&self.ctx, view.size, self.renderer.depth())?);
         }
         let targets = self.targets.as_mut().expect("made above");
         let (renderer, egui, presenter) = (&mut self.renderer, &mut self.egui, &self.presenter);
@@ -127,7 +127,7 @@ impl Viewer {
         self.ring.record_synced(&self.ctx, acquired.sync, |rec| {
             if targets.fresh {
                 rec.discard_to(&targets.color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                rec.discard_to(&targets.depth, DEPTH_LAYOUT);
+                rec.discard_to(&targets.depth, renderer.depth().layout());
                 targets.fresh = false;
             }
             let rt = RenderTargets { color: &targets.color, depth: &targets.depth, clear: SKY_CLEAR };
