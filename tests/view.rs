@@ -1,5 +1,6 @@
 //! `vista view` in a real window under Xvfb (lavapipe presents to it),
-//! under the validation layer: a scripted flight, resized on the way,
+//! under the validation layer: a scripted flight, minimised (openbox
+//! manages the window) and resized on the way,
 //! exits cleanly with no message and no live object; its screenshot, read back from the
 //! swapchain image, is `vista render`'s picture of the same camera; the
 //! overlay is drawn over it when shown.
@@ -22,12 +23,21 @@ fn dir() -> PathBuf {
     d
 }
 
-/// Runs `vista --validation ARGS` on a private X server (xvfb-run -a);
-/// returns stdout, failing the test with stderr on a non-zero exit.
-fn on_xvfb(args: &[&str]) -> String {
+/// Runs `vista --validation ARGS` on a private X server (xvfb-run -a),
+/// with openbox managing its windows when `window_manager` (minimising
+/// needs one); returns stdout, failing the test with stderr on a non-zero
+/// exit.
+fn on_xvfb(window_manager: bool, args: &[&str]) -> String {
     let vista = vista_cmd();
     let mut c = std::process::Command::new("xvfb-run");
-    c.args(["-a", "-s", "-screen 0 640x480x24", vista.get_program().to_str().unwrap(), "--validation"]);
+    c.args(["-a", "-s", "-screen 0 640x480x24"]);
+    if window_manager {
+        // The window manager gets a second to take the display before
+        // vista's window maps (the context and world take longer).
+        let wm = "openbox --sm-disable || echo 'openbox missing: run tools/install-deps' >&2 & sleep 1; exec \"$@\"";
+        c.args(["sh", "-c", wm, "sh"]);
+    }
+    c.args([vista.get_program().to_str().unwrap(), "--validation"]);
     c.args(args).args(WORLD);
     c.envs(vista.get_envs().filter_map(|(k, v)| v.map(|v| (k, v))));
     let out = c.output().expect("xvfb-run (tools/install-deps installs xvfb)");
@@ -46,25 +56,35 @@ fn png(path: &Path) -> (Vec<u8>, [u32; 2]) {
 fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() {
     let d = dir();
     let path = d.join("flight.txt");
-    // Resized half-way (the swapchain, the targets and the G-buffer are
-    // remade mid-flight), back to its size for the screenshot.
-    let flight = "# south edge, over the middle turning east, back\n1024,100,420,0,-20\nsize 200x100\n\
-                  1024,900,380,60,-30\nsize 256x144\n1024,600,400,30,-25\n";
+    // Minimised after the first leg (no frame while the window manager
+    // has it minimised; restored, the swapchain comes back), resized
+    // half-way (the swapchain, the targets and the G-buffer are remade
+    // mid-flight), back to its size for the screenshot.
+    let flight = "# south edge, over the middle turning east, back\n1024,100,420,0,-20\n1024,500,400,30,-25\n\
+                  minimise\nsize 200x100\n1024,900,380,60,-30\nsize 256x144\n1024,600,400,30,-25\n";
     std::fs::write(&path, flight).unwrap();
     let flown = d.join("flown.png");
-    let out = on_xvfb(&[
-        "view",
-        "--size",
-        SIZE,
-        "--frames",
-        "60",
-        "--path",
-        path.to_str().unwrap(),
-        "--screenshot",
-        flown.to_str().unwrap(),
-    ]);
+    let out = on_xvfb(
+        true,
+        &[
+            "view",
+            "--size",
+            SIZE,
+            "--frames",
+            "60",
+            "--path",
+            path.to_str().unwrap(),
+            "--screenshot",
+            flown.to_str().unwrap(),
+        ],
+    );
     // Validation messages or live objects would have failed the run.
     assert!(out.contains("0 Vulkan objects alive at exit"), "{out}");
+    let restored = out.lines().find(|l| l.starts_with("restored: presenting"));
+    assert!(
+        restored.is_some_and(|l| l.contains("after 10 redraws skipped")),
+        "not minimised and back (openbox, from tools/install-deps, minimises it):\n{out}"
+    );
     for size in ["200x100", "256x144"] {
         assert!(out.contains(&format!("resized: swapchain {size}")), "no resize to {size}:\n{out}");
     }
@@ -73,18 +93,21 @@ fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() 
 
     // The same camera without the overlay, and `vista render`'s picture of it.
     let shot = d.join("shot.png");
-    on_xvfb(&[
-        "view",
-        "--size",
-        SIZE,
-        "--camera",
-        CAMERA,
-        "--frames",
-        "3",
-        "--no-overlay",
-        "--screenshot",
-        shot.to_str().unwrap(),
-    ]);
+    on_xvfb(
+        false,
+        &[
+            "view",
+            "--size",
+            SIZE,
+            "--camera",
+            CAMERA,
+            "--frames",
+            "3",
+            "--no-overlay",
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ],
+    );
     let rendered = d.join("render");
     let render = vista_cmd()
         .args(["--validation", "render", "--size", SIZE, "--camera", CAMERA, "--frames", "3", "--out"])

@@ -69,17 +69,20 @@ impl FlyCamera {
 
 /// A scripted flight: cameras in `--camera` form, one per line (`#`
 /// comments), flown through at even spacing over the run's frames; a line
-/// `size WxH` asks the window for that size when the flight reaches it.
+/// `size WxH` asks the window for that size when the flight reaches it, a
+/// line `minimise` minimises it there (`minimise.rs`).
 pub struct FlightPath {
     keys: Vec<Camera>,
     /// (cameras before it, size).
     sizes: Vec<(usize, [u32; 2])>,
+    /// Cameras before each `minimise` line.
+    minimises: Vec<usize>,
 }
 
 impl FlightPath {
     pub fn load(path: &Path) -> Result<FlightPath> {
         let text = std::fs::read_to_string(path).with_context(|| format!("--path {}", path.display()))?;
-        let (mut keys, mut sizes) = (Vec::new(), Vec::new());
+        let (mut keys, mut sizes, mut minimises) = (Vec::new(), Vec::new(), Vec::new());
         for (n, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("").trim();
             if line.is_empty() {
@@ -89,6 +92,10 @@ impl FlightPath {
                 let size = crate::render_cmd::parse_size(size.trim())
                     .map_err(|e| anyhow::anyhow!("--path {} line {}: {e}", path.display(), n + 1))?;
                 sizes.push((keys.len(), size));
+                continue;
+            }
+            if line == "minimise" {
+                minimises.push(keys.len());
                 continue;
             }
             let arg = crate::render_cmd::parse_camera(line)
@@ -101,15 +108,24 @@ impl FlightPath {
         if keys.is_empty() {
             bail!("--path {}: no camera in it (one X,Y,Z,YAW,PITCH per line)", path.display());
         }
-        Ok(FlightPath { keys, sizes })
+        Ok(FlightPath { keys, sizes, minimises })
+    }
+
+    /// The frame of `frames` at which the flight reaches the line that
+    /// followed `k` cameras.
+    fn reached(&self, k: usize, frames: u32) -> u32 {
+        let last = (self.keys.len() - 1).max(1) as f64;
+        (k.saturating_sub(1) as f64 / last * f64::from(frames.saturating_sub(1))).round() as u32
     }
 
     /// The window size the flight asks for at `frame` of `frames`, once.
     pub fn size_at(&self, frame: u32, frames: u32) -> Option<[u32; 2]> {
-        let last = (self.keys.len() - 1).max(1) as f64;
-        let reached =
-            |k: usize| (k.saturating_sub(1) as f64 / last * f64::from(frames.saturating_sub(1))).round() as u32;
-        self.sizes.iter().find(|(k, _)| reached(*k) == frame).map(|(_, s)| *s)
+        self.sizes.iter().find(|(k, _)| self.reached(*k, frames) == frame).map(|(_, s)| *s)
+    }
+
+    /// Whether the flight minimises the window at `frame` of `frames`.
+    pub fn minimise_at(&self, frame: u32, frames: u32) -> bool {
+        self.minimises.iter().any(|&k| self.reached(k, frames) == frame)
     }
 
     pub fn first(&self) -> Camera {
@@ -147,8 +163,11 @@ mod tests {
 
     #[test]
     fn a_path_starts_at_its_first_key_and_ends_at_its_last() {
-        let p =
-            FlightPath { keys: vec![cam(0.0, 350.0), cam(100.0, 10.0), cam(300.0, 10.0)], sizes: vec![(2, [64, 32])] };
+        let p = FlightPath {
+            keys: vec![cam(0.0, 350.0), cam(100.0, 10.0), cam(300.0, 10.0)],
+            sizes: vec![(2, [64, 32])],
+            minimises: vec![1],
+        };
         assert_eq!(p.at(0, 5), cam(0.0, 350.0));
         assert_eq!(p.at(4, 5), cam(300.0, 10.0));
         let mid = p.at(1, 5);
@@ -158,6 +177,8 @@ mod tests {
         // After the second camera: reached at frame 2 of 5.
         assert_eq!(p.size_at(2, 5), Some([64, 32]));
         assert_eq!(p.size_at(3, 5), None);
+        // After the first camera: the start.
+        assert!(p.minimise_at(0, 5) && !p.minimise_at(1, 5));
     }
 
     #[test]

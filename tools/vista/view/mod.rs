@@ -5,6 +5,7 @@
 //! last presented image read back from the swapchain image.
 
 mod fly;
+mod minimise;
 mod overlay;
 mod viewer;
 
@@ -13,6 +14,7 @@ use crate::world_args::{LoadedWorld, WorldArgs};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
 use fly::{FlightPath, FlyCamera};
+use minimise::{ScriptedMinimise, Step};
 use overlay::{Overlay, Settings};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -44,7 +46,8 @@ pub struct ViewArgs {
     pub frames: u32,
     /// A scripted flight over --frames: one X,Y,Z,YAW,PITCH per line (#
     /// comments), flown through at even spacing; a line `size WxH` resizes
-    /// the window when the flight gets there.
+    /// the window when the flight gets there, a line `minimise` minimises
+    /// it there (restored after 10 skipped redraws; needs a window manager).
     #[arg(long, value_name = "FILE")]
     pub path: Option<PathBuf>,
     /// Write the last presented frame (PNG), read back from the swapchain
@@ -137,6 +140,9 @@ pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: O
         cursor: None,
         looking: false,
         resized_at: None,
+        minimising: None,
+        minimised_at: None,
+        skipped_minimised: 0,
         result: None,
     };
     event_loop.run_app(&mut app).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
@@ -180,6 +186,11 @@ struct App {
     looking: bool,
     /// The scripted frame whose `size` line was applied.
     resized_at: Option<u32>,
+    /// A `minimise` line under way, and the frame of the last one done.
+    minimising: Option<ScriptedMinimise>,
+    minimised_at: Option<u32>,
+    /// Redraws skipped while minimised since the last frame presented.
+    skipped_minimised: u64,
     result: Option<Result<()>>,
 }
 
@@ -236,14 +247,35 @@ impl App {
                     self.resized_at = Some(scripted_frame);
                     let _ = open.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
                 }
+                let minimise = p.minimise_at(scripted_frame, frames) && self.minimised_at != Some(scripted_frame);
+                if minimise && self.minimising.is_none() {
+                    self.minimising = Some(ScriptedMinimise::new(scripted_frame, now));
+                    open.window.set_minimized(true);
+                }
             }
             None => self.fly.update(dt.min(0.25)),
         }
         self.view.camera = self.fly.camera;
         viewer::apply(&mut open.viewer.renderer, &self.settings, &mut self.view);
         self.view.size = open.viewer.presenter.extent();
-        if self.view.size == [0, 0] {
-            // Minimised: nothing to present to; wait for the window to return.
+        // Minimised (X11 keeps the size, other systems report none): no
+        // frame; the loader threads keep baking meanwhile.
+        let minimised = self.view.size == [0, 0] || open.window.is_minimized() == Some(true);
+        if let Some(m) = self.minimising.as_mut() {
+            let step = m.step(minimised, now);
+            if step != Step::Hold {
+                let frame = m.frame;
+                self.minimising = None;
+                self.minimised_at = Some(frame);
+                match step {
+                    Step::Restore => open.window.set_minimized(false),
+                    _ => println!("minimise at frame {frame}: the window manager did not minimise the window"),
+                }
+            }
+        }
+        if minimised {
+            self.skipped_minimised += 1;
+            std::thread::sleep(minimise::SKIPPED_REDRAW_PAUSE);
             return Ok(());
         }
         let overlay = if self.show_overlay { Some(self.run_overlay()?) } else { None };
@@ -260,6 +292,11 @@ impl App {
         }
         self.started.get_or_insert(now);
         self.presented_all += 1;
+        if self.skipped_minimised > 0 {
+            let (n, [w, h]) = (self.skipped_minimised, open.viewer.presenter.extent());
+            println!("restored: presenting {w}x{h} again after {n} redraws skipped while minimised");
+            self.skipped_minimised = 0;
+        }
         if !final_frame {
             self.presented += 1;
             return Ok(());
@@ -331,6 +368,9 @@ impl App {
                 messages[0].id_name,
                 messages[0].text
             );
+        }
+        if let Some(m) = &self.minimising {
+            println!("minimise at frame {}: the window manager did not minimise the window before the end", m.frame);
         }
         if let Some(t) = self.started {
             let s = t.elapsed().as_secs_f64();
