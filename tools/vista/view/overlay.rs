@@ -79,17 +79,27 @@ impl Overlay {
     }
 
     pub fn ui(&mut self, ctx: &egui::Context, shown: &Shown, settings: &mut Settings) {
+        // Taller than the window (many shading variants, a small window):
+        // it scrolls rather than hiding the switches below the edge.
+        let max_height = (ctx.content_rect().height() - 48.0).max(120.0);
         egui::Window::new("vista").default_pos([8.0, 8.0]).default_width(360.0).resizable(false).show(ctx, |ui| {
-            ui.label(format!("{}  {}x{}  {:.1} fps", shown.device, shown.size[0], shown.size[1], shown.fps));
-            ui.label(format!("camera {}  speed {:.0} m/s", shown.camera, shown.speed_mps));
-            ui.label("WASD/QE move, right drag looks, wheel speed, Shift fast, P prints camera, F1 hides, Esc quits");
-            egui::CollapsingHeader::new("GPU ms per pass").default_open(true).show(ui, |ui| self.timings(ui, shown));
-            egui::CollapsingHeader::new("culling and LOD").default_open(true).show(ui, |ui| counters(ui, shown));
-            egui::CollapsingHeader::new("streaming and memory").default_open(false).show(ui, |ui| streaming(ui, shown));
-            egui::CollapsingHeader::new("switches (next frame)")
-                .default_open(true)
-                .show(ui, |ui| switches(ui, shown, settings));
+            egui::ScrollArea::vertical()
+                .max_height(max_height)
+                .min_scrolled_height(max_height)
+                .show(ui, |ui| self.sections(ui, shown, settings));
         });
+    }
+
+    fn sections(&mut self, ui: &mut egui::Ui, shown: &Shown, settings: &mut Settings) {
+        ui.label(format!("{}  {}x{}  {:.1} fps", shown.device, shown.size[0], shown.size[1], shown.fps));
+        ui.label(format!("camera {}  speed {:.0} m/s", shown.camera, shown.speed_mps));
+        ui.label("WASD/QE move, right drag looks, wheel speed, Shift fast, P prints camera, F1 hides, Esc quits");
+        egui::CollapsingHeader::new("GPU ms per pass").default_open(true).show(ui, |ui| self.timings(ui, shown));
+        egui::CollapsingHeader::new("culling and LOD").default_open(true).show(ui, |ui| counters(ui, shown));
+        egui::CollapsingHeader::new("streaming and memory").default_open(false).show(ui, |ui| streaming(ui, shown));
+        egui::CollapsingHeader::new("switches (next frame)")
+            .default_open(true)
+            .show(ui, |ui| switches(ui, shown, settings));
     }
 
     fn timings(&self, ui: &mut egui::Ui, shown: &Shown) {
