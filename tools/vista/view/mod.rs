@@ -263,7 +263,9 @@ impl App {
         let minimised = self.view.size == [0, 0] || open.window.is_minimized() == Some(true);
         if let Some(m) = self.minimising.as_mut() {
             let step = m.step(minimised, now);
-            if step != Step::Hold {
+            if step == Step::Ask {
+                open.window.set_minimized(true);
+            } else if step != Step::Hold {
                 let frame = m.frame;
                 self.minimising = None;
                 self.minimised_at = Some(frame);
