@@ -1,6 +1,6 @@
 //! `vista view` in a real window under Xvfb (lavapipe presents to it),
 //! under the validation layer: a scripted flight, minimised (openbox
-//! manages the window) and resized on the way,
+//! manages the window), its surface lost (injected) and resized on the way,
 //! exits cleanly with no message and no live object; its screenshot, read back from the
 //! swapchain image, is `vista render`'s picture of the same camera; the
 //! overlay is drawn over it when shown.
@@ -59,9 +59,12 @@ fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() 
     // Minimised after the first leg (no frame while the window manager
     // has it minimised; restored, the swapchain comes back), resized
     // half-way (the swapchain, the targets and the G-buffer are remade
-    // mid-flight), back to its size for the screenshot.
+    // mid-flight), its surface lost (the next acquisition reports it, as a
+    // window system may: surface and swapchain are remade from the
+    // window's handles), back to its size for the screenshot.
     let flight = "# south edge, over the middle turning east, back\n1024,100,420,0,-20\n1024,500,400,30,-25\n\
-                  minimise\nsize 200x100\n1024,900,380,60,-30\nsize 256x144\n1024,600,400,30,-25\n";
+                  minimise\nsize 200x100\n1024,900,380,60,-30\nlose-surface\n1024,750,390,45,-28\n\
+                  size 256x144\n1024,600,400,30,-25\n";
     std::fs::write(&path, flight).unwrap();
     let flown = d.join("flown.png");
     let out = on_xvfb(
@@ -85,6 +88,8 @@ fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() 
         restored.is_some_and(|l| l.contains("after 10 redraws skipped")),
         "not minimised and back (openbox, from tools/install-deps, minimises it):\n{out}"
     );
+    let lost = out.lines().find(|l| l.starts_with("surface lost after frame"));
+    assert!(lost.is_some_and(|l| l.ends_with("remade, swapchain 200x100")), "the lost surface was not remade:\n{out}");
     for size in ["200x100", "256x144"] {
         assert!(out.contains(&format!("resized: swapchain {size}")), "no resize to {size}:\n{out}");
     }

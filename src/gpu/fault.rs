@@ -1,7 +1,9 @@
 //! Fault injection for `vista stability` case 8 and its test: make the Nth
 //! device-memory allocation fail with `OutOfDeviceMemory`, or the Nth queue
-//! submission or fence wait report `DeviceLost`, counting from when it was
-//! armed, so every error path can be walked on a device that never fails.
+//! submission or fence wait report `DeviceLost`, or the Nth swapchain
+//! acquisition report `SurfaceLost`, counting from when it was armed, so
+//! every error path can be walked on a device (and a window) that never
+//! fails.
 //! Disarmed (the default) each hook is one relaxed atomic load.
 
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
@@ -12,9 +14,11 @@ pub struct FaultInjector {
     allocations: AtomicU64,
     submits: AtomicU64,
     waits: AtomicU64,
+    acquires: AtomicU64,
     fail_allocation: AtomicU64,
     lose_at_submit: AtomicU64,
     lose_at_wait: AtomicU64,
+    lose_surface_at_acquire: AtomicU64,
 }
 
 impl Default for FaultInjector {
@@ -23,9 +27,11 @@ impl Default for FaultInjector {
             allocations: AtomicU64::new(0),
             submits: AtomicU64::new(0),
             waits: AtomicU64::new(0),
+            acquires: AtomicU64::new(0),
             fail_allocation: AtomicU64::new(OFF),
             lose_at_submit: AtomicU64::new(OFF),
             lose_at_wait: AtomicU64::new(OFF),
+            lose_surface_at_acquire: AtomicU64::new(OFF),
         }
     }
 }
@@ -51,8 +57,14 @@ impl FaultInjector {
         self.lose_at_wait.store(self.waits.load(Relaxed) + n, Relaxed);
     }
 
+    /// The swapchain acquisition `n` acquisitions from now reports a lost
+    /// surface (`Presenter::acquire`), as a window system may at any time.
+    pub fn lose_surface_at_acquire_in(&self, n: u64) {
+        self.lose_surface_at_acquire.store(self.acquires.load(Relaxed) + n, Relaxed);
+    }
+
     pub fn disarm(&self) {
-        for a in [&self.fail_allocation, &self.lose_at_submit, &self.lose_at_wait] {
+        for a in [&self.fail_allocation, &self.lose_at_submit, &self.lose_at_wait, &self.lose_surface_at_acquire] {
             a.store(OFF, Relaxed);
         }
     }
@@ -73,5 +85,10 @@ impl FaultInjector {
 
     pub(crate) fn wait_loses_device(&self) -> bool {
         Self::hit(&self.waits, &self.lose_at_wait)
+    }
+
+    #[cfg_attr(not(feature = "window"), allow(dead_code))]
+    pub(crate) fn acquire_loses_surface(&self) -> bool {
+        Self::hit(&self.acquires, &self.lose_surface_at_acquire)
     }
 }

@@ -53,6 +53,8 @@ pub struct Presenter {
     /// Acquiring or presenting said the surface was lost: `resize` makes a
     /// new one.
     lost: bool,
+    /// Surfaces made for the window: 1 plus those remade after a loss.
+    surfaces: u32,
     shared: Arc<Shared>,
 }
 
@@ -94,6 +96,7 @@ impl Presenter {
             display,
             window,
             lost: false,
+            surfaces: 1,
             shared: s.clone(),
         };
         // SAFETY: live surface and physical device of this instance.
@@ -123,6 +126,11 @@ impl Presenter {
     /// The swapchain's size; [0, 0] while the window is minimised.
     pub fn extent(&self) -> [u32; 2] {
         self.extent
+    }
+
+    /// Surfaces made for the window so far: 1, plus one for each loss.
+    pub fn surfaces_made(&self) -> u32 {
+        self.surfaces
     }
 
     pub fn image(&self, index: u32) -> &Image {
@@ -225,6 +233,7 @@ impl Presenter {
         self.surface = unsafe { ash_window::create_surface(&s.entry, &s.instance, self.display, self.window, None) }
             .map_err(vk_err("vkCreate*SurfaceKHR"))?;
         self.lost = false;
+        self.surfaces += 1;
         Ok(())
     }
 
@@ -262,6 +271,11 @@ impl Presenter {
     /// skip the frame.
     pub fn acquire(&mut self) -> Result<Option<Acquired>> {
         if self.extent == [0, 0] {
+            return Ok(None);
+        }
+        if self.shared.faults.acquire_loses_surface() {
+            // Injected (FaultInjector): as vkAcquireNextImageKHR reports it.
+            self.lost = true;
             return Ok(None);
         }
         let wait = self.acquired[self.next_acquire];

@@ -70,19 +70,23 @@ impl FlyCamera {
 /// A scripted flight: cameras in `--camera` form, one per line (`#`
 /// comments), flown through at even spacing over the run's frames; a line
 /// `size WxH` asks the window for that size when the flight reaches it, a
-/// line `minimise` minimises it there (`minimise.rs`).
+/// line `minimise` minimises it there (`minimise.rs`), a line `lose-surface`
+/// makes the next swapchain acquisition report a lost surface (injected, as
+/// a window system may report it), which the viewer remakes.
 pub struct FlightPath {
     keys: Vec<Camera>,
     /// (cameras before it, size).
     sizes: Vec<(usize, [u32; 2])>,
     /// Cameras before each `minimise` line.
     minimises: Vec<usize>,
+    /// Cameras before each `lose-surface` line.
+    surface_losses: Vec<usize>,
 }
 
 impl FlightPath {
     pub fn load(path: &Path) -> Result<FlightPath> {
         let text = std::fs::read_to_string(path).with_context(|| format!("--path {}", path.display()))?;
-        let (mut keys, mut sizes, mut minimises) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut keys, mut sizes, mut minimises, mut surface_losses) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (n, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("").trim();
             if line.is_empty() {
@@ -98,6 +102,10 @@ impl FlightPath {
                 minimises.push(keys.len());
                 continue;
             }
+            if line == "lose-surface" {
+                surface_losses.push(keys.len());
+                continue;
+            }
             let arg = crate::render_cmd::parse_camera(line)
                 .map_err(|e| anyhow::anyhow!("--path {} line {}: {e}", path.display(), n + 1))?;
             let [yaw_deg, pitch_deg] = arg.angles.ok_or_else(|| {
@@ -108,7 +116,7 @@ impl FlightPath {
         if keys.is_empty() {
             bail!("--path {}: no camera in it (one X,Y,Z,YAW,PITCH per line)", path.display());
         }
-        Ok(FlightPath { keys, sizes, minimises })
+        Ok(FlightPath { keys, sizes, minimises, surface_losses })
     }
 
     /// The frame of `frames` at which the flight reaches the line that
@@ -126,6 +134,11 @@ impl FlightPath {
     /// Whether the flight minimises the window at `frame` of `frames`.
     pub fn minimise_at(&self, frame: u32, frames: u32) -> bool {
         self.minimises.iter().any(|&k| self.reached(k, frames) == frame)
+    }
+
+    /// Whether the flight loses the window's surface at `frame` of `frames`.
+    pub fn surface_lost_at(&self, frame: u32, frames: u32) -> bool {
+        self.surface_losses.iter().any(|&k| self.reached(k, frames) == frame)
     }
 
     pub fn first(&self) -> Camera {
@@ -167,6 +180,7 @@ mod tests {
             keys: vec![cam(0.0, 350.0), cam(100.0, 10.0), cam(300.0, 10.0)],
             sizes: vec![(2, [64, 32])],
             minimises: vec![1],
+            surface_losses: vec![2],
         };
         assert_eq!(p.at(0, 5), cam(0.0, 350.0));
         assert_eq!(p.at(4, 5), cam(300.0, 10.0));
@@ -179,6 +193,7 @@ mod tests {
         assert_eq!(p.size_at(3, 5), None);
         // After the first camera: the start.
         assert!(p.minimise_at(0, 5) && !p.minimise_at(1, 5));
+        assert!(p.surface_lost_at(2, 5) && !p.surface_lost_at(0, 5));
     }
 
     #[test]

@@ -47,7 +47,9 @@ pub struct ViewArgs {
     /// A scripted flight over --frames: one X,Y,Z,YAW,PITCH per line (#
     /// comments), flown through at even spacing; a line `size WxH` resizes
     /// the window when the flight gets there, a line `minimise` minimises
-    /// it there (restored after 10 skipped redraws; needs a window manager).
+    /// it there (restored after 10 skipped redraws; needs a window manager),
+    /// a line `lose-surface` makes the next acquisition report a lost
+    /// surface (injected), which is remade.
     #[arg(long, value_name = "FILE")]
     pub path: Option<PathBuf>,
     /// Write the last presented frame (PNG), read back from the swapchain
@@ -143,6 +145,7 @@ pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: O
         minimising: None,
         minimised_at: None,
         skipped_minimised: 0,
+        surface_lost_at: None,
         result: None,
     };
     event_loop.run_app(&mut app).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
@@ -191,6 +194,8 @@ struct App {
     minimised_at: Option<u32>,
     /// Redraws skipped while minimised since the last frame presented.
     skipped_minimised: u64,
+    /// The scripted frame whose `lose-surface` line was applied.
+    surface_lost_at: Option<u32>,
     result: Option<Result<()>>,
 }
 
@@ -252,6 +257,10 @@ impl App {
                     self.minimising = Some(ScriptedMinimise::new(scripted_frame, now));
                     open.window.set_minimized(true);
                 }
+                if p.surface_lost_at(scripted_frame, frames) && self.surface_lost_at != Some(scripted_frame) {
+                    self.surface_lost_at = Some(scripted_frame);
+                    open.viewer.ctx.faults().lose_surface_at_acquire_in(0);
+                }
             }
             None => self.fly.update(dt.min(0.25)),
         }
@@ -289,7 +298,12 @@ impl App {
         let shot = if shoot { Some(open.viewer.readback()?) } else { None };
         if !open.viewer.frame(&self.view, overlay.as_ref(), shot.as_ref())? {
             let s = open.window.inner_size();
+            let surfaces = open.viewer.presenter.surfaces_made();
             open.viewer.resize([s.width, s.height])?;
+            if open.viewer.presenter.surfaces_made() > surfaces {
+                let [w, h] = open.viewer.presenter.extent();
+                println!("surface lost after frame {}: remade, swapchain {w}x{h}", self.presented);
+            }
             return Ok(());
         }
         self.started.get_or_insert(now);
