@@ -53,7 +53,7 @@ fn bakes_a_region_of_the_default_world() {
     // One node of each of the 6 LODs covers the 64 m corner; the world has
     // 160^2 + 80^2 + 40^2 + 20^2 + 10^2 + 5^2 = 34125 nodes.
     assert!(text.contains("nodes:    6 (lod0 1, lod1 1"), "{text}");
-    assert!(text.contains("6 baked, 0 cached"), "{text}");
+    assert!(text.contains("0 reused, 0 rebaked, 6 new"), "{text}");
     // The error tree of the one root over the corner comes first.
     assert!(text.contains("for the error tree (1 roots: 0 read, 1 computed)"), "{text}");
     assert!(text.contains("extrapolated") && text.contains("34125 nodes"), "{text}");
@@ -68,7 +68,7 @@ fn bakes_a_region_of_the_default_world() {
     // A second run finds every node in the cache.
     let (ok, text, err) = vista(&["bake", "--out", o, "--region", "0,0,64,64"]);
     assert!(ok, "{err}");
-    assert!(text.contains("0 baked, 6 cached") && text.contains("(1 roots: 1 read, 0 computed)"), "{text}");
+    assert!(text.contains("6 reused, 0 rebaked, 0 new") && text.contains("(1 roots: 1 read, 0 computed)"), "{text}");
 }
 
 #[test]
@@ -463,5 +463,52 @@ fn every_option_acts_or_is_refused() {
     assert_eq!(lines.len(), 2, "{err}");
     assert!(lines.contains(&"note: --spacing 4 replaces the scene's spacing 2"), "{err}");
     assert!(err.contains("hole 1 (circle at 5000,5000 radius 20) lies outside the world"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A scene's stamps: baked on top of the world, a stamp added to a baked
+/// scene rebakes only the nodes it touches (the bake says how many), and a
+/// bad stamp is one line naming it.
+#[test]
+fn a_stamp_added_to_a_baked_scene_rebakes_only_what_it_touches() {
+    let dir = temp_dir("stamps");
+    let stamps = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/stamps");
+    // The procedural world spans its whole height range: a stamp may only
+    // raise the ground to within it (max), not add on top of its peaks.
+    let world = "[world]\nsource = \"procedural\"\nextent = 2048\nheight_range = [0, 600]\nspacing = 2\nlods = 4\n";
+    let plain = dir.join("plain.toml");
+    std::fs::write(&plain, world).unwrap();
+    let stamp = format!(
+        "[[stamps]]\nsource = \"{stamps}/crater.png\"\ncenter = [500, 600]\nsize = 300\nheight = 80\noffset = 100\n\
+         blend = \"max\"\nfalloff = 30\n"
+    );
+    let stamped = dir.join("stamped.toml");
+    std::fs::write(&stamped, format!("{world}{stamp}")).unwrap();
+    let out = dir.join("nodes");
+    let o = out.to_str().unwrap();
+    let (ok, text, err) = vista(&["bake", "--scene", plain.to_str().unwrap(), "--out", o, "--no-progress"]);
+    assert!(ok, "{err}");
+    assert!(text.contains("0 reused, 0 rebaked, 85 new"), "{text}");
+    let (ok, text, err) = vista(&["bake", "--scene", stamped.to_str().unwrap(), "--out", o, "--no-progress"]);
+    assert!(ok, "{err}");
+    assert!(text.contains("with 1 stamp"), "{text}");
+    // The crater covers 350..650 x 450..750 m: it straddles x = 512 and
+    // y = 512, the edges of 2 x 2 LOD-0 nodes (256 m) and of 2 x 2 LOD-1
+    // nodes (512 m), inside one node each of LOD 2 and 3: 10 of 85.
+    assert!(text.contains("75 reused, 10 rebaked, 0 new"), "{text}");
+
+    let bad = format!("{world}{}", stamp.replace("\"max\"", "\"ad\""));
+    std::fs::write(&stamped, bad).unwrap();
+    assert_fails_naming(
+        &["bake", "--scene", stamped.to_str().unwrap(), "--out", o],
+        &["stamp 1", "crater.png", "blend \"ad\" is not one of replace, add, max, min"],
+    );
+    std::fs::write(&stamped, format!("{world}{}", stamp.replace("height = 80", "height = 3000"))).unwrap();
+    assert_fails_naming(
+        &["bake", "--scene", stamped.to_str().unwrap(), "--out", o],
+        &["stamp 1 (max at 500,600)", "outside the world's height range 0..600 m"],
+    );
+    std::fs::write(&stamped, format!("{world}{}", stamp.replace("crater.png", "missing.png"))).unwrap();
+    assert_fails_naming(&["bake", "--scene", stamped.to_str().unwrap(), "--out", o], &["stamp 1", "missing.png"]);
     let _ = std::fs::remove_dir_all(&dir);
 }

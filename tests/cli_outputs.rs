@@ -136,7 +136,7 @@ fn a_bake_on_a_full_disk_leaves_only_whole_node_files() {
     let done = c.env("VISTA_CACHE", &cache).args(args).args(WORLD).output().unwrap();
     let text = String::from_utf8_lossy(&done.stdout);
     assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
-    assert!(text.contains(&format!(" {files} cached")), "{files} whole files expected to be read back:\n{text}");
+    assert!(text.contains(&format!(" {files} reused")), "{files} whole files expected to be read back:\n{text}");
     let _ = std::fs::remove_dir_all(&root);
 }
 

@@ -131,7 +131,7 @@ fn two_shards_at_once_equal_one_process_and_a_killed_shard_resumes() {
     assert!(ok, "{err}");
     // What the killed run finished is kept, not baked again.
     let kept = partial - before;
-    assert!(out.contains(&format!("{kept} cached")), "{kept} nodes were on disk:\n{out}");
+    assert!(out.contains(&format!("{kept} reused")), "{kept} nodes were on disk:\n{out}");
     assert!(verify(&three).0);
     assert!(products(&three) == expected, "the resumed bake differs from one process's");
     let _ = std::fs::remove_dir_all(&root);

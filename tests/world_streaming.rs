@@ -420,7 +420,12 @@ fn cache_roundtrip_corruption_and_staleness() {
     let (n, o) = other.get_or_bake(id).unwrap();
     assert_eq!(o, CacheOutcome::Baked(MissReason::Stale));
     assert_ne!(n.heights, baked.heights);
-    let holes = vec![Hole::Circle { center_m: [10.0, 10.0], radius_m: 5.0 }];
+    // A hole away from the node (it covers 256..512 x 0..256 m) leaves its
+    // file current; one over it makes it stale.
+    let far = vec![Hole::Circle { center_m: [10.0, 10.0], radius_m: 5.0 }];
+    let unholed = NodeCache::new(&dir, world, Arc::new(Flat(43.0)), far).unwrap();
+    assert_eq!(unholed.get_or_bake(id).unwrap().1, CacheOutcome::Hit);
+    let holes = vec![Hole::Circle { center_m: [300.0, 100.0], radius_m: 5.0 }];
     let holed = NodeCache::new(&dir, world, Arc::new(Flat(43.0)), holes).unwrap();
     assert_eq!(holed.get_or_bake(id).unwrap().1, CacheOutcome::Baked(MissReason::Stale));
     assert_eq!(holed.get_or_bake(id).unwrap().1, CacheOutcome::Hit);

@@ -8,7 +8,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::bake::BakeSettings;
-use super::cache::{CacheOutcome, NodeCache};
+use super::cache::{CacheOutcome, MissReason, NodeCache};
 use super::error::Result;
 use super::errors::PreparedErrors;
 use super::holes::Hole;
@@ -59,6 +59,9 @@ pub struct BakeStats {
     pub nodes_per_lod: Vec<usize>,
     /// Nodes baked now; the rest came from the cache.
     pub baked: usize,
+    /// Of those, nodes whose file was there but stale (made from other
+    /// inputs over its area: an edit touched it) or damaged.
+    pub rebaked: usize,
     pub cached: usize,
     pub seconds: f64,
     /// Bytes of the node files of this region on disk.
@@ -143,7 +146,10 @@ fn bake_nodes(cache: &NodeCache, nodes: &[NodeId], tiles: Vec<NodeId>, progress:
         stats.bytes_on_disk += file.bytes;
         match outcome {
             CacheOutcome::Hit => stats.cached += 1,
-            CacheOutcome::Baked(_) => stats.baked += 1,
+            CacheOutcome::Baked(reason) => {
+                stats.baked += 1;
+                stats.rebaked += usize::from(reason != MissReason::Missing);
+            }
         }
         stats.files.push(file);
     }

@@ -1,9 +1,15 @@
 //! One file per baked node, validated by header and checksum on every read.
 //!
 //! Layout (little-endian): magic "VNOD", format version u32, world hash u64,
-//! source id hash u64, holes hash u64, bake settings hash u64, lod u8, x u32,
-//! y u32, payload length u32 (uncompressed), the payload
+//! source region hash u64, holes hash u64, bake settings hash u64, lod u8, x
+//! u32, y u32, payload length u32 (uncompressed), the payload
 //! ([`BakedNode::to_bytes`]) as one zstd frame, crc32 of all preceding bytes.
+//!
+//! The source and hole keys are a node's own ([`NodeCache::node_keys`]):
+//! they cover only what its bake reads (the source over the node and the
+//! samples around it, the holes touching that), so an edit (a stamp added
+//! or moved, a hole cut, a height map retouched) makes exactly the nodes it
+//! touches stale, and their ancestors, whose areas hold it too.
 //!
 //! zstd because it is the general-purpose compressor with the best speed
 //! for its ratio at low levels, and decompression (on the streaming path)
@@ -26,7 +32,7 @@ use super::texels::PayloadFormat;
 /// File magic: identifies a vista node file.
 const MAGIC: [u8; 4] = *b"VNOD";
 /// Bumped whenever the file layout or the bake's output changes.
-const FORMAT_VERSION: u32 = 6;
+const FORMAT_VERSION: u32 = 7;
 /// Bytes before the payload.
 const HEADER_BYTES: usize = 4 + 4 + 8 * 4 + 1 + 4 + 4 + 4;
 /// zstd level: 3 (zstd's default) measured within 1 % of level 9's size on
@@ -62,6 +68,19 @@ pub fn estimated_file_bytes(format: PayloadFormat) -> u64 {
     (uncompressed_file_bytes(format) as f64 / PLANNED_ZSTD_RATIO) as u64
 }
 
+/// Metres around a node that its bake reads besides its own area, in its
+/// own sample steps: the atlas border (2 samples) and the half-step grid's
+/// central differences beyond it.
+const BAKE_MARGIN_STEPS: f64 = 3.0;
+
+/// The area whose source and holes decide node `id`'s file: its bounds and
+/// the samples its bake reads around them ([min x, min y, max x, max y]).
+pub fn bake_region(world: &WorldDesc, id: NodeId) -> [f64; 4] {
+    let b = world.bounds_m(id);
+    let m = BAKE_MARGIN_STEPS * world.node_spacing_m(id.lod);
+    [b[0] - m, b[1] - m, b[2] + m, b[3] + m]
+}
+
 /// Why a node was (re)baked instead of read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CacheOutcome {
@@ -77,6 +96,10 @@ pub enum MissReason {
     Corrupt,
     /// Valid file for another world, source, hole set or node.
     Stale,
+}
+
+fn overlaps(a: [f64; 4], b: [f64; 4]) -> bool {
+    a[0] <= b[2] && a[2] >= b[0] && a[1] <= b[3] && a[3] >= b[1]
 }
 
 /// Node cache for one world + source + hole set under a directory.
@@ -141,10 +164,19 @@ impl NodeCache {
         &self.errors
     }
 
-    /// The world, source, hole set and bake settings hashes every node file
-    /// carries: what a file must match to be read.
+    /// The world, source, hole set and bake settings hashes of the whole
+    /// world: its identity in shard manifests.
     pub fn keys(&self) -> [u64; 4] {
         self.keys
+    }
+
+    /// The keys node `id`'s file carries and must match to be read: the
+    /// world and the bake settings, the source's [`HeightSource::region_hash`]
+    /// over its [`bake_region`] and the holes touching that.
+    pub fn node_keys(&self, id: NodeId) -> [u64; 4] {
+        let r = bake_region(&self.world, id);
+        let near: Vec<Hole> = self.holes.iter().filter(|h| overlaps(h.bounds(), r)).cloned().collect();
+        [self.keys[0], self.source.region_hash(r), holes_hash(&near), self.keys[3]]
     }
 
     /// A node file's size and its trailing crc32 (of every byte before it),
@@ -188,7 +220,7 @@ impl NodeCache {
         }
         let keys = [u64_at(8), u64_at(16), u64_at(24), u64_at(32)];
         let file_id = NodeId::new(body[40], u32_at(41), u32_at(45));
-        if keys != self.keys || file_id != id {
+        if keys != self.node_keys(id) || file_id != id {
             return Err(MissReason::Stale);
         }
         let len = u32_at(49) as usize;
@@ -213,7 +245,7 @@ impl NodeCache {
         let mut out = Vec::with_capacity(HEADER_BYTES + packed.len() + CRC_BYTES);
         out.extend_from_slice(&MAGIC);
         out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        for k in self.keys {
+        for k in self.node_keys(node.id) {
             out.extend_from_slice(&k.to_le_bytes());
         }
         out.push(node.id.lod);

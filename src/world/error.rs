@@ -9,6 +9,9 @@ use super::layout::NodeId;
 pub enum WorldError {
     #[error("invalid world description: {0}")]
     InvalidDesc(String),
+    /// A stamp's placement, or what it does to the world's heights.
+    #[error("{0}")]
+    InvalidStamp(String),
     #[error("file not found: {}", path.display())]
     FileNotFound { path: PathBuf },
     /// The I/O error is part of the message, not a `source`: a chain

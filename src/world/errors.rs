@@ -17,8 +17,10 @@
 //!
 //! A root's numbers need every LOD-0 sample under it, so they are computed
 //! a root at a time (in parallel blocks), kept in memory and, with a cache
-//! folder, written to `DIR/errors/lod{k}/{x}_{y}.verr` (zstd, crc32,
-//! versioned and keyed like the node files). A node gets its numbers when
+//! folder, written to `DIR/errors/{world}{base}/lod{k}/{x}_{y}.verr` (zstd,
+//! crc32, versioned and keyed like the node files: a tile's key is the
+//! source's region hash over the root, so stamping a world recomputes only
+//! the roots the stamps touch; `base` is the source before its stamps). A node gets its numbers when
 //! it is baked or loaded ([`ErrorTree::attach`]): the first node of a root
 //! waits for that root's computation.
 
@@ -40,7 +42,7 @@ use super::source::HeightSource;
 
 const MAGIC: [u8; 4] = *b"VERR";
 /// Bumped whenever the tile layout or the error definition changes.
-const TILE_VERSION: u32 = 2;
+const TILE_VERSION: u32 = 3;
 
 /// One root's patches of every level (index = LOD).
 type Tile = Arc<Vec<LevelPatches>>;
@@ -76,6 +78,7 @@ pub struct ErrorTree {
     world: WorldDesc,
     source: Arc<dyn HeightSource>,
     dir: Option<PathBuf>,
+    /// The world's hash and the source's id: what [`Self::is_for`] checks.
     keys: [u64; 2],
     /// Tiles by node: the roots', and any made below them.
     roots: Mutex<HashMap<NodeId, Arc<OnceLock<Tile>>>>,
@@ -108,9 +111,11 @@ impl ErrorTree {
     pub fn new(world: &WorldDesc, source: Arc<dyn HeightSource>, cache_dir: Option<&Path>) -> Result<Self> {
         world.validate()?;
         let keys = [world.hash(), source.id_hash()];
-        // A folder per world and source: a cache shared by several worlds
-        // keeps each one's tiles.
-        let dir = cache_dir.map(|d| d.join("errors").join(format!("{:016x}{:016x}", keys[0], keys[1])));
+        // A folder per world and base source: a cache shared by several
+        // worlds keeps each one's tiles, and stamped versions of one world
+        // share the tiles their stamps leave alone.
+        let folder = format!("{:016x}{:016x}", keys[0], source.base_id_hash());
+        let dir = cache_dir.map(|d| d.join("errors").join(folder));
         Ok(ErrorTree {
             world: *world,
             source,
@@ -266,6 +271,12 @@ impl ErrorTree {
         }))
     }
 
+    /// The world and what the source is over the root's area (and the
+    /// samples around it that its finest surface reads).
+    fn tile_keys(&self, root: NodeId) -> [u64; 2] {
+        [self.keys[0], self.source.region_hash(super::cache::bake_region(&self.world, root))]
+    }
+
     fn path(&self, root: NodeId) -> Option<PathBuf> {
         let dir = self.dir.as_ref()?;
         Some(dir.join(format!("lod{}", root.lod)).join(format!("{}_{}.verr", root.x, root.y)))
@@ -279,7 +290,8 @@ impl ErrorTree {
         }
         let u64_at = |o: usize| body.get(o..o + 8).map(|b| u64::from_le_bytes(b.try_into().unwrap()));
         let version = body.get(4..8).map(|b| u32::from_le_bytes(b.try_into().unwrap()))?;
-        if version != TILE_VERSION || [u64_at(8)?, u64_at(16)?] != self.keys || u64_at(24)? != node_key(root) {
+        if version != TILE_VERSION || [u64_at(8)?, u64_at(16)?] != self.tile_keys(root) || u64_at(24)? != node_key(root)
+        {
             return None;
         }
         let raw = zstd::stream::decode_all(&body[32..]).ok()?;
@@ -294,7 +306,7 @@ impl ErrorTree {
         let mut out = Vec::with_capacity(packed.len() + 36);
         out.extend_from_slice(&MAGIC);
         out.extend_from_slice(&TILE_VERSION.to_le_bytes());
-        for k in self.keys.into_iter().chain([node_key(root)]) {
+        for k in self.tile_keys(root).into_iter().chain([node_key(root)]) {
             out.extend_from_slice(&k.to_le_bytes());
         }
         out.extend_from_slice(&packed);

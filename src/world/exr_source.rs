@@ -74,6 +74,14 @@ impl HeightSource for ExrSource {
     fn id_hash(&self) -> u64 {
         self.grid.id_hash()
     }
+
+    fn region_hash(&self, bounds_m: [f64; 4]) -> u64 {
+        self.grid.region_hash(bounds_m)
+    }
+
+    fn range_in(&self, bounds_m: [f64; 4]) -> Option<[f32; 2]> {
+        self.grid.range_in(bounds_m)
+    }
 }
 
 fn wrong_format(label: &Path, found: String) -> WorldError {

@@ -299,6 +299,14 @@ impl HeightSource for GeoTiffSource {
         self.grid.id_hash()
     }
 
+    fn region_hash(&self, bounds_m: [f64; 4]) -> u64 {
+        self.grid.region_hash(bounds_m)
+    }
+
+    fn range_in(&self, bounds_m: [f64; 4]) -> Option<[f32; 2]> {
+        self.grid.range_in(bounds_m)
+    }
+
     fn is_hole(&self, x_m: f64, y_m: f64) -> bool {
         self.grid.is_hole(x_m, y_m)
     }

@@ -29,13 +29,14 @@ mod projection;
 mod resample_bound;
 mod shard;
 mod source;
+mod stamps;
 mod streaming;
 mod texels;
 
 pub use bake::{bake_node, bake_node_with, BakeSettings};
 pub use bake_run::{bake_shard, bake_world, nodes_in_region, BakeStats, NodeFile};
 pub use cache::{
-    default_cache_dir, estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache,
+    bake_region, default_cache_dir, estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache,
 };
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use error::{Result, WorldError};
@@ -68,6 +69,7 @@ pub use projection::TraverseCamera;
 pub use resample_bound::RangeFit;
 pub use shard::{ShardError, ShardPlan, ShardSplit, MAX_SHARDS, UNITS_PER_SHARD};
 pub use source::{GridSource, HeightSource};
+pub use stamps::{load_stamp_map, Stamp, StampBlend, StampPlacement, StampedSource};
 pub use streaming::{
     Arrival, FailureCounts, LoadFate, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer,
     MAX_LOAD_ATTEMPTS,

@@ -106,6 +106,10 @@ impl Png16Source {
     pub fn grid(&self) -> &GridSource {
         &self.grid
     }
+
+    pub fn into_grid(self) -> GridSource {
+        self.grid
+    }
 }
 
 impl HeightSource for Png16Source {
@@ -115,6 +119,14 @@ impl HeightSource for Png16Source {
 
     fn id_hash(&self) -> u64 {
         self.grid.id_hash()
+    }
+
+    fn region_hash(&self, bounds_m: [f64; 4]) -> u64 {
+        self.grid.region_hash(bounds_m)
+    }
+
+    fn range_in(&self, bounds_m: [f64; 4]) -> Option<[f32; 2]> {
+        self.grid.range_in(bounds_m)
     }
 }
 

@@ -132,6 +132,11 @@ impl HeightSource for ProceduralSource {
     /// Neighbouring points share most lattice cells, so the row keeps each
     /// noise's last cell and its gradients: the same values, without the
     /// hashing (half a sample's cost).
+    /// Heights are a 0..1 field (clamped) over the source's range.
+    fn range_in(&self, _bounds_m: [f64; 4]) -> Option<[f32; 2]> {
+        Some(self.height_range_m)
+    }
+
     fn sample_row(&self, xs: &[f64], y_m: f64, out: &mut [f32]) {
         let mut c = Lattices::default();
         for (x, o) in xs.iter().zip(out) {

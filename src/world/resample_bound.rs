@@ -58,24 +58,36 @@ impl GridSource {
     ///
     /// [`HeightSource::sample`]: super::HeightSource::sample
     pub fn resampled_range(&self) -> [f32; 2] {
+        self.resampled_range_of([0, 0, self.width() - 1, self.height() - 1])
+    }
+
+    /// As [`Self::resampled_range`], over the cells between pixel columns
+    /// `i0..=i1` and rows `j0..=j1` only (`[i0, j0, i1, j1]`, inclusive).
+    pub fn resampled_range_of(&self, pixels: [usize; 4]) -> [f32; 2] {
+        let [i0, j0, i1, j1] = pixels;
+        assert!(i0 <= i1 && i1 < self.width() && j0 <= j1 && j1 < self.height(), "pixels {pixels:?} outside the grid");
         let (w, h) = (self.width(), self.height());
         // A single row or column never leaves its pixel centres on that axis.
         let (tu, tv) = (if w > 1 { 1.0 } else { 0.0 }, if h > 1 { 1.0 } else { 0.0 });
         let at = |i: isize, j: isize| {
             f64::from(self.pixel(i.clamp(0, w as isize - 1) as usize, j.clamp(0, h as isize - 1) as usize))
         };
-        // Cells per axis; a single pixel still has one (degenerate) cell.
-        let (cells_u, cells_v) = (w.saturating_sub(1).max(1), h.saturating_sub(1).max(1));
-        let (lo, hi) = (0..cells_v)
+        // Cells per axis (cell i lies between pixels i and i + 1); a single
+        // pixel still has one (degenerate) cell.
+        let cells =
+            |a: usize, b: usize, n: usize| a.min(n.saturating_sub(2))..b.max(a + 1).min(n.saturating_sub(1).max(1));
+        let (cells_u, cells_v) = (cells(i0, i1, w), cells(j0, j1, h));
+        let (lo, hi) = cells_v
             .into_par_iter()
             .map(|jv| {
                 // Range of every column's cubic over this row of cells.
                 let jv = jv as isize;
-                let cols: Vec<(f64, f64)> = (-1..cells_u as isize + 2)
+                let first = cells_u.start as isize - 1;
+                let cols: Vec<(f64, f64)> = (first..cells_u.end as isize + 2)
                     .map(|i| cubic_range([at(i, jv - 1), at(i, jv), at(i, jv + 1), at(i, jv + 2)], tv))
                     .collect();
                 let mut out = (f64::INFINITY, f64::NEG_INFINITY);
-                for iu in 0..cells_u {
+                for iu in 0..cells_u.len() {
                     let c = &cols[iu..iu + 4];
                     let upper = cubic_range([c[0].0, c[1].1, c[2].1, c[3].0], tu).1;
                     let lower = cubic_range([c[0].1, c[1].0, c[2].0, c[3].1], tu).0;

@@ -25,6 +25,29 @@ pub trait HeightSource: Send + Sync {
         false
     }
 
+    /// A hash of everything that decides [`Self::sample`] and
+    /// [`Self::is_hole`] inside `bounds_m` ([min x, min y, max x, max y],
+    /// metres): two sources that agree there hash alike, so a node's cache
+    /// key changes only with what touches it (an edit elsewhere rebakes
+    /// nothing here). The default, the whole source's [`Self::id_hash`], is
+    /// right for sources with no locality (a procedural function).
+    fn region_hash(&self, _bounds_m: [f64; 4]) -> u64 {
+        self.id_hash()
+    }
+
+    /// The id of the source before its edits (a [`super::StampedSource`]'s
+    /// base): caches keep one folder per base, so edits share it.
+    fn base_id_hash(&self) -> u64 {
+        self.id_hash()
+    }
+
+    /// Bounds (lo, hi metres) of every height [`Self::sample`] returns
+    /// inside `bounds_m`, where the source can say without sampling; `None`:
+    /// only that they lie in the world's height range.
+    fn range_in(&self, _bounds_m: [f64; 4]) -> Option<[f32; 2]> {
+        None
+    }
+
     /// `out[i] = sample(xs[i], y_m)`, bit for bit; a source may share work
     /// between the neighbouring points of a row.
     fn sample_row(&self, xs: &[f64], y_m: f64, out: &mut [f32]) {
@@ -142,6 +165,20 @@ impl GridSource {
         [self.extent_m[0] / self.width as f64, self.extent_m[1] / self.height as f64]
     }
 
+    /// Pixel columns and rows (inclusive, clamped) whose values
+    /// [`HeightSource::sample`] or [`HeightSource::is_hole`] read anywhere in
+    /// `bounds_m`: the Catmull-Rom taps one pixel before and two after.
+    pub fn pixels_under(&self, bounds_m: [f64; 4]) -> [usize; 4] {
+        let [dx, dy] = self.pixel_size_m();
+        let ey = self.extent_m[1];
+        let clamp_i = |v: f64, n: usize| (v.max(0.0) as usize).min(n - 1);
+        let i0 = clamp_i((bounds_m[0] / dx - 0.5).floor() - 1.0, self.width);
+        let i1 = clamp_i((bounds_m[2] / dx).floor() + 2.0, self.width);
+        let j0 = clamp_i(((ey - bounds_m[3]) / dy - 0.5).floor() - 1.0, self.height);
+        let j1 = clamp_i(((ey - bounds_m[1]) / dy).floor() + 2.0, self.height);
+        [i0, j0, i1, j1]
+    }
+
     fn at(&self, i: isize, j: isize) -> f32 {
         let i = i.clamp(0, self.width as isize - 1) as usize;
         let j = j.clamp(0, self.height as isize - 1) as usize;
@@ -191,5 +228,34 @@ impl HeightSource for GridSource {
 
     fn has_holes(&self) -> bool {
         self.no_data.is_some()
+    }
+
+    /// The pixels (and no-data bits) under the region, with the grid's
+    /// geometry and encoding.
+    fn region_hash(&self, bounds_m: [f64; 4]) -> u64 {
+        let [i0, j0, i1, j1] = self.pixels_under(bounds_m);
+        let mut h = grid_hash(self.width, self.height, self.extent_m);
+        if let Samples::U16 { lo, scale, .. } = &self.heights {
+            h = h.f64(f64::from(*lo)).f64(f64::from(*scale));
+        }
+        h = [i0, j0, i1, j1].iter().fold(h, |h, v| h.u64(*v as u64));
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let k = j * self.width + i;
+                h = match &self.heights {
+                    Samples::F32(v) => h.bytes(&v[k].to_le_bytes()),
+                    Samples::U16 { values, .. } => h.bytes(&values[k].to_le_bytes()),
+                };
+                if let Some(mask) = &self.no_data {
+                    h = h.u64(mask[k / 64] >> (k % 64) & 1);
+                }
+            }
+        }
+        h.finish()
+    }
+
+    fn range_in(&self, bounds_m: [f64; 4]) -> Option<[f32; 2]> {
+        let [i0, j0, i1, j1] = self.pixels_under(bounds_m);
+        Some(self.resampled_range_of([i0, j0, i1, j1]))
     }
 }

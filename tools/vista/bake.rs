@@ -136,6 +136,9 @@ struct BakeReport {
     nodes_per_lod: Vec<usize>,
     nodes: usize,
     baked: usize,
+    /// Of `baked`, nodes whose file was stale (an edit touched its area) or
+    /// damaged; the rest were new.
+    rebaked: usize,
     cached: usize,
     seconds: f64,
     bytes_on_disk: u64,
@@ -302,6 +305,7 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         nodes_per_lod: stats.nodes_per_lod.clone(),
         nodes,
         baked: stats.baked,
+        rebaked: stats.rebaked,
         cached: stats.cached,
         seconds: stats.seconds,
         bytes_on_disk: stats.bytes_on_disk,
@@ -423,7 +427,8 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
     }?;
     let per_lod: Vec<String> = r.nodes_per_lod.iter().enumerate().map(|(l, n)| format!("lod{l} {n}")).collect();
     writeln!(out, "nodes:    {} ({})", r.nodes, per_lod.join(", "))?;
-    writeln!(out, "          {} baked, {} cached", r.baked, r.cached)?;
+    let new = r.baked - r.rebaked;
+    writeln!(out, "          {} reused, {} rebaked, {} new", r.cached, r.rebaked, new)?;
     let e = &r.error_tree;
     writeln!(
         out,

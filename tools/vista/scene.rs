@@ -22,6 +22,16 @@
 //! holes = true
 //! lighting = { sun_elevation_deg = 25 }
 //!
+//! [[stamps]]                   # height maps pasted in order on top of the source
+//! source = "crater.png"        # PNG16 (0..65535) or EXR (its own min..max), as 0..1
+//! center = [1024, 1024]        # metres (in the origin's coordinates, like holes)
+//! size = 300                   # metres, the stamp's side
+//! rotation_deg = 0             # counter-clockwise
+//! height = 80                  # metres spanned by the map's 0..1
+//! offset = 0                   # metres added to the stamp's heights
+//! blend = "add"                # replace | add | max | min
+//! falloff = 20                 # metres inside the edge over which it fades in
+//!
 //! [material_rules]             # where the bake puts each material (defaults: the Alps)
 //! rock_slope_deg = 40          # steeper is bare rock
 //! scree_slope_deg = 30         # steeper (and not rock) is scree
@@ -35,12 +45,13 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 use serde::Deserialize;
 use vista::render::Effects;
-use vista::world::{Hole, MaterialRules};
+use vista::world::{Hole, MaterialRules, StampBlend, StampPlacement};
 
 #[derive(Debug, Default)]
 pub struct Scene {
     pub world: SceneWorld,
     holes: Vec<SceneHole>,
+    stamps: Vec<SceneStamp>,
     pub effects: Effects,
     pub material_rules: MaterialRules,
     /// For error messages.
@@ -55,6 +66,8 @@ struct RawScene {
     world: SceneWorld,
     #[serde(default)]
     holes: Vec<SceneHole>,
+    #[serde(default)]
+    stamps: Vec<SceneStamp>,
     #[serde(default)]
     effects: toml::Table,
     #[serde(default)]
@@ -111,6 +124,30 @@ impl Extent {
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct SceneStamp {
+    source: PathBuf,
+    center: [f64; 2],
+    size: f64,
+    #[serde(default)]
+    rotation_deg: f64,
+    height: f64,
+    #[serde(default)]
+    offset: f64,
+    blend: String,
+    #[serde(default)]
+    falloff: f64,
+}
+
+/// A stamp of the scene: its map file (resolved) and where it goes, in the
+/// user's coordinates.
+#[derive(Debug, Clone)]
+pub struct SceneStampSpec {
+    pub source: PathBuf,
+    pub placement: StampPlacement,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct SceneHole {
     circle: Option<[f64; 3]>,
     polygon: Option<Vec<[f64; 2]>>,
@@ -150,7 +187,45 @@ impl Scene {
         let effects =
             Effects::from_toml(&raw.effects, dir).map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
         raw.material_rules.validate().map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
-        Ok(Scene { world, holes: raw.holes, effects, material_rules: raw.material_rules, path: path.to_path_buf() })
+        let mut stamps = raw.stamps;
+        for st in &mut stamps {
+            if st.source.is_relative() {
+                st.source = vista::world::resolve_relative(dir, &st.source);
+            }
+        }
+        Ok(Scene {
+            world,
+            holes: raw.holes,
+            stamps,
+            effects,
+            material_rules: raw.material_rules,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// The stamps, in order, each checked (blend word, finite numbers, a
+    /// positive size, a falloff within half of it).
+    pub fn stamps(&self) -> Result<Vec<SceneStampSpec>> {
+        let mut out = Vec::with_capacity(self.stamps.len());
+        for (i, st) in self.stamps.iter().enumerate() {
+            let at = format!("scene file {}: stamp {} ({})", self.path.display(), i + 1, st.source.display());
+            let Some(blend) = StampBlend::from_name(&st.blend) else {
+                let words: Vec<&str> = StampBlend::ALL.iter().map(|b| b.name()).collect();
+                bail!("{at}: blend \"{}\" is not one of {}", st.blend, words.join(", "));
+            };
+            let placement = StampPlacement {
+                center_m: st.center,
+                size_m: st.size,
+                rotation_deg: st.rotation_deg,
+                height_m: st.height,
+                offset_m: st.offset,
+                blend,
+                falloff_m: st.falloff,
+            };
+            placement.validate().map_err(|e| anyhow::anyhow!("{at}: {e}"))?;
+            out.push(SceneStampSpec { source: st.source.clone(), placement });
+        }
+        Ok(out)
     }
 
     /// The holes, each checked: exactly one shape, finite numbers, a

@@ -176,6 +176,8 @@ pub struct WorldSpec {
     pub desc: WorldDesc,
     source: SpecSource,
     holes: Vec<Hole>,
+    /// The scene's stamps, placed relative to the world's corner.
+    stamps: Vec<crate::scene::SceneStampSpec>,
     effects: Effects,
     origin_m: [f64; 2],
     pub limits: Limits,
@@ -262,6 +264,11 @@ impl WorldArgs {
         let mut holes = scene.holes()?;
         holes.extend(self.hole_circle.iter().cloned());
         let holes: Vec<Hole> = holes.iter().map(|h| h.relative_to(origin_m)).collect();
+        let mut stamps = scene.stamps()?;
+        for st in &mut stamps {
+            let c = &mut st.placement.center_m;
+            *c = [c[0] - origin_m[0], c[1] - origin_m[1]];
+        }
 
         let (desc, source) = match heightmap {
             None => {
@@ -301,7 +308,7 @@ impl WorldArgs {
         let max_sectors_per_side = self.max_sectors.unwrap_or(DEFAULT_MAX_SECTORS_PER_SIDE);
         let limits = Limits { max_sectors_per_side, ..Limits::default() };
         let bake = BakeSettings { format: self.payload, materials: scene.material_rules };
-        Ok(WorldSpec { desc, source, holes, effects: scene.effects, origin_m, limits, bake })
+        Ok(WorldSpec { desc, source, holes, stamps, effects: scene.effects, origin_m, limits, bake })
     }
 }
 
@@ -425,20 +432,41 @@ impl WorldSpec {
         LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake }
     }
 
+    /// The source with the scene's stamps on it (each map read now), checked
+    /// to stay inside the world's height range.
+    fn stamped(&self, base: Arc<dyn HeightSource>, desc: &WorldDesc) -> Result<Arc<dyn HeightSource>> {
+        if self.stamps.is_empty() {
+            return Ok(base);
+        }
+        let mut stamps = Vec::with_capacity(self.stamps.len());
+        for (i, st) in self.stamps.iter().enumerate() {
+            let at = |e: vista::world::WorldError| anyhow::anyhow!("stamp {} ({}): {e}", i + 1, st.source.display());
+            let map = vista::world::load_stamp_map(&st.source, st.placement.size_m).map_err(at)?;
+            stamps.push(vista::world::Stamp::new(st.placement, map).map_err(at)?);
+        }
+        let stamped = vista::world::StampedSource::new(base, stamps);
+        stamped.check_range(desc.height_range_m)?;
+        Ok(Arc::new(stamped))
+    }
+
     /// Reads the height map (or makes the procedural source).
     pub fn open(self) -> Result<LoadedWorld> {
-        let (desc, source, label): (WorldDesc, Arc<dyn HeightSource>, String) = match self.source {
+        let (desc, source, mut label): (WorldDesc, Arc<dyn HeightSource>, String) = match &self.source {
             SpecSource::Procedural { seed } => {
                 let d = self.desc;
-                let source = ProceduralSource::new(seed, d.extent_m, d.height_range_m).map_err(input_error)?;
+                let source = ProceduralSource::new(*seed, d.extent_m, d.height_range_m).map_err(input_error)?;
                 (d, Arc::new(source), format!("procedural (seed {seed})"))
             }
             SpecSource::Heightmap { path, kind, height_range, clamp } => {
                 let (desc, source) =
-                    open_heightmap(&path, kind, self.desc, height_range, clamp).map_err(input_error)?;
+                    open_heightmap(path, *kind, self.desc, *height_range, *clamp).map_err(input_error)?;
                 (desc, source, path.display().to_string())
             }
         };
+        let source = self.stamped(source, &desc).map_err(input_error)?;
+        if !self.stamps.is_empty() {
+            label += &format!(" with {} stamp{}", self.stamps.len(), if self.stamps.len() == 1 { "" } else { "s" });
+        }
         let (holes, effects, origin_m, limits, bake) =
             (self.holes, self.effects, self.origin_m, self.limits, self.bake);
         Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake })
