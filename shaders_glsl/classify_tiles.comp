@@ -2,8 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 // One invocation per 8x8 screen tile: OR the classification bits of its
 // pixels (2x2 gathers), skip tiles with no terrain, and append the tile to
-// the list of its combined variant, whose indirect instance count is the
-// append counter. The classification target is cleared to 0 by the
+// the list of its combined variant (the flavour bits), whose indirect
+// instance count is the append counter; a control-map tile also counts how
+// many tri-planar planes its pixels sample at most (the plane bits). The classification target is cleared to 0 by the
 // geometry pass's load op and every terrain pixel has at least one bit, so
 // a zero OR is exactly "no terrain in the tile" without reading the depth
 // in a second view.
@@ -20,10 +21,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = 0) uniform utexture2D classification;
 layout(set = 0, binding = 2) uniform sampler nearest;
-layout(set = 0, binding = 1, std430) buffer TileLists {
-    TileDrawArgs args[FLAVOUR_VARIANTS];
-    uint tiles[];
-} lists;
+layout(set = 0, binding = 1, std430) buffer TileLists { TILE_LISTS_MEMBERS } lists;
 
 layout(push_constant, std430) uniform ClassifyPush { TilePush p; } pc;
 
@@ -43,8 +41,12 @@ void main() {
         }
     }
     if (bits != 0u) {
-        uint variant = pc.p.force_variant != 0u ? pc.p.force_variant : bits;
+        uint variant = pc.p.force_variant != 0u ? pc.p.force_variant : bits & FLAVOUR_MASK;
         uint i = atomicAdd(lists.args[variant].instance_count, 1u);
         lists.tiles[variant * pc.p.capacity + i] = tile.x | (tile.y << 16u);
+        if ((bits & FLAVOUR_CONTROL_MAP) != 0u) {
+            uint planes = (bits & CLASS_PLANES_3) != 0u ? 3u : ((bits & CLASS_PLANES_2) != 0u ? 2u : 1u);
+            atomicAdd(lists.plane_tiles[planes - 1u], 1u);
+        }
     }
 }

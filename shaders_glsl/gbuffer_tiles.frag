@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// variants: MATERIALS
+// variants: MATERIALS CONTROL_MAP
 // Shades the tiles of one variant into the G-buffer. The variant's flavour
 // bits are a specialization constant, so each pipeline contains only the
 // flavours its tiles need; per pixel, the flavours are weighted by the
@@ -11,7 +11,9 @@
 // finest resident node (terrain_sample.glsl); a silhouette pixel takes its
 // geometric normal from the surface in front of the edge (silhouette.glsl).
 // Without MATERIALS (no splat or cliffs effect) only the far atlas flavour
-// exists and no material resource is bound or built.
+// exists and no material resource is bound or built. CONTROL_MAP: the
+// control-map flavour (seed 004, control_surface.glsl) instead of splat,
+// with its own atlas and texture table over the same detail textures.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
 #include "atlas_texels.glsl"
@@ -37,13 +39,24 @@ layout(set = 0, binding = 7) uniform texture2DArray normal_atlas;
 #ifdef MATERIALS
 layout(set = 0, binding = 8) uniform utexture2DArray splat_atlas;
 layout(set = 0, binding = 9, std430) readonly buffer Materials { TerrainMaterial m[]; } materials;
+#define VISTA_SPLAT_ATLAS splat_atlas
+#else
+#define VISTA_NO_MATERIAL_QUERY
+#endif
+#if defined(MATERIALS) || defined(CONTROL_MAP)
+#define DETAIL_TEXTURES 1
 layout(set = 0, binding = 10) uniform texture2DArray detail_albedo;
 layout(set = 0, binding = 11) uniform texture2DArray detail_normal;
 layout(set = 0, binding = 12) uniform texture2DArray detail_height;
 layout(set = 0, binding = 15) uniform sampler detail_sampler;
-#define VISTA_SPLAT_ATLAS splat_atlas
-#else
-#define VISTA_NO_MATERIAL_QUERY
+#endif
+#ifdef CONTROL_MAP
+layout(set = 0, binding = 17) uniform utexture2DArray control_atlas;
+layout(set = 0, binding = 18, std430) readonly buffer ControlTable {
+    float uv_scales[8];   // by UV scale code (0: 1, the textures' own)
+    float thresholds[8];  // by slope threshold code (0: unused, the background's own)
+    ControlTexture t[CONTROL_TEXTURES];
+} control;
 #endif
 layout(set = 0, binding = 13) uniform sampler nearest;
 layout(set = 0, binding = 14) uniform sampler linear_clamp;
@@ -88,6 +101,40 @@ struct Texel {
     float height;
 };
 
+#ifdef DETAIL_TEXTURES
+// Plane coordinates of tri-planar projection `p` (0: x axis, 1: y, 2: z).
+vec2 project(vec3 v, int p) {
+    return p == 0 ? v.yz : (p == 1 ? v.xz : v.xy);
+}
+
+// The detail normal of projection `p` applied to the geometric normal.
+vec3 perturb(vec3 ng, vec2 tangent, int p) {
+    if (p == 0) {
+        return vec3(ng.x, ng.y + tangent.x, ng.z + tangent.y);
+    } else if (p == 1) {
+        return vec3(ng.x + tangent.x, ng.y, ng.z + tangent.y);
+    }
+    return vec3(ng.xy + tangent, ng.z);
+}
+
+// The detail textures of layers `layers` (albedo | normal << 8 | height <<
+// 16) at texture coordinates `uv` with derivatives `gx`, `gy`; `rot` turns
+// the texture's axes into the plane's.
+Texel sample_layers(uint layers, vec2 uv, vec2 gx, vec2 gy, mat2 rot) {
+    vec3 a = vec3(uv, float(layers & 0xFFu));
+    vec3 n = vec3(uv, float((layers >> 8u) & 0xFFu));
+    vec3 h = vec3(uv, float((layers >> 16u) & 0xFFu));
+    Texel t;
+    t.albedo = textureGrad(sampler2DArray(detail_albedo, detail_sampler), a, gx, gy).rgb;
+    vec4 nr = textureGrad(sampler2DArray(detail_normal, detail_sampler), n, gx, gy);
+    // Back from texture axes to the plane's axes.
+    t.tangent = transpose(rot) * (nr.xy * 2.0 - 1.0);
+    t.roughness = nr.a;
+    t.height = textureGrad(sampler2DArray(detail_height, detail_sampler), h, gx, gy).r;
+    return t;
+}
+#endif
+
 #ifdef MATERIALS
 // The four splat texels around `xy` and their bilinear weights.
 void splat_texels(vec2 xy, out uint ids[4], out vec4 weights) {
@@ -114,19 +161,7 @@ Texel sample_material(uint id, vec2 plane, vec2 dx, vec2 dy, float scale) {
     float k = scale / materials.m[id].tiling_m;
     vec2 cs = vec2(materials.m[id].cos_rot, materials.m[id].sin_rot);
     mat2 rot = mat2(cs.x, cs.y, -cs.y, cs.x);
-    vec2 uv = rot * plane * k;
-    vec2 gx = rot * dx * k, gy = rot * dy * k;
-    vec3 a = vec3(uv, float(layers & 0xFFu));
-    vec3 n = vec3(uv, float((layers >> 8u) & 0xFFu));
-    vec3 h = vec3(uv, float((layers >> 16u) & 0xFFu));
-    Texel t;
-    t.albedo = textureGrad(sampler2DArray(detail_albedo, detail_sampler), a, gx, gy).rgb;
-    vec4 nr = textureGrad(sampler2DArray(detail_normal, detail_sampler), n, gx, gy);
-    // Back from texture axes to the plane's axes.
-    t.tangent = transpose(rot) * (nr.xy * 2.0 - 1.0);
-    t.roughness = nr.a;
-    t.height = textureGrad(sampler2DArray(detail_height, detail_sampler), h, gx, gy).r;
-    return t;
+    return sample_layers(layers, rot * plane * k, rot * dx * k, rot * dy * k, rot);
 }
 
 #endif
@@ -177,21 +212,6 @@ Surface splat_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, out uint dominant
     tangent /= sum;
     s.normal = normalize(vec3(ng.xy + tangent, ng.z));
     return s;
-}
-
-// Plane coordinates of tri-planar projection `p` (0: x axis, 1: y, 2: z).
-vec2 project(vec3 v, int p) {
-    return p == 0 ? v.yz : (p == 1 ? v.xz : v.xy);
-}
-
-// The detail normal of projection `p` applied to the geometric normal.
-vec3 perturb(vec3 ng, vec2 tangent, int p) {
-    if (p == 0) {
-        return vec3(ng.x, ng.y + tangent.x, ng.z + tangent.y);
-    } else if (p == 1) {
-        return vec3(ng.x + tangent.x, ng.y, ng.z + tangent.y);
-    }
-    return vec3(ng.xy + tangent, ng.z);
 }
 
 // Index picked by uniform `u` in proportion to `w` (which sums to 1).
@@ -256,6 +276,10 @@ Surface cliff_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, bool far_cliff, f
 
 #endif
 
+#ifdef CONTROL_MAP
+#include "control_surface.glsl"
+#endif
+
 void main() {
     uint variant = VARIANT_BITS;
     // A variable, not a constant expression: naga reads no SpecConstantOp.
@@ -279,7 +303,7 @@ void main() {
     // Only the pixel's own flavours (its tile's variant contains them).
     shares *= vec4(0.0, (bits & FLAVOUR_FAR_ATLAS) != 0u ? 1.0 : 0.0, (bits & FLAVOUR_NEAR_CLIFF) != 0u ? 1.0 : 0.0,
                    (bits & FLAVOUR_FAR_CLIFF) != 0u ? 1.0 : 0.0);
-    splat_share *= (bits & FLAVOUR_SPLAT) != 0u ? 1.0 : 0.0;
+    splat_share *= (bits & (FLAVOUR_SPLAT | FLAVOUR_CONTROL_MAP)) != 0u ? 1.0 : 0.0;
     float total = shares.y + shares.z + shares.w + splat_share;
     if (total <= 0.0) {
         // Rounding left the pixel with none of its flavours' shares: the
@@ -289,6 +313,8 @@ void main() {
     }
     shares /= total;
     splat_share /= total;
+    // The baked normal as classified (the tri-planar planes follow it).
+    vec3 nv = ng;
     // After the shares, which follow the geometry pass's classification.
     ng = silhouette_normal(px, depth, ng, normalize(-p));
 
@@ -324,6 +350,16 @@ void main() {
         s.albedo += shares.w * f.albedo;
         s.normal += shares.w * f.normal;
         s.roughness += shares.w * f.roughness;
+    }
+#endif
+#ifdef CONTROL_MAP
+    if ((variant & FLAVOUR_CONTROL_MAP) != 0u && (every || splat_share > 0.0)) {
+        uint m;
+        Surface f = control_surface(world, nv, ng, ddx, ddy, m);
+        material = splat_share > 0.0 ? m : material;
+        s.albedo += splat_share * f.albedo;
+        s.normal += splat_share * f.normal;
+        s.roughness += splat_share * f.roughness;
     }
 #endif
     vec3 n = normalize(s.normal);

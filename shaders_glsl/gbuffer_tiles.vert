@@ -7,10 +7,7 @@
 // The variant: flavour bits (constants.glsl), a specialization constant.
 layout(constant_id = 0) const uint VARIANT_BITS = 0u;
 
-layout(set = 0, binding = 1, std430) readonly buffer TileLists {
-    TileDrawArgs args[FLAVOUR_VARIANTS];
-    uint tiles[];
-} lists;
+layout(set = 0, binding = 1, std430) readonly buffer TileLists { TILE_LISTS_MEMBERS } lists;
 
 #define VISTA_TERRAIN_DECLARE_ONLY
 #include "terrain_sample.glsl"

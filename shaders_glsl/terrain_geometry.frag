@@ -38,8 +38,13 @@ void main() {
     float depth_m = 1.0 / gl_FragCoord.w;
     float splat;
     vec4 shares = flavour_shares(depth_m, geometric.z, view.v.shade_bands, view.v.shade_slope, view.v.shade_flags.x, splat);
-    classification = flavour_bits(shares, splat);
-    normals = uvec4(oct_encode8(geometric), oct_encode8(triangle));
+    uint allowed = view.v.shade_flags.x;
+    uvec2 code = oct_encode8(geometric);
+    classification = flavour_bits(shares, splat, allowed);
+    if ((classification & FLAVOUR_CONTROL_MAP) != 0u) {
+        classification |= plane_bits(tri_planar_planes(oct_decode8(code), view.v.control.x));
+    }
+    normals = uvec4(code, oct_encode8(triangle));
     // Within a pixel of the patch grid's edge (the debug views' outlines).
     vec2 edge = min(patch_uv, 1.0 - patch_uv) / max(fwidth(patch_uv), vec2(1e-6));
     patch_info = patch_code | (uint(min(edge.x, edge.y) < 1.0) << PATCH_INFO_EDGE_SHIFT);

@@ -177,9 +177,22 @@ fn rust_twins_match_reflected_layouts() {
         fields!(TerrainViewGpu: view_proj, frustum, sun_dir, sun_color, sky_color, camera_sample, camera_frac,
             camera_z, spacing_m, height_lo, height_scale, height_range, lod_map_w, lod_map_h, pad, inv_view_proj,
             viewport, camera_world, shade_bands, shade_slope, shade_flags, lod_forward, lod_params, lod_right, lod_up,
-            image),
+            image, control),
         layouts::TERRAIN_VIEW,
         structs::TERRAIN_VIEW,
+    );
+    check_layout(
+        "ControlGpu",
+        fields!(vista::render::materials::ControlGpu: layers, tiling_m, threshold, sharpness, slope_damp, normal_damp,
+            pad),
+        layouts::CONTROL_TEXTURE,
+        structs::CONTROL_TEXTURE,
+    );
+    check_layout(
+        "MaterialGpu",
+        fields!(vista::render::materials::MaterialGpu: layers, tiling_m, cos_rot, sin_rot),
+        layouts::TERRAIN_MATERIAL,
+        structs::TERRAIN_MATERIAL,
     );
     // Push-constant blocks are exactly what the pipelines were built with.
     assert_eq!(size_of::<TraversePush>() as u32, shaders::traverse::PUSH_CONSTANT_SIZE);
@@ -316,7 +329,16 @@ fn variants_leave_out_what_their_switches_add() {
         assert!(!names(tiles::variant(0)).contains(&material), "far atlas only: no {material}");
         assert!(names(tiles::variant(tiles::VARIANT_MATERIALS)).contains(&material));
     }
-    assert!(std::ptr::eq(tiles::variant(tiles::VARIANT_MATERIALS), &tiles::SHADER), "SHADER is the full variant");
+    // The control-map flavour: its atlas and table and the detail textures,
+    // none of the splat map's.
+    let control = names(tiles::variant(tiles::VARIANT_CONTROL_MAP));
+    for name in ["control_atlas", "control", "detail_albedo", "detail_normal", "detail_height"] {
+        assert!(control.contains(&name) && !names(tiles::variant(tiles::VARIANT_MATERIALS)).contains(&"control_atlas"));
+        assert!(!names(tiles::variant(0)).contains(&name), "far atlas only: no {name}");
+    }
+    assert!(!control.contains(&"splat_atlas") && !control.contains(&"materials"));
+    let full = tiles::VARIANT_MATERIALS | tiles::VARIANT_CONTROL_MAP;
+    assert!(std::ptr::eq(tiles::variant(full), &tiles::SHADER), "SHADER is the full variant");
     let bare = names(cull::variant(0));
     for gone in ["patch_cones", "patch_holes", "hole_list"] {
         assert!(!bare.contains(&gone), "{gone} in the bare cull variant");

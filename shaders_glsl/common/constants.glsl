@@ -99,7 +99,24 @@
 #define FLAVOUR_NEAR_CLIFF 4u
 #define FLAVOUR_FAR_CLIFF 8u
 #define FLAVOUR_SPLAT 16u
-#define FLAVOUR_VARIANTS 32u
+#define FLAVOUR_CONTROL_MAP 32u
+#define FLAVOUR_VARIANTS 64u
+// The flavour bits of a classification (the rest say more about the pixel).
+#define FLAVOUR_MASK 63u
+// A control-map pixel's tri-planar background samples 2 or more planes
+// (bit 6), 3 planes (bit 7): a tile's OR gives its largest plane count.
+#define CLASS_PLANES_2 64u
+#define CLASS_PLANES_3 128u
+// Control-map words (seed 004; world/control_map.rs): bits 0-4 overlay
+// texture, 5-9 background texture, 10-12 UV scale code, 13-15 slope
+// threshold code (0: the background texture's own; 1-7: a table value).
+#define CONTROL_OVERLAY_SHIFT 0u
+#define CONTROL_BACKGROUND_SHIFT 5u
+#define CONTROL_UV_SCALE_SHIFT 10u
+#define CONTROL_THRESHOLD_SHIFT 13u
+#define CONTROL_TEXTURE_MASK 31u
+#define CONTROL_CODE_MASK 7u
+#define CONTROL_TEXTURES 32u
 // Screen tiles of classify_tiles (pixels per side).
 #define TILE_SIZE 8u
 // The geometry pass's patch info (R8_UINT, for the debug views): bits 0-3

@@ -11,4 +11,17 @@ struct TerrainMaterial {
     float sin_rot;
 };
 
+// One of the 32 control-map textures (render/materials.rs ControlGpu):
+// its layers and tiling, and seed 004's per-texture parameters.
+struct ControlTexture {
+    uint layers;        // albedo | normal << 8 | height << 16
+    float tiling_m;     // metres per texture repeat
+    float threshold;    // as background: its own slope threshold (control code 0)
+    float sharpness;    // as overlay: the slope span of its blend into the background
+    float slope_damp;   // as background: how much flat ground flattens its normal for the slope test
+    float normal_damp;  // as background: how much of the overlay's normal the combination keeps
+    float pad0;
+    float pad1;
+};
+
 #endif

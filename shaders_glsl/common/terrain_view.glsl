@@ -39,6 +39,8 @@ struct TerrainView {
     vec4 lod_up;            // xyz: the camera's up axis (world); w: tan of the frustum's half height
     // The display image (render/tonemap.rs).
     vec4 image;             // x: exposure scale (2^EV); y: tonemapper (Tonemap::gpu_id: 0 clip, 1 ACES fitted); zw: unused
+    // The control-map flavour (render/shading.rs).
+    vec4 control;           // x: tri-planar tighten factor (a plane counts where abs(n) exceeds it); yzw: unused
 };
 
 // LOD-0 sample index -> camera-relative metres (x, y). Takes fields, not

@@ -34,6 +34,9 @@ const _: () = assert!(std::mem::size_of::<vk::DrawIndirectCommand>() == structs:
 
 /// Bytes of the draw arguments at the head of the lists.
 pub const ARGS_BYTES: u64 = FLAVOUR_VARIANTS as u64 * structs::TILE_DRAW_ARGS as u64;
+/// The head of the lists: the draw arguments, then the 4 plane counters
+/// (control-map tiles whose background samples 1, 2, 3 planes; one unused).
+pub const HEAD_BYTES: u64 = ARGS_BYTES + 16;
 
 impl TilePush {
     pub fn for_size(size: [u32; 2]) -> TilePush {
@@ -60,7 +63,7 @@ impl TileLists {
         let bytes = ctx.read_buffer(&self.buffer)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
         let cap = self.push.capacity as usize;
-        let head = ARGS_BYTES as usize / 4;
+        let head = HEAD_BYTES as usize / 4;
         Ok((0..FLAVOUR_VARIANTS as usize)
             .map(|v| {
                 let n = (words[v * 4 + 1] as usize).min(cap);
@@ -99,7 +102,7 @@ impl ClassifyTiles {
         if self.lists.as_ref().is_some_and(|l| l.push.width == size[0] && l.push.height == size[1]) {
             return Ok(());
         }
-        let bytes = ARGS_BYTES + u64::from(FLAVOUR_VARIANTS) * u64::from(push.capacity) * 4;
+        let bytes = HEAD_BYTES + u64::from(FLAVOUR_VARIANTS) * u64::from(push.capacity) * 4;
         let buffer = Buffer::new(
             ctx,
             &BufferDesc {
@@ -122,7 +125,8 @@ impl ClassifyTiles {
     pub fn record(&self, rec: &mut Recorder, gbuffer: &GBuffer, force_variant: u32) {
         let lists = self.lists.as_ref().expect("classify_tiles::prepare runs before record");
         assert_eq!(gbuffer.size(), [lists.push.width, lists.push.height], "prepare was called for another size");
-        let args: Vec<[u32; 4]> = (0..FLAVOUR_VARIANTS).map(|_| [6, 0, 0, 0]).collect();
+        // Each variant's arguments, then the zeroed plane counters.
+        let args: Vec<[u32; 4]> = (0..FLAVOUR_VARIANTS).map(|_| [6, 0, 0, 0]).chain([[0; 4]]).collect();
         rec.update_buffer(&lists.buffer, 0, bytemuck::cast_slice(&args));
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         rec.transition(&gbuffer.classification, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);

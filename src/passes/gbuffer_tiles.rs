@@ -22,7 +22,9 @@ use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FOR
 use crate::render::shading::variant_name;
 use crate::shaders::consts::FLAVOUR_VARIANTS;
 use crate::shaders::{gbuffer_tiles_frag as fs, gbuffer_tiles_vert as vs, structs};
-use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT};
+use crate::terrain::gpu_quadtree::{
+    GpuQuadtree, ATLAS_ALBEDO, ATLAS_CONTROL, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT,
+};
 use std::sync::OnceLock;
 
 /// Host twin of `TileDrawPush` (gbuffer_tiles.vert/.frag).
@@ -45,19 +47,31 @@ pub fn variant_label(bits: u32) -> &'static str {
     &labels[bits as usize]
 }
 
-/// The splat material resources (effects `splat` or `cliffs`).
+/// The material resources (effects `splat` or `cliffs`).
 pub struct MaterialBindings<'a> {
     /// 256 `TerrainMaterial`s.
     pub table: &'a Buffer,
+    /// The control-map flavour's `ControlTable` (control-map mode only).
+    pub control: Option<&'a Buffer>,
     pub albedo: &'a Image,
     pub normal: &'a Image,
     pub height: &'a Image,
 }
 
+/// Which fragment shader a renderer's tile shading uses: the splat and
+/// cliff flavours (MATERIALS) or the control-map flavour (CONTROL_MAP), or
+/// neither (far atlas only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TileMaterials {
+    None,
+    Splat,
+    ControlMap,
+}
+
 pub struct GbufferTiles {
     /// (flavour bits, pipeline), in increasing bits.
     pipelines: Vec<(u32, Pipeline)>,
-    materials: bool,
+    materials: TileMaterials,
     nearest: Sampler,
     linear: Sampler,
     detail: Sampler,
@@ -67,17 +81,21 @@ impl GbufferTiles {
     pub const NAME: &'static str = vs::PASS;
 
     /// Pipelines for `variants`; `materials`: the shader with the splat and
-    /// cliff paths (bound to material resources at record time);
-    /// `every_flavour`: evaluate each variant's every flavour at every pixel.
-    /// `depth_format`: the renderer's depth target's.
+    /// cliff paths, or the control-map one (bound to material resources at
+    /// record time); `every_flavour`: evaluate each variant's every flavour
+    /// at every pixel. `depth_format`: the renderer's depth target's.
     pub fn new(
         ctx: &Context,
         variants: &[u32],
-        materials: bool,
+        materials: TileMaterials,
         every_flavour: bool,
         depth_format: vk::Format,
     ) -> Result<Self> {
-        let fragment = fs::variant(if materials { fs::VARIANT_MATERIALS } else { 0 });
+        let fragment = fs::variant(match materials {
+            TileMaterials::None => 0,
+            TileMaterials::Splat => fs::VARIANT_MATERIALS,
+            TileMaterials::ControlMap => fs::VARIANT_CONTROL_MAP,
+        });
         let pipelines = variants
             .iter()
             .map(|&bits| {
@@ -176,16 +194,25 @@ impl GbufferTiles {
             (fs::NEAREST, Resource::Sampler(self.nearest.raw())),
             (fs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
         ];
-        if self.materials {
-            let m = materials.expect("the MATERIALS shader needs the material resources");
+        if self.materials != TileMaterials::None {
+            let m = materials.expect("the material shaders need the material resources");
             bindings.extend([
-                (fs::SPLAT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_SPLAT), ATLAS_LAYOUT)),
-                (fs::MATERIALS, Resource::Buffer(m.table)),
                 (fs::DETAIL_ALBEDO, Resource::Image(m.albedo, read)),
                 (fs::DETAIL_NORMAL, Resource::Image(m.normal, read)),
                 (fs::DETAIL_HEIGHT, Resource::Image(m.height, read)),
                 (fs::DETAIL_SAMPLER, Resource::Sampler(self.detail.raw())),
             ]);
+        }
+        match self.materials {
+            TileMaterials::Splat => bindings.extend([
+                (fs::SPLAT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_SPLAT), ATLAS_LAYOUT)),
+                (fs::MATERIALS, Resource::Buffer(materials.expect("checked").table)),
+            ]),
+            TileMaterials::ControlMap => bindings.extend([
+                (fs::CONTROL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_CONTROL), ATLAS_LAYOUT)),
+                (fs::CONTROL, Resource::Buffer(materials.and_then(|m| m.control).expect("the control table"))),
+            ]),
+            TileMaterials::None => {}
         }
         rec.push_descriptors(pipeline, &bindings);
         rec.push_constants(pipeline, &TileDrawPush { tiles: lists.push, terrain });

@@ -93,6 +93,17 @@ impl DetailImages {
         })
     }
 
+    /// Layer `layer`'s mean albedo, linear (as the far atlas stores it: a
+    /// UNORM layer the shader reads as linear colour), and mean roughness:
+    /// its last mip's texel (the chain averages down to 1x1, in linear).
+    pub fn mean(&self, layer: u32) -> ([u8; 3], u8) {
+        let last = self.mips as usize - 1;
+        let (a, n) = (&self.albedo[last], &self.normal[last]);
+        let i = layer as usize * self.layer_bytes(last as u32, 4);
+        let linear = |v: u8| (srgb_to_linear_lut()[v as usize] * 255.0).round() as u8;
+        ([linear(a[i]), linear(a[i + 1]), linear(a[i + 2])], n[i + 3])
+    }
+
     /// Side of `mip`.
     pub fn mip_size(&self, mip: u32) -> u32 {
         (self.size >> mip).max(1)

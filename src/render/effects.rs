@@ -144,6 +144,30 @@ impl Effect {
     }
 }
 
+/// Which near material flavour the `splat` effect builds (scene
+/// `[materials] mode`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialsMode {
+    /// Far Cry 5's splat map: material ids blended by height, cliffs
+    /// tri-planar in their own flavours.
+    #[default]
+    Splat,
+    /// REDengine 3's control map (seed 004): a background and an overlay
+    /// texture per texel, blended by slope; the background is tri-planar,
+    /// so the cliff flavours are not built.
+    ControlMap,
+}
+
+impl MaterialsMode {
+    pub fn name(self) -> &'static str {
+        match self {
+            MaterialsMode::Splat => "splat",
+            MaterialsMode::ControlMap => "control_map",
+        }
+    }
+}
+
 /// The effects a scene asks for, with their parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Effects {
@@ -154,8 +178,14 @@ pub struct Effects {
     /// Classification and cliff parameters (`allowed` is decided by the
     /// renderer from the effects that are on).
     pub shade: ShadeRules,
-    /// Material set of the splat map (a file that must exist).
+    /// Material set of the splat map (a file that must exist); in
+    /// control-map mode also its `[[control_texture]]` table.
     pub splat_materials: Option<PathBuf>,
+    /// The near material flavour's kind (scene `[materials] mode`).
+    pub materials: MaterialsMode,
+    /// A painted control map (16-bit PNG over the world's extent); `None`
+    /// in control-map mode: words made from the material rules.
+    pub control_map: Option<PathBuf>,
     pub virtual_texture_cache_mb: u32,
     pub decals_file: Option<PathBuf>,
     pub shadows: ShadowParams,
@@ -229,6 +259,8 @@ impl Default for Effects {
             lighting: Lighting::default(),
             shade: ShadeRules::default(),
             splat_materials: None,
+            materials: MaterialsMode::Splat,
+            control_map: None,
             virtual_texture_cache_mb: 256,
             decals_file: None,
             shadows: ShadowParams::default(),
@@ -289,6 +321,35 @@ impl Effects {
             }
         }
         Ok(fx)
+    }
+
+    /// Reads a scene's `[materials]` table: `mode` ("splat" or
+    /// "control_map"), `control_map` (a 16-bit PNG, relative to `base`),
+    /// `tighten` (the tri-planar tighten factor, 0..1). Errors are one line
+    /// naming the key.
+    pub fn read_materials(&mut self, t: &toml::Table, base: &Path) -> Result<()> {
+        const KNOWN: [&str; 3] = ["mode", "control_map", "tighten"];
+        for (k, v) in t {
+            let key = format!("materials.{k}");
+            match k.as_str() {
+                "mode" => {
+                    let want = "\"splat\" or \"control_map\"";
+                    self.materials = match v.as_str() {
+                        Some("splat") => MaterialsMode::Splat,
+                        Some("control_map") => MaterialsMode::ControlMap,
+                        Some(other) => return Err(bad(format!("{key} = {other:?} is not a mode ({want})"))),
+                        None => return Err(wrong(&key, want, v)),
+                    };
+                }
+                "control_map" => self.control_map = Some(file(&key, v, base)?),
+                "tighten" => self.shade.tighten = number(&key, v, 0.0, 1.0)? as f32,
+                _ => return Err(bad(format!("unknown key {key} (known: {})", KNOWN.join(", ")))),
+            }
+        }
+        if self.control_map.is_some() && self.materials != MaterialsMode::ControlMap {
+            return Err(bad("materials.control_map needs materials.mode = \"control_map\"".into()));
+        }
+        Ok(())
     }
 
     fn read_table(&mut self, effect: Effect, t: &toml::Table, base: &Path) -> Result<()> {
@@ -463,6 +524,15 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                     // Both change the lit image, which lighting off does not make.
                     (Effect::Shadows | Effect::Atmosphere, _) if !fx.is_on(Effect::Lighting) => {
                         (false, "requested, but it changes the lit image and effect lighting is off".into())
+                    }
+                    (Effect::Cliffs, _) if fx.materials == MaterialsMode::ControlMap => (
+                        false,
+                        "requested, but the control-map materials shade slopes with their tri-planar background \
+                         ([materials] mode = \"control_map\")"
+                            .into(),
+                    ),
+                    (Effect::Splat, _) if fx.materials == MaterialsMode::ControlMap => {
+                        (true, format!("requested{how}: the control-map flavour ([materials] mode = \"control_map\")"))
                     }
                     (Effect::Holes, Some(why)) if force => (true, format!("forced on (test override) although {why}")),
                     (Effect::Holes, Some(why)) => (false, format!("requested, but {why}")),

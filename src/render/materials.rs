@@ -19,8 +19,24 @@
 //! `[textures]` with one of their names replaces that layer (so a file can
 //! retexture rock without touching the table), other sets follow in name
 //! order (`toml::Table` is sorted: the file's order is not kept).
+//!
+//! A control-map world (scene `[materials] mode = "control_map"`) indexes a
+//! second, 32-entry table with its control words' 5-bit texture indices;
+//! each entry carries seed 004's per-texture parameters:
+//!
+//! ```toml
+//! [[control_texture]]
+//! index = 5                        # 0..=31
+//! texture = "granite"
+//! tiling_m = 6.0
+//! threshold = 0.4                  # as background: its own slope threshold (0 flat .. 1 vertical)
+//! sharpness = 0.1                  # as overlay: the slope span of its blend into the background
+//! slope_damp = 1.0                 # as background: flat ground flattens its normal for the slope test (0..1)
+//! normal_damp = 0.8                # as background: how much of the overlay's normal is kept (0..1)
+//! ```
 
 use crate::error::{Error, Result};
+use crate::world::{CONTROL_TEXTURES, SLOPE_THRESHOLDS, UV_SCALES};
 use std::path::{Path, PathBuf};
 
 /// Entries in the table: every value a u8 splat texel can hold, so the
@@ -106,12 +122,57 @@ impl MaterialEntry {
     }
 }
 
-/// The texture sets and the 256-entry table indexing them.
+/// One of the control map's 32 textures and seed 004's parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControlTextureEntry {
+    /// Texture-array layer (its albedo, normal and height).
+    pub layer: u32,
+    pub tiling_m: f32,
+    /// As background: its own slope threshold (control code 0), 0..1.
+    pub threshold: f32,
+    /// As overlay: the slope span over which the background replaces it.
+    pub sharpness: f32,
+    /// As background: how far flat ground flattens its normal before the
+    /// slope test (artificial materials ~0, natural ones ~1).
+    pub slope_damp: f32,
+    /// As background: the overlay normal's weight in the combination.
+    pub normal_damp: f32,
+}
+
+/// The texture sets, the 256-entry splat table and the 32-entry control
+/// table indexing them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MaterialSet {
     pub textures: Vec<TextureSet>,
     /// Exactly [`MATERIAL_COUNT`] entries.
     pub table: Vec<MaterialEntry>,
+    /// Exactly [`CONTROL_TEXTURES`] entries.
+    pub control: Vec<ControlTextureEntry>,
+}
+
+/// GPU twin of [`ControlTextureEntry`] (GLSL `ControlTexture`, std430).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ControlGpu {
+    /// albedo | normal << 8 | height << 16 (one layer for all three).
+    pub layers: u32,
+    pub tiling_m: f32,
+    pub threshold: f32,
+    pub sharpness: f32,
+    pub slope_damp: f32,
+    pub normal_damp: f32,
+    pub pad: [f32; 2],
+}
+
+/// GPU twin of the control table's head (GLSL `ControlTable`): the values
+/// of the 3-bit codes, then [`ControlGpu`] per texture.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ControlTableHead {
+    /// By UV scale code; code 0 is 1 (the textures' own tiling).
+    pub uv_scales: [f32; 8],
+    /// By slope threshold code; code 0 reads the background's own.
+    pub thresholds: [f32; 8],
 }
 
 /// GPU twin of [`MaterialEntry`] (GLSL `TerrainMaterial`, std430).
@@ -144,8 +205,33 @@ impl Default for MaterialSet {
             MaterialEntry::on_layer(3, 4.0, 113.0),
         ];
         table.resize(MATERIAL_COUNT, table[0]);
-        MaterialSet { textures, table }
+        MaterialSet { textures, table, control: default_control() }
     }
+}
+
+/// The control table's defaults at the indices `world::control_textures`
+/// names (rock 0, grass 1, snow 2, scree 3, gravel 4: scree's texture,
+/// finer, for roads), after seed 004's categories: natural backgrounds
+/// damp fully (1), an artificial one (gravel) not at all; snow, grass and
+/// gravel blend sharply, scree softly. Indices 5..=31 repeat rock.
+fn default_control() -> Vec<ControlTextureEntry> {
+    let e = |layer, tiling_m, threshold, sharpness, slope_damp, normal_damp| ControlTextureEntry {
+        layer,
+        tiling_m,
+        threshold,
+        sharpness,
+        slope_damp,
+        normal_damp,
+    };
+    let mut t = vec![
+        e(1, 7.0, 0.375, 0.1, 1.0, 0.8),
+        e(0, 3.0, 0.375, 0.06, 0.8, 0.5),
+        e(2, 5.0, 0.375, 0.04, 1.0, 0.8),
+        e(3, 4.0, 0.3, 0.15, 0.7, 0.6),
+        e(3, 1.5, 0.5, 0.04, 0.0, 0.2),
+    ];
+    t.resize(CONTROL_TEXTURES, t[0]);
+    t
 }
 
 impl MaterialSet {
@@ -179,6 +265,41 @@ impl MaterialSet {
         self.textures.iter().position(|t| t.name == name).map(|i| i as u32)
     }
 
+    /// The control table as the shader reads it: the code values, then
+    /// [`CONTROL_TEXTURES`] entries.
+    pub fn control_gpu(&self) -> (ControlTableHead, Vec<ControlGpu>) {
+        let mut head = ControlTableHead { uv_scales: [1.0; 8], thresholds: [0.0; 8] };
+        head.uv_scales[1..].copy_from_slice(&UV_SCALES);
+        head.thresholds[1..].copy_from_slice(&SLOPE_THRESHOLDS);
+        let entries = self
+            .control
+            .iter()
+            .map(|c| ControlGpu {
+                layers: (c.layer & 0xff) | (c.layer & 0xff) << 8 | (c.layer & 0xff) << 16,
+                tiling_m: c.tiling_m,
+                threshold: c.threshold,
+                sharpness: c.sharpness,
+                slope_damp: c.slope_damp,
+                normal_damp: c.normal_damp,
+                pad: [0.0; 2],
+            })
+            .collect();
+        (head, entries)
+    }
+
+    /// What a control-map bake paints far away with each control texture:
+    /// its detail texture's mean albedo and smoothness, and its threshold
+    /// and sharpness (`images` built from this set).
+    pub fn control_looks(&self, images: &crate::render::detail_textures::DetailImages) -> crate::world::ControlLooks {
+        let means: Vec<([u8; 3], u8)> = self.control.iter().map(|c| images.mean(c.layer)).collect();
+        crate::world::ControlLooks {
+            albedo: means.iter().map(|m| m.0).collect(),
+            smoothness: means.iter().map(|m| 255 - m.1).collect(),
+            threshold: self.control.iter().map(|c| c.threshold).collect(),
+            sharpness: self.control.iter().map(|c| c.sharpness).collect(),
+        }
+    }
+
     /// The table as the shader reads it ([`MATERIAL_COUNT`] entries).
     pub fn gpu_table(&self) -> Vec<MaterialGpu> {
         self.table
@@ -196,11 +317,40 @@ impl MaterialSet {
     }
 }
 
+/// The material set a scene's effects name (its file, or the defaults).
+pub fn material_set(fx: &crate::render::effects::Effects) -> Result<MaterialSet> {
+    match &fx.splat_materials {
+        Some(path) => MaterialSet::from_file(path),
+        None => Ok(MaterialSet::default()),
+    }
+}
+
+/// What a control-map world's bake needs from its materials: the control
+/// words' source (the scene's painted map, or the material rules) and each
+/// texture's look. `None` outside control-map mode.
+pub fn control_bake(
+    fx: &crate::render::effects::Effects,
+    world: &crate::world::WorldDesc,
+    rules: crate::world::MaterialRules,
+) -> Result<Option<crate::world::ControlBake>> {
+    use crate::world::{ControlBake, ControlMap, ControlRules, ControlSource};
+    if fx.materials != crate::render::effects::MaterialsMode::ControlMap {
+        return Ok(None);
+    }
+    let set = material_set(fx)?;
+    let images = crate::render::detail_textures::DetailImages::build(&set, crate::render::materials_gpu::DETAIL_SIZE)?;
+    let source = match &fx.control_map {
+        Some(path) => ControlSource::Map(std::sync::Arc::new(ControlMap::open(path, world.extent_m)?)),
+        None => ControlSource::Rules(ControlRules { rules }),
+    };
+    Ok(Some(ControlBake { source, looks: set.control_looks(&images) }))
+}
+
 /// Errors here are messages without the origin, which the caller prepends.
 fn parse(table: &toml::Table, base: &Path) -> std::result::Result<MaterialSet, String> {
     let mut set = MaterialSet::default();
-    if let Some(key) = table.keys().find(|k| *k != "textures" && *k != "material") {
-        return Err(format!("unknown key {key} (known: textures, material)"));
+    if let Some(key) = table.keys().find(|k| !["textures", "material", "control_texture"].contains(&k.as_str())) {
+        return Err(format!("unknown key {key} (known: textures, material, control_texture)"));
     }
     if let Some(v) = table.get("textures") {
         let sets = v.as_table().ok_or_else(|| wrong("textures", "a table of texture sets", v))?;
@@ -218,6 +368,9 @@ fn parse(table: &toml::Table, base: &Path) -> std::result::Result<MaterialSet, S
                 None => set.textures.push(TextureSet { name: name.clone(), source }),
             }
         }
+    }
+    if let Some(v) = table.get("control_texture") {
+        parse_control(&mut set, v)?;
     }
     let Some(v) = table.get("material") else { return Ok(set) };
     let list = v.as_array().ok_or_else(|| wrong("material", "an array of tables ([[material]])", v))?;
@@ -262,6 +415,58 @@ fn parse(table: &toml::Table, base: &Path) -> std::result::Result<MaterialSet, S
         }
     }
     Ok(set)
+}
+
+/// `[[control_texture]]` entries over the default control table.
+fn parse_control(set: &mut MaterialSet, v: &toml::Value) -> std::result::Result<(), String> {
+    let list = v.as_array().ok_or_else(|| wrong("control_texture", "an array of tables ([[control_texture]])", v))?;
+    let mut first_at: [Option<usize>; CONTROL_TEXTURES] = [None; CONTROL_TEXTURES];
+    for (i, m) in list.iter().enumerate() {
+        let key = format!("control_texture[{i}]");
+        let m = m.as_table().ok_or_else(|| wrong(&key, "a table", m))?;
+        const KNOWN: [&str; 7] =
+            ["index", "texture", "tiling_m", "threshold", "sharpness", "slope_damp", "normal_damp"];
+        if let Some(k) = m.keys().find(|k| !KNOWN.contains(&k.as_str())) {
+            return Err(format!("unknown key {key}.{k} (known: {})", KNOWN.join(", ")));
+        }
+        let want_index = "a whole number 0..=31";
+        let index = m.get("index").ok_or_else(|| format!("{key}.index is missing ({want_index})"))?;
+        let index = match index.as_integer() {
+            Some(n) if (0..CONTROL_TEXTURES as i64).contains(&n) => n as usize,
+            _ => return Err(wrong(&format!("{key}.index"), want_index, index)),
+        };
+        if let Some(j) = first_at[index].replace(i) {
+            return Err(format!("{key}.index = {index} repeats control_texture[{j}].index"));
+        }
+        let entry = &mut set.control[index];
+        if let Some(v) = m.get("texture") {
+            let name = v.as_str().ok_or_else(|| wrong(&format!("{key}.texture"), "a texture set name", v))?;
+            entry.layer = set.textures.iter().position(|t| t.name == name).ok_or_else(|| {
+                let known: Vec<&str> = set.textures.iter().map(|t| t.name.as_str()).collect();
+                format!("{key}.texture: unknown texture set {name:?} (known: {})", known.join(", "))
+            })? as u32;
+        }
+        if let Some(v) = m.get("tiling_m") {
+            entry.tiling_m = number(v)
+                .filter(|x| x.is_finite() && *x > 0.0 && (*x as f32).is_normal())
+                .ok_or_else(|| wrong(&format!("{key}.tiling_m"), "a finite number > 0", v))?
+                as f32;
+        }
+        for (name, field) in [
+            ("threshold", &mut entry.threshold),
+            ("sharpness", &mut entry.sharpness),
+            ("slope_damp", &mut entry.slope_damp),
+            ("normal_damp", &mut entry.normal_damp),
+        ] {
+            if let Some(v) = m.get(name) {
+                *field = number(v)
+                    .filter(|x| (0.0..=1.0).contains(x))
+                    .ok_or_else(|| wrong(&format!("{key}.{name}"), "a number 0..=1", v))?
+                    as f32;
+            }
+        }
+    }
+    Ok(())
 }
 
 fn texture_source(key: &str, v: &toml::Value, base: &Path) -> std::result::Result<TextureSource, String> {

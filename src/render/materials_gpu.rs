@@ -6,8 +6,8 @@ use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation};
 use crate::passes::gbuffer_tiles::MaterialBindings;
 use crate::render::detail_textures::{DetailImages, DetailTextures};
-use crate::render::effects::Effects;
-use crate::render::materials::{MaterialGpu, MaterialSet};
+use crate::render::effects::{Effects, MaterialsMode};
+use crate::render::materials::{material_set, ControlGpu, MaterialGpu, MaterialSet};
 use crate::shaders::{consts, structs};
 
 /// Detail texture side (texels); every layer has a full mip chain.
@@ -18,15 +18,16 @@ const _: () = assert!(std::mem::size_of::<MaterialGpu>() == structs::TERRAIN_MAT
 pub struct MaterialResources {
     pub set: MaterialSet,
     pub table: Buffer,
+    /// The control-map flavour's table (`[materials] mode = "control_map"`).
+    pub control: Option<Buffer>,
     pub textures: DetailTextures,
 }
 
+const _: () = assert!(std::mem::size_of::<ControlGpu>() == structs::CONTROL_TEXTURE);
+
 impl MaterialResources {
     pub fn new(ctx: &Context, fx: &Effects) -> Result<Self> {
-        let set = match &fx.splat_materials {
-            Some(path) => MaterialSet::from_file(path)?,
-            None => MaterialSet::default(),
-        };
+        let set = material_set(fx)?;
         let images = DetailImages::build(&set, DETAIL_SIZE)?;
         let textures = DetailTextures::new(ctx, &images)?;
         let gpu = set.gpu_table();
@@ -41,12 +42,17 @@ impl MaterialResources {
             },
         )?;
         ctx.upload(&table, bytemuck::cast_slice(&gpu))?;
-        Ok(MaterialResources { set, table, textures })
+        let control = match fx.materials {
+            MaterialsMode::ControlMap => Some(control_table(ctx, &set)?),
+            MaterialsMode::Splat => None,
+        };
+        Ok(MaterialResources { set, table, control, textures })
     }
 
     pub fn bindings(&self) -> MaterialBindings<'_> {
         MaterialBindings {
             table: &self.table,
+            control: self.control.as_ref(),
             albedo: &self.textures.albedo,
             normal: &self.textures.normal,
             height: &self.textures.height,
@@ -54,6 +60,25 @@ impl MaterialResources {
     }
 
     pub fn memory_bytes(&self) -> u64 {
-        self.table.memory_bytes() + self.textures.memory_bytes()
+        self.table.memory_bytes() + self.control.as_ref().map_or(0, Buffer::memory_bytes) + self.textures.memory_bytes()
     }
+}
+
+/// The control table's buffer: the code values, then every texture.
+fn control_table(ctx: &Context, set: &MaterialSet) -> Result<Buffer> {
+    let (head, entries) = set.control_gpu();
+    assert_eq!(entries.len(), consts::CONTROL_TEXTURES as usize);
+    let mut bytes = bytemuck::bytes_of(&head).to_vec();
+    bytes.extend_from_slice(bytemuck::cast_slice(&entries));
+    let buffer = Buffer::new(
+        ctx,
+        &BufferDesc {
+            name: "control_table",
+            size: bytes.len() as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuOnly,
+        },
+    )?;
+    ctx.upload(&buffer, &bytes)?;
+    Ok(buffer)
 }

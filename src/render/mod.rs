@@ -23,7 +23,7 @@ pub mod tonemap;
 pub mod view;
 
 pub use crate::passes::terrain_geometry::RenderTargets;
-pub use effects::{Effect, EffectDecision, Effects, FrameSwitches};
+pub use effects::{Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode};
 pub use renderer::{memory_for, LodOptions, RendererOptions, TerrainRenderer};
 pub use report::{frame_report, FrameReport, PassState};
 pub use shading::Shading;

@@ -20,7 +20,7 @@ use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
-use crate::passes::gbuffer_tiles::GbufferTiles;
+use crate::passes::gbuffer_tiles::{GbufferTiles, TileMaterials};
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lighting_resolve::LightingResolve;
 use crate::passes::lod_map::LodMap;
@@ -31,7 +31,7 @@ use crate::passes::sun_shadows::{SunShadowJob, SunShadows};
 use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeometry, COLOR_FORMAT};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::traverse::Traverse;
-use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, WorldContent};
+use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode, WorldContent};
 use crate::render::frame_passes::FramePasses;
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FramePass, PassGraph, Skip};
@@ -42,7 +42,9 @@ use crate::render::sun_shadows::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
 use crate::shaders::structs;
-use crate::terrain::gpu_quadtree::{AtlasSet, ATLAS_NORMAL, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_SPLAT};
+use crate::terrain::gpu_quadtree::{
+    AtlasSet, ATLAS_CONTROL, ATLAS_NORMAL, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_SPLAT,
+};
 use crate::terrain::quadtree::texture_extent;
 use crate::terrain::{Terrain, TerrainOptions};
 use crate::world::{HeightSource, Hole, NodeId, WorldDesc};
@@ -155,14 +157,20 @@ pub struct Occlusion {
 pub const GRAPHICS_WAIT_STAGE: vk::PipelineStageFlags2 = vk::PipelineStageFlags2::ALL_COMMANDS;
 
 /// The payload atlases each effect reads beyond the core ones (the splat
-/// map serves three).
-const EFFECT_ATLASES: [(Effect, usize); 5] = [
-    (Effect::ConeCull, ATLAS_PATCH_CONES),
-    (Effect::Holes, ATLAS_PATCH_HOLES),
-    (Effect::Queries, ATLAS_SPLAT),
-    (Effect::Splat, ATLAS_SPLAT),
-    (Effect::Cliffs, ATLAS_SPLAT),
-];
+/// map serves three; in control-map mode `splat` reads the control words).
+fn effect_atlases(mode: MaterialsMode) -> [(Effect, usize); 5] {
+    let near = match mode {
+        MaterialsMode::Splat => ATLAS_SPLAT,
+        MaterialsMode::ControlMap => ATLAS_CONTROL,
+    };
+    [
+        (Effect::ConeCull, ATLAS_PATCH_CONES),
+        (Effect::Holes, ATLAS_PATCH_HOLES),
+        (Effect::Queries, ATLAS_SPLAT),
+        (Effect::Splat, near),
+        (Effect::Cliffs, ATLAS_SPLAT),
+    ]
+}
 
 /// The patch lists whose headers hold a frame's counters, in telemetry
 /// order: phase 1 solid, holes; phase 2 solid, holes.
@@ -180,9 +188,9 @@ fn counter_lists<'a>(cull: &'a CullPatches, occlusion: &'a Option<Occlusion>) ->
 /// The payload atlases a renderer keeps on the GPU for these decisions:
 /// the core ones, the normal (the geometry pass classifies by it), and
 /// each atlas an effect that is on reads.
-fn atlases_for(decisions: &[EffectDecision]) -> AtlasSet {
+fn atlases_for(decisions: &[EffectDecision], mode: MaterialsMode) -> AtlasSet {
     let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
-    EFFECT_ATLASES
+    effect_atlases(mode)
         .iter()
         .filter(|(effect, _)| on(*effect))
         .fold(AtlasSet::CORE.with(ATLAS_NORMAL), |set, (_, atlas)| set.with(*atlas))
@@ -200,7 +208,11 @@ pub fn memory_for(
     source_holes: bool,
 ) -> crate::world::MemoryReport {
     let decisions = decide(effects, &world_content(world, holes, source_holes), false);
-    crate::terrain::mask_memory(crate::world::MemoryReport::for_format(slots, format), atlases_for(&decisions))
+    let mut report = crate::world::MemoryReport::for_format(slots, format);
+    if effects.materials == MaterialsMode::ControlMap {
+        report = report.with_control();
+    }
+    crate::terrain::mask_memory(report, atlases_for(&decisions, effects.materials))
 }
 
 /// `source_holes`: the height source has holes of its own (a DEM's no-data
@@ -248,7 +260,7 @@ impl TerrainRenderer {
         let decisions =
             decide(&options.effects, &world_content(world, &holes, source.has_holes()), options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
-        let atlases = atlases_for(&decisions);
+        let atlases = atlases_for(&decisions, options.effects.materials);
         let terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
         let geometry = TerrainGeometry::new(ctx, depth)?;
         let shade = ShadeRules::from_effects(&options.effects, on(Effect::Splat), on(Effect::Cliffs));
@@ -259,7 +271,12 @@ impl TerrainRenderer {
         };
         let variants = options.shading.pipelines(&shade);
         let every = options.shading == Shading::OneShaderEveryFlavour;
-        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, materials.is_some(), every, depth.format)?;
+        let tile_materials = match (&materials, options.effects.materials) {
+            (None, _) => TileMaterials::None,
+            (Some(_), MaterialsMode::Splat) => TileMaterials::Splat,
+            (Some(_), MaterialsMode::ControlMap) => TileMaterials::ControlMap,
+        };
+        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, tile_materials, every, depth.format)?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
         let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
         let build =
@@ -567,8 +584,8 @@ impl TerrainRenderer {
             bytes.extend(header);
         }
         match self.classify.lists.as_ref() {
-            Some(l) => bytes.extend(&ctx.read_buffer(&l.buffer)?[..crate::passes::classify_tiles::ARGS_BYTES as usize]),
-            None => bytes.extend(vec![0; crate::passes::classify_tiles::ARGS_BYTES as usize]),
+            Some(l) => bytes.extend(&ctx.read_buffer(&l.buffer)?[..crate::passes::classify_tiles::HEAD_BYTES as usize]),
+            None => bytes.extend(vec![0; crate::passes::classify_tiles::HEAD_BYTES as usize]),
         }
         bytes.extend(&ctx.read_buffer(&self.select.levels)?[..structs::SELECT_HEADER]);
         let frame = self.graph.last_frame().map_or(0, |l| l.frame);
@@ -652,7 +669,8 @@ impl TerrainRenderer {
     /// it exists for (empty: needed by any scene).
     pub fn memory(&self) -> Vec<(String, u64, Vec<Effect>)> {
         let atlas_users = |i: usize| -> Vec<Effect> {
-            EFFECT_ATLASES.iter().filter(|(e, a)| *a == i && self.effect_on(*e)).map(|(e, _)| *e).collect()
+            let pairs = effect_atlases(self.effects.materials);
+            pairs.iter().filter(|(e, a)| *a == i && self.effect_on(*e)).map(|(e, _)| *e).collect()
         };
         let mut out: Vec<(String, u64, Vec<Effect>)> = self
             .terrain

@@ -4,16 +4,17 @@
 //! shaders through the view (`TerrainView.shade_*`); none is a literal in a
 //! shader. `shade_rules.glsl` states the rule they parameterise.
 
-use crate::render::effects::{Effect, Effects};
+use crate::render::effects::{Effect, Effects, MaterialsMode};
 use crate::shaders::consts;
 
 /// Flavour bits, in the classification target's order.
-pub const FLAVOURS: [(u32, &str); 5] = [
+pub const FLAVOURS: [(u32, &str); 6] = [
     (consts::FLAVOUR_VIRTUAL_TEXTURE, "virtual_texture"),
     (consts::FLAVOUR_FAR_ATLAS, "far_atlas"),
     (consts::FLAVOUR_NEAR_CLIFF, "near_cliff"),
     (consts::FLAVOUR_FAR_CLIFF, "far_cliff"),
     (consts::FLAVOUR_SPLAT, "splat"),
+    (consts::FLAVOUR_CONTROL_MAP, "control_map"),
 ];
 
 /// A variant's flavours joined by `+` (e.g. `far_atlas+splat`).
@@ -86,6 +87,10 @@ pub struct ShadeRules {
     pub hash_seed: u32,
     /// False: cliffs blend every material and projection (the reference).
     pub stochastic: bool,
+    /// The control-map flavour's tri-planar tighten factor (seed 004): a
+    /// plane is sampled where the normal's component along its axis
+    /// exceeds it (0: every plane a normal leans towards).
+    pub tighten: f32,
 }
 
 impl Default for ShadeRules {
@@ -102,14 +107,21 @@ impl Default for ShadeRules {
             hash_scale: 1.0,
             hash_seed: 0,
             stochastic: true,
+            tighten: DEFAULT_TIGHTEN,
         }
     }
 }
 
-/// The shading flavours an effect adds (none for most).
+/// Seed 004 shows 0.3 and 0.576 (where one plane is left almost
+/// everywhere); 0.3 keeps a blend band on every ridge (see `vista bench
+/// shade` and tests/control_map.rs for what tightening costs and saves).
+pub const DEFAULT_TIGHTEN: f32 = 0.3;
+
+/// The shading flavours an effect may add (none for most): `splat` adds
+/// the splat or the control-map flavour, as the scene's materials mode says.
 pub fn effect_flavours(effect: Effect) -> u32 {
     match effect {
-        Effect::Splat => consts::FLAVOUR_SPLAT,
+        Effect::Splat => consts::FLAVOUR_SPLAT | consts::FLAVOUR_CONTROL_MAP,
         Effect::Cliffs => consts::FLAVOUR_NEAR_CLIFF | consts::FLAVOUR_FAR_CLIFF,
         _ => 0,
     }
@@ -118,10 +130,14 @@ pub fn effect_flavours(effect: Effect) -> u32 {
 impl ShadeRules {
     pub fn from_effects(fx: &Effects, splat: bool, cliffs: bool) -> ShadeRules {
         let mut allowed = consts::FLAVOUR_FAR_ATLAS;
-        for (effect, on) in [(Effect::Splat, splat), (Effect::Cliffs, cliffs)] {
-            if on {
-                allowed |= effect_flavours(effect);
-            }
+        if splat {
+            allowed |= match fx.materials {
+                MaterialsMode::Splat => consts::FLAVOUR_SPLAT,
+                MaterialsMode::ControlMap => consts::FLAVOUR_CONTROL_MAP,
+            };
+        }
+        if cliffs {
+            allowed |= effect_flavours(Effect::Cliffs);
         }
         ShadeRules { allowed, ..fx.shade }
     }
@@ -145,14 +161,21 @@ impl ShadeRules {
         [lo.to_radians().cos(), hi.to_radians().cos()]
     }
 
-    /// The view's `shade_bands`, `shade_slope` and `shade_flags`.
-    pub fn gpu(&self) -> ([f32; 4], [f32; 4], [u32; 4]) {
+    /// The view's `shade_bands`, `shade_slope`, `shade_flags` and `control`.
+    pub fn gpu(&self) -> ([f32; 4], [f32; 4], [u32; 4], [f32; 4]) {
         let [nz0, nz1] = self.slope_normal_z();
         (
             [self.far_start_m, self.far_end_m, self.cliff_split_start_m, self.cliff_split_end_m],
             [nz0, nz1, self.far_cliff_scale, self.hash_scale],
             [self.allowed, self.hash_seed, u32::from(self.stochastic), 0],
+            [self.tighten, 0.0, 0.0, 0.0],
         )
+    }
+
+    /// Planes of the tightened tri-planar blend at unit normal `n` (1 to 3;
+    /// `shade_rules.glsl` `tri_planar_planes`).
+    pub fn planes(&self, n: [f32; 3]) -> u32 {
+        (n.iter().filter(|c| c.abs() > self.tighten).count() as u32).max(1)
     }
 }
 

@@ -8,7 +8,7 @@
 
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
-use crate::passes::classify_tiles::ARGS_BYTES;
+use crate::passes::classify_tiles::{ARGS_BYTES, HEAD_BYTES};
 use crate::passes::cull_patches::{CullCounters, PatchListHeader};
 use crate::passes::select_patches::SelectHeader;
 use crate::passes::traverse::TraverseHeader;
@@ -44,6 +44,9 @@ pub struct FrameCounters {
     pub triangles: u64,
     /// Tiles listed per shader variant (index = flavour bits).
     pub tiles: Vec<u32>,
+    /// Control-map tiles whose tri-planar background samples at most 1, 2
+    /// and 3 planes (the tightened blend).
+    pub plane_tiles: [u32; 3],
 }
 
 /// Which lists a renderer has: phase 1's hole list, phase 2's lists.
@@ -61,12 +64,13 @@ const HEADER_BYTES: u64 = structs::PATCH_LIST_HEADER as u64;
 const SELECT_BYTES: u64 = structs::SELECT_HEADER as u64;
 /// Readback bytes: the traversal header, then 4 list headers (phase 1
 /// solid, holes; phase 2 solid, holes), absent ones left zero, the tile
-/// lists' draw arguments and the selection counters.
-const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + ARGS_BYTES + SELECT_BYTES;
+/// lists' head (draw arguments and plane counters) and the selection
+/// counters.
+const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + HEAD_BYTES + SELECT_BYTES;
 /// Where the tile lists' draw arguments start in a slot.
 const TILES_AT: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES;
 /// Where the selection counters start.
-const SELECT_AT: u64 = TILES_AT + ARGS_BYTES;
+const SELECT_AT: u64 = TILES_AT + HEAD_BYTES;
 
 impl CounterLayout {
     /// Parses a slot's bytes (also used on a waiting readback in tests).
@@ -82,10 +86,12 @@ impl CounterLayout {
         let instances = [0, 1, 2, 3].map(|i| header(i).instance_count.min(self.list_capacity));
         let args = &bytes[TILES_AT as usize..(TILES_AT + ARGS_BYTES) as usize];
         let tiles = bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(args).iter().map(|a| a[1]).collect();
+        let planes: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[(TILES_AT + ARGS_BYTES) as usize..][..16]);
         let select = bytemuck::pod_read_unaligned(&bytes[SELECT_AT as usize..(SELECT_AT + SELECT_BYTES) as usize]);
         FrameCounters {
             select,
             tiles,
+            plane_tiles: [planes[0], planes[1], planes[2]],
             instances,
             frame,
             traverse: TraverseCounters {
@@ -192,7 +198,7 @@ impl Telemetry {
             }
         }
         if let Some(tiles) = src.tiles {
-            rec.copy_buffer_region(tiles, 0, &slot.buffer, TILES_AT, ARGS_BYTES);
+            rec.copy_buffer_region(tiles, 0, &slot.buffer, TILES_AT, HEAD_BYTES);
         }
         rec.copy_buffer_region(src.select, 0, &slot.buffer, SELECT_AT, SELECT_BYTES);
         rec.transfer_to_host_barrier();

@@ -201,7 +201,7 @@ impl View {
         let inv = self.view_proj().inverse().as_mat4();
         let f4 = |v: DVec4| v.as_vec4().to_array();
         let [w, h] = self.size.map(f64::from);
-        let (bands, slope, mut flags) = shade.gpu();
+        let (bands, slope, mut flags, control) = shade.gpu();
         // w: the clay albedo's f32 bits, 0 = the G-buffer's albedo.
         flags[3] = light.clay_albedo.map_or(0, f32::to_bits);
         TerrainViewGpu {
@@ -242,6 +242,7 @@ impl View {
                 [u.x as f32, u.y as f32, u.z as f32, (self.fov_y_deg.to_radians() / 2.0).tan() as f32]
             },
             image: [2f32.powf(light.exposure_ev()), light.tonemap.gpu_id() as f32, 0.0, 0.0],
+            control,
         }
     }
 }
@@ -342,6 +343,8 @@ pub struct TerrainViewGpu {
     /// The camera's up axis and the frustum's half-height tangent.
     pub lod_up: [f32; 4],
     pub image: [f32; 4],
+    /// x: the control-map flavour's tri-planar tighten factor.
+    pub control: [f32; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<TerrainViewGpu>() == crate::shaders::structs::TERRAIN_VIEW);

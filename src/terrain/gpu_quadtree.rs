@@ -37,7 +37,7 @@ const fn texels(name: &'static str) -> AtlasKind {
 
 /// Atlas formats, in the order of `payload_bytes`; the `ATLAS_*` indices
 /// name them.
-const ATLASES: [AtlasKind; 8] = [
+const ATLASES: [AtlasKind; 9] = [
     plain("atlas_height", vk::Format::R16_UNORM, ATLAS_SIDE as u32, 2),
     texels("atlas_normal"),
     texels("atlas_albedo"),
@@ -46,6 +46,7 @@ const ATLASES: [AtlasKind; 8] = [
     plain("atlas_patch_cones", vk::Format::R32G32B32A32_SFLOAT, PATCHES_PER_NODE_SIDE, 16),
     plain("atlas_patch_holes", vk::Format::R8_UINT, PATCHES_PER_NODE_SIDE, 1),
     plain("atlas_patch_errors", vk::Format::R32G32_SFLOAT, PATCHES_PER_NODE_SIDE, 8),
+    plain("atlas_control", vk::Format::R16_UINT, SPLAT_RES as u32, 2),
 ];
 
 /// Vulkan format and layer bytes of atlas `i` for payloads in `format`.
@@ -73,6 +74,8 @@ pub const ATLAS_PATCH_MIN_MAX: usize = 4;
 pub const ATLAS_PATCH_CONES: usize = 5;
 pub const ATLAS_PATCH_HOLES: usize = 6;
 pub const ATLAS_PATCH_ERRORS: usize = 7;
+/// A control-map world's control words (the control-map flavour only).
+pub const ATLAS_CONTROL: usize = 8;
 
 /// Which payload atlases live on the GPU: one bit per `ATLAS_*` index. An
 /// effect that is off keeps none of the atlases only it reads (no image, no
@@ -121,6 +124,7 @@ fn payload_bytes(n: &BakedNode) -> [&[u8]; ATLAS_COUNT] {
         bytemuck::cast_slice(&n.patch_cones),
         &n.patch_holes,
         bytemuck::cast_slice(&n.patch_errors),
+        bytemuck::cast_slice(&n.control),
     ]
 }
 
@@ -430,6 +434,13 @@ impl GpuQuadtree {
             let mut off = i * per_node;
             for (k, bytes) in payload_bytes(node).into_iter().enumerate() {
                 if kept(&k) {
+                    assert_eq!(
+                        bytes.len() as u64,
+                        atlas_format(k, self.format).1,
+                        "{} of node {}",
+                        atlas_name(k),
+                        node.id
+                    );
                     mapped[off..off + bytes.len()].copy_from_slice(bytes);
                     off += aligned_size(k, self.format) as usize;
                 }

@@ -192,10 +192,12 @@ impl Terrain {
             }
             (None, Some(dir)) => Loader::with_cache(
                 threads,
-                Arc::new(NodeCache::with_settings(dir, *world, source, holes, options.bake)?.with_errors(errors)),
+                Arc::new(
+                    NodeCache::with_settings(dir, *world, source, holes, options.bake.clone())?.with_errors(errors),
+                ),
             )?,
             (None, None) => {
-                let (w, settings) = (*world, options.bake);
+                let (w, settings) = (*world, options.bake.clone());
                 let load: Arc<LoadFn> = Arc::new(move |id| {
                     let mut node = bake_node_with(&*source, &w, &holes, &settings, id);
                     errors.attach(&mut node)?;
@@ -299,7 +301,11 @@ impl Terrain {
     /// Memory of the resident payloads, CPU and GPU side; payload kinds no
     /// effect reads are baked (CPU) but not kept on the GPU.
     pub fn memory_report(&self) -> MemoryReport {
-        mask_memory(MemoryReport::for_format(self.stats.resident, self.tree.payload_format()), self.tree.atlas_set())
+        let mut report = MemoryReport::for_format(self.stats.resident, self.tree.payload_format());
+        if self.tree.atlas_set().contains(crate::terrain::gpu_quadtree::ATLAS_CONTROL) {
+            report = report.with_control();
+        }
+        mask_memory(report, self.tree.atlas_set())
     }
 }
 

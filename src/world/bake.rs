@@ -3,6 +3,7 @@
 use rayon::prelude::*;
 
 use super::cones::{fit_cone, patch_triangle_normals};
+use super::control_map::{slope01, ControlBake};
 use super::hash::Fnv64;
 use super::holes::Hole;
 use super::layout::{
@@ -33,17 +34,28 @@ impl Grid {
 /// (Far Cry 5 packs it there; nothing here computes occlusion yet).
 const NO_OCCLUSION: u8 = 255;
 
-/// What a bake makes besides the geometry: the texel formats and the
-/// material rules. Part of the cache key.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// What a bake makes besides the geometry: the texel formats, the
+/// material rules and, for a control-map world, its control words. Part of
+/// the cache key.
+#[derive(Clone, Debug, Default)]
 pub struct BakeSettings {
     pub format: PayloadFormat,
     pub materials: MaterialRules,
+    /// Control-map materials (seed 004): a word per splat texel in the
+    /// payload's `control` layer, and the baked albedo from its textures.
+    pub control: Option<ControlBake>,
+}
+
+impl PartialEq for BakeSettings {
+    fn eq(&self, other: &Self) -> bool {
+        self.hash() == other.hash()
+    }
 }
 
 impl BakeSettings {
     pub fn hash(&self) -> u64 {
-        Fnv64::new().u64(u64::from(self.format.tag())).u64(self.materials.hash()).finish()
+        let h = Fnv64::new().u64(u64::from(self.format.tag())).u64(self.materials.hash());
+        h.u64(self.control.as_ref().map_or(0, ControlBake::hash)).finish()
     }
 }
 
@@ -98,6 +110,7 @@ pub fn bake_node_with(
     let mut normals = Vec::with_capacity(ATLAS_TEXELS);
     let mut albedo = Vec::with_capacity(ATLAS_TEXELS);
     let mut materials = Vec::with_capacity(ATLAS_TEXELS);
+    let mut words = Vec::with_capacity(ATLAS_TEXELS);
     for u in 0..ATLAS_SIDE {
         for t in 0..ATLAS_SIDE {
             // Texel (t, u) is sample (t - 2, u - 2).
@@ -114,15 +127,24 @@ pub fn bake_node_with(
             let solid = !outside_extent(pos, world.extent_m, step)
                 && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]))
                 && !source.is_hole(pos[0], pos[1]);
-            let (rgb, smooth) = material_look(mat, slope_deg);
+            let altitude = f[fj * width + fi];
+            let word = settings.control.as_ref().map(|c| c.source.word(pos[0], pos[1], slope_deg, altitude));
+            let (rgb, smooth) = match (&settings.control, word) {
+                (Some(c), Some(w)) => c.looks.look(w, slope01(nrm[2])),
+                _ => material_look(mat, slope_deg),
+            };
             normals.push(pack_normal(nrm, NO_OCCLUSION, smooth));
             albedo.push([rgb[0], rgb[1], rgb[2], if solid { 255 } else { 0 }]);
             materials.push(mat);
+            words.push(word.unwrap_or(0));
         }
     }
-    let splat = (0..SPLAT_RES * SPLAT_RES)
-        .map(|k| materials[texel_index(2 * (k % SPLAT_RES) as isize, 2 * (k / SPLAT_RES) as isize)] as u8)
-        .collect();
+    let at_splat = |k: usize| texel_index(2 * (k % SPLAT_RES) as isize, 2 * (k / SPLAT_RES) as isize);
+    let splat = (0..SPLAT_RES * SPLAT_RES).map(|k| materials[at_splat(k)] as u8).collect();
+    let control = match settings.control {
+        Some(_) => (0..SPLAT_RES * SPLAT_RES).map(|k| words[at_splat(k)]).collect(),
+        None => Vec::new(),
+    };
 
     let decoded: Vec<f32> = samples.iter().map(|&v| world.decode_height(v)).collect();
     let mut patch_min_max = Vec::new();
@@ -159,6 +181,7 @@ pub fn bake_node_with(
         normals: settings.format.encode(TexelKind::Normal, &normals),
         albedo: settings.format.encode(TexelKind::Albedo, &albedo),
         splat,
+        control,
         patch_min_max,
         patch_cones,
         patch_holes,

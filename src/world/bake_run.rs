@@ -87,7 +87,7 @@ pub fn bake_world(
     cache_dir: &Path,
     progress: impl Into<Progress>,
 ) -> Result<BakeStats> {
-    let cache = NodeCache::with_settings(cache_dir, *world, source, holes.to_vec(), *settings)?;
+    let cache = NodeCache::with_settings(cache_dir, *world, source, holes.to_vec(), settings.clone())?;
     // Before the node list, which grows with the world.
     let plan = WorldPlan::new(world, region);
     plan.check(&Limits::default())?;
@@ -115,7 +115,7 @@ pub fn bake_shard(
 ) -> Result<BakeStats> {
     assert_eq!(split.world(), world, "a split of another world");
     split.check_index(index).map_err(|e| super::WorldError::InvalidConfig(e.to_string()))?;
-    let cache = NodeCache::with_settings(cache_dir, *world, source, holes.to_vec(), *settings)?;
+    let cache = NodeCache::with_settings(cache_dir, *world, source, holes.to_vec(), settings.clone())?;
     WorldPlan::new(world, None).check(&Limits::default())?;
     let nodes = split.nodes(index);
     let mut stats = bake_nodes(&cache, &nodes, split.tiles(index), progress.into())?;

@@ -56,7 +56,7 @@ pub fn default_cache_dir() -> Option<PathBuf> {
 /// Bytes a node file of `format` would take without compression: what the
 /// cache's compression ratio is measured against.
 pub fn uncompressed_file_bytes(format: PayloadFormat) -> u64 {
-    (HEADER_BYTES + BakedNode::serialized_bytes(format) + CRC_BYTES) as u64
+    (HEADER_BYTES + BakedNode::serialized_bytes(format, false) + CRC_BYTES) as u64
 }
 
 /// zstd's ratio over the node files of the whole default world (1.49:1,
@@ -176,7 +176,8 @@ impl NodeCache {
     pub fn node_keys(&self, id: NodeId) -> [u64; 4] {
         let r = bake_region(&self.world, id);
         let near: Vec<Hole> = self.holes.iter().filter(|h| overlaps(h.bounds(), r)).cloned().collect();
-        [self.keys[0], self.source.region_hash(r), holes_hash(&near), self.keys[3]]
+        let control = self.settings.control.as_ref().map_or(0, |c| c.source.region_hash(r));
+        [self.keys[0], self.source.region_hash(r), holes_hash(&near), self.keys[3] ^ control]
     }
 
     /// A node file's size and its trailing crc32 (of every byte before it),
@@ -224,7 +225,7 @@ impl NodeCache {
             return Err(MissReason::Stale);
         }
         let len = u32_at(49) as usize;
-        if len != BakedNode::serialized_bytes(self.settings.format) {
+        if len != BakedNode::serialized_bytes(self.settings.format, self.settings.control.is_some()) {
             return Err(MissReason::Corrupt);
         }
         let payload = zstd::bulk::decompress(&body[HEADER_BYTES..], len).map_err(|_| MissReason::Corrupt)?;

@@ -48,11 +48,21 @@ impl MemoryReport {
                 kind("patch cones", "RGBA32F 8x8", p * 16, p * 16),
                 kind("patch holes", "R8_UINT 8x8", p, p),
                 kind("patch errors", "RG32F 8x8", p * 8, p * 8),
+                // A control-map world's words (`with_control`).
+                kind("control", "R16_UINT 65x65", 0, 0),
                 // id, min/max, error, representation error; on the GPU the
                 // 2 x u32 node description and the f32 LOD error.
                 kind("node scalars", "2 x u32 desc + f32 error", 9 + 4 + 4 + 4, 12),
             ],
         }
+    }
+
+    /// The report of a control-map world, whose nodes carry control words.
+    pub fn with_control(mut self) -> Self {
+        let sp = SPLAT_RES * SPLAT_RES * 2;
+        let k = self.kinds.iter_mut().find(|k| k.name == "control").expect("the control kind");
+        (k.cpu_bytes, k.gpu_bytes) = (sp, sp);
+        self
     }
 
     pub fn cpu_bytes_per_node(&self) -> usize {
@@ -78,6 +88,7 @@ pub fn node_cpu_bytes(n: &BakedNode) -> usize {
         + n.normals.len()
         + n.albedo.len()
         + n.splat.len()
+        + n.control.len() * 2
         + n.patch_min_max.len() * 4
         + n.patch_cones.len() * 16
         + n.patch_holes.len()

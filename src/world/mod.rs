@@ -6,6 +6,7 @@ mod bake;
 mod bake_run;
 mod cache;
 mod cones;
+mod control_map;
 mod error;
 mod error_quantile;
 mod error_tile;
@@ -39,6 +40,10 @@ pub use cache::{
     bake_region, default_cache_dir, estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache,
 };
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
+pub use control_map::{
+    nearest_threshold, slope01, textures as control_textures, ControlBake, ControlCode, ControlLooks, ControlMap,
+    ControlRules, ControlSource, CONTROL_TEXTURES, SLOPE_THRESHOLDS, UV_SCALES,
+};
 pub use error::{Result, WorldError};
 pub use error_tile::diamond;
 pub use errors::{selection_error, ErrorTree, NodeErrors, PreparedErrors};

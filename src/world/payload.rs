@@ -43,6 +43,9 @@ pub struct BakedNode {
     pub albedo: Vec<u8>,
     /// 65x65 material ids ([`Material`]), texel (i, j) at sample (2i, 2j).
     pub splat: Vec<u8>,
+    /// A control-map world's 65x65 control words (`super::control_map`),
+    /// laid out as `splat`; empty in other worlds.
+    pub control: Vec<u16>,
     /// 8x8 (min, max) R16 heights of each patch: the finest surface's
     /// range over the patch's area ([`super::ErrorTree`]), which holds the
     /// node's own samples, every finer level's and the refinement's; until
@@ -74,15 +77,17 @@ const HEIGHT_TEXELS: usize = ATLAS_TEXELS;
 const SPLATS: usize = SPLAT_RES * SPLAT_RES;
 
 impl BakedNode {
-    /// Size of [`Self::to_bytes`]' output; payloads of one format are
-    /// fixed-size.
-    pub fn serialized_bytes(format: PayloadFormat) -> usize {
+    /// Size of [`Self::to_bytes`]' output; payloads of one format, with or
+    /// without control words, are fixed-size.
+    pub fn serialized_bytes(format: PayloadFormat, control: bool) -> usize {
         10 + 2 * 2
             + 4
             + HEIGHT_TEXELS * 2
             + format.layer_bytes(TexelKind::Normal)
             + format.layer_bytes(TexelKind::Albedo)
             + SPLATS
+            + 1
+            + if control { SPLATS * 2 } else { 0 }
             + PATCHES_PER_NODE * (1 + 4 + 16 + 8)
             + 4
     }
@@ -118,7 +123,9 @@ impl BakedNode {
 
     /// Little-endian serialisation, independent of the host.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(Self::serialized_bytes(self.format));
+        assert!(self.control.is_empty() || self.control.len() == SPLATS, "control words: 0 or 65x65");
+        let control = !self.control.is_empty();
+        let mut out = Vec::with_capacity(Self::serialized_bytes(self.format, control));
         out.push(self.id.lod);
         out.push(self.format.tag());
         out.extend_from_slice(&self.id.x.to_le_bytes());
@@ -131,6 +138,8 @@ impl BakedNode {
         out.extend_from_slice(&self.normals);
         out.extend_from_slice(&self.albedo);
         out.extend_from_slice(&self.splat);
+        out.push(u8::from(control));
+        self.control.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         for mm in &self.patch_min_max {
             mm.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         }
@@ -141,7 +150,7 @@ impl BakedNode {
             e.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         }
         out.extend_from_slice(&self.repr_error_m.to_le_bytes());
-        debug_assert_eq!(out.len(), Self::serialized_bytes(self.format));
+        debug_assert_eq!(out.len(), Self::serialized_bytes(self.format, control));
         out
     }
 
@@ -149,9 +158,11 @@ impl BakedNode {
     /// length is wrong.
     pub fn from_bytes(bytes: &[u8]) -> Option<Self> {
         let format = PayloadFormat::from_tag(*bytes.get(1)?)?;
-        if bytes.len() != Self::serialized_bytes(format) {
-            return None;
-        }
+        let control = match bytes.len() {
+            n if n == Self::serialized_bytes(format, false) => false,
+            n if n == Self::serialized_bytes(format, true) => true,
+            _ => return None,
+        };
         let mut r = Reader { bytes, pos: 0 };
         let lod = r.take::<2>()[0];
         let x = u32::from_le_bytes(r.take());
@@ -164,6 +175,10 @@ impl BakedNode {
         let normals = r.slice(format.layer_bytes(TexelKind::Normal)).to_vec();
         let albedo = r.slice(format.layer_bytes(TexelKind::Albedo)).to_vec();
         let splat = (0..SPLATS).map(|_| r.take::<1>()[0]).collect();
+        if r.take::<1>()[0] != u8::from(control) {
+            return None;
+        }
+        let control = (0..if control { SPLATS } else { 0 }).map(|_| u16::from_le_bytes(r.take())).collect();
         let patch_min_max =
             (0..PATCHES_PER_NODE).map(|_| [u16::from_le_bytes(r.take()), u16::from_le_bytes(r.take())]).collect();
         let patch_cones = (0..PATCHES_PER_NODE).map(|_| [0; 4].map(|_: i32| f32::from_le_bytes(r.take()))).collect();
@@ -176,6 +191,7 @@ impl BakedNode {
             normals,
             albedo,
             splat,
+            control,
             patch_min_max,
             patch_cones,
             patch_holes,

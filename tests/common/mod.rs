@@ -74,6 +74,7 @@ pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
                 .collect::<Vec<_>>(),
         ),
         splat: (0..SPLAT_RES * SPLAT_RES).map(|i| (i % 4) as u8).collect(),
+        control: Vec::new(),
         patch_min_max: (0..PATCHES_PER_NODE).map(|i| [i as u16, tag]).collect(),
         patch_cones: (0..PATCHES_PER_NODE).map(|i| [0.0, 0.0, 1.0, i as f32 / 64.0]).collect(),
         patch_holes: (0..PATCHES_PER_NODE).map(|i| (i % 3) as u8).collect(),

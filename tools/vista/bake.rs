@@ -283,7 +283,7 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         Some((split, Some(i))) => {
             let stats = bake_shard(w.source.clone(), &w.desc, &w.holes, &w.bake, split, *i, &dir, progress)
                 .with_context(|| format!("baking into {}", dir.display()))?;
-            let cache = NodeCache::with_settings(&dir, w.desc, w.source.clone(), w.holes.clone(), w.bake)?;
+            let cache = NodeCache::with_settings(&dir, w.desc, w.source.clone(), w.holes.clone(), w.bake.clone())?;
             let path = ShardManifest::new(&cache, split, *i, &stats).write(&dir)?;
             (stats, Some(path))
         }

@@ -178,7 +178,7 @@ pub fn run_verify(w: &LoadedWorld, dir: &Path) -> Result<()> {
     if !dir.is_dir() {
         return Err(InputError(format!("--verify {}: no such folder", dir.display())).into());
     }
-    let cache = NodeCache::with_settings(dir, w.desc, w.source.clone(), w.holes.clone(), w.bake)?;
+    let cache = NodeCache::with_settings(dir, w.desc, w.source.clone(), w.holes.clone(), w.bake.clone())?;
     let report = verify(&cache, dir)?;
     let mut out = String::new();
     write_report(&mut out, dir, &report)?;

@@ -210,7 +210,7 @@ fn render(ctx: &Context, g: &Golden, payload: PayloadFormat) -> Result<Vec<u8>> 
         // picture, is the same on every run (threads finishing in another
         // order leave another set where the slot budget is short).
         terrain: TerrainOptions {
-            bake: world.bake,
+            bake: world.bake.clone(),
             errors: Some(world.errors(ctx, None)?),
             loader_threads: 0,
             ..TerrainOptions::default()

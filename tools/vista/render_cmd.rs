@@ -114,7 +114,7 @@ impl ViewpointArgs {
                 slots: self.slots,
                 cache_dir: cache.map(Path::to_path_buf),
                 errors: Some(errors),
-                bake: world.bake,
+                bake: world.bake.clone(),
                 limits: world.limits.clone(),
                 ..TerrainOptions::default()
             },

@@ -32,6 +32,11 @@
 //! blend = "add"                # replace | add | max | min
 //! falloff = 20                 # metres inside the edge over which it fades in
 //!
+//! [materials]                  # the near material flavour (effect splat)
+//! mode = "control_map"         # or "splat" (the default): REDengine 3's control map
+//! control_map = "control.png"  # 16-bit PNG over the world (else made from the material rules)
+//! tighten = 0.3                # tri-planar tighten factor of the control-map background
+//!
 //! [material_rules]             # where the bake puts each material (defaults: the Alps)
 //! rock_slope_deg = 40          # steeper is bare rock
 //! scree_slope_deg = 30         # steeper (and not rock) is scree
@@ -70,6 +75,8 @@ struct RawScene {
     stamps: Vec<SceneStamp>,
     #[serde(default)]
     effects: toml::Table,
+    #[serde(default)]
+    materials: toml::Table,
     #[serde(default)]
     material_rules: MaterialRules,
 }
@@ -184,8 +191,11 @@ impl Scene {
             }
         }
         let dir = path.parent().unwrap_or(Path::new("."));
-        let effects =
+        let mut effects =
             Effects::from_toml(&raw.effects, dir).map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
+        effects
+            .read_materials(&raw.materials, dir)
+            .map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
         raw.material_rules.validate().map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
         let mut stamps = raw.stamps;
         for st in &mut stamps {

@@ -135,7 +135,7 @@ impl LoadedWorld {
     /// refused before its tree is made.
     pub fn errors(&self, ctx: &vista::gpu::Context, cache: Option<&Path>) -> Result<Arc<ErrorTree>> {
         let terrain = vista::terrain::TerrainOptions {
-            bake: self.bake,
+            bake: self.bake.clone(),
             limits: self.limits.clone(),
             ..vista::terrain::TerrainOptions::default()
         };
@@ -307,7 +307,7 @@ impl WorldArgs {
         note_holes_outside(&holes, &desc, origin_m);
         let max_sectors_per_side = self.max_sectors.unwrap_or(DEFAULT_MAX_SECTORS_PER_SIDE);
         let limits = Limits { max_sectors_per_side, ..Limits::default() };
-        let bake = BakeSettings { format: self.payload, materials: scene.material_rules };
+        let bake = BakeSettings { format: self.payload, materials: scene.material_rules, control: None };
         Ok(WorldSpec { desc, source, holes, stamps, effects: scene.effects, origin_m, limits, bake })
     }
 }
@@ -464,11 +464,13 @@ impl WorldSpec {
             }
         };
         let source = self.stamped(source, &desc).map_err(input_error)?;
+        let mut bake = self.bake.clone();
+        bake.control = vista::render::materials::control_bake(&self.effects, &desc, bake.materials)
+            .map_err(|e| input_error(anyhow::anyhow!("{e}")))?;
         if !self.stamps.is_empty() {
             label += &format!(" with {} stamp{}", self.stamps.len(), if self.stamps.len() == 1 { "" } else { "s" });
         }
-        let (holes, effects, origin_m, limits, bake) =
-            (self.holes, self.effects, self.origin_m, self.limits, self.bake);
+        let (holes, effects, origin_m, limits) = (self.holes, self.effects, self.origin_m, self.limits);
         Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake })
     }
 }
