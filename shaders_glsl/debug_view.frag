@@ -42,7 +42,7 @@ void main() {
     } else if (pc.mode == DEBUG_VIEW_CLASSIFICATION) {
         vec3 sum = vec3(0.0);
         float n = 0.0;
-        for (uint b = 0u; b < 5u; ++b) {
+        for (uint b = 0u; b < FLAVOUR_BITS; ++b) {
             if ((cls & (1u << b)) != 0u) {
                 sum += pc.colours[b].rgb;
                 n += 1.0;

@@ -305,7 +305,7 @@ fn payload_roundtrip_and_memory_report() {
     let src = Surface::Paraboloid { z0: 0.0, a: 0.004, c: [100.0, 50.0] };
     let node = bake_node(&src, &w, &[], NodeId::new(1, 1, 0));
     let bytes = node.to_bytes();
-    assert_eq!(bytes.len(), BakedNode::serialized_bytes(PayloadFormat::Bc));
+    assert_eq!(bytes.len(), BakedNode::serialized_bytes(PayloadFormat::Bc, false));
     assert_eq!(BakedNode::from_bytes(&bytes), Some(node.clone()));
     assert_eq!(BakedNode::from_bytes(&bytes[1..]), None);
 

@@ -400,7 +400,7 @@ fn cache_roundtrip_corruption_and_staleness() {
     let path = cache.path(id);
     let good = std::fs::read(&path).unwrap();
     // A flat node is mostly repeated bytes: zstd keeps a small part of it.
-    assert!(good.len() * 10 < BakedNode::serialized_bytes(PayloadFormat::Bc), "{} bytes", good.len());
+    assert!(good.len() * 10 < BakedNode::serialized_bytes(PayloadFormat::Bc, false), "{} bytes", good.len());
     for at in [0, 5, 20, 36, 44, 60, good.len() / 2, good.len() - 1] {
         let mut b = good.clone();
         b[at] ^= 0x10;
@@ -437,7 +437,7 @@ fn cache_roundtrip_corruption_and_staleness() {
             ..BakeSettings::default()
         },
     ] {
-        let c = NodeCache::with_settings(&dir, world, Arc::new(Flat(43.0)), vec![], settings).unwrap();
+        let c = NodeCache::with_settings(&dir, world, Arc::new(Flat(43.0)), vec![], settings.clone()).unwrap();
         assert_eq!(c.get_or_bake(id).unwrap().1, CacheOutcome::Baked(MissReason::Stale));
         let (n, o) = c.get_or_bake(id).unwrap();
         assert_eq!((o, n.format), (CacheOutcome::Hit, settings.format));

@@ -101,6 +101,8 @@
 #define FLAVOUR_SPLAT 16u
 #define FLAVOUR_CONTROL_MAP 32u
 #define FLAVOUR_VARIANTS 64u
+// Flavour bits (log2 of FLAVOUR_VARIANTS).
+#define FLAVOUR_BITS 6u
 // The flavour bits of a classification (the rest say more about the pixel).
 #define FLAVOUR_MASK 63u
 // A control-map pixel's tri-planar background samples 2 or more planes

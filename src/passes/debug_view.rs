@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::gpu::{vk, ColorTarget, Context, GraphicsPipelineDesc, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT};
-use crate::render::gbuffer::{classification_palette, GBuffer};
+use crate::render::gbuffer::{classification_palette, GBuffer, FLAVOUR_COUNT};
 use crate::shaders::consts as k;
 use crate::shaders::{debug_view_frag as fs, debug_view_vert as vs};
 use serde::Serialize;
@@ -72,7 +72,7 @@ impl DebugView {
         let mut c = [[0u8; 3]; 6];
         match self {
             DebugView::Lod => c = LOD_COLOURS,
-            DebugView::Classification => c[..5].copy_from_slice(&classification_palette()),
+            DebugView::Classification => c[..FLAVOUR_COUNT].copy_from_slice(&classification_palette()),
             DebugView::PatchEdges => c[0] = EDGE_COLOUR,
             DebugView::OcclusionPhase => c[..2].copy_from_slice(&PHASE_COLOURS),
         }
@@ -94,7 +94,8 @@ impl DebugView {
                 base.map(|v| v + (1.0 - v) * 0.25 * refine as f32)
             }
             DebugView::Classification => {
-                let on: Vec<[f32; 3]> = (0..5).filter(|b| class & (1 << b) != 0).map(|b| colours[b]).collect();
+                let on: Vec<[f32; 3]> =
+                    (0..FLAVOUR_COUNT).filter(|b| class & (1 << b) != 0).map(|b| colours[b]).collect();
                 let n = on.len().max(1) as f32;
                 [0, 1, 2].map(|i| on.iter().map(|c| c[i]).sum::<f32>() / n)
             }

@@ -1,25 +1,54 @@
 //! CPU twin of `classify_tiles`: per 8x8 tile, the OR of the
-//! classification bits; a tile with any bit is listed under that OR (its
-//! variant). Lists come out in row-major tile order; the GPU's append order
-//! is whatever its atomics gave, so compare sorted.
+//! classification bits; a tile with any bit is listed under its flavour
+//! bits (its variant), and a control-map tile counted by the most
+//! tri-planar planes its pixels sample. Lists come out in row-major tile
+//! order; the GPU's append order is whatever its atomics gave, so compare
+//! sorted.
+
+use crate::shaders::consts::{CLASS_PLANES_2, CLASS_PLANES_3, FLAVOUR_CONTROL_MAP, FLAVOUR_MASK};
+
+/// The OR of each tile's classification (row-major tiles).
+fn tile_bits(classification: &[u8], size: [u32; 2], tile: u32) -> impl Iterator<Item = ([u32; 2], u32)> + '_ {
+    let [w, h] = size;
+    assert_eq!(classification.len(), (w * h) as usize);
+    (0..h.div_ceil(tile)).flat_map(move |ty| {
+        (0..w.div_ceil(tile)).map(move |tx| {
+            let mut bits = 0u32;
+            for y in ty * tile..((ty + 1) * tile).min(h) {
+                for x in tx * tile..((tx + 1) * tile).min(w) {
+                    bits |= u32::from(classification[(y * w + x) as usize]);
+                }
+            }
+            ([tx, ty], bits)
+        })
+    })
+}
 
 /// Tiles (x, y) per variant (index = flavour bits) of a classification
 /// image `size[0]` x `size[1]`, row 0 at the top.
 pub fn classify_tiles_cpu(classification: &[u8], size: [u32; 2], tile: u32, variants: usize) -> Vec<Vec<[u32; 2]>> {
-    let [w, h] = size;
-    assert_eq!(classification.len(), (w * h) as usize);
     let mut out = vec![Vec::new(); variants];
-    for ty in 0..h.div_ceil(tile) {
-        for tx in 0..w.div_ceil(tile) {
-            let mut bits = 0u8;
-            for y in ty * tile..((ty + 1) * tile).min(h) {
-                for x in tx * tile..((tx + 1) * tile).min(w) {
-                    bits |= classification[(y * w + x) as usize];
-                }
-            }
-            if bits != 0 {
-                out[bits as usize].push([tx, ty]);
-            }
+    for (t, bits) in tile_bits(classification, size, tile) {
+        if bits != 0 {
+            out[(bits & FLAVOUR_MASK) as usize].push(t);
+        }
+    }
+    out
+}
+
+/// Control-map tiles whose background samples at most 1, 2 and 3 planes.
+pub fn plane_tiles_cpu(classification: &[u8], size: [u32; 2], tile: u32) -> [u32; 3] {
+    let mut out = [0; 3];
+    for (_, bits) in tile_bits(classification, size, tile) {
+        if bits & FLAVOUR_CONTROL_MAP != 0 {
+            let planes = if bits & CLASS_PLANES_3 != 0 {
+                3
+            } else if bits & CLASS_PLANES_2 != 0 {
+                2
+            } else {
+                1
+            };
+            out[planes - 1] += 1;
         }
     }
     out

@@ -15,7 +15,7 @@ pub mod sun_shadow;
 pub mod tonemap;
 pub mod traverse;
 
-pub use classify::classify_tiles_cpu;
+pub use classify::{classify_tiles_cpu, plane_tiles_cpu};
 pub use finest::FinestSurface;
 #[cfg(feature = "bench")]
 pub use image_metric::{flip_magma, flip_map, flip_stats, FlipStats};

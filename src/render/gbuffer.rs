@@ -122,8 +122,8 @@ impl GBuffer {
 
 /// The classification's colour of each flavour bit (bit 0 first): virtual
 /// texture violet, far atlas blue, near cliff red, far cliff orange, splat
-/// green (`debug_view` shows the same).
-pub fn classification_palette() -> [[u8; 3]; 5] {
+/// green, control map pink (`debug_view` shows the same).
+pub fn classification_palette() -> [[u8; 3]; FLAVOUR_COUNT] {
     use crate::shaders::consts::*;
     let colour = |bit: u32| match bit {
         FLAVOUR_VIRTUAL_TEXTURE => [200, 60, 255],
@@ -131,16 +131,21 @@ pub fn classification_palette() -> [[u8; 3]; 5] {
         FLAVOUR_NEAR_CLIFF => [255, 50, 40],
         FLAVOUR_FAR_CLIFF => [255, 190, 30],
         FLAVOUR_SPLAT => [60, 220, 60],
+        FLAVOUR_CONTROL_MAP => [255, 110, 200],
         _ => unreachable!("flavour bit {bit}"),
     };
-    [0, 1, 2, 3, 4].map(|b| colour(1 << b))
+    std::array::from_fn(|b| colour(1 << b))
 }
+
+/// Flavour bits of a classification (the plane bits above them are not
+/// flavours).
+pub const FLAVOUR_COUNT: usize = crate::shaders::consts::FLAVOUR_BITS as usize;
 
 /// Debug colour of a classification value: the mean of its flavours'
 /// colours ([`classification_palette`]); black where no terrain.
 pub fn classification_colour(bits: u8) -> [u8; 3] {
     let palette = classification_palette();
-    let on: Vec<[u8; 3]> = (0..5).filter(|b| bits & (1 << b) != 0).map(|b| palette[b]).collect();
+    let on: Vec<[u8; 3]> = (0..FLAVOUR_COUNT).filter(|b| bits & (1 << b) != 0).map(|b| palette[b]).collect();
     if on.is_empty() {
         return [0, 0, 0];
     }

@@ -261,7 +261,13 @@ impl TerrainRenderer {
             decide(&options.effects, &world_content(world, &holes, source.has_holes()), options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         let atlases = atlases_for(&decisions, options.effects.materials);
-        let terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
+        let mut terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
+        if atlases.contains(ATLAS_CONTROL) && terrain_options.bake.control.is_none() {
+            // The control-map flavour reads control words: bake them (from
+            // the scene's map or the material rules) unless the caller did.
+            let rules = terrain_options.bake.materials;
+            terrain_options.bake.control = crate::render::materials::control_bake(&options.effects, world, rules)?;
+        }
         let geometry = TerrainGeometry::new(ctx, depth)?;
         let shade = ShadeRules::from_effects(&options.effects, on(Effect::Splat), on(Effect::Cliffs));
         let materials = if on(Effect::Splat) || on(Effect::Cliffs) {

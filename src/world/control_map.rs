@@ -170,9 +170,28 @@ impl ControlMap {
         self.grid.id_hash()
     }
 
-    /// A hash of the texels under `bounds_m` (and their position).
+    /// Texel columns and rows (inclusive) a lookup anywhere in `bounds_m`
+    /// reads: those whose area the bounds touch.
+    fn texels_under(&self, b: [f64; 4]) -> [usize; 4] {
+        let [dx, dy] = self.grid.pixel_size_m();
+        let ey = dy * self.grid.height() as f64;
+        let (w, h) = (self.grid.width(), self.grid.height());
+        let col = |x: f64| ((x / dx).floor().max(0.0) as usize).min(w - 1);
+        let row = |y: f64| (((ey - y) / dy).floor().max(0.0) as usize).min(h - 1);
+        [col(b[0]), row(b[3]), col(b[2]), row(b[1])]
+    }
+
+    /// A hash of the texels a lookup in `bounds_m` reads, and where they
+    /// are: repainting elsewhere leaves it alone.
     pub fn region_hash(&self, bounds_m: [f64; 4]) -> u64 {
-        self.grid.region_hash(bounds_m)
+        let [i0, j0, i1, j1] = self.texels_under(bounds_m);
+        let mut h = [i0, j0, i1, j1].iter().fold(Fnv64::new().u64(self.grid.width() as u64), |h, v| h.u64(*v as u64));
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                h = h.u64(u64::from(self.grid.pixel(i, j).to_bits()));
+            }
+        }
+        h.finish()
     }
 }
 
