@@ -40,6 +40,9 @@ pub struct RenderStats {
     /// Streaming after the frame: residency, failed loads, retries, nodes
     /// given up.
     pub streaming: TerrainStats,
+    /// Control-map tiles whose tri-planar background samples at most 1, 2
+    /// and 3 planes (`None` without the control-map flavour).
+    pub plane_tiles: Option<[u32; 3]>,
 }
 
 /// The last recorded frame's numbers; waits for the GPU.
@@ -60,5 +63,6 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
         overflow: c.traverse.overflow,
         missing_roots: c.traverse.missing_roots,
         streaming: terrain.stats(),
+        plane_tiles: (renderer.shade.allowed & crate::shaders::consts::FLAVOUR_CONTROL_MAP != 0).then_some(c.plane_tiles),
     })
 }

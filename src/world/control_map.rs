@@ -95,12 +95,13 @@ pub mod textures {
     pub const GRASS: u8 = 1;
     pub const SNOW: u8 = 2;
     pub const SCREE: u8 = 3;
-    pub const DIRT: u8 = 4;
+    /// Scree's texture, finer: roads and beaches.
+    pub const GRAVEL: u8 = 4;
 }
 
 /// Control words from the material rules, for a world without a painted
 /// map: rock (or scree) as the background everywhere, the overlay the
-/// rules' ground cover (grass, snow above the snow line, dirt for sand),
+/// rules' ground cover (grass, snow above the snow line, gravel for sand),
 /// and a threshold that lets the overlay cling to slopes up to about the
 /// rules' scree angle.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -116,7 +117,7 @@ impl ControlRules {
         let (overlay, background) = match m {
             Material::Snow => (SNOW, ROCK),
             Material::Grass => (GRASS, ROCK),
-            Material::Sand => (DIRT, SCREE),
+            Material::Sand => (GRAVEL, SCREE),
             Material::Scree => (if snowy { SNOW } else { GRASS }, SCREE),
             Material::Rock => (if snowy { SNOW } else { GRASS }, ROCK),
         };

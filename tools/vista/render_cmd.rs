@@ -446,6 +446,12 @@ fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
         s.missing_roots
     );
     println!("         ('wanted finer': the camera asks for more detail there but the children are not resident yet)");
+    if let Some([one, two, three]) = s.plane_tiles {
+        println!(
+            "control map: tri-planar background tiles sampling 1 plane {one}, 2 planes {two}, 3 planes {three} \
+             (the tightened blend)"
+        );
+    }
 }
 
 fn print_timings(timed: &[FrameTimings]) {
