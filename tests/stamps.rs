@@ -315,3 +315,60 @@ fn adding_a_stamp_rebakes_exactly_the_nodes_it_touches() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+mod common;
+
+/// A running renderer takes an edited source: the resident nodes the stamp
+/// touches reload (no frame between shows a gap: the old payloads stay
+/// drawn until the new ones are swapped in), the others stay, and once
+/// settled the picture is the one a renderer made with the stamped source
+/// from the start draws.
+#[test]
+fn a_running_renderer_reloads_the_nodes_a_new_stamp_touches() {
+    use common::terrain::{small_world, view, Rig, Surface, MAGENTA_RGBA};
+    use vista::passes::cull_patches::CullStages;
+    use vista::render::RendererOptions;
+    use vista::world::bake_region;
+    common::gpu_test(|ctx| {
+        let world = small_world();
+        let base: Arc<dyn HeightSource> = Arc::new(Surface::Hills);
+        let size = [160, 96];
+        let v = view([512.0, 150.0, 520.0], 0.0, -25.0, size, 1.0);
+        let mut rig = Rig::with_source(ctx, world, Arc::clone(&base), vec![], size, false, RendererOptions::default());
+        let before = rig.shot(ctx, &v, CullStages::ALL);
+        // A 200 m plateau raised in front of the camera (max, flat map).
+        let mut p = placement([512.0, 420.0], 200.0, 25.0, 80.0, 380.0, StampBlend::Max);
+        p.falloff_m = 30.0;
+        let stamp = Stamp::new(p, GridSource::new(2, 2, vec![1.0; 4], [200.0; 2])).unwrap();
+        let region = stamp.bounds_m();
+        let stamped: Arc<dyn HeightSource> = Arc::new(StampedSource::new(Arc::clone(&base), vec![stamp]));
+        let resident = rig.renderer.terrain.resident_nodes();
+        let touched = resident
+            .iter()
+            .filter(|id| {
+                let r = bake_region(&world, **id);
+                r[0] <= region[2] && r[2] >= region[0] && r[1] <= region[3] && r[3] >= region[1]
+            })
+            .count();
+        let reloaded = rig.renderer.replace_source(Arc::clone(&stamped), region).unwrap();
+        assert_eq!(reloaded, touched, "every resident node whose bake reads the stamp, and only those");
+        assert!(reloaded > 0 && reloaded < resident.len(), "{reloaded} of {}", resident.len());
+        // The frames while the reloads come in: never a gap.
+        let terrain_before = before.rgba.chunks(4).filter(|p| *p != MAGENTA_RGBA).count();
+        for _ in 0..3 {
+            let mid = rig.again(ctx, &v, CullStages::ALL);
+            let terrain = mid.rgba.chunks(4).filter(|p| *p != MAGENTA_RGBA).count();
+            assert!(
+                terrain >= terrain_before,
+                "a gap while reloading: {terrain} terrain pixels, {terrain_before} before"
+            );
+        }
+        let after = rig.shot(ctx, &v, CullStages::ALL);
+        assert_ne!(after.depth, before.depth, "the stamp shows");
+        let mut fresh = Rig::with_source(ctx, world, stamped, vec![], size, false, RendererOptions::default());
+        let want = fresh.shot(ctx, &v, CullStages::ALL);
+        assert_eq!(rig.renderer.terrain.resident_nodes(), fresh.renderer.terrain.resident_nodes());
+        assert!(after.depth == want.depth && after.rgba == want.rgba, "the edited renderer draws the stamped world");
+        println!("{reloaded} of {} resident nodes reloaded", resident.len());
+    });
+}

@@ -28,6 +28,11 @@ fn dir() -> PathBuf {
 /// needs one); returns stdout, failing the test with stderr on a non-zero
 /// exit.
 fn on_xvfb(window_manager: bool, args: &[&str]) -> String {
+    on_xvfb_in(window_manager, args, &WORLD)
+}
+
+/// As `on_xvfb`, in the world `world` names.
+fn on_xvfb_in(window_manager: bool, args: &[&str], world: &[&str]) -> String {
     let vista = vista_cmd();
     let mut c = std::process::Command::new("xvfb-run");
     c.args(["-a", "-s", "-screen 0 640x480x24"]);
@@ -38,7 +43,7 @@ fn on_xvfb(window_manager: bool, args: &[&str]) -> String {
         c.args(["sh", "-c", wm, "sh"]);
     }
     c.args([vista.get_program().to_str().unwrap(), "--validation"]);
-    c.args(args).args(WORLD);
+    c.args(args).args(world);
     c.envs(vista.get_envs().filter_map(|(k, v)| v.map(|v| (k, v))));
     let out = c.output().expect("xvfb-run (tools/install-deps installs xvfb)");
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
@@ -140,6 +145,55 @@ fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() 
         })
         .count();
     assert!(grey > 300, "the overlay is missing from the flight's screenshot ({grey} of 400 pixels grey)");
+}
+
+/// A stamp added to the scene while `vista view` runs (a flight's `scene`
+/// line, which is what an edit of the scene file does): the nodes it
+/// touches reload without a restart, and the last picture is `vista
+/// render`'s of the stamped scene.
+#[test]
+fn a_stamp_added_while_the_view_runs_shows_without_a_restart() {
+    let d = dir();
+    let world = "[world]\nsource = \"procedural\"\nextent = 2048\nspacing = 2\nlods = 4\n";
+    let stamp = format!(
+        "[[stamps]]\nsource = \"{}/scenes/stamps/mountain.png\"\ncenter = [1024, 700]\nsize = 400\nheight = 300\n\
+         offset = 800\nblend = \"max\"\nfalloff = 40\n",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let (plain, stamped) = (d.join("plain.toml"), d.join("stamped.toml"));
+    std::fs::write(&plain, world).unwrap();
+    std::fs::write(&stamped, format!("{world}{stamp}")).unwrap();
+    let flight = d.join("edit.txt");
+    let camera = "1024,200,420,0,-20";
+    // Half-way, once the plain world is resident.
+    std::fs::write(&flight, format!("{camera}\n{camera}\nscene stamped.toml\n{camera}\n")).unwrap();
+    let shot = d.join("edited.png");
+    let scene = ["--scene", plain.to_str().unwrap()];
+    let flown = ["--path", flight.to_str().unwrap(), "--screenshot", shot.to_str().unwrap()];
+    let args = [&["view", "--size", SIZE, "--frames", "20", "--no-overlay"][..], &flown[..]].concat();
+    let out = on_xvfb_in(false, &args, &scene);
+    let line = out.lines().find(|l| l.starts_with("scene ")).unwrap_or_else(|| panic!("no scene line:\n{out}"));
+    assert!(line.contains("stamped.toml: stamps changed over 824,500 .. 1224,900 m (1 now)"), "{line}");
+    let reloaded: u32 = line.split("; ").nth(1).and_then(|r| r.split(' ').next()?.parse().ok()).unwrap();
+    assert!(reloaded > 0, "{line}");
+    assert!(out.contains("0 Vulkan objects alive at exit"), "{out}");
+    let rendered = d.join("stamped-render");
+    let render = vista_cmd()
+        .args(["--validation", "render", "--size", SIZE, "--camera", camera, "--frames", "3", "--out"])
+        .arg(&rendered)
+        .args(["--scene", stamped.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
+    let (got, size) = png(&shot);
+    let (want, want_size) = png(&rendered.join("image.png"));
+    assert_eq!(size, want_size);
+    // The golden images' tolerance, as for the first test's screenshot.
+    let stats = flip_stats(flip_map(&want, &got, size));
+    assert!(
+        stats.mean <= 0.005 && stats.p99 <= 0.05,
+        "edited view against vista render of the stamped scene: {stats:?}"
+    );
 }
 
 /// `examples/embed`: an engine with its own device, swapchain, targets and

@@ -285,11 +285,13 @@ impl TerrainRenderer {
         let gbuffer_tiles = GbufferTiles::new(ctx, &variants, tile_materials, every, depth.format)?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
         let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
+        // Per-slot resources cover the reload slots too (gpu_quadtree::RELOAD_SLOTS).
+        let slot_capacity = terrain.tree.slot_capacity();
         let build =
             CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes), occlusion: on(Effect::Occlusion) };
         let cull = CullPatches::new(ctx, &traverse, geometry.index_count(), build)?;
         let occlusion = if build.occlusion {
-            let occluded = CullOccluded::new(ctx, &traverse, geometry.index_count(), build, options.terrain.slots)?;
+            let occluded = CullOccluded::new(ctx, &traverse, geometry.index_count(), build, slot_capacity)?;
             Some(Occlusion { hiz: HizBuild::new(ctx)?, cull: occluded })
         } else {
             None
@@ -321,7 +323,7 @@ impl TerrainRenderer {
             lod_map: LodMap::new(ctx, world)?,
             sector_data,
             terrain,
-            select: SelectPatches::new(ctx, world, options.terrain.slots)?,
+            select: SelectPatches::new(ctx, world, slot_capacity)?,
             traverse,
             cull,
             occlusion,
@@ -337,7 +339,7 @@ impl TerrainRenderer {
                 depth.format,
             )?,
             sun_shadows: if on(Effect::Shadows) {
-                Some(SunShadows::new(ctx, options.effects.shadows, options.terrain.slots)?)
+                Some(SunShadows::new(ctx, options.effects.shadows, slot_capacity)?)
             } else {
                 None
             },
@@ -613,6 +615,14 @@ impl TerrainRenderer {
     /// frame now shows what more frames would.
     pub fn settled(&self) -> bool {
         self.terrain.settled() && self.shadow_schedule.stale() == 0
+    }
+
+    /// The world's height source was edited over `region` (a stamp added,
+    /// moved or removed): see [`Terrain::replace_source`]. The resident
+    /// nodes it touches reload while the old ones stay drawn (their sun
+    /// shadows are marched again as for arrivals); returns how many.
+    pub fn replace_source(&mut self, source: Arc<dyn HeightSource>, region: [f64; 4]) -> Result<usize> {
+        self.terrain.replace_source(source, region)
     }
 
     /// How the last frame was submitted (None before the first).

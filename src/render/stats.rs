@@ -63,6 +63,7 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
         overflow: c.traverse.overflow,
         missing_roots: c.traverse.missing_roots,
         streaming: terrain.stats(),
-        plane_tiles: (renderer.shade.allowed & crate::shaders::consts::FLAVOUR_CONTROL_MAP != 0).then_some(c.plane_tiles),
+        plane_tiles: (renderer.shade.allowed & crate::shaders::consts::FLAVOUR_CONTROL_MAP != 0)
+            .then_some(c.plane_tiles),
     })
 }

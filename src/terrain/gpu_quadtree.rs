@@ -148,6 +148,13 @@ struct RingSlot {
     payloads: Buffer,
 }
 
+struct Waiting {
+    node: BakedNode,
+    lod_bias: i8,
+    /// A new payload for a resident node: it moves to a fresh slot.
+    reload: bool,
+}
+
 pub struct GpuQuadtree {
     pub shadow: QuadtreeShadow,
     pub node_texture: Image,
@@ -163,7 +170,8 @@ pub struct GpuQuadtree {
     /// the ring advances with the frames, not with the uploads.
     frame: u64,
     current: usize,
-    waiting: VecDeque<(BakedNode, i8)>,
+    /// Payloads to upload: arrivals, and reloads of resident nodes.
+    waiting: VecDeque<Waiting>,
     update_capacity: u32,
     /// Nodes made resident by this frame's `prepare_frame`, with their slots.
     arrived: Vec<(NodeId, u32)>,
@@ -190,7 +198,7 @@ impl GpuQuadtree {
         if extent.iter().any(|&e| e > max) {
             return Err(node_texture_error(ctx, world, extent, None));
         }
-        let mut shadow = QuadtreeShadow::new(world, slots);
+        let mut shadow = QuadtreeShadow::new(world, crate::world::slot_capacity(slots));
         // A freed slot waits until the frames that drew its last node are done.
         shadow.set_reuse_delay(frames_in_flight.max(1) as u64);
         let node_texture = Image::new(
@@ -209,7 +217,7 @@ impl GpuQuadtree {
         )
         .map_err(|e| node_texture_error(ctx, world, extent, Some(e)))?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-        let layers = slots + FIRST_SLOT;
+        let layers = shadow.slot_capacity() + FIRST_SLOT;
         let node_descs = Buffer::new(
             ctx,
             &BufferDesc {
@@ -343,7 +351,7 @@ impl GpuQuadtree {
 
     /// Removes a resident (or still waiting) node; its slot is free at once.
     pub fn remove(&mut self, id: NodeId) {
-        self.waiting.retain(|(n, _)| n.id != id);
+        self.waiting.retain(|w| w.node.id != id);
         self.shadow.remove(id);
     }
 
@@ -351,7 +359,24 @@ impl GpuQuadtree {
     /// uploaded by `record_updates` (at most MAX_UPLOADS_PER_FRAME a frame).
     pub fn add(&mut self, node: BakedNode, lod_bias: i8) {
         assert_eq!(node.format, self.format, "{} baked for other atlases", node.id);
-        self.waiting.push_back((node, lod_bias));
+        self.waiting.push_back(Waiting { node, lod_bias, reload: false });
+    }
+
+    /// Queues a new payload for a resident node (its source was edited):
+    /// uploaded like an arrival into a fresh slot, which replaces the old
+    /// one in the same update, so the node is drawn without a gap. Dropped
+    /// if the node leaves before then.
+    pub fn reload(&mut self, node: BakedNode, lod_bias: i8) {
+        assert_eq!(node.format, self.format, "{} baked for other atlases", node.id);
+        self.waiting.retain(|w| w.node.id != node.id || !w.reload);
+        self.waiting.push_back(Waiting { node, lod_bias, reload: true });
+    }
+
+    /// Slots the GPU resources hold: the budget and the reload slots
+    /// ([`crate::world::slot_capacity`]); every per-slot resource of a pass
+    /// is this large.
+    pub fn slot_capacity(&self) -> u32 {
+        self.shadow.slot_capacity()
     }
 
     /// Whether the next `prepare_frame` has anything to upload or write
@@ -416,15 +441,19 @@ impl GpuQuadtree {
         self.current = slot_index;
         let mut uploaded = Vec::new();
         while uploaded.len() < MAX_UPLOADS_PER_FRAME {
-            let Some((node, bias)) = self.waiting.pop_front() else { break };
-            if self.shadow.slot_of(node.id).is_some() {
+            let Some(w) = self.waiting.pop_front() else { break };
+            let resident = self.shadow.slot_of(w.node.id).is_some();
+            if resident != w.reload {
+                // An arrival already resident, or a reload of a node gone.
                 continue;
             }
-            let Some(slot) = self.shadow.add(node.id, NodeDesc::from_baked(&node, bias)) else {
-                self.waiting.push_front((node, bias));
+            let desc = NodeDesc::from_baked(&w.node, w.lod_bias);
+            let slot = if w.reload { self.shadow.replace(w.node.id, desc) } else { self.shadow.add(w.node.id, desc) };
+            let Some(slot) = slot else {
+                self.waiting.push_front(w);
                 break;
             };
-            uploaded.push((node, slot));
+            uploaded.push((w.node, slot));
         }
         let ring = &mut self.ring[slot_index];
         let mapped = ring.payloads.mapped_mut().expect("mapped");

@@ -131,6 +131,9 @@ pub struct TerrainStats {
 pub struct Terrain {
     pub world: WorldDesc,
     streamer: Streamer,
+    /// How payloads are made: what a new source needs for a new loader.
+    recipe: LoaderRecipe,
+    errors: Arc<ErrorTree>,
     pub tree: GpuQuadtree,
     stats: TerrainStats,
     ring_prefetch: bool,
@@ -164,7 +167,6 @@ impl Terrain {
             ..ResidencyConfig::default()
         };
         let residency = Residency::new(world, config)?;
-        let threads = options.loader_threads;
         let errors = match &options.errors {
             Some(e) => {
                 assert!(
@@ -175,40 +177,20 @@ impl Terrain {
             }
             None => Arc::new(ErrorTree::new(world, Arc::clone(&source), options.cache_dir.as_deref())?),
         };
-        let loader = match (&options.load, &options.cache_dir) {
-            (Some(load), _) => {
-                // A caller's payloads without errors get the world's.
-                let load = Arc::clone(&load.0);
-                Loader::new(
-                    threads,
-                    Arc::new(move |id| {
-                        let mut node = load(id)?;
-                        if node.max_error_m.is_infinite() {
-                            errors.attach(&mut node)?;
-                        }
-                        Ok(node)
-                    }),
-                )?
-            }
-            (None, Some(dir)) => Loader::with_cache(
-                threads,
-                Arc::new(
-                    NodeCache::with_settings(dir, *world, source, holes, options.bake.clone())?.with_errors(errors),
-                ),
-            )?,
-            (None, None) => {
-                let (w, settings) = (*world, options.bake.clone());
-                let load: Arc<LoadFn> = Arc::new(move |id| {
-                    let mut node = bake_node_with(&*source, &w, &holes, &settings, id);
-                    errors.attach(&mut node)?;
-                    Ok(node)
-                });
-                Loader::new(threads, load)?
-            }
+        let recipe = LoaderRecipe {
+            world: *world,
+            holes,
+            bake: options.bake.clone(),
+            cache_dir: options.cache_dir.clone(),
+            threads: options.loader_threads,
+            custom: options.load.clone(),
         };
+        let loader = recipe.loader(source, Arc::clone(&errors))?;
         Ok(Terrain {
             world: *world,
             streamer: Streamer::new(residency, loader),
+            recipe,
+            errors,
             tree,
             stats: TerrainStats::default(),
             ring_prefetch: options.ring_prefetch,
@@ -257,6 +239,9 @@ impl Terrain {
         for node in s.arrived {
             self.tree.add(node, 0);
         }
+        for node in s.reloaded {
+            self.tree.reload(node, 0);
+        }
         let root_lod = self.world.root_lod();
         for ((id, e), fate) in s.failed.iter().zip(&s.fates) {
             log::error!("node {id} failed to load ({fate:?}): {e}");
@@ -282,6 +267,37 @@ impl Terrain {
         }
     }
 
+    /// Loads every resident node whose bake reads `region` ([min x, min
+    /// y, max x, max y] metres: [`crate::world::bake_region`]) again: each
+    /// is drawn from its old payload until the new one is uploaded, then
+    /// swapped in one update (no gap). For a caller's loader whose data
+    /// changed there; an edited height source goes through
+    /// [`Self::replace_source`]. Returns how many nodes reload.
+    pub fn invalidate(&mut self, region: [f64; 4]) -> usize {
+        let touched = touches(self.world, region);
+        let ids: Vec<NodeId> = self.streamer.residency().resident().filter(|id| touched(*id)).collect();
+        ids.iter().filter(|id| self.streamer.reload(**id)).count()
+    }
+
+    /// The world's height source was edited (a stamp added, moved or
+    /// removed) over `region`: payloads are made from `source` from now on
+    /// (the error tree keeps the roots the edit leaves alone), loads under
+    /// way are made again from it, and the resident nodes the edit touches
+    /// reload ([`Self::invalidate`]). Refused for a caller's loader
+    /// ([`TerrainOptions::load`]), which does not read the source.
+    pub fn replace_source(&mut self, source: Arc<dyn HeightSource>, region: [f64; 4]) -> Result<usize> {
+        if self.recipe.custom.is_some() {
+            return Err(crate::error::Error::BadInput(
+                "replace_source: this terrain's payloads come from the caller's loader, not a height source".into(),
+            ));
+        }
+        let errors = Arc::new(self.errors.edited(Arc::clone(&source), self.recipe.cache_dir.as_deref())?);
+        let loader = self.recipe.loader(source, Arc::clone(&errors))?;
+        self.streamer.replace_loader(loader, touches(self.world, region));
+        self.errors = errors;
+        Ok(self.invalidate(region))
+    }
+
     /// Streaming counters; `waiting_upload` is what `quadtree_update` has
     /// not uploaded yet.
     pub fn stats(&self) -> TerrainStats {
@@ -293,6 +309,7 @@ impl Terrain {
     /// from [`Terrain::stream`], and never settles).
     pub fn settled(&self) -> bool {
         self.stats.loading == 0
+            && self.streamer.reloading() == 0
             && self.stats.retry_waiting == 0
             && self.tree.waiting() == 0
             && self.root_failure.is_none()
@@ -306,6 +323,64 @@ impl Terrain {
             report = report.with_control();
         }
         mask_memory(report, self.tree.atlas_set())
+    }
+}
+
+/// Whether node `id`'s bake reads anything in `region`.
+fn touches(world: WorldDesc, region: [f64; 4]) -> impl Fn(NodeId) -> bool {
+    move |id| {
+        let r = crate::world::bake_region(&world, id);
+        r[0] <= region[2] && r[2] >= region[0] && r[1] <= region[3] && r[3] >= region[1]
+    }
+}
+
+/// What a terrain's loader is made from (again, when its source changes).
+struct LoaderRecipe {
+    world: WorldDesc,
+    holes: Vec<Hole>,
+    bake: BakeSettings,
+    cache_dir: Option<PathBuf>,
+    threads: usize,
+    custom: Option<CustomLoad>,
+}
+
+impl LoaderRecipe {
+    /// Payloads from the caller's loader, the cache folder or a bake in
+    /// memory, each with the world's errors.
+    fn loader(&self, source: Arc<dyn HeightSource>, errors: Arc<ErrorTree>) -> Result<Loader> {
+        let threads = self.threads;
+        Ok(match (&self.custom, &self.cache_dir) {
+            (Some(load), _) => {
+                // A caller's payloads without errors get the world's.
+                let load = Arc::clone(&load.0);
+                Loader::new(
+                    threads,
+                    Arc::new(move |id| {
+                        let mut node = load(id)?;
+                        if node.max_error_m.is_infinite() {
+                            errors.attach(&mut node)?;
+                        }
+                        Ok(node)
+                    }),
+                )?
+            }
+            (None, Some(dir)) => {
+                let (w, holes, bake) = (self.world, self.holes.clone(), self.bake.clone());
+                Loader::with_cache(
+                    threads,
+                    Arc::new(NodeCache::with_settings(dir, w, source, holes, bake)?.with_errors(errors)),
+                )?
+            }
+            (None, None) => {
+                let (w, holes, settings) = (self.world, self.holes.clone(), self.bake.clone());
+                let load: Arc<LoadFn> = Arc::new(move |id| {
+                    let mut node = bake_node_with(&*source, &w, &holes, &settings, id);
+                    errors.attach(&mut node)?;
+                    Ok(node)
+                });
+                Loader::new(threads, load)?
+            }
+        })
     }
 }
 

@@ -213,6 +213,29 @@ impl QuadtreeShadow {
         self.cooling = waiting;
     }
 
+    /// Moves resident `id` to a fresh slot holding `desc` (a new payload
+    /// for it: an edited source) in one coalesced write: the texel names the
+    /// new slot, the old one cools like a removed one. None while no slot
+    /// is free (or `id` is not resident: the caller drops the payload).
+    pub fn replace(&mut self, id: NodeId, desc: NodeDesc) -> Option<u32> {
+        let old = self.slot_of(id)?;
+        let slot = self.free.pop()?;
+        self.set_texel(id, slot as u16);
+        let packed = desc.pack(slot);
+        self.descs[slot as usize] = packed;
+        self.desc_writes.insert(slot, packed);
+        self.errors[slot as usize] = desc.max_error_m;
+        self.error_writes.insert(slot, desc.max_error_m);
+        self.descs[old as usize] = [0, 0];
+        self.desc_writes.insert(old, [0, 0]);
+        if self.reuse_delay == 0 {
+            self.free.push(old);
+        } else {
+            self.cooling.push_back((self.frame + self.reuse_delay, old));
+        }
+        Some(slot)
+    }
+
     /// Freed slots still waiting out the reuse delay (neither free nor resident).
     pub fn cooling_count(&self) -> usize {
         self.cooling.len()

@@ -127,6 +127,25 @@ impl ErrorTree {
         })
     }
 
+    /// The error tree of the same world after an edit of its source
+    /// (`cache_dir` as for [`Self::new`]): the root tiles made so far that
+    /// the edit leaves alone (the source hashes alike over them) come
+    /// along, the others are made again when asked for (or read from the
+    /// folder, where an earlier run left them).
+    pub fn edited(&self, source: Arc<dyn HeightSource>, cache_dir: Option<&Path>) -> Result<ErrorTree> {
+        let tree = ErrorTree::new(&self.world, source, cache_dir)?;
+        let root_lod = self.world.root_lod();
+        let old = self.roots.lock().unwrap_or_else(|e| e.into_inner());
+        let mut kept = tree.roots.lock().unwrap_or_else(|e| e.into_inner());
+        for (id, cell) in old.iter().filter(|(id, _)| id.lod == root_lod) {
+            if let Some(tile) = cell.get().filter(|_| self.tile_keys(*id) == tree.tile_keys(*id)) {
+                kept.insert(*id, Arc::new(OnceLock::from(Arc::clone(tile))));
+            }
+        }
+        drop(kept);
+        Ok(tree)
+    }
+
     /// Where the root tiles are cached (`None`: in memory only).
     pub fn dir(&self) -> Option<&Path> {
         self.dir.as_deref()

@@ -34,6 +34,17 @@ pub const DEFAULT_MAX_BAKE_DISK_BYTES: u64 = 64 << 30;
 /// Resident slots a plan assumes when none are given (the renderer's
 /// default budget).
 pub const DEFAULT_SLOTS: u32 = 512;
+
+/// Slots the GPU keeps beyond the residency budget: a reloaded node (an
+/// edited source) moves to a fresh slot while frames in flight still read
+/// its old one, so a full budget does not stall the reload (fewer where
+/// the budget is near the 10-bit limit: [`slot_capacity`]).
+pub const RELOAD_SLOTS: u32 = 8;
+
+/// Node slots the GPU resources hold for a residency budget of `slots`.
+pub fn slot_capacity(slots: u32) -> u32 {
+    (slots + RELOAD_SLOTS).min(crate::shaders::consts::MAX_SLOTS)
+}
 /// Single-thread seconds to bake one node when no sample was timed: the
 /// whole default procedural world baked and written (`vista bake`, 34 125
 /// nodes, BC payloads, zstd) on the 2-core development VM took 513 thread
@@ -358,8 +369,8 @@ impl WorldPlan {
             }
         }
         if let Some(max) = limits.max_image_array_layers {
-            // Slot 0 is reserved: one layer more than slots.
-            let layers = u64::from(self.slots) + 1;
+            // Slot 0 is reserved: one layer more than the GPU's slots.
+            let layers = u64::from(slot_capacity(self.slots)) + 1;
             if layers > u64::from(max) {
                 return Err(PlanError::TooManyLayers { slots: self.slots, layers, max });
             }

@@ -436,10 +436,12 @@ fn dist_to_box(p: [f64; 2], b: [f64; 4]) -> f64 {
 }
 
 /// One frame of streaming for the GPU side: apply `removed` (free slots)
-/// then upload `arrived`.
+/// then upload `arrived` and `reloaded`.
 #[derive(Debug, Default)]
 pub struct StreamFrame {
     pub arrived: Vec<BakedNode>,
+    /// New payloads of resident nodes asked for by [`Streamer::reload`].
+    pub reloaded: Vec<BakedNode>,
     pub removed: Vec<NodeId>,
     /// Loads that failed this frame, and what becomes of each node.
     pub failed: Vec<(NodeId, WorldError)>,
@@ -452,11 +454,47 @@ pub struct Streamer {
     loader: Loader,
     /// Loaded payloads waiting for their parent to become resident.
     parked: HashMap<NodeId, BakedNode>,
+    /// Resident nodes whose payload is being made again ([`Self::reload`]):
+    /// they stay drawn until it arrives.
+    reloading: HashSet<NodeId>,
 }
 
 impl Streamer {
     pub fn new(residency: Residency, loader: Loader) -> Self {
-        Streamer { residency, loader, parked: HashMap::new() }
+        Streamer { residency, loader, parked: HashMap::new(), reloading: HashSet::new() }
+    }
+
+    /// Makes every payload with `loader` from now on (the source was
+    /// edited): loads under way, and payloads parked for their parent for
+    /// which `stale` is true, are asked of it again; the old loader's
+    /// queue is dropped with it.
+    pub fn replace_loader(&mut self, loader: Loader, stale: impl Fn(NodeId) -> bool) {
+        self.loader = loader;
+        self.parked.retain(|id, _| !stale(*id));
+        let pending: Vec<NodeId> =
+            self.residency.slots.iter().filter(|(_, s)| **s == Slot::Pending).map(|(id, _)| *id).collect();
+        for id in pending.into_iter().filter(|id| !self.parked.contains_key(id)).chain(self.reloading.iter().copied()) {
+            self.loader.request(id);
+        }
+    }
+
+    /// Loads resident `id` again (its source changed); the payload comes
+    /// back in [`StreamFrame::reloaded`] while the old one stays drawn.
+    /// False when `id` is not resident (a pending load gets the new
+    /// source anyway).
+    pub fn reload(&mut self, id: NodeId) -> bool {
+        if !self.residency.is_resident(id) {
+            return false;
+        }
+        if self.reloading.insert(id) {
+            self.loader.request(id);
+        }
+        true
+    }
+
+    /// Reloads not back yet.
+    pub fn reloading(&self) -> usize {
+        self.reloading.len()
     }
 
     pub fn residency(&self) -> &Residency {
@@ -472,11 +510,29 @@ impl Streamer {
             self.loader.cancel(*id);
             self.parked.remove(id);
         }
+        for id in &changes.removes {
+            if self.reloading.remove(id) {
+                self.loader.cancel(*id);
+            }
+        }
         for id in &changes.adds {
             self.loader.request(*id);
         }
         let mut frame = StreamFrame { removed: changes.removes, ..StreamFrame::default() };
         for (id, result) in self.loader.poll() {
+            if self.reloading.remove(&id) && self.residency.is_resident(id) {
+                match result {
+                    Ok(node) => {
+                        let w = self.residency.world;
+                        let z = [w.decode_height(node.min_height), w.decode_height(node.max_height)];
+                        self.residency.note_bounds(id, node.max_error_m, z);
+                        frame.reloaded.push(node);
+                    }
+                    // The old payload stays: better stale than missing.
+                    Err(e) => log::error!("node {id} could not be reloaded (its old payload stays): {e}"),
+                }
+                continue;
+            }
             match result {
                 Ok(node) => {
                     self.parked.insert(id, node);

@@ -96,6 +96,8 @@ pub struct LoadedWorld {
     /// The limits it was planned against (the library checks them again
     /// with the device's).
     pub limits: Limits,
+    /// Each stamp's id and box, in order: what a scene edit compares.
+    pub stamps: Vec<(u64, [f64; 4])>,
 }
 
 /// Refuses a slot budget the renderer cannot use for `world`, in the
@@ -429,14 +431,19 @@ impl WorldSpec {
     fn with_source(self, source: Arc<dyn HeightSource>, label: String) -> LoadedWorld {
         let (desc, holes, effects, origin_m, limits, bake) =
             (self.desc, self.holes, self.effects, self.origin_m, self.limits, self.bake);
-        LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake }
+        LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps: Vec::new() }
     }
 
     /// The source with the scene's stamps on it (each map read now), checked
-    /// to stay inside the world's height range.
-    fn stamped(&self, base: Arc<dyn HeightSource>, desc: &WorldDesc) -> Result<Arc<dyn HeightSource>> {
+    /// to stay inside the world's height range, and each stamp's id and box.
+    #[allow(clippy::type_complexity)]
+    fn stamped(
+        &self,
+        base: Arc<dyn HeightSource>,
+        desc: &WorldDesc,
+    ) -> Result<(Arc<dyn HeightSource>, Vec<(u64, [f64; 4])>)> {
         if self.stamps.is_empty() {
-            return Ok(base);
+            return Ok((base, Vec::new()));
         }
         let mut stamps = Vec::with_capacity(self.stamps.len());
         for (i, st) in self.stamps.iter().enumerate() {
@@ -444,9 +451,10 @@ impl WorldSpec {
             let map = vista::world::load_stamp_map(&st.source, st.placement.size_m).map_err(at)?;
             stamps.push(vista::world::Stamp::new(st.placement, map).map_err(at)?);
         }
+        let keys = stamps.iter().map(|s| (s.id_hash(), s.bounds_m())).collect();
         let stamped = vista::world::StampedSource::new(base, stamps);
         stamped.check_range(desc.height_range_m)?;
-        Ok(Arc::new(stamped))
+        Ok((Arc::new(stamped), keys))
     }
 
     /// Reads the height map (or makes the procedural source).
@@ -463,7 +471,7 @@ impl WorldSpec {
                 (desc, source, path.display().to_string())
             }
         };
-        let source = self.stamped(source, &desc).map_err(input_error)?;
+        let (source, stamps) = self.stamped(source, &desc).map_err(input_error)?;
         let mut bake = self.bake.clone();
         bake.control = vista::render::materials::control_bake(&self.effects, &desc, bake.materials)
             .map_err(|e| input_error(anyhow::anyhow!("{e}")))?;
@@ -471,7 +479,7 @@ impl WorldSpec {
             label += &format!(" with {} stamp{}", self.stamps.len(), if self.stamps.len() == 1 { "" } else { "s" });
         }
         let (holes, effects, origin_m, limits) = (self.holes, self.effects, self.origin_m, self.limits);
-        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake })
+        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps })
     }
 }
 

@@ -72,7 +72,9 @@ impl FlyCamera {
 /// `size WxH` asks the window for that size when the flight reaches it, a
 /// line `minimise` minimises it there (`minimise.rs`), a line `lose-surface`
 /// makes the next swapchain acquisition report a lost surface (injected, as
-/// a window system may report it), which the viewer remakes.
+/// a window system may report it), which the viewer remakes; a line
+/// `scene FILE` (relative to the flight's file) takes that scene's stamps
+/// there, as an edit of the scene file would (`scene_edit.rs`).
 pub struct FlightPath {
     keys: Vec<Camera>,
     /// (cameras before it, size).
@@ -81,12 +83,15 @@ pub struct FlightPath {
     minimises: Vec<usize>,
     /// Cameras before each `lose-surface` line.
     surface_losses: Vec<usize>,
+    /// (cameras before it, the scene file) of each `scene` line.
+    scenes: Vec<(usize, std::path::PathBuf)>,
 }
 
 impl FlightPath {
     pub fn load(path: &Path) -> Result<FlightPath> {
         let text = std::fs::read_to_string(path).with_context(|| format!("--path {}", path.display()))?;
         let (mut keys, mut sizes, mut minimises, mut surface_losses) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut scenes = Vec::new();
         for (n, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("").trim();
             if line.is_empty() {
@@ -106,6 +111,11 @@ impl FlightPath {
                 surface_losses.push(keys.len());
                 continue;
             }
+            if let Some(file) = line.strip_prefix("scene ") {
+                let dir = path.parent().unwrap_or(Path::new("."));
+                scenes.push((keys.len(), vista::world::resolve_relative(dir, Path::new(file.trim()))));
+                continue;
+            }
             let arg = crate::render_cmd::parse_camera(line)
                 .map_err(|e| anyhow::anyhow!("--path {} line {}: {e}", path.display(), n + 1))?;
             let [yaw_deg, pitch_deg] = arg.angles.ok_or_else(|| {
@@ -116,7 +126,7 @@ impl FlightPath {
         if keys.is_empty() {
             bail!("--path {}: no camera in it (one X,Y,Z,YAW,PITCH per line)", path.display());
         }
-        Ok(FlightPath { keys, sizes, minimises, surface_losses })
+        Ok(FlightPath { keys, sizes, minimises, surface_losses, scenes })
     }
 
     /// The frame of `frames` at which the flight reaches the line that
@@ -139,6 +149,11 @@ impl FlightPath {
     /// Whether the flight loses the window's surface at `frame` of `frames`.
     pub fn surface_lost_at(&self, frame: u32, frames: u32) -> bool {
         self.surface_losses.iter().any(|&k| self.reached(k, frames) == frame)
+    }
+
+    /// The scene file the flight switches to at `frame` of `frames`.
+    pub fn scene_at(&self, frame: u32, frames: u32) -> Option<&Path> {
+        self.scenes.iter().find(|(k, _)| self.reached(*k, frames) == frame).map(|(_, p)| p.as_path())
     }
 
     pub fn first(&self) -> Camera {
@@ -181,6 +196,7 @@ mod tests {
             sizes: vec![(2, [64, 32])],
             minimises: vec![1],
             surface_losses: vec![2],
+            scenes: vec![(3, "s.toml".into())],
         };
         assert_eq!(p.at(0, 5), cam(0.0, 350.0));
         assert_eq!(p.at(4, 5), cam(300.0, 10.0));
@@ -194,6 +210,7 @@ mod tests {
         // After the first camera: the start.
         assert!(p.minimise_at(0, 5) && !p.minimise_at(1, 5));
         assert!(p.surface_lost_at(2, 5) && !p.surface_lost_at(0, 5));
+        assert_eq!(p.scene_at(4, 5), Some(Path::new("s.toml")));
     }
 
     #[test]

@@ -7,6 +7,7 @@
 mod fly;
 mod minimise;
 mod overlay;
+mod scene_edit;
 mod viewer;
 
 use crate::render_cmd::{check_view, ViewpointArgs};
@@ -16,7 +17,7 @@ use clap::Args;
 use fly::{FlightPath, FlyCamera};
 use minimise::{ScriptedMinimise, Step};
 use overlay::{Overlay, Settings};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use viewer::{Frame, OverlayFrame, Viewer};
 use vista::gpu::present::Presenter;
@@ -49,7 +50,8 @@ pub struct ViewArgs {
     /// the window when the flight gets there, a line `minimise` minimises
     /// it there (restored after 10 skipped redraws; needs a window manager),
     /// a line `lose-surface` makes the next acquisition report a lost
-    /// surface (injected), which is remade.
+    /// surface (injected), which is remade, a line `scene FILE` takes that
+    /// scene's stamps there (as an edit of --scene's file does at any time).
     #[arg(long, value_name = "FILE")]
     pub path: Option<PathBuf>,
     /// Write the last presented frame (PNG), read back from the swapchain
@@ -115,6 +117,7 @@ pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: O
     }
     check_view(&view, &world)?;
     let camera = view.camera;
+    let args_scene = args.world.scene.clone();
     let mut app = App {
         fly: FlyCamera::new(camera, world.desc.extent_m),
         settings: Settings {
@@ -146,6 +149,8 @@ pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: O
         minimised_at: None,
         skipped_minimised: 0,
         surface_lost_at: None,
+        scene_at: None,
+        scene_watch: args_scene.map(scene_edit::SceneWatch::new),
         result: None,
     };
     event_loop.run_app(&mut app).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
@@ -196,6 +201,10 @@ struct App {
     skipped_minimised: u64,
     /// The scripted frame whose `lose-surface` line was applied.
     surface_lost_at: Option<u32>,
+    /// The scripted frame whose `scene` line was applied.
+    scene_at: Option<u32>,
+    /// The scene file, read again when it changes.
+    scene_watch: Option<scene_edit::SceneWatch>,
     result: Option<Result<()>>,
 }
 
@@ -225,6 +234,16 @@ impl App {
         let egui = egui::Context::default();
         let egui_state = egui_winit::State::new(egui.clone(), egui::ViewportId::ROOT, &window, None, None, Some(4096));
         Ok(Open { egui_state, egui, viewer, window })
+    }
+
+    /// Takes `file`'s stamps (scene_edit.rs); a scene that cannot be read
+    /// is one line, and the view goes on with the world it has.
+    fn edit_scene(&mut self, file: &Path) {
+        let Some(open) = self.state.as_mut() else { return };
+        match scene_edit::apply(&self.args.world, file, &mut self.world, &mut open.viewer.renderer) {
+            Ok(line) => println!("{line}"),
+            Err(e) => println!("scene {}: {e:#}", file.display()),
+        }
     }
 
     fn fail(&mut self, el: &ActiveEventLoop, e: anyhow::Error) {
@@ -264,6 +283,16 @@ impl App {
             }
             None => self.fly.update(dt.min(0.25)),
         }
+        let scripted_scene = self.path.as_ref().and_then(|p| p.scene_at(scripted_frame, frames));
+        let scripted_scene = scripted_scene.filter(|_| self.scene_at != Some(scripted_frame)).map(Path::to_path_buf);
+        if scripted_scene.is_some() {
+            self.scene_at = Some(scripted_frame);
+        }
+        let watched = self.scene_watch.as_mut().and_then(|w| w.changed(now));
+        if let Some(file) = scripted_scene.or(watched) {
+            self.edit_scene(&file);
+        }
+        let Some(open) = self.state.as_mut() else { return Ok(()) };
         self.view.camera = self.fly.camera;
         viewer::apply(&mut open.viewer.renderer, &self.settings, &mut self.view);
         self.view.size = open.viewer.presenter.extent();
