@@ -307,7 +307,7 @@ fn repainting_a_corner_of_the_control_map_rebakes_only_the_nodes_there() {
     let mut words = vec![base; 256 * 256];
     let map = |words: &[u16]| {
         let m = ControlMap::from_words(256, 256, words, world.extent_m);
-        let control = ControlBake { source: ControlSource::Map(Arc::new(m)), looks: looks.clone() };
+        let control = ControlBake { source: ControlSource::Map(Arc::new(m)), looks: looks.clone(), stamps: Vec::new() };
         BakeSettings { control: Some(control), ..BakeSettings::default() }
     };
     let dir = temp_dir("repaint");
@@ -348,4 +348,71 @@ fn repainting_a_corner_of_the_control_map_rebakes_only_the_nodes_there() {
         assert!(std::fs::read(edited.join(&rel)).unwrap() == std::fs::read(fresh.join(&rel)).unwrap(), "{rel}");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A stamp's own control map: inside the stamp's square, where its blend
+/// weight reaches a half, its words replace the world's (rotated with it);
+/// elsewhere the world's map decides.
+#[test]
+fn a_stamps_control_map_paints_its_square() {
+    use glam::{DMat2, DVec2};
+    use vista::world::{
+        bake_node_with, BakeSettings, ControlBake, ControlLooks, ControlMap, ControlSource, NodeId, StampBlend,
+        StampControl, StampPlacement, CONTROL_TEXTURES,
+    };
+    let world = vista::world::WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [0.0, 300.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..Default::default()
+    };
+    let looks = ControlLooks {
+        albedo: vec![[100, 100, 100]; CONTROL_TEXTURES],
+        smoothness: vec![50; CONTROL_TEXTURES],
+        threshold: vec![0.4; CONTROL_TEXTURES],
+        sharpness: vec![0.1; CONTROL_TEXTURES],
+    };
+    let base = ControlCode { overlay: 2, background: 0, uv_scale: 0, threshold: 3 }.encode();
+    // The stamp's map: 4 x 4 texels, each its own word (overlay = column,
+    // background = row + 8).
+    let word =
+        |i: usize, j: usize| ControlCode { overlay: i as u8, background: 8 + j as u8, uv_scale: 2, threshold: 1 };
+    let words: Vec<u16> = (0..16).map(|k| word(k % 4, k / 4).encode()).collect();
+    let placement = StampPlacement {
+        center_m: [60.0, 70.0],
+        size_m: 80.0,
+        rotation_deg: 30.0,
+        height_m: 10.0,
+        offset_m: 0.0,
+        blend: StampBlend::Add,
+        falloff_m: 20.0,
+    };
+    let stamp = StampControl { placement, map: Arc::new(ControlMap::from_words(4, 4, &words, [80.0; 2])) };
+    let world_map = ControlMap::from_words(1, 1, &[base], world.extent_m);
+    let control = ControlBake { source: ControlSource::Map(Arc::new(world_map)), looks, stamps: vec![stamp] };
+    let settings = BakeSettings { control: Some(control), ..BakeSettings::default() };
+    let node = bake_node_with(&Surface::Plane(100.0), &world, &[], &settings, NodeId::new(0, 0, 0));
+    let (mut inside, mut outside) = (0, 0);
+    for (k, &w) in node.control.iter().enumerate() {
+        // Splat texel k is node sample (2i, 2j): 2 m apart from the corner.
+        let p = DVec2::new(2.0 * (k % 65) as f64, 2.0 * (k / 65) as f64);
+        let local = DMat2::from_angle(-30f64.to_radians()) * (p - DVec2::new(60.0, 70.0));
+        // The weight reaches 0.5 half-way through the 20 m falloff band.
+        let edge = 40.0 - local.x.abs().max(local.y.abs());
+        if (edge - 10.0).abs() < 0.01 {
+            continue;
+        }
+        let want = if edge > 10.0 {
+            inside += 1;
+            // Texel (i, j) of the map, row 0 at the square's north edge.
+            let (i, j) = (((local.x + 40.0) / 20.0) as usize, ((40.0 - local.y) / 20.0) as usize);
+            word(i.min(3), j.min(3)).encode()
+        } else {
+            outside += 1;
+            base
+        };
+        assert_eq!(w, want, "texel {k} at {p}: {:?}", ControlCode::decode(w));
+    }
+    assert!(inside > 500 && outside > 2000, "{inside} inside, {outside} outside");
 }

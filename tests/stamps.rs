@@ -350,7 +350,7 @@ fn a_running_renderer_reloads_the_nodes_a_new_stamp_touches() {
                 r[0] <= region[2] && r[2] >= region[0] && r[1] <= region[3] && r[3] >= region[1]
             })
             .count();
-        let reloaded = rig.renderer.replace_source(Arc::clone(&stamped), region).unwrap();
+        let reloaded = rig.renderer.replace_source(Arc::clone(&stamped), None, region).unwrap();
         assert_eq!(reloaded, touched, "every resident node whose bake reads the stamp, and only those");
         assert!(reloaded > 0 && reloaded < resident.len(), "{reloaded} of {}", resident.len());
         // The frames while the reloads come in: never a gap.

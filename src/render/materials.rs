@@ -343,7 +343,7 @@ pub fn control_bake(
         Some(path) => ControlSource::Map(std::sync::Arc::new(ControlMap::open(path, world.extent_m)?)),
         None => ControlSource::Rules(ControlRules { rules }),
     };
-    Ok(Some(ControlBake { source, looks: set.control_looks(&images) }))
+    Ok(Some(ControlBake { source, looks: set.control_looks(&images), stamps: Vec::new() }))
 }
 
 /// Errors here are messages without the origin, which the caller prepends.

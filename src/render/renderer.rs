@@ -621,8 +621,14 @@ impl TerrainRenderer {
     /// moved or removed): see [`Terrain::replace_source`]. The resident
     /// nodes it touches reload while the old ones stay drawn (their sun
     /// shadows are marched again as for arrivals); returns how many.
-    pub fn replace_source(&mut self, source: Arc<dyn HeightSource>, region: [f64; 4]) -> Result<usize> {
-        self.terrain.replace_source(source, region)
+    /// `bake`: new bake settings too (see [`Terrain::replace_source`]).
+    pub fn replace_source(
+        &mut self,
+        source: Arc<dyn HeightSource>,
+        bake: Option<crate::world::BakeSettings>,
+        region: [f64; 4],
+    ) -> Result<usize> {
+        self.terrain.replace_source(source, bake, region)
     }
 
     /// How the last frame was submitted (None before the first).

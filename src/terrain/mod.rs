@@ -285,11 +285,24 @@ impl Terrain {
     /// way are made again from it, and the resident nodes the edit touches
     /// reload ([`Self::invalidate`]). Refused for a caller's loader
     /// ([`TerrainOptions::load`]), which does not read the source.
-    pub fn replace_source(&mut self, source: Arc<dyn HeightSource>, region: [f64; 4]) -> Result<usize> {
+    /// `bake`: new bake settings too (a stamp's control map edited), of
+    /// the same payload format and materials mode; `None` keeps them.
+    pub fn replace_source(
+        &mut self,
+        source: Arc<dyn HeightSource>,
+        bake: Option<BakeSettings>,
+        region: [f64; 4],
+    ) -> Result<usize> {
+        let bad = |m: &str| Err(crate::error::Error::BadInput(format!("replace_source: {m}")));
         if self.recipe.custom.is_some() {
-            return Err(crate::error::Error::BadInput(
-                "replace_source: this terrain's payloads come from the caller's loader, not a height source".into(),
-            ));
+            return bad("this terrain's payloads come from the caller's loader, not a height source");
+        }
+        if let Some(bake) = bake {
+            let old = &self.recipe.bake;
+            if bake.format != old.format || bake.control.is_some() != old.control.is_some() {
+                return bad("the payload format and the materials mode stay what the renderer was built with");
+            }
+            self.recipe.bake = bake;
         }
         let errors = Arc::new(self.errors.edited(Arc::clone(&source), self.recipe.cache_dir.as_deref())?);
         let loader = self.recipe.loader(source, Arc::clone(&errors))?;

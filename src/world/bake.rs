@@ -128,7 +128,7 @@ pub fn bake_node_with(
                 && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]))
                 && !source.is_hole(pos[0], pos[1]);
             let altitude = f[fj * width + fi];
-            let word = settings.control.as_ref().map(|c| c.source.word(pos[0], pos[1], slope_deg, altitude));
+            let word = settings.control.as_ref().map(|c| c.word(pos[0], pos[1], slope_deg, altitude));
             let (rgb, smooth) = match (&settings.control, word) {
                 (Some(c), Some(w)) => c.looks.look(w, slope01(nrm[2])),
                 _ => material_look(mat, slope_deg),

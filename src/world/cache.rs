@@ -176,7 +176,7 @@ impl NodeCache {
     pub fn node_keys(&self, id: NodeId) -> [u64; 4] {
         let r = bake_region(&self.world, id);
         let near: Vec<Hole> = self.holes.iter().filter(|h| overlaps(h.bounds(), r)).cloned().collect();
-        let control = self.settings.control.as_ref().map_or(0, |c| c.source.region_hash(r));
+        let control = self.settings.control.as_ref().map_or(0, |c| c.region_hash(r));
         [self.keys[0], self.source.region_hash(r), holes_hash(&near), self.keys[3] ^ control]
     }
 

@@ -263,14 +263,52 @@ impl ControlLooks {
     }
 }
 
-/// What a control-map bake needs: the words' source and the looks.
+/// A stamp's own control map (seed 004's stamps copy the control map with
+/// the elevation): inside the stamp's square, where its blend weight is
+/// at least a half, its words replace the world's.
+#[derive(Clone, Debug)]
+pub struct StampControl {
+    pub placement: super::stamps::StampPlacement,
+    /// Over the stamp's square (`size_m` a side, its own axes).
+    pub map: std::sync::Arc<ControlMap>,
+}
+
+impl StampControl {
+    fn word(&self, x_m: f64, y_m: f64) -> Option<u16> {
+        let ([u, v], w) = self.placement.local(x_m, y_m)?;
+        (w >= 0.5).then(|| self.map.word(u, v))
+    }
+
+    fn hash(&self) -> u64 {
+        Fnv64::new().u64(self.placement.hash()).u64(self.map.id_hash()).finish()
+    }
+}
+
+/// What a control-map bake needs: the words' source, the looks, and the
+/// stamps' own control maps.
 #[derive(Clone, Debug)]
 pub struct ControlBake {
     pub source: ControlSource,
     pub looks: ControlLooks,
+    /// In stamp order; the last one covering a point wins.
+    pub stamps: Vec<StampControl>,
 }
 
 impl ControlBake {
+    /// The word at a point: a stamp's where one covers it, else the
+    /// world's (its map's, or the rules' for this slope and altitude).
+    pub fn word(&self, x_m: f64, y_m: f64, slope_deg: f32, altitude_m: f32) -> u16 {
+        let stamped = self.stamps.iter().rev().find_map(|s| s.word(x_m, y_m));
+        stamped.unwrap_or_else(|| self.source.word(x_m, y_m, slope_deg, altitude_m))
+    }
+
+    /// Part of a node's key over `bounds_m`: the source's, and the stamps'
+    /// control maps touching it.
+    pub fn region_hash(&self, bounds_m: [f64; 4]) -> u64 {
+        let touching = self.stamps.iter().filter(|s| s.placement.overlaps(bounds_m));
+        touching.fold(Fnv64::new().u64(self.source.region_hash(bounds_m)), |h, s| h.u64(s.hash())).finish()
+    }
+
     /// The part of the bake settings' hash that is the same everywhere: a
     /// map's texels are in each node's own key
     /// ([`ControlSource::region_hash`]), so repainting a corner rebakes

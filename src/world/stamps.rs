@@ -143,6 +143,70 @@ impl StampPlacement {
         }
         Ok(())
     }
+
+    /// A point's position in the stamp's square (metres from its
+    /// south-west corner along its own axes, 0..size) and its blend weight
+    /// there; `None` outside the square.
+    pub fn local(&self, x_m: f64, y_m: f64) -> Option<([f64; 2], f64)> {
+        self.local_rotated(x_m, y_m, self.rotation())
+    }
+
+    /// cos and sin of the rotation.
+    fn rotation(&self) -> [f64; 2] {
+        let a = self.rotation_deg.to_radians();
+        [a.cos(), a.sin()]
+    }
+
+    /// [`Self::local`] with the rotation's cos and sin given.
+    fn local_rotated(&self, x_m: f64, y_m: f64, [c, s]: [f64; 2]) -> Option<([f64; 2], f64)> {
+        let (dx, dy) = (x_m - self.center_m[0], y_m - self.center_m[1]);
+        // Into the square's frame: rotated back by the stamp's rotation.
+        let (u, v) = (c * dx + s * dy, -s * dx + c * dy);
+        let half = 0.5 * self.size_m;
+        let edge = half - u.abs().max(v.abs());
+        if edge < 0.0 {
+            return None;
+        }
+        let w = if self.falloff_m > 0.0 {
+            let t = (edge / self.falloff_m).min(1.0);
+            t * t * (3.0 - 2.0 * t)
+        } else {
+            1.0
+        };
+        Some(([u + half, v + half], w))
+    }
+
+    /// The axis-aligned box ([min x, min y, max x, max y]) holding the
+    /// rotated square: nothing outside it changes.
+    pub fn bounds_m(&self) -> [f64; 4] {
+        let [c, s] = self.rotation();
+        let half = 0.5 * self.size_m * (c.abs() + s.abs());
+        let [cx, cy] = self.center_m;
+        [cx - half, cy - half, cx + half, cy + half]
+    }
+
+    /// Whether the square's box touches `b`.
+    pub fn overlaps(&self, b: [f64; 4]) -> bool {
+        let s = self.bounds_m();
+        s[0] <= b[2] && s[2] >= b[0] && s[1] <= b[3] && s[3] >= b[1]
+    }
+
+    /// A hash of where and how the stamp is pasted.
+    pub fn hash(&self) -> u64 {
+        [
+            self.center_m[0],
+            self.center_m[1],
+            self.size_m,
+            self.rotation_deg,
+            self.height_m,
+            self.offset_m,
+            self.falloff_m,
+        ]
+        .iter()
+        .fold(Fnv64::new(), |h, v| h.f64(*v))
+        .u64(self.blend as u64)
+        .finish()
+    }
 }
 
 /// One stamp: its placement and its map (values 0..1).
@@ -153,7 +217,7 @@ pub struct Stamp {
     map: GridSource,
     /// The map's normalised range as the resampler can reach it.
     map_range: [f64; 2],
-    /// cos and sin of the rotation.
+    /// cos and sin of the rotation, once (every sample needs them).
     rot: [f64; 2],
     id: u64,
 }
@@ -167,14 +231,9 @@ impl Stamp {
         let rel = |a: f64| (a - placement.size_m).abs() <= 1e-9 * placement.size_m;
         assert!(rel(extent[0]) && rel(extent[1]), "a stamp map of {extent:?} m for a {} m stamp", placement.size_m);
         let r = map.resampled_range();
-        let a = placement.rotation_deg.to_radians();
-        let p = &placement;
-        let id = [p.center_m[0], p.center_m[1], p.size_m, p.rotation_deg, p.height_m, p.offset_m, p.falloff_m]
-            .iter()
-            .fold(Fnv64::new().u64(map.id_hash()), |h, v| h.f64(*v))
-            .u64(p.blend as u64)
-            .finish();
-        Ok(Stamp { placement, map, map_range: [f64::from(r[0]), f64::from(r[1])], rot: [a.cos(), a.sin()], id })
+        let id = Fnv64::new().u64(map.id_hash()).u64(placement.hash()).finish();
+        let rot = placement.rotation();
+        Ok(Stamp { placement, map, map_range: [f64::from(r[0]), f64::from(r[1])], rot, id })
     }
 
     /// A hash of the placement and the map.
@@ -182,39 +241,21 @@ impl Stamp {
         self.id
     }
 
-    /// The axis-aligned box ([min x, min y, max x, max y]) holding the
-    /// rotated square: nothing outside it changes.
+    /// The axis-aligned box holding the rotated square.
     pub fn bounds_m(&self) -> [f64; 4] {
-        let half = 0.5 * self.placement.size_m * (self.rot[0].abs() + self.rot[1].abs());
-        let [cx, cy] = self.placement.center_m;
-        [cx - half, cy - half, cx + half, cy + half]
+        self.placement.bounds_m()
     }
 
     pub fn overlaps(&self, b: [f64; 4]) -> bool {
-        let s = self.bounds_m();
-        s[0] <= b[2] && s[2] >= b[0] && s[1] <= b[3] && s[3] >= b[1]
+        self.placement.overlaps(b)
     }
 
     /// The stamp's height and blend weight at a world point; `None` outside
     /// its square.
     pub fn at(&self, x_m: f64, y_m: f64) -> Option<(f64, f64)> {
         let p = &self.placement;
-        let (dx, dy) = (x_m - p.center_m[0], y_m - p.center_m[1]);
-        let [c, s] = self.rot;
-        // Into the square's frame: rotated back by the stamp's rotation.
-        let (u, v) = (c * dx + s * dy, -s * dx + c * dy);
-        let half = 0.5 * p.size_m;
-        let edge = half - u.abs().max(v.abs());
-        if edge < 0.0 {
-            return None;
-        }
-        let w = if p.falloff_m > 0.0 {
-            let t = (edge / p.falloff_m).min(1.0);
-            t * t * (3.0 - 2.0 * t)
-        } else {
-            1.0
-        };
-        let value = f64::from(self.map.sample(u + half, v + half));
+        let ([u, v], w) = p.local_rotated(x_m, y_m, self.rot)?;
+        let value = f64::from(self.map.sample(u, v));
         Some((p.offset_m + p.height_m * value, w))
     }
 

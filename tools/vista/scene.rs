@@ -31,6 +31,7 @@
 //! offset = 0                   # metres added to the stamp's heights
 //! blend = "add"                # replace | add | max | min
 //! falloff = 20                 # metres inside the edge over which it fades in
+//! control_map = "crater-control.png"  # optional (control-map mode): its words where it weighs >= 0.5
 //!
 //! [materials]                  # the near material flavour (effect splat)
 //! mode = "control_map"         # or "splat" (the default): REDengine 3's control map
@@ -143,6 +144,8 @@ struct SceneStamp {
     blend: String,
     #[serde(default)]
     falloff: f64,
+    /// Its own control map (16-bit PNG over its square), control-map mode.
+    control_map: Option<PathBuf>,
 }
 
 /// A stamp of the scene: its map file (resolved) and where it goes, in the
@@ -151,6 +154,8 @@ struct SceneStamp {
 pub struct SceneStampSpec {
     pub source: PathBuf,
     pub placement: StampPlacement,
+    /// Its own control map, resolved.
+    pub control_map: Option<PathBuf>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -199,9 +204,8 @@ impl Scene {
         raw.material_rules.validate().map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
         let mut stamps = raw.stamps;
         for st in &mut stamps {
-            if st.source.is_relative() {
-                st.source = vista::world::resolve_relative(dir, &st.source);
-            }
+            st.source = vista::world::resolve_relative(dir, &st.source);
+            st.control_map = st.control_map.as_ref().map(|c| vista::world::resolve_relative(dir, c));
         }
         Ok(Scene {
             world,
@@ -233,7 +237,10 @@ impl Scene {
                 falloff_m: st.falloff,
             };
             placement.validate().map_err(|e| anyhow::anyhow!("{at}: {e}"))?;
-            out.push(SceneStampSpec { source: st.source.clone(), placement });
+            if st.control_map.is_some() && self.effects.materials != vista::render::MaterialsMode::ControlMap {
+                bail!("{at}: control_map needs [materials] mode = \"control_map\"");
+            }
+            out.push(SceneStampSpec { source: st.source.clone(), placement, control_map: st.control_map.clone() });
         }
         Ok(out)
     }

@@ -434,6 +434,18 @@ impl WorldSpec {
         LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps: Vec::new() }
     }
 
+    /// The stamps' own control maps, in stamp order.
+    fn stamp_controls(&self) -> Result<Vec<vista::world::StampControl>> {
+        let mut out = Vec::new();
+        for (i, st) in self.stamps.iter().enumerate() {
+            let Some(path) = &st.control_map else { continue };
+            let map = vista::world::ControlMap::open(path, [st.placement.size_m; 2])
+                .map_err(|e| anyhow::anyhow!("stamp {} ({}): {e}", i + 1, path.display()))?;
+            out.push(vista::world::StampControl { placement: st.placement, map: Arc::new(map) });
+        }
+        Ok(out)
+    }
+
     /// The source with the scene's stamps on it (each map read now), checked
     /// to stay inside the world's height range, and each stamp's id and box.
     #[allow(clippy::type_complexity)]
@@ -451,7 +463,19 @@ impl WorldSpec {
             let map = vista::world::load_stamp_map(&st.source, st.placement.size_m).map_err(at)?;
             stamps.push(vista::world::Stamp::new(st.placement, map).map_err(at)?);
         }
-        let keys = stamps.iter().map(|s| (s.id_hash(), s.bounds_m())).collect();
+        // A stamp's own control map is part of what an edit compares.
+        let control_id = |st: &crate::scene::SceneStampSpec| {
+            st.control_map.as_ref().and_then(|p| std::fs::metadata(p).and_then(|m| m.modified()).ok())
+        };
+        let keys = stamps
+            .iter()
+            .zip(&self.stamps)
+            .map(|(s, spec)| {
+                let mut h = std::hash::DefaultHasher::new();
+                std::hash::Hash::hash(&(s.id_hash(), &spec.control_map, control_id(spec)), &mut h);
+                (std::hash::Hasher::finish(&h), s.bounds_m())
+            })
+            .collect();
         let stamped = vista::world::StampedSource::new(base, stamps);
         stamped.check_range(desc.height_range_m)?;
         Ok((Arc::new(stamped), keys))
@@ -475,6 +499,9 @@ impl WorldSpec {
         let mut bake = self.bake.clone();
         bake.control = vista::render::materials::control_bake(&self.effects, &desc, bake.materials)
             .map_err(|e| input_error(anyhow::anyhow!("{e}")))?;
+        if let Some(control) = &mut bake.control {
+            control.stamps = self.stamp_controls().map_err(input_error)?;
+        }
         if !self.stamps.is_empty() {
             label += &format!(" with {} stamp{}", self.stamps.len(), if self.stamps.len() == 1 { "" } else { "s" });
         }

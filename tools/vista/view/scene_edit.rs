@@ -79,7 +79,7 @@ pub fn apply(args: &WorldArgs, file: &Path, world: &mut LoadedWorld, renderer: &
     let Some(region) = changed_region(&world.stamps, &edited.stamps) else {
         return Ok(format!("scene {name}: no stamp changed{note}"));
     };
-    let reloaded = renderer.replace_source(std::sync::Arc::clone(&edited.source), region)?;
+    let reloaded = renderer.replace_source(std::sync::Arc::clone(&edited.source), Some(edited.bake.clone()), region)?;
     let n = edited.stamps.len();
     *world = edited;
     Ok(format!(
