@@ -275,16 +275,25 @@ fn tightened_tri_planar_samples_one_plane_on_flat_ground_and_more_on_flanks() {
     });
 }
 
+/// Every control texture looks alike far away (the looks only colour the
+/// far atlas; these tests read the words).
+fn grey_looks() -> vista::world::ControlLooks {
+    use vista::world::CONTROL_TEXTURES;
+    vista::world::ControlLooks {
+        albedo: vec![[100, 100, 100]; CONTROL_TEXTURES],
+        smoothness: vec![50; CONTROL_TEXTURES],
+        threshold: vec![0.4; CONTROL_TEXTURES],
+        sharpness: vec![0.1; CONTROL_TEXTURES],
+    }
+}
+
 /// A control-map bake: the words come from the map (nearest texel) and
 /// survive the node file; repainting a corner of the map rebakes exactly
 /// the nodes whose bake reads a repainted texel, and the result equals a
 /// full bake byte for byte.
 #[test]
 fn repainting_a_corner_of_the_control_map_rebakes_only_the_nodes_there() {
-    use vista::world::{
-        bake_region, bake_world, BakeSettings, ControlBake, ControlLooks, ControlMap, ControlSource, NodeId,
-        CONTROL_TEXTURES,
-    };
+    use vista::world::{bake_region, bake_world, BakeSettings, ControlBake, ControlMap, ControlSource, NodeId};
     let world = vista::world::WorldDesc {
         extent_m: [2048.0, 2048.0],
         height_range_m: [0.0, 300.0],
@@ -293,12 +302,7 @@ fn repainting_a_corner_of_the_control_map_rebakes_only_the_nodes_there() {
         ..Default::default()
     };
     let source: Arc<dyn vista::world::HeightSource> = Arc::new(Surface::Plane(100.0));
-    let looks = ControlLooks {
-        albedo: vec![[100, 100, 100]; CONTROL_TEXTURES],
-        smoothness: vec![50; CONTROL_TEXTURES],
-        threshold: vec![0.4; CONTROL_TEXTURES],
-        sharpness: vec![0.1; CONTROL_TEXTURES],
-    };
+    let looks = grey_looks();
     // 256 x 256 texels of 8 m; the repaint covers texel columns 12..20 and
     // rows 230..240 (row 0 north): x in [96, 160) m and, rows counting
     // down from the north edge, y in (128, 208] m.
@@ -357,8 +361,8 @@ fn repainting_a_corner_of_the_control_map_rebakes_only_the_nodes_there() {
 fn a_stamps_control_map_paints_its_square() {
     use glam::{DMat2, DVec2};
     use vista::world::{
-        bake_node_with, BakeSettings, ControlBake, ControlLooks, ControlMap, ControlSource, NodeId, StampBlend,
-        StampControl, StampPlacement, CONTROL_TEXTURES,
+        bake_node_with, BakeSettings, ControlBake, ControlMap, ControlSource, NodeId, StampBlend, StampControl,
+        StampPlacement,
     };
     let world = vista::world::WorldDesc {
         extent_m: [1024.0, 1024.0],
@@ -367,12 +371,7 @@ fn a_stamps_control_map_paints_its_square() {
         lod_count: 4,
         ..Default::default()
     };
-    let looks = ControlLooks {
-        albedo: vec![[100, 100, 100]; CONTROL_TEXTURES],
-        smoothness: vec![50; CONTROL_TEXTURES],
-        threshold: vec![0.4; CONTROL_TEXTURES],
-        sharpness: vec![0.1; CONTROL_TEXTURES],
-    };
+    let looks = grey_looks();
     let base = ControlCode { overlay: 2, background: 0, uv_scale: 0, threshold: 3 }.encode();
     // The stamp's map: 4 x 4 texels, each its own word (overlay = column,
     // background = row + 8).

@@ -186,6 +186,12 @@ impl QuadtreeShadow {
     pub fn remove(&mut self, id: NodeId) -> Option<u32> {
         let slot = self.slot_of(id)?;
         self.set_texel(id, EMPTY);
+        self.retire(slot);
+        Some(slot)
+    }
+
+    /// Clears `slot` and frees it after the reuse delay.
+    fn retire(&mut self, slot: u32) {
         self.descs[slot as usize] = [0, 0];
         self.desc_writes.insert(slot, [0, 0]);
         if self.reuse_delay == 0 {
@@ -193,7 +199,16 @@ impl QuadtreeShadow {
         } else {
             self.cooling.push_back((self.frame + self.reuse_delay, slot));
         }
-        Some(slot)
+    }
+
+    /// Points `id` at `slot`, which holds `desc` from now on.
+    fn place(&mut self, id: NodeId, slot: u32, desc: NodeDesc) {
+        self.set_texel(id, slot as u16);
+        let packed = desc.pack(slot);
+        self.descs[slot as usize] = packed;
+        self.desc_writes.insert(slot, packed);
+        self.errors[slot as usize] = desc.max_error_m;
+        self.error_writes.insert(slot, desc.max_error_m);
     }
 
     /// Frames a freed slot waits before `add` may hand it out again (0, the
@@ -220,19 +235,8 @@ impl QuadtreeShadow {
     pub fn replace(&mut self, id: NodeId, desc: NodeDesc) -> Option<u32> {
         let old = self.slot_of(id)?;
         let slot = self.free.pop()?;
-        self.set_texel(id, slot as u16);
-        let packed = desc.pack(slot);
-        self.descs[slot as usize] = packed;
-        self.desc_writes.insert(slot, packed);
-        self.errors[slot as usize] = desc.max_error_m;
-        self.error_writes.insert(slot, desc.max_error_m);
-        self.descs[old as usize] = [0, 0];
-        self.desc_writes.insert(old, [0, 0]);
-        if self.reuse_delay == 0 {
-            self.free.push(old);
-        } else {
-            self.cooling.push_back((self.frame + self.reuse_delay, old));
-        }
+        self.place(id, slot, desc);
+        self.retire(old);
         Some(slot)
     }
 
@@ -247,12 +251,7 @@ impl QuadtreeShadow {
         assert!(self.world.is_valid(id), "node {id} is outside the world");
         assert!(self.slot_of(id).is_none(), "node {id} is already resident");
         let slot = self.free.pop()?;
-        self.set_texel(id, slot as u16);
-        let packed = desc.pack(slot);
-        self.descs[slot as usize] = packed;
-        self.desc_writes.insert(slot, packed);
-        self.errors[slot as usize] = desc.max_error_m;
-        self.error_writes.insert(slot, desc.max_error_m);
+        self.place(id, slot, desc);
         Some(slot)
     }
 

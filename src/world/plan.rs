@@ -41,9 +41,16 @@ pub const DEFAULT_SLOTS: u32 = 512;
 /// the budget is near the 10-bit limit: [`slot_capacity`]).
 pub const RELOAD_SLOTS: u32 = 8;
 
-/// Node slots the GPU resources hold for a residency budget of `slots`.
+/// Node slots the GPU resources hold for a residency budget of `slots`
+/// (a budget over the 10-bit limit is left as it is, for the plan to
+/// refuse).
 pub fn slot_capacity(slots: u32) -> u32 {
-    (slots + RELOAD_SLOTS).min(crate::shaders::consts::MAX_SLOTS)
+    let max = crate::shaders::consts::MAX_SLOTS;
+    if slots >= max {
+        slots
+    } else {
+        (slots + RELOAD_SLOTS).min(max)
+    }
 }
 /// Single-thread seconds to bake one node when no sample was timed: the
 /// whole default procedural world baked and written (`vista bake`, 34 125
