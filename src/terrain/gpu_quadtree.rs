@@ -84,7 +84,10 @@ pub const ATLAS_CONTROL: usize = 8;
 pub struct AtlasSet(u16);
 
 impl AtlasSet {
-    pub const ALL: AtlasSet = AtlasSet((1 << ATLAS_COUNT) - 1);
+    /// Every payload kind a world's nodes carry: all but the control words,
+    /// which only a control-map bake makes (a renderer in control-map mode
+    /// adds them).
+    pub const ALL: AtlasSet = AtlasSet(((1 << ATLAS_COUNT) - 1) & !(1 << ATLAS_CONTROL));
     /// What drawing needs in any case: heights, albedo, patch bounds and
     /// errors (the per-patch LOD selection).
     pub const CORE: AtlasSet =
