@@ -16,10 +16,12 @@ use common::terrain::{view, Rig, Surface, MAGENTA_RGBA};
 use common::{gpu_test, Rng};
 use std::sync::Arc;
 use vista::bench::accuracy_error::{projected_px, quantile};
+use vista::bench::accuracy_floor::grid_floors;
 use vista::passes::cull_patches::CullStages;
+use vista::reference::{RayCaster, RaycastConfig};
 use vista::render::offscreen::Capture;
 use vista::render::stats::collect;
-use vista::render::{LodOptions, RendererOptions, View};
+use vista::render::{Lighting, LodOptions, RendererOptions, View};
 use vista::terrain::TerrainOptions;
 use vista::world::{GridSource, HeightSource, Png16Source, WorldDesc};
 
@@ -204,6 +206,18 @@ fn the_promise_holds_on_vertical_steps_and_a_sawtooth_ridge() {
                         "{surface:?} {position:?} target {target}: LOD part p99 {p99:.3} px, max {max:.3} px, bound {:.3}",
                         stats.bound_px
                     );
+                    // No drawing beats the grids' lower bound (bench::accuracy_floor).
+                    let reference = RayCaster::new(&surface, &world, RaycastConfig::default()).image(
+                        &v,
+                        &Lighting::default(),
+                        0.4,
+                        [0.0; 4],
+                    );
+                    let floor = grid_floors(&reference, &v, &world, &surface);
+                    let drawn = stats.triangles_drawn as f64 / f64::from(size[0] * size[1]);
+                    println!("  {drawn:.3} triangles per pixel drawn, floors {floor:?}");
+                    let (t, p) = (floor.triangles, floor.patches);
+                    assert!(t > 0.0 && p >= t && drawn >= p, "{surface:?} from {position:?}: {drawn} below {floor:?}");
                     let t = f64::from(target);
                     assert!(p99 <= t, "{surface:?} from {position:?}: p99 {p99:.3} px > target {target}");
                     assert!(max <= 2.0 * t, "{surface:?} from {position:?}: max {max:.3} px > 2 x target {target}");

@@ -15,6 +15,7 @@
 //! reference does not model looking through holes.
 
 use super::accuracy_error::{accuracy_error, AccuracyError};
+use super::accuracy_floor::{grid_floors, Floors};
 use super::accuracy_shadows::{shadow_rows, ShadowPoint, ShadowSweep};
 use crate::error::Result;
 use crate::frame::profiler::summarize;
@@ -96,6 +97,10 @@ pub struct AccuracyPoint {
     pub triangles_drawn: u64,
     /// Triangles drawn per screen pixel.
     pub triangles_per_pixel: f64,
+    /// The fewest triangles per screen pixel any LOD choice on vista's grids
+    /// could draw at this target, per triangle and per patch
+    /// ([`super::accuracy_floor`]): lower bounds.
+    pub floor: Floors,
     pub patches_drawn: u32,
     pub nodes_drawn_per_lod: Vec<u32>,
     pub resident_per_lod: Vec<u32>,
@@ -346,6 +351,7 @@ impl Run<'_> {
             bound_px: stats.bound_px,
             promise_held,
             triangles_per_pixel: stats.triangles_drawn as f64 / pixels,
+            floor: grid_floors(reference, view, self.world, &**self.source),
             gpu_ms: passes.iter().map(|p| p.median_ms).sum(),
             passes,
             samples: timings.len(),

@@ -5,6 +5,7 @@
 
 pub mod accuracy;
 pub mod accuracy_error;
+pub mod accuracy_floor;
 pub mod accuracy_shadows;
 pub mod cull;
 pub mod effects;

@@ -51,6 +51,12 @@ impl<'a> FinestSurface<'a> {
     fn lattice(&self, u: i64, v: i64) -> f64 {
         let r = REFINE_LEVELS;
         let (ci, cj) = (u >> r, v >> r);
+        let mask = (1i64 << r) - 1;
+        if u & mask == 0 && v & mask == 0 {
+            // On a post every weight but one is 0: the sample itself.
+            let mut cache = self.samples.lock().unwrap_or_else(|e| e.into_inner());
+            return self.sample_at(&mut cache, ci, cj);
+        }
         let scale = f64::from(1u32 << r);
         let wx = catmull_rom((u - (ci << r)) as f64 / scale);
         let wy = catmull_rom((v - (cj << r)) as f64 / scale);
@@ -62,6 +68,27 @@ impl<'a> FinestSurface<'a> {
                 wy[b] * row
             })
             .sum()
+    }
+}
+
+impl FinestSurface<'_> {
+    /// Height at (x, y) of the diamond-split triangles of level `level`'s
+    /// grid: its vertices 2^level samples apart (0 = LOD 0, negative = the
+    /// refinements below it, down to -REFINE_LEVELS, the finest surface
+    /// itself), each quad split as the level draws it.
+    pub fn level(&self, level: i32, x_m: f64, y_m: f64) -> f64 {
+        let r = REFINE_LEVELS as i32;
+        assert!(level >= -r, "level {level} is finer than the finest surface");
+        let step = 1i64 << (level + r);
+        let scale = f64::from(1u32 << r) / step as f64;
+        let [ox, oy] = self.world.grid_origin_m;
+        let u = (x_m - ox) / self.world.spacing_m * scale;
+        let v = (y_m - oy) / self.world.spacing_m * scale;
+        let (qx, qy) = (u.floor() as i64, v.floor() as i64);
+        let (fu, fv) = (u - qx as f64, v - qy as f64);
+        let at = |a: i64, b: i64| self.lattice(a * step, b * step);
+        let h = [at(qx, qy), at(qx + 1, qy), at(qx, qy + 1), at(qx + 1, qy + 1)];
+        crate::world::diamond(h, fu, fv, (qx + qy).rem_euclid(2) == 0)
     }
 }
 

@@ -168,7 +168,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         );
     }
     println!(
-        "{:<12} {:<32} {:>6} {:>6} {:>9} {:>10} {:>6} {:>7} {:>5} {:>5} {:>8} {:>7} {:>13} {:>13} {:>13} {:>6} {:>6} {:>5} {:>8}",
+        "{:<12} {:<32} {:>6} {:>6} {:>9} {:>10} {:>6} {:>13} {:>7} {:>5} {:>5} {:>8} {:>7} {:>13} {:>13} {:>13} {:>6} {:>6} {:>5} {:>8}",
         "view",
         "setting",
         "target",
@@ -176,6 +176,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         "GPU ms",
         "triangles",
         "tri/px",
+        "floor tri/ptc",
         "patches",
         "nodes",
         "want+",
@@ -204,7 +205,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         };
         let pair = |a: f64, b: f64| format!("{a:.2}/{b:.2}");
         println!(
-            "{:<12} {:<32} {:>6} {:>6.2} {:>9.2} {:>10} {:>6.2} {:>7} {:>5} {:>5} {:>8.1e} {:>7} {:>13} {:>13} {:>13} {:>6.1} {:>6.4} {:>5} {:>8}{}",
+            "{:<12} {:<32} {:>6} {:>6.2} {:>9.2} {:>10} {:>6.2} {:>13} {:>7} {:>5} {:>5} {:>8.1e} {:>7} {:>13} {:>13} {:>13} {:>6.1} {:>6.4} {:>5} {:>8}{}",
             p.view,
             setting,
             p.target_error_px,
@@ -212,6 +213,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
             p.gpu_ms,
             p.triangles_drawn,
             p.triangles_per_pixel,
+            format!("{:.3}/{:.3}", p.floor.triangles, p.floor.patches),
             p.patches_drawn,
             p.nodes_drawn_per_lod.iter().sum::<u32>(),
             p.wanted_finer,
@@ -229,7 +231,10 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
     }
     println!(
         "bound: the largest projected selection error of any drawn patch (px: 99 % of each patch within it, all of it \
-         within twice it; above the target when the slot budget could not meet it); tri/px: triangles drawn per screen pixel; want+: drawn nodes the camera wants finer whose children \
+         within twice it; above the target when the slot budget could not meet it); tri/px: triangles drawn per screen pixel; \
+         floor tri/ptc: the fewest triangles per screen pixel any LOD choice on vista's grids could draw for the \
+         visible ground with every visible point within 2 x target, choosing per triangle / per whole patch (lower \
+         bounds: nothing hidden, outside the view or for seams counted); want+: drawn nodes the camera wants finer whose children \
          are not resident; d: relative depth error; silh: pixels terrain in one image only; geo: vertical error to \
          the source surface projected on screen (px), split into lod (drawn surface vs the finest surface vista can \
          draw: what the target bounds) and repr (finest surface vs the source: what no LOD choice removes); PSNR, \
