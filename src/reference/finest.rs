@@ -69,9 +69,7 @@ impl<'a> FinestSurface<'a> {
             })
             .sum()
     }
-}
 
-impl FinestSurface<'_> {
     /// Height at (x, y) of the diamond-split triangles of level `level`'s
     /// grid: its vertices 2^level samples apart (0 = LOD 0, negative = the
     /// refinements below it, down to -REFINE_LEVELS, the finest surface
@@ -94,15 +92,7 @@ impl FinestSurface<'_> {
 
 impl HeightSource for FinestSurface<'_> {
     fn sample(&self, x_m: f64, y_m: f64) -> f32 {
-        let scale = f64::from(1u32 << REFINE_LEVELS);
-        let [ox, oy] = self.world.grid_origin_m;
-        let u = (x_m - ox) / self.world.spacing_m * scale;
-        let v = (y_m - oy) / self.world.spacing_m * scale;
-        let (qx, qy) = (u.floor() as i64, v.floor() as i64);
-        let (fu, fv) = (u - qx as f64, v - qy as f64);
-        let h =
-            [self.lattice(qx, qy), self.lattice(qx + 1, qy), self.lattice(qx, qy + 1), self.lattice(qx + 1, qy + 1)];
-        crate::world::diamond(h, fu, fv, (qx + qy).rem_euclid(2) == 0) as f32
+        self.level(-(REFINE_LEVELS as i32), x_m, y_m) as f32
     }
 
     fn id_hash(&self) -> u64 {
