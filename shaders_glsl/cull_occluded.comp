@@ -7,7 +7,7 @@
 // did not draw (not visible last frame) that the pyramid leaves visible are
 // listed for the second draw; every patch's visibility bit is rewritten
 // for the next frame's phase 1.
-layout(local_size_x = 64) in;
+layout(local_size_x = 256) in;
 #include "patch_cull.glsl"
 
 layout(set = 0, binding = 9, std430) buffer Visibility { uint words[]; } visibility;
@@ -35,11 +35,12 @@ void main() {
     atomicAdd(s_in, c.units);
     uint bit = 1u << (t & 31u);
     // Read before the barrier below; the words are rewritten after it.
-    bool drawn_in_phase1 = c.hole && (visibility.words[c.slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] & bit) != 0u;
+    // (cull_patches draws patches that stitch beyond their corners whatever the bit.)
+    bool drawn_in_phase1 = c.hole && (c.beyond || (visibility.words[c.slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] & bit) != 0u);
     bool visible = false;
     if (c.hole) {
         uint level;
-        visible = hiz_box_visible(c.lo, c.hi, view.v.view_proj, uvec2(pc.depth_w, pc.depth_h), level);
+        visible = c.beyond || hiz_box_visible(c.lo, c.hi, view.v.view_proj, uvec2(pc.depth_w, pc.depth_h), level);
     }
     if (visible) {
         atomicOr(s_visible[t >> 5u], bit);

@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 // variants: CONE_CULL HOLE_CULL OCCLUSION
 // Far Cry 5's patch culling: one workgroup per listed node (indirect, from
-// traverse), one thread per patch (8x8), each drawing what select_patches
+// traverse), one thread per patch (16x16), each drawing what select_patches
 // chose for it (an ancestor's patch, its own, or its sub-patches below LOD
 // 0; common/patch_cull.glsl). Stages: frustum, backface (variant
 // CONE_CULL), holes (variant HOLE_CULL: all-hole patches removed,
@@ -11,7 +11,7 @@
 // 1 of two-phase occlusion culling: only the survivors that were visible
 // last frame are listed; cull_occluded tests the rest against the depth
 // pyramid of what phase 1 drew.
-layout(local_size_x = 64) in;
+layout(local_size_x = 256) in;
 #include "patch_cull.glsl"
 
 #ifdef OCCLUSION
@@ -44,7 +44,7 @@ void main() {
 #ifdef OCCLUSION
     uint word = visibility.words[c.slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)];
     if ((pc.stages & CULL_STAGE_OCCLUSION) != 0u) {
-        keep = keep && (word & (1u << (t & 31u))) != 0u;
+        keep = keep && (c.beyond || (word & (1u << (t & 31u))) != 0u);
     }
 #endif
     if (keep) {

@@ -7,7 +7,7 @@
 // refines the LOD-0 patches that LOD 0 itself does not serve (capped by the
 // neighbours' coarse levels phase 0 wrote). cull_patches and cull_occluded
 // draw what they decided.
-layout(local_size_x = 64) in;
+layout(local_size_x = 256) in;
 
 #define SELECT_WRITES 1
 #include "lod_select.glsl"
@@ -55,6 +55,13 @@ void coarse_level(uint lod, ivec2 node, uint slot, uint t) {
     int cap = s_finest == int(NO_LEVEL) ? amax : min(s_finest + int(MAX_LOD_DELTA) - n, amax);
     int lift = max(s_coarsest - int(MAX_LOD_DELTA) - n, 0);
     bool conflict = cap < 0 || lift > min(max(cap, 0), amax);
+    // LOD-0 patches (here or next door) may be refined below the samples in
+    // phase 1, up to the renderer's cap: coarsening stays within
+    // MAX_LOD_DELTA of that too, so refinement is never refused for a seam
+    // (which would break the target where it is needed most).
+    int finest = min(s_finest == int(NO_LEVEL) ? n : s_finest, n);
+    int finest_drawn = finest == 0 ? -int(view.v.lod_params.z) : finest;
+    int refine_cap = finest_drawn + int(MAX_LOD_DELTA) - n;
     uint per_side = PATCHES_PER_SIDE;
     ivec2 pxy = ivec2(t % per_side, t / per_side);
     int a = 0;
@@ -70,7 +77,7 @@ void coarse_level(uint lod, ivec2 node, uint slot, uint t) {
         a = k;
     }
     // Where the seams allow no choice, lifting the finer side keeps them closed.
-    a = conflict ? min(lift, amax) : clamp(a, lift, cap);
+    a = conflict ? min(lift, amax) : clamp(a, lift, max(min(cap, refine_cap), lift));
     select_levels.levels[2 * select_index(slot, t)] = n + a;
     if (t == 0u && conflict) {
         atomicAdd(select_levels.header.conflicts, 1u);

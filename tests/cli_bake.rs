@@ -364,14 +364,15 @@ fn memory_json_gives_the_bytes_per_node_of_each_payload_format() {
         (v["cpu_bytes_per_node"].as_u64().unwrap(), v["gpu_bytes_per_node"].as_u64().unwrap())
     };
     // Derived by hand: heights 132 * 132 * 2 (a 2-sample border), normal BC3 33 * 33 blocks of
-    // 16 bytes, albedo BC1 of 8, splat 65 * 65, patch min/max, cones,
-    // holes and errors 64 * (4 + 16 + 1 + 8), node desc + error 12.
-    let bc_gpu = 132 * 132 * 2 + 33 * 33 * 16 + 33 * 33 * 8 + 65 * 65 + 64 * 29 + 12;
+    // 16 bytes, albedo BC1 of 8, splat 65 * 65, patch min/max, holes and
+    // errors 256 * (4 + 1 + 8), cones 64 * 16 (one per 2 x 2 patches), node
+    // desc + error 12.
+    let bc_gpu = 132 * 132 * 2 + 33 * 33 * 16 + 33 * 33 * 8 + 65 * 65 + 256 * 13 + 64 * 16 + 12;
     // The floor: at most 70 KB a resident node on the GPU.
     assert!(bc_gpu <= 70_000);
     // What the default effects keep: no splat (effect off) and no hole
     // bits (no holes), each baked but not uploaded.
-    let not_kept = 65 * 65 + 64;
+    let not_kept = 65 * 65 + 256;
     assert_eq!(per_node("bc").1, bc_gpu - not_kept);
     // RGBA8 layers: 132 * 132 * 4 each.
     assert_eq!(per_node("rgba8").1, bc_gpu - not_kept - 33 * 33 * 24 + 2 * 132 * 132 * 4);

@@ -163,10 +163,13 @@ fn each_limit_is_refused_before_allocating() {
     let run = assert_refused(&[&big[..], &["--dry-run"]].concat(), &["--yes"]);
     assert!(run.out.contains("1563 x 1563"), "{}", run.out);
     // A lower cap refuses what the default takes: 34 125 node files of
-    // 65 062 bytes uncompressed before the height layer's 2-sample border
-    // ((132^2 - 129^2) * 2 bytes more) and the patch errors (64 * 2 f32)
-    // and representation error (f32), at zstd's 1.49:1 of the default world.
-    let file = 65062.0 + f64::from(132 * 132 - 129 * 129) * 2.0 + 64.0 * 8.0 + 4.0;
+    // 65 062 bytes uncompressed with 8 x 8 patches (64 * (4 + 16 + 1) bytes
+    // of min/max, cone and holes), now 16 x 16 patches (256 * (4 + 1)) with
+    // 8 x 8 cones (64 * 16), plus the height layer's 2-sample border
+    // ((132^2 - 129^2) * 2 bytes more), the patch errors (256 * 2 f32) and
+    // the representation error (f32), at zstd's 1.49:1 of the default world.
+    let patches = -64.0 * 21.0 + 256.0 * 5.0 + 64.0 * 16.0;
+    let file = 65062.0 + patches + f64::from(132 * 132 - 129 * 129) * 2.0 + 256.0 * 8.0 + 4.0;
     let expect = format!("{:.2} GiB", 34125.0 * (file / 1.49f64).floor() / f64::from(1 << 30));
     assert_refused(&["bake", "--out", o, "--max-disk", "1"], &[&expect, "the cap is 1.00 GiB"]);
     assert_eq!(node_files(Path::new(o)), 0, "nothing baked");

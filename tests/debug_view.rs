@@ -21,7 +21,7 @@ fn each_debug_view_matches_its_cpu_twin_and_the_patch_info_names_the_patches_dra
     gpu_test(|ctx| {
         // Low over hills: several LODs in view.
         let mut rig = Rig::new(ctx, small_world(), Surface::Hills, vec![], SIZE, false);
-        let v = view([512.0, 60.0, 330.0], 0.0, -15.0, SIZE, 1.0);
+        let v = view([512.0, 60.0, 330.0], 0.0, -15.0, SIZE, 0.5);
         let plain = rig.shot(ctx, &v, CullStages::ALL);
         let outcome = |rig: &Rig| rig.renderer.last_frame_log().and_then(|l| l.outcome(FramePass::DebugView)).cloned();
         assert_eq!(outcome(&rig), Some(Outcome::Skipped(Skip::NoDebugView)));

@@ -12,8 +12,12 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use vista::world::{
     bake_node, diamond, ErrorTree, GridSource, HeightSource, NodeErrors, NodeId, ProceduralSource, WorldDesc,
-    NODE_QUADS,
+    NODE_QUADS, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS,
 };
+
+/// Patches per node side and quads per patch side.
+const SIDE: usize = PATCHES_PER_NODE_SIDE as usize;
+const QUADS: usize = PATCH_QUADS as usize;
 
 fn procedural() -> (WorldDesc, Arc<dyn HeightSource>) {
     let w = WorldDesc {
@@ -83,11 +87,11 @@ fn errors_and_bounds_are_monotone_over_whole_trees() {
                 let c = &errors[&child];
                 assert!(e.node_m >= c.node_m, "{id} {} < {child} {}", e.node_m, c.node_m);
                 assert!(e.repr_m >= c.repr_m, "{id} repr");
-                // Child patch (i, j) lies under parent patch ((i + 8 * cx) / 2, ...).
+                // Child patch (i, j) lies under parent patch ((i + side * cx) / 2, ...).
                 let (cx, cy) = ((child.x & 1) as usize, (child.y & 1) as usize);
                 for (k, (cp, cb)) in c.patch_m.iter().zip(&c.bounds).enumerate() {
-                    let (i, j) = (k % 8 + 8 * cx, k / 8 + 8 * cy);
-                    let pk = (j / 2) * 8 + i / 2;
+                    let (i, j) = (k % SIDE + SIDE * cx, k / SIDE + SIDE * cy);
+                    let pk = (j / 2) * SIDE + i / 2;
                     assert!(e.patch_m[pk][0] >= cp[0], "{id} patch {pk} < {child} patch {k}");
                     assert!(e.patch_max_m[pk][0] >= c.patch_max_m[k][0], "{id} patch {pk} max < {child} patch {k}");
                     assert!(e.bounds[pk][0] <= cb[0] && e.bounds[pk][1] >= cb[1], "{id} bounds");
@@ -95,7 +99,7 @@ fn errors_and_bounds_are_monotone_over_whole_trees() {
                 }
             }
         }
-        assert!(checked >= 13 * 64, "{checked}");
+        assert!(checked >= 13 * PATCHES_PER_NODE, "{checked}");
     }
 }
 
@@ -140,11 +144,11 @@ fn no_triangle_lies_farther_from_the_finest_surface_than_its_patch_error() {
                 let id = nodes[rng.index(nodes.len())];
                 let node = bake_node(source.as_ref(), &world, &[], id);
                 let e = tree.node(id).unwrap();
-                let patch = rng.index(64);
-                let (px, py) = (patch % 8, patch / 8);
+                let patch = rng.index(PATCHES_PER_NODE);
+                let (px, py) = (patch % SIDE, patch / SIDE);
                 let step = 1usize << lod;
                 // The finest surface's vertices: a quarter of a LOD-0 sample apart.
-                let n = 16 * step * 4;
+                let n = QUADS * step * 4;
                 let mut worst = 0f64;
                 // Exact gap at every finest vertex, row-major over (n + 1)^2.
                 let mut gaps = vec![0f64; (n + 1) * (n + 1)];
@@ -152,8 +156,8 @@ fn no_triangle_lies_farther_from_the_finest_surface_than_its_patch_error() {
                 for b in 0..=n {
                     for a in 0..=n {
                         // LOD-0 sample coordinates of the vertex.
-                        let x = (ox + px * 16 * step) as f64 + a as f64 / 4.0;
-                        let y = (oy + py * 16 * step) as f64 + b as f64 / 4.0;
+                        let x = (ox + px * QUADS * step) as f64 + a as f64 / 4.0;
+                        let y = (oy + py * QUADS * step) as f64 + b as f64 / 4.0;
                         let f = finest(&world, source.as_ref(), &mut cache, x, y);
                         // The node's own triangle there: node-local sample units.
                         let (lx, ly) = ((x - ox as f64) / step as f64, (y - oy as f64) / step as f64);

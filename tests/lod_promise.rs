@@ -17,7 +17,7 @@ use common::{gpu_test, Rng};
 use std::sync::Arc;
 use vista::bench::accuracy_error::{projected_px, quantile};
 use vista::bench::accuracy_floor::grid_floors;
-use vista::passes::cull_patches::CullStages;
+use vista::passes::cull_patches::{CullStages, MAX_LOD_DELTA};
 use vista::reference::{RayCaster, RaycastConfig};
 use vista::render::offscreen::Capture;
 use vista::render::stats::collect;
@@ -259,8 +259,12 @@ fn a_starved_budget_reports_its_bound_keeps_it_and_a_finer_target_is_no_worse() 
         for w in rows.windows(2) {
             let ((t0, b0, q0, m0), (t1, b1, q1, m1)) = (w[0], w[1]);
             assert!(b1 <= b0 * 1.0001, "target {t0} -> {t1}: bound {b0} -> {b1}");
-            assert!(q1 <= q0 * 1.0001 + 1e-3, "target {t0} -> {t1}: measured p99 {q0} -> {q1}");
-            assert!(m1 <= m0 * 1.0001 + 1e-3, "target {t0} -> {t1}: measured max {m0} -> {m1}");
+            // 0.01 px: the measurement's own floor (depth read back and
+            // unprojected; an exactly drawn view of this ridge measures
+            // 0.008 px, the_promise_holds... from [1500, 1200]), and the
+            // finer level bounds the error over a patch, not at each point.
+            assert!(q1 <= q0 * 1.0001 + 0.01, "target {t0} -> {t1}: measured p99 {q0} -> {q1}");
+            assert!(m1 <= m0 * 1.0001 + 0.01, "target {t0} -> {t1}: measured max {m0} -> {m1}");
         }
     });
 }
@@ -321,7 +325,13 @@ fn background_pixels(stitching: bool) -> (usize, u8) {
 fn seams_hold_on_rough_ground_and_open_without_snapping() {
     let (holes, delta) = background_pixels(true);
     assert_eq!(holes, 0, "background shows through the terrain: cracks");
-    assert!(delta >= 3, "the views saw LOD deltas of at most {delta}: the test would be weak");
+    // MAX_LOD_DELTA (4) is past log2(PATCH_QUADS): such edges snap to
+    // vertices beyond their patch's corners, and the patch is never culled.
+    assert_eq!(
+        u32::from(delta),
+        MAX_LOD_DELTA,
+        "the views never reached the largest LOD delta: the test would be weak"
+    );
     // The same views without edge snapping: the test sees the cracks.
     let (holes_unstitched, _) = background_pixels(false);
     println!("largest LOD delta {delta}; background pixels without snapping: {holes_unstitched}");

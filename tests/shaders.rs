@@ -249,8 +249,11 @@ fn shared_constants_have_one_source() {
         "sector data holds every LOD a world can have, in as few words as fit"
     );
     const { assert!(k::SECTOR_LODS_PER_WORD * k::SLOT_BITS <= 32) };
-    assert_eq!(k::PATCH_DELTA_SHIFT + 4 * k::PATCH_DELTA_BITS, 32, "four deltas end the word");
-    assert_eq!(1u32 << k::MAX_LOD_DELTA, vista::world::PATCH_QUADS);
+    const { assert!(k::PATCH_DELTA_SHIFT + 4 * k::PATCH_DELTA_BITS <= 32, "four deltas fit the word") };
+    const { assert!(k::PATCH_INDEX_SHIFT + k::PATCH_INDEX_MASK.count_ones() <= k::PATCH_DELTA_SHIFT) };
+    const { assert!(k::MAX_LOD_DELTA < 1 << k::PATCH_DELTA_BITS, "a delta fits its bits") };
+    // Stitching snaps in node coordinates: the coarsest grid divides the node.
+    assert_eq!(vista::world::NODE_QUADS % (1u32 << k::MAX_LOD_DELTA), 0);
 }
 
 #[test]

@@ -13,7 +13,7 @@ use std::collections::BTreeSet;
 use vista::passes::cull_patches::{CullStages, PatchRecord};
 use vista::render::offscreen::Capture;
 use vista::render::View;
-use vista::world::{bake_node, Hole, NodeId, WorldDesc, PATCH_HOLE_ALL, PATCH_QUADS};
+use vista::world::{bake_node, Hole, NodeId, WorldDesc, PATCHES_PER_NODE_SIDE, PATCH_HOLE_ALL, PATCH_QUADS};
 
 fn magenta(c: &Capture, x: u32, y: u32) -> bool {
     c.pixel(x, y) == MAGENTA_RGBA
@@ -320,23 +320,25 @@ fn patch_triangles(world: &WorldDesc, surface: &Surface, p: &PatchRecord) -> Vec
     let node = bake_node(surface, world, &[], NodeId::new(p.lod, p.node_x, p.node_y));
     let b = world.bounds_m(node.id);
     let s = world.node_spacing_m(p.lod);
-    let (px, py) = (p.patch % 8 * PATCH_QUADS, p.patch / 8 * PATCH_QUADS);
+    let (px, py) = (p.patch % PATCHES_PER_NODE_SIDE * PATCH_QUADS, p.patch / PATCHES_PER_NODE_SIDE * PATCH_QUADS);
     // Nearest point of the grid 2^d coarser, ties toward the lower one.
     let snap = |v: u32, d: u8| if d == 0 { v } else { ((v + (1 << (d - 1)) - 1) >> d) << d };
     let [dw, de, ds, dn] = p.deltas;
+    // Snapped in node coordinates: past log2(PATCH_QUADS) the coarse vertex
+    // lies beyond the patch's corners.
     let v = |i: u32, j: u32| {
         let q = PATCH_QUADS;
-        let si = match j {
-            0 => snap(i, ds),
-            j if j == q => snap(i, dn),
-            _ => i,
+        let (x, y) = (px + i, py + j);
+        let gi = match j {
+            0 => snap(x, ds),
+            j if j == q => snap(x, dn),
+            _ => x,
         };
-        let sj = match i {
-            0 => snap(j, dw),
-            i if i == q => snap(j, de),
-            _ => j,
+        let gj = match i {
+            0 => snap(y, dw),
+            i if i == q => snap(y, de),
+            _ => y,
         };
-        let (gi, gj) = (px + si, py + sj);
         let h = world.decode_height(node.height(gi as isize, gj as isize));
         DVec3::new(b[0] + f64::from(gi) * s, b[1] + f64::from(gj) * s, f64::from(h))
     };

@@ -35,16 +35,17 @@ fn check_grids(src: &dyn HeightSource, w: &WorldDesc, node: &BakedNode) {
             assert_eq!(node.height(i as isize, j as isize), w.encode_height(src.sample(x, y)));
         }
     }
-    for py in 0..8 {
-        for px in 0..8 {
+    let (p, q) = (PATCHES_PER_NODE_SIDE as usize, PATCH_QUADS as usize);
+    for py in 0..p {
+        for px in 0..p {
             let mut mm = [u16::MAX, 0];
-            for j in py * 16..=py * 16 + 16 {
-                for i in px * 16..=px * 16 + 16 {
+            for j in py * q..=py * q + q {
+                for i in px * q..=px * q + q {
                     let v = node.height(i as isize, j as isize);
                     mm = [mm[0].min(v), mm[1].max(v)];
                 }
             }
-            assert_eq!(node.patch_min_max[py * 8 + px], mm, "patch {px},{py}");
+            assert_eq!(node.patch_min_max[py * p + px], mm, "patch {px},{py}");
         }
     }
     assert_eq!(node.min_height, *node.sample_heights().iter().min().unwrap());
@@ -58,9 +59,11 @@ fn check_cones(w: &WorldDesc, node: &BakedNode) -> f64 {
     let h = |i: usize, j: usize| w.decode_height(node.height(i as isize, j as isize)) as f64;
     let p = |i: usize, j: usize| [i as f64 * s, j as f64 * s, h(i, j)];
     let mut widest = 0f64;
-    for py in 0..8 {
-        for px in 0..8 {
-            let cone = node.patch_cones[py * 8 + px];
+    // One cone per block of CONE_BLOCK_PATCHES x CONE_BLOCK_PATCHES patches.
+    let (blocks, q) = (CONE_BLOCKS_PER_NODE_SIDE as usize, NODE_QUADS as usize / CONE_BLOCKS_PER_NODE_SIDE as usize);
+    for py in 0..blocks {
+        for px in 0..blocks {
+            let cone = node.patch_cones[py * blocks + px];
             if cone[3] >= 1.0 {
                 assert_eq!(&cone[..3], &[0.0, 0.0, 0.0], "never-cull cone must have zero axis");
                 widest = 90f64;
@@ -69,8 +72,8 @@ fn check_cones(w: &WorldDesc, node: &BakedNode) -> f64 {
             let axis = glam::DVec3::new(cone[0] as f64, cone[1] as f64, cone[2] as f64).normalize();
             let half = (cone[3] as f64).asin();
             widest = widest.max(half.to_degrees());
-            for qy in py * 16..py * 16 + 16 {
-                for qx in px * 16..px * 16 + 16 {
+            for qy in py * q..py * q + q {
+                for qx in px * q..px * q + q {
                     // Diagonal through the odd/odd corner of the quad.
                     let tris = if (qx + qy).is_multiple_of(2) {
                         [[p(qx, qy), p(qx + 1, qy), p(qx + 1, qy + 1)], [p(qx, qy), p(qx + 1, qy + 1), p(qx, qy + 1)]]
@@ -210,11 +213,25 @@ fn samples_outside_extent_clamp_to_edge_and_are_holes() {
         assert_eq!(height, expect);
         assert_eq!(hole, x > 300.0, "hole flag at x = {x}");
     }
-    // Patches 0 and 1 (x 256..288 m) lie inside, patch 2 (288..304 m) is
-    // cut at 300 m, patches 3..8 lie wholly beyond the extent.
-    let row: Vec<u8> = (0..8).map(|px| node.patch_holes[px]).collect();
-    let (none, some, all) = (PATCH_HOLE_NONE, PATCH_HOLE_SOME, PATCH_HOLE_ALL);
-    assert_eq!(row, [none, none, some, all, all, all, all, all]);
+    // Patches whose samples (x 256 + q k ..= 256 + q (k + 1) m) all lie at or
+    // before 300 m are inside, the one holding 300 m is cut, the rest lie
+    // wholly beyond the extent.
+    let q = PATCH_QUADS as f64;
+    let row: Vec<u8> = (0..PATCHES_PER_NODE_SIDE as usize).map(|px| node.patch_holes[px]).collect();
+    let expect: Vec<u8> = (0..PATCHES_PER_NODE_SIDE)
+        .map(|k| {
+            let (lo, hi) = (256.0 + q * f64::from(k), 256.0 + q * f64::from(k + 1));
+            if hi <= 300.0 {
+                PATCH_HOLE_NONE
+            } else if lo > 300.0 {
+                PATCH_HOLE_ALL
+            } else {
+                PATCH_HOLE_SOME
+            }
+        })
+        .collect();
+    assert_eq!(row, expect);
+    assert!(expect.contains(&PATCH_HOLE_SOME) && expect.contains(&PATCH_HOLE_ALL));
 }
 
 #[test]
@@ -233,11 +250,15 @@ fn holes_clear_alpha_and_flag_patches() {
             assert_eq!(mask[j * N + i], inside, "({x},{y})");
         }
     }
-    // Patch (4,4) spans 64..80 m, well inside the circle; patch (0,0) is
-    // untouched; patch (2,2) (32..48 m) is cut by the circle's rim.
-    assert_eq!(node.patch_holes[4 * 8 + 4], PATCH_HOLE_ALL);
+    // The patch holding (64, 64) lies well inside the circle (30 m radius;
+    // patches are at most 16 m); patch (0,0) is untouched; the one holding
+    // (34, 64) straddles the rim (its west edge at 32 m lies 32 m out).
+    let patch =
+        |x: usize, y: usize| y / PATCH_QUADS as usize * PATCHES_PER_NODE_SIDE as usize + x / PATCH_QUADS as usize;
+    const { assert!(PATCH_QUADS <= 16) };
+    assert_eq!(node.patch_holes[patch(64, 64)], PATCH_HOLE_ALL);
     assert_eq!(node.patch_holes[0], PATCH_HOLE_NONE);
-    assert_eq!(node.patch_holes[2 * 8 + 2], PATCH_HOLE_SOME);
+    assert_eq!(node.patch_holes[patch(34, 64)], PATCH_HOLE_SOME);
     assert_ne!(holes_hash(&holes), holes_hash(&holes[..1]));
 }
 

@@ -61,26 +61,29 @@
 #define PATCH_HOLE_NONE 0u
 #define PATCH_HOLE_SOME 1u
 #define PATCH_HOLE_ALL 2u
-// Patch record word 1: slot | patch index (6 bits) << 10 | 4 LOD deltas (4 bits each) << 16.
+// Patch record word 1: slot | patch index (8 bits) << 10 | 4 LOD deltas (3 bits each) << 18.
 #define PATCH_INDEX_SHIFT 10u
-#define PATCH_INDEX_MASK 0x3Fu
-#define PATCH_DELTA_SHIFT 16u
-#define PATCH_DELTA_BITS 4u
-// Largest stitched LOD delta: a patch edge has 16 = 2^4 quads.
+#define PATCH_INDEX_MASK 0xFFu
+#define PATCH_DELTA_SHIFT 18u
+#define PATCH_DELTA_BITS 3u
+// Largest stitched LOD delta. Above log2(PATCH_QUADS) = 3 an edge snaps to
+// vertices beyond the patch's corners (terrain_vertex.glsl), so such a
+// patch covers part of its neighbour's ground and is never frustum- or
+// occlusion-culled (patch_cull.glsl).
 #define MAX_LOD_DELTA 4u
 // Per-patch LOD selection (select_patches): a listed node's patch may be
 // drawn from an ancestor up to this many levels coarser (its patch covers
-// 2^a x 2^a of the node's patches; 3 = the whole node).
+// 2^a x 2^a of the node's patches; 4 would be the whole node).
 #define MAX_COARSEN 3u
 // Refinement below LOD 0: 2x and 4x denser vertices on the Catmull-Rom
-// surface of the samples, as 4 or 16 sub-patches of the same 16x16 grid.
+// surface of the samples, as 4 or 16 sub-patches of the same 8x8 grid.
 #define REFINE_LEVELS 2u
 // Patch record word 2: refinement level (2 bits) | sub-patch index << 2.
 #define PATCH_REFINE_MASK 3u
 #define PATCH_SUB_SHIFT 2u
 // LOD-0 patches refined per frame at most (the patch lists are sized for
 // them); beyond, a patch is drawn at LOD 0 and counted.
-#define MAX_REFINED_PATCHES 2048u
+#define MAX_REFINED_PATCHES 8192u
 // Counters before the per-slot levels in the selection buffer.
 #define SELECT_HEADER_WORDS 4u
 // A region no listed node covers (outside the world, or no root yet).
@@ -90,8 +93,11 @@
 #define EDGE_EAST 1u
 #define EDGE_SOUTH 2u
 #define EDGE_NORTH 3u
-// Occlusion: visibility bits per slot (one bit per patch, 64 patches).
-#define VISIBILITY_WORDS_PER_SLOT 2u
+// Backface culling: one normal cone per 2 x 2 patches, holding all four's
+// triangles (a node's GPU payload stays within 70 KB).
+#define CONE_BLOCK_PATCHES 2u
+// Occlusion: visibility bits per slot (one bit per patch, 256 patches).
+#define VISIBILITY_WORDS_PER_SLOT 8u
 // G-buffer tile shading: one bit per shading flavour a pixel needs (the
 // classification target); a tile's OR of them is its shader variant.
 #define FLAVOUR_VIRTUAL_TEXTURE 1u

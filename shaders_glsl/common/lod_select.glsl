@@ -10,11 +10,12 @@
 // patch agree: the first of them (the block's representative) draws it.
 //
 // Seams: a patch is drawn at most MAX_LOD_DELTA levels coarser than any
-// neighbour, which stitching handles. Coarsening is capped per node at 4
-// levels above the finest neighbouring node (read from the LOD map along
-// the node's edges), refinement at 4 levels below the neighbouring
-// patches' coarse levels; where node LODs themselves differ by more than
-// 4 the finer node is lifted instead (counted as a conflict).
+// neighbour, which stitching handles. Coarsening is capped per node at
+// MAX_LOD_DELTA levels above the finest neighbouring node (read from the
+// LOD map along the node's edges), refinement at MAX_LOD_DELTA levels
+// below the neighbouring patches' coarse levels; where node LODs
+// themselves differ by more the finer node is lifted instead (counted as
+// a conflict).
 //
 // The inputs are declared here, with the bindings every includer shares.
 #ifndef VISTA_LOD_SELECT_GLSL
@@ -24,8 +25,8 @@
 #include "terrain_view.glsl"
 
 // Patches per node side (world PATCHES_PER_NODE_SIDE) and quads per patch side.
-layout(constant_id = 1) const uint PATCHES_PER_SIDE = 8u;
-layout(constant_id = 2) const uint PATCH_QUADS = 16u;
+layout(constant_id = 1) const uint PATCHES_PER_SIDE = 16u;
+layout(constant_id = 2) const uint PATCH_QUADS = 8u;
 
 struct SelectHeader {
     uint conflicts;      // listed nodes next to one more than MAX_LOD_DELTA LODs coarser (lifted)

@@ -1,5 +1,5 @@
 // Patch culling shared by cull_patches (phase 1) and cull_occluded (phase
-// 2): one workgroup per listed node, one thread per patch (8x8). Each
+// 2): one workgroup per listed node, one thread per patch (16x16). Each
 // thread draws what select_patches decided for its patch (lod_select.glsl):
 // nothing, when another patch of its block draws their common ancestor;
 // the ancestor's patch; its own; or its 4 or 16 sub-patches below LOD 0.
@@ -66,7 +66,7 @@ bool cone_faces_away(vec4 cone, vec3 lo, vec3 hi) {
 }
 #endif
 
-// LOD deltas (EDGE_* order, 4 bits each) of a square of `size` LOD-0
+// LOD deltas (EDGE_* order, PATCH_DELTA_BITS each) of a square of `size` LOD-0
 // samples at `o` drawn at `level`, from the drawn levels just across the
 // middle of each edge (a coarser neighbour covers the whole edge). A delta
 // past MAX_LOD_DELTA (select_patches prevents it) is clamped and counted.
@@ -88,9 +88,25 @@ uint edge_deltas(ivec2 o, int size, int level, inout uint overflow) {
     return deltas;
 }
 
+// Whether an edge snaps past the patch's corners (a delta above
+// log2(quads)): then the patch's triangles fill part of its neighbour's
+// ground, which the neighbour alone does not cover, so culling it by its
+// own box could open a crack there. Such patches (only where node LODs
+// differ by 4) skip the frustum, cone and occlusion tests.
+bool stitches_beyond(uint deltas) {
+    uint within = uint(findMSB(PATCH_QUADS));
+    for (uint e = 0u; e < 4u; ++e) {
+        if (bitfieldExtract(deltas, int(PATCH_DELTA_BITS * e), int(PATCH_DELTA_BITS)) > within) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // One listed patch after selection and the frustum, cone and hole stages.
 struct PatchCull {
     bool drawn;       // this thread draws for its block (select_patches)
+    bool beyond;      // some edge snaps past its corners (stitches_beyond): never frustum-, cone- or occlusion-culled
     vec3 lo;          // camera-relative box of what it draws, padded
     vec3 hi;
     bool frustum;     // survived each stage so far
@@ -121,6 +137,21 @@ uint sub_patches_in_frustum(PatchCull c) {
         lo.xy = view_rel_xy(o, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m) - vec2(1e-3);
         hi.xy = view_rel_xy(o + size, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m) + vec2(1e-3);
         if (!box_outside_frustum(lo, hi)) {
+            mask |= 1u << s;
+        }
+    }
+    return mask;
+}
+
+// Bits of the sub-patches of a refined patch that stitch beyond their
+// corners (stitches_beyond).
+uint sub_patches_beyond(PatchCull c) {
+    uint subs = 1u << c.refine;
+    int size = int(PATCH_QUADS >> c.refine);
+    uint mask = 0u;
+    for (uint s = 0u; s < subs * subs; ++s) {
+        uint overflow = 0u;
+        if (stitches_beyond(edge_deltas(c.origin + ivec2(s % subs, s / subs) * size, size, c.level, overflow))) {
             mask |= 1u << s;
         }
     }
@@ -160,20 +191,24 @@ PatchCull cull_patch(uint t) {
     if (c.refine == 0u) {
         deltas = edge_deltas(c.origin, int(quads) << dlod, c.level, c.overflow);
     }
-
     c.units = c.drawn ? 1u << (2u * c.refine) : 0u;
     c.subs = c.units == 0u ? 0u : (1u << c.units) - 1u;
-    if ((pc.stages & CULL_STAGE_FRUSTUM) != 0u) {
-        c.subs = box_outside_frustum(c.lo, c.hi) ? 0u : c.refine == 0u ? c.subs : sub_patches_in_frustum(c);
+    uint beyond = c.subs == 0u ? 0u : c.refine > 0u ? sub_patches_beyond(c) : stitches_beyond(deltas) ? 1u : 0u;
+    c.beyond = beyond != 0u;
+    if (c.subs != 0u && (pc.stages & CULL_STAGE_FRUSTUM) != 0u) {
+        uint in_view = box_outside_frustum(c.lo, c.hi) ? 0u : c.refine == 0u ? c.subs : sub_patches_in_frustum(c);
+        c.subs = in_view | beyond;
     }
     bool keep = c.subs != 0u;
     c.frustum = keep;
     // The baked cone holds every stitched variant of the patch's triangles
     // (src/world/cones.rs), not the Catmull-Rom triangles of sub-patches:
-    // refined patches are not cone-tested.
+    // refined patches are not cone-tested, nor are patches whose triangles
+    // leave their box (stitches_beyond).
 #ifdef CONE_CULL
-    if (keep && (pc.stages & CULL_STAGE_CONE) != 0u && c.refine == 0u) {
-        vec4 cone = texelFetch(sampler2DArray(patch_cones, nearest), ivec3(dpxy, int(dslot)), 0);
+    if (keep && (pc.stages & CULL_STAGE_CONE) != 0u && c.refine == 0u && !c.beyond) {
+        ivec2 block = dpxy / int(CONE_BLOCK_PATCHES);
+        vec4 cone = texelFetch(sampler2DArray(patch_cones, nearest), ivec3(block, int(dslot)), 0);
         keep = !cone_faces_away(cone, c.lo, c.hi);
     }
 #endif

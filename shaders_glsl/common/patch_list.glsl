@@ -10,7 +10,7 @@ struct PatchListHeader {
     uint first_index;
     int vertex_offset;
     uint first_instance;
-    uint patches_in;      // 64 per listed node
+    uint patches_in;      // 256 per listed node
     uint after_frustum;
     uint after_cone;
     uint after_hole;
@@ -22,7 +22,7 @@ struct PatchListHeader {
 #include "constants.glsl"
 
 // Patch record: x = packed node (node_list.glsl) the patch is drawn from;
-// y = slot | patch index (py * 8 + px) | LOD deltas, one per edge in EDGE_*
+// y = slot | patch index (py * 16 + px) | LOD deltas, one per edge in EDGE_*
 // order (constants.glsl); z = refinement level below LOD 0 (0..2) | the
 // sub-patch index (row-major over 2^r x 2^r) << PATCH_SUB_SHIFT; w unused.
 uint pack_patch(uint slot, uint index, uint deltas) {

@@ -1,4 +1,4 @@
-// The terrain vertex: one instanced indirect draw of a 17x17-vertex patch per
+// The terrain vertex: one instanced indirect draw of a 9x9-vertex patch per
 // listed patch (instance = patch record). A patch refined below LOD 0 is 4
 // or 16 sub-patches of the same grid whose vertices lie on the Catmull-Rom
 // surface of the node's samples (the finest surface the error tree
@@ -20,8 +20,8 @@
 #include "atlas_texels.glsl"
 
 // Patches per node side and quads per patch side (world layout).
-layout(constant_id = 1) const uint PATCHES_PER_SIDE = 8u;
-layout(constant_id = 2) const uint PATCH_QUADS = 16u;
+layout(constant_id = 1) const uint PATCHES_PER_SIDE = 16u;
+layout(constant_id = 2) const uint PATCH_QUADS = 8u;
 
 layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
 layout(set = 0, binding = 1, std430) readonly buffer PatchList {
@@ -101,25 +101,29 @@ void main() {
     uint r = patch_refine(p), sub = patch_sub(p);
     uint side = quads + 1u;
     uint i = uint(gl_VertexIndex) % side, j = uint(gl_VertexIndex) / side;
-    uint si = i, sj = j;
-    // 0 unless stitching is switched off (tests that show the seams open).
-    uint off = uint(view.v.lod_params.w != 0.0);
-    if (j == 0u) {
-        si = snap(i, patch_delta(p, EDGE_SOUTH) * (1u - off));
-    } else if (j == quads) {
-        si = snap(i, patch_delta(p, EDGE_NORTH) * (1u - off));
-    }
-    if (i == 0u) {
-        sj = snap(j, patch_delta(p, EDGE_WEST) * (1u - off));
-    } else if (i == quads) {
-        sj = snap(j, patch_delta(p, EDGE_EAST) * (1u - off));
-    }
     uvec2 pxy = uvec2(index % per_side, index / per_side);
     uint lod = node_lod(n);
     ivec2 node = ivec2(node_x(n), node_y(n));
     // Node-local vertex index in units of 2^-r samples (r = 0: samples).
     uint subs = 1u << r;
-    ivec2 fine = ivec2((pxy * quads) << r) + ivec2(uvec2(sub % subs, sub / subs) * quads + uvec2(si, sj));
+    uvec2 f = ((pxy * quads) << r) + uvec2(sub % subs, sub / subs) * quads + uvec2(i, j);
+    // 0 unless stitching is switched off (tests that show the seams open).
+    uint on = uint(view.v.lod_params.w == 0.0);
+    // Snapped in node coordinates: a neighbour more than log2(quads) levels
+    // coarser has its vertices beyond this patch's corners (the node's
+    // side is a multiple of its grid, so they stay inside the node).
+    uvec2 s = f;
+    if (j == 0u) {
+        s.x = snap(f.x, patch_delta(p, EDGE_SOUTH) * on);
+    } else if (j == quads) {
+        s.x = snap(f.x, patch_delta(p, EDGE_NORTH) * on);
+    }
+    if (i == 0u) {
+        s.y = snap(f.y, patch_delta(p, EDGE_WEST) * on);
+    } else if (i == quads) {
+        s.y = snap(f.y, patch_delta(p, EDGE_EAST) * on);
+    }
+    ivec2 fine = ivec2(s);
     precise float h;
     precise vec3 rel;
     if (r == 0u) {

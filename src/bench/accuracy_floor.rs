@@ -279,7 +279,7 @@ mod tests {
     #[test]
     fn units_larger_than_pixels_count_once() {
         // The same view at 64 m quads: coarsest quads of 512 m, patches of
-        // 16 of them (8 km), and the view 231 x 308 m around (2048, 2048), a
+        // PATCH_QUADS of them (4 km or more), and the view 231 x 308 m around (2048, 2048), a
         // corner of four 512 m quads: their triangles that hold it (2 per
         // quad, by the diamond pattern's diagonals all meeting at the
         // corner, 8 in all) and one patch, (0, 0).
@@ -289,8 +289,8 @@ mod tests {
         let floors = grid_floors(&reference(&Plane, &w, &v), &v, &w, &Plane);
         let pixels = 64.0 * 48.0;
         assert_eq!(floors.triangles * pixels, 8.0, "{floors:?}");
-        assert_eq!(PATCH_QUADS, 16, "the comment's patch size");
-        assert_eq!(floors.patches * pixels, 512.0, "{floors:?}");
+        const { assert!(PATCH_QUADS * 512 >= 4096, "the comment's patch size") };
+        assert_eq!(floors.patches * pixels, f64::from(2 * PATCH_QUADS * PATCH_QUADS), "{floors:?}");
     }
 
     #[test]

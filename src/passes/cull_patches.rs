@@ -1,4 +1,4 @@
-//! `cull_patches`: splits every listed node into 8x8 patches (one thread
+//! `cull_patches`: splits every listed node into 16x16 patches (one thread
 //! each, one workgroup per node, dispatched indirectly by `traverse`), draws
 //! for each what `select_patches` chose (an ancestor's patch, its own, or
 //! its sub-patches below LOD 0), culls them (frustum; backface cone and
@@ -31,7 +31,10 @@ use serde::Serialize;
 /// Largest stitched LOD delta: a patch edge of 2^4 quads can snap to a grid
 /// at most 2^4 times coarser without moving its corners.
 pub const MAX_LOD_DELTA: u32 = k::MAX_LOD_DELTA;
-const _: () = assert!(MAX_LOD_DELTA == PATCH_QUADS.trailing_zeros());
+// Stitching snaps to a coarser grid that must divide the node's side
+// (terrain_vertex.glsl), and the delta must fit its bits in the record.
+const _: () = assert!(1 << MAX_LOD_DELTA <= PATCH_QUADS * PATCHES_PER_NODE_SIDE);
+const _: () = assert!(MAX_LOD_DELTA < 1 << k::PATCH_DELTA_BITS);
 
 /// Which culling stages run (all by default; tests and benchmarks switch
 /// them off to show what each removes and costs).
@@ -118,7 +121,7 @@ pub struct CullPush {
 /// Patch counts after each stage of one frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct CullCounters {
-    /// 64 per listed node.
+    /// 256 per listed node.
     pub patches_in: u32,
     pub after_frustum: u32,
     pub after_cone: u32,

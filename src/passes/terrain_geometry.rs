@@ -1,5 +1,5 @@
 //! `terrain_geometry`: every visible patch without holes in ONE instanced
-//! indexed-indirect draw of a 16x16-quad grid (the draw args are the patch
+//! indexed-indirect draw of an 8x8-quad grid (the draw args are the patch
 //! list's header). The vertex shader stitches LOD seams; patches with holes
 //! are drawn by `terrain_holes`, whose vertex shader alone tests holes.
 //! The fragment shader writes what the G-buffer tile passes shade from:

@@ -10,7 +10,8 @@ use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
 use crate::terrain::quadtree::{texture_extent, NodeDesc, QuadtreeShadow, QuadtreeUpdate, FIRST_SLOT, MAX_SLOTS};
 use crate::world::{
-    BakedNode, NodeId, PayloadFormat, TexelKind, WorldDesc, ATLAS_SIDE, PATCHES_PER_NODE_SIDE, SPLAT_RES,
+    BakedNode, NodeId, PayloadFormat, TexelKind, WorldDesc, ATLAS_SIDE, CONE_BLOCKS_PER_NODE_SIDE,
+    PATCHES_PER_NODE_SIDE, SPLAT_RES,
 };
 use std::collections::VecDeque;
 
@@ -43,7 +44,7 @@ const ATLASES: [AtlasKind; 9] = [
     texels("atlas_albedo"),
     plain("atlas_splat", vk::Format::R8_UINT, SPLAT_RES as u32, 1),
     plain("atlas_patch_min_max", vk::Format::R16G16_UINT, PATCHES_PER_NODE_SIDE, 4),
-    plain("atlas_patch_cones", vk::Format::R32G32B32A32_SFLOAT, PATCHES_PER_NODE_SIDE, 16),
+    plain("atlas_patch_cones", vk::Format::R32G32B32A32_SFLOAT, CONE_BLOCKS_PER_NODE_SIDE, 16),
     plain("atlas_patch_holes", vk::Format::R8_UINT, PATCHES_PER_NODE_SIDE, 1),
     plain("atlas_patch_errors", vk::Format::R32G32_SFLOAT, PATCHES_PER_NODE_SIDE, 8),
     plain("atlas_control", vk::Format::R16_UINT, SPLAT_RES as u32, 2),

@@ -7,8 +7,8 @@ use super::control_map::{slope01, ControlBake};
 use super::hash::Fnv64;
 use super::holes::Hole;
 use super::layout::{
-    NodeId, WorldDesc, NODE_QUADS, NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES,
-    SPLAT_RES,
+    NodeId, WorldDesc, CONE_BLOCKS_PER_NODE_SIDE, NODE_QUADS, NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE,
+    PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES,
 };
 use super::material_rules::MaterialRules;
 use super::payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
@@ -168,7 +168,15 @@ pub fn bake_node_with(
                 n if n == PATCH_SAMPLES * PATCH_SAMPLES => PATCH_HOLE_ALL,
                 _ => PATCH_HOLE_SOME,
             });
-            let tri = patch_triangle_normals(&decoded, step, px, py);
+        }
+    }
+    // One cone per block of patches holds every triangle any of them draws.
+    let b = crate::shaders::consts::CONE_BLOCK_PATCHES;
+    for by in 0..CONE_BLOCKS_PER_NODE_SIDE {
+        for bx in 0..CONE_BLOCKS_PER_NODE_SIDE {
+            let tri: Vec<[f64; 3]> = (0..b * b)
+                .flat_map(|k| patch_triangle_normals(&decoded, step, bx * b + k % b, by * b + k / b))
+                .collect();
             patch_cones.push(fit_cone(&tri).to_gpu());
         }
     }

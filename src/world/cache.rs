@@ -32,7 +32,7 @@ use super::texels::PayloadFormat;
 /// File magic: identifies a vista node file.
 const MAGIC: [u8; 4] = *b"VNOD";
 /// Bumped whenever the file layout or the bake's output changes.
-const FORMAT_VERSION: u32 = 7;
+const FORMAT_VERSION: u32 = 8;
 /// Bytes before the payload.
 const HEADER_BYTES: usize = 4 + 4 + 8 * 4 + 1 + 4 + 4 + 4;
 /// zstd level: 3 (zstd's default) measured within 1 % of level 9's size on

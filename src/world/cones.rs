@@ -41,11 +41,13 @@ impl NormalCone {
 
 /// Unit normals of every triangle the GPU may draw for patch (px, py),
 /// from `heights` (129x129 decoded metres, row 0 south) with `spacing`
-/// metres between samples: its 512 triangles, and those of its edge quads
-/// under every stitching (an edge next to a coarser patch snaps its
-/// vertices to that patch's grid, 1 to `MAX_LOD_DELTA` levels coarser, as
-/// `terrain_vertex.glsl` does), so a patch is cone-tested whatever its
-/// neighbours' levels. Quads whose (x + y) is even are split along the
+/// metres between samples: its 2 x PATCH_QUADS^2 triangles, and those of
+/// its edge quads under every stitching that stays within its corners (an
+/// edge next to a coarser patch snaps its vertices to that patch's grid, 1
+/// to log2(PATCH_QUADS) levels coarser, as `terrain_vertex.glsl` does), so
+/// a patch is cone-tested whatever its neighbours' levels. Patches that
+/// stitch further (up to `MAX_LOD_DELTA`) are never cone-tested
+/// (`patch_cull.glsl`), so their cones need not hold those variants. Quads whose (x + y) is even are split along the
 /// SW-NE diagonal, odd ones along SE-NW, so every odd/odd vertex is the
 /// centre of 8 triangles: the diamond pattern the GPU index buffer uses.
 /// Degenerate triangles (a snapped edge folds some to a line) draw nothing
@@ -54,8 +56,8 @@ pub fn patch_triangle_normals(heights: &[f32], spacing: f64, px: u32, py: u32) -
     assert_eq!(heights.len(), NODE_SAMPLES * NODE_SAMPLES, "not a node grid");
     let q = PATCH_QUADS;
     let mut out = Vec::with_capacity((q * q * 2) as usize);
-    let h = |i: u32, j: u32| f64::from(heights[(py * q + j) as usize * NODE_SAMPLES + (px * q + i) as usize]);
-    let deltas = 0..=MAX_LOD_DELTA;
+    let h = |x: u32, y: u32| f64::from(heights[y as usize * NODE_SAMPLES + x as usize]);
+    let deltas = 0..=q.trailing_zeros().min(MAX_LOD_DELTA);
     for qy in 0..q {
         for qx in 0..q {
             // Deltas of the edges this quad touches (west/east, south/north).
@@ -65,8 +67,8 @@ pub fn patch_triangle_normals(heights: &[f32], spacing: f64, px: u32, py: u32) -
                 for dy in deltas.clone().take(if on_y { usize::MAX } else { 1 }) {
                     let p = |di: u32, dj: u32| {
                         let (i, j) = (qx + di, qy + dj);
-                        let (si, sj) = stitched(i, j, dx, dy, q);
-                        [f64::from(si) * spacing, f64::from(sj) * spacing, h(si, sj)]
+                        let (x, y) = stitched([px * q + i, py * q + j], i, j, dx, dy, q);
+                        [f64::from(x) * spacing, f64::from(y) * spacing, h(x, y)]
                     };
                     let (p00, p10, p01, p11) = (p(0, 0), p(1, 0), p(0, 1), p(1, 1));
                     let tris = if (qx + qy).is_multiple_of(2) {
@@ -82,13 +84,15 @@ pub fn patch_triangle_normals(heights: &[f32], spacing: f64, px: u32, py: u32) -
     out
 }
 
-/// Where the vertex shader draws patch vertex (i, j) when the edges at
-/// i = 0 or q take delta `dx` and those at j = 0 or q take `dy`.
-fn stitched(i: u32, j: u32, dx: u32, dy: u32, q: u32) -> (u32, u32) {
+/// Where the vertex shader draws patch vertex (i, j), node sample `node`,
+/// when the edges at i = 0 or q take delta `dx` and those at j = 0 or q
+/// take `dy`: snapped in node coordinates, so a delta above log2(q) moves
+/// it to a coarse vertex beyond the patch's corners (still in the node).
+fn stitched(node: [u32; 2], i: u32, j: u32, dx: u32, dy: u32, q: u32) -> (u32, u32) {
     let snap = |v: u32, d: u32| if d == 0 { v } else { ((v + (1 << (d - 1)) - 1) >> d) << d };
-    let si = if j == 0 || j == q { snap(i, dy) } else { i };
-    let sj = if i == 0 || i == q { snap(j, dx) } else { j };
-    (si, sj)
+    let x = if j == 0 || j == q { snap(node[0], dy) } else { node[0] };
+    let y = if i == 0 || i == q { snap(node[1], dx) } else { node[1] };
+    (x, y)
 }
 
 /// The unit normal, or `None` for a triangle of no area (drawn as nothing).

@@ -1,4 +1,4 @@
-//! The error tree: for every node and each of its 8 x 8 patches, the
+//! The error tree: for every node and each of its 16 x 16 patches, the
 //! largest vertical distance between the surface the GPU draws for it (the
 //! diamond-split triangles of its own samples) and the finest surface vista
 //! can draw (the Catmull-Rom surface of the LOD-0 samples, tessellated 4x
@@ -42,7 +42,7 @@ use super::source::HeightSource;
 
 const MAGIC: [u8; 4] = *b"VERR";
 /// Bumped whenever the tile layout or the error definition changes.
-const TILE_VERSION: u32 = 3;
+const TILE_VERSION: u32 = 4;
 
 /// One root's patches of every level (index = LOD).
 type Tile = Arc<Vec<LevelPatches>>;

@@ -22,10 +22,15 @@ pub const NODE_QUADS: u32 = 128;
 /// Samples per node side: one more than quads so neighbours share edges.
 pub const NODE_SAMPLES: usize = NODE_QUADS as usize + 1;
 /// Patches per node side: a patch is the unit of GPU culling and drawing.
-pub const PATCHES_PER_NODE_SIDE: u32 = 8;
+pub const PATCHES_PER_NODE_SIDE: u32 = 16;
 /// Patches per node.
 pub const PATCHES_PER_NODE: usize = (PATCHES_PER_NODE_SIDE * PATCHES_PER_NODE_SIDE) as usize;
-/// Quads per patch side (128 / 8).
+/// Normal cones per node side: one per `CONE_BLOCK_PATCHES` x
+/// `CONE_BLOCK_PATCHES` patches (see `world::cones`).
+pub const CONE_BLOCKS_PER_NODE_SIDE: u32 = PATCHES_PER_NODE_SIDE / crate::shaders::consts::CONE_BLOCK_PATCHES;
+/// Normal cones per node.
+pub const CONE_BLOCKS_PER_NODE: usize = (CONE_BLOCKS_PER_NODE_SIDE * CONE_BLOCKS_PER_NODE_SIDE) as usize;
+/// Quads per patch side (128 / 16).
 pub const PATCH_QUADS: u32 = NODE_QUADS / PATCHES_PER_NODE_SIDE;
 /// Samples per patch side.
 pub const PATCH_SAMPLES: usize = PATCH_QUADS as usize + 1;

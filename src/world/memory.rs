@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use super::layout::{PATCHES_PER_NODE, SPLAT_RES};
+use super::layout::{CONE_BLOCKS_PER_NODE, PATCHES_PER_NODE, SPLAT_RES};
 use super::payload::BakedNode;
 use super::texels::{PayloadFormat, TexelKind, ATLAS_TEXELS};
 
@@ -34,7 +34,7 @@ impl MemoryReport {
     pub fn for_format(nodes: usize, format: PayloadFormat) -> Self {
         let h = ATLAS_TEXELS;
         let sp = SPLAT_RES * SPLAT_RES;
-        let p = PATCHES_PER_NODE;
+        let (p, c) = (PATCHES_PER_NODE, CONE_BLOCKS_PER_NODE);
         let (normal, albedo) = (TexelKind::Normal, TexelKind::Albedo);
         let kind = |name, gpu_format, cpu_bytes, gpu_bytes| PayloadSize { name, gpu_format, cpu_bytes, gpu_bytes };
         MemoryReport {
@@ -44,10 +44,10 @@ impl MemoryReport {
                 kind("normal", format.describe(normal), format.layer_bytes(normal), format.layer_bytes(normal)),
                 kind("albedo", format.describe(albedo), format.layer_bytes(albedo), format.layer_bytes(albedo)),
                 kind("splat", "R8_UINT 65x65", sp, sp),
-                kind("patch min/max", "RG16_UINT 8x8", p * 4, p * 4),
-                kind("patch cones", "RGBA32F 8x8", p * 16, p * 16),
-                kind("patch holes", "R8_UINT 8x8", p, p),
-                kind("patch errors", "RG32F 8x8", p * 8, p * 8),
+                kind("patch min/max", "RG16_UINT 16x16", p * 4, p * 4),
+                kind("patch cones", "RGBA32F 8x8", c * 16, c * 16),
+                kind("patch holes", "R8_UINT 16x16", p, p),
+                kind("patch errors", "RG32F 16x16", p * 8, p * 8),
                 // A control-map world's words (`with_control`).
                 kind("control", "R16_UINT 65x65", 0, 0),
                 // id, min/max, error, representation error; on the GPU the

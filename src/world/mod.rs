@@ -52,9 +52,9 @@ pub use geotiff::{GeoTiffInfo, GeoTiffSource};
 pub use holes::{holes_hash, Hole};
 pub use input_file::{require_regular_file, resolve_relative};
 pub use layout::{
-    decode_height, encode_height, NodeId, WorldDesc, MAX_ABS_HEIGHT_M, MAX_IMAGE_SIDE, MAX_LOD_COUNT,
-    MAX_SECTORS_PER_SIDE, NODE_QUADS, NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE, PATCH_QUADS,
-    PATCH_SAMPLES, SPLAT_RES,
+    decode_height, encode_height, NodeId, WorldDesc, CONE_BLOCKS_PER_NODE, CONE_BLOCKS_PER_NODE_SIDE, MAX_ABS_HEIGHT_M,
+    MAX_IMAGE_SIDE, MAX_LOD_COUNT, MAX_SECTORS_PER_SIDE, NODE_QUADS, NODE_SAMPLES, PATCHES_PER_NODE,
+    PATCHES_PER_NODE_SIDE, PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES,
 };
 pub use loader::{LoadFn, Loader};
 pub use manifest::{

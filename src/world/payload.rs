@@ -1,6 +1,6 @@
 //! The baked payload of one quadtree node and its byte serialisation.
 
-use super::layout::{NodeId, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
+use super::layout::{NodeId, CONE_BLOCKS_PER_NODE, NODE_SAMPLES, PATCHES_PER_NODE, SPLAT_RES};
 use super::texels::{texel_index, PayloadFormat, TexelKind, ATLAS_TEXELS};
 
 /// Splat material ids (index into the renderer's 256-entry palette).
@@ -46,15 +46,15 @@ pub struct BakedNode {
     /// A control-map world's 65x65 control words (`super::control_map`),
     /// laid out as `splat`; empty in other worlds.
     pub control: Vec<u16>,
-    /// 8x8 (min, max) R16 heights of each patch: the finest surface's
+    /// 16x16 (min, max) R16 heights of each patch: the finest surface's
     /// range over the patch's area ([`super::ErrorTree`]), which holds the
     /// node's own samples, every finer level's and the refinement's; until
-    /// errors are attached, the range of the patch's own 17x17 samples.
+    /// errors are attached, the range of the patch's own 9x9 samples.
     pub patch_min_max: Vec<[u16; 2]>,
-    /// 8x8 normal cones: axis xyz + sin(half-angle); axis 0 and sin 1 mean
-    /// "never cull" (half-angle of 90 degrees or more).
+    /// 8x8 normal cones, one per 2x2 patches: axis xyz + sin(half-angle);
+    /// axis 0 and sin 1 mean "never cull" (half-angle of 90 degrees or more).
     pub patch_cones: Vec<[f32; 4]>,
-    /// 8x8 hole summary per patch ([`PATCH_HOLE_NONE`], [`PATCH_HOLE_SOME`],
+    /// 16x16 hole summary per patch ([`PATCH_HOLE_NONE`], [`PATCH_HOLE_SOME`],
     /// [`PATCH_HOLE_ALL`]): the cull pass drops all-hole patches outright.
     pub patch_holes: Vec<u8>,
     /// The union of the patch ranges.
@@ -64,7 +64,7 @@ pub struct BakedNode {
     /// surface vista can draw ([`super::ErrorTree`]); infinite until
     /// attached, so a node without errors is always refined.
     pub max_error_m: f32,
-    /// 8x8 [error drawn at this node's level, error drawn 2x refined below
+    /// 16x16 [error drawn at this node's level, error drawn 2x refined below
     /// the samples (LOD 0 only)], metres; infinite until attached.
     pub patch_errors: Vec<[f32; 2]>,
     /// The largest LOD-0 representation error under the node (LOD 0's
@@ -88,7 +88,8 @@ impl BakedNode {
             + SPLATS
             + 1
             + if control { SPLATS * 2 } else { 0 }
-            + PATCHES_PER_NODE * (1 + 4 + 16 + 8)
+            + PATCHES_PER_NODE * (1 + 4 + 8)
+            + CONE_BLOCKS_PER_NODE * 16
             + 4
     }
 
@@ -181,7 +182,8 @@ impl BakedNode {
         let control = (0..if control { SPLATS } else { 0 }).map(|_| u16::from_le_bytes(r.take())).collect();
         let patch_min_max =
             (0..PATCHES_PER_NODE).map(|_| [u16::from_le_bytes(r.take()), u16::from_le_bytes(r.take())]).collect();
-        let patch_cones = (0..PATCHES_PER_NODE).map(|_| [0; 4].map(|_: i32| f32::from_le_bytes(r.take()))).collect();
+        let patch_cones =
+            (0..CONE_BLOCKS_PER_NODE).map(|_| [0; 4].map(|_: i32| f32::from_le_bytes(r.take()))).collect();
         let patch_errors = (0..PATCHES_PER_NODE).map(|_| [0; 2].map(|_: i32| f32::from_le_bytes(r.take()))).collect();
         let repr_error_m = f32::from_le_bytes(r.take());
         Some(BakedNode {

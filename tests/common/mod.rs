@@ -6,7 +6,8 @@
 
 use vista::gpu::{Context, ContextOptions};
 use vista::world::{
-    texel_index, BakedNode, NodeId, PayloadFormat, TexelKind, ATLAS_TEXELS, PATCHES_PER_NODE, SPLAT_RES,
+    texel_index, BakedNode, NodeId, PayloadFormat, TexelKind, ATLAS_TEXELS, CONE_BLOCKS_PER_NODE, PATCHES_PER_NODE,
+    SPLAT_RES,
 };
 
 /// (message id, why it is acceptable). Keep this list short and justified.
@@ -76,7 +77,7 @@ pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
         splat: (0..SPLAT_RES * SPLAT_RES).map(|i| (i % 4) as u8).collect(),
         control: Vec::new(),
         patch_min_max: (0..PATCHES_PER_NODE).map(|i| [i as u16, tag]).collect(),
-        patch_cones: (0..PATCHES_PER_NODE).map(|i| [0.0, 0.0, 1.0, i as f32 / 64.0]).collect(),
+        patch_cones: (0..CONE_BLOCKS_PER_NODE).map(|i| [0.0, 0.0, 1.0, i as f32 / 64.0]).collect(),
         patch_holes: (0..PATCHES_PER_NODE).map(|i| (i % 3) as u8).collect(),
         min_height: tag & 0x7FFF,
         max_height: tag | 0x8000,
