@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// variants: MATERIALS CONTROL_MAP
+// variants: MATERIALS CONTROL_MAP VIRTUAL_TEXTURE
 // Shades the tiles of one variant into the G-buffer. The variant's flavour
 // bits are a specialization constant, so each pipeline contains only the
 // flavours its tiles need; per pixel, the flavours are weighted by the
@@ -58,6 +58,13 @@ layout(set = 0, binding = 18, std430) readonly buffer ControlTable {
     ControlTexture t[CONTROL_TEXTURES];
 } control;
 #endif
+#ifdef VIRTUAL_TEXTURE
+layout(set = 0, binding = 19, std430) readonly buffer VtState { uint words[]; } vt_state;
+layout(set = 0, binding = 20) uniform texture2D vt_albedo;
+layout(set = 0, binding = 21) uniform texture2D vt_detail;
+#define VISTA_VT_WORD(i) vt_state.words[i]
+#include "virtual_texture.glsl"
+#endif
 layout(set = 0, binding = 13) uniform sampler nearest;
 layout(set = 0, binding = 14) uniform sampler linear_clamp;
 layout(set = 0, binding = 16) uniform texture2DArray height_atlas;
@@ -83,10 +90,6 @@ layout(location = 0) out vec4 gb_albedo;    // rgb albedo (sRGB target)
 layout(location = 1) out vec4 gb_normal;    // xy octahedral shading normal, z roughness
 layout(location = 2) out uvec2 gb_material; // x material id, y flavour bits shaded
 
-// Height-weighted blending: how far (in height units) below the highest
-// layer a texel still shows.
-const float HEIGHT_BLEND = 0.6;
-const float BLEND_DEPTH = 0.2;
 
 struct Surface {
     vec3 albedo;
@@ -94,14 +97,10 @@ struct Surface {
     float roughness;
 };
 
-struct Texel {
-    vec3 albedo;
-    vec2 tangent;  // detail normal xy on its plane, world-aligned
-    float roughness;
-    float height;
-};
 
 #ifdef DETAIL_TEXTURES
+#include "splat_blend.glsl"
+
 // Plane coordinates of tri-planar projection `p` (0: x axis, 1: y, 2: z).
 vec2 project(vec3 v, int p) {
     return p == 0 ? v.yz : (p == 1 ? v.xz : v.xy);
@@ -115,53 +114,6 @@ vec3 perturb(vec3 ng, vec2 tangent, int p) {
         return vec3(ng.x + tangent.x, ng.y, ng.z + tangent.y);
     }
     return vec3(ng.xy + tangent, ng.z);
-}
-
-// The detail textures of layers `layers` (albedo | normal << 8 | height <<
-// 16) at texture coordinates `uv` with derivatives `gx`, `gy`; `rot` turns
-// the texture's axes into the plane's.
-Texel sample_layers(uint layers, vec2 uv, vec2 gx, vec2 gy, mat2 rot) {
-    vec3 a = vec3(uv, float(layers & 0xFFu));
-    vec3 n = vec3(uv, float((layers >> 8u) & 0xFFu));
-    vec3 h = vec3(uv, float((layers >> 16u) & 0xFFu));
-    Texel t;
-    t.albedo = textureGrad(sampler2DArray(detail_albedo, detail_sampler), a, gx, gy).rgb;
-    vec4 nr = textureGrad(sampler2DArray(detail_normal, detail_sampler), n, gx, gy);
-    // Back from texture axes to the plane's axes.
-    t.tangent = transpose(rot) * (nr.xy * 2.0 - 1.0);
-    t.roughness = nr.a;
-    t.height = textureGrad(sampler2DArray(detail_height, detail_sampler), h, gx, gy).r;
-    return t;
-}
-#endif
-
-#ifdef MATERIALS
-// The four splat texels around `xy` and their bilinear weights.
-void splat_texels(vec2 xy, out uint ids[4], out vec4 weights) {
-    VistaNodeHit hit = vista_find_node(xy);
-    if (!hit.found) {
-        ids = uint[4](0u, 0u, 0u, 0u);
-        weights = vec4(1.0, 0.0, 0.0, 0.0);
-        return;
-    }
-    vec2 t = hit.local * 0.5;
-    ivec2 i0 = min(ivec2(floor(t)), ivec2(int(SPLAT_TEXELS) - 2));
-    vec2 f = clamp(t - vec2(i0), 0.0, 1.0);
-    for (int k = 0; k < 4; ++k) {
-        ivec2 o = ivec2(k & 1, k >> 1);
-        ids[k] = texelFetch(usampler2DArray(splat_atlas, nearest), ivec3(i0 + o, int(hit.slot)), 0).r;
-    }
-    weights = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
-}
-
-// Material `id` on a plane with coordinates `plane` (m) and their screen
-// derivatives, at tiling scale `scale` (1 = the material's own).
-Texel sample_material(uint id, vec2 plane, vec2 dx, vec2 dy, float scale) {
-    uint layers = materials.m[id].layers;
-    float k = scale / materials.m[id].tiling_m;
-    vec2 cs = vec2(materials.m[id].cos_rot, materials.m[id].sin_rot);
-    mat2 rot = mat2(cs.x, cs.y, -cs.y, cs.x);
-    return sample_layers(layers, rot * plane * k, rot * dx * k, rot * dy * k, rot);
 }
 
 #endif
@@ -178,40 +130,11 @@ Surface far_atlas(vec3 world, vec3 ng) {
 }
 
 #ifdef MATERIALS
-// Full splat: four materials on the ground plane, height-weighted.
+// Full splat (splat_blend.glsl) around the geometric normal.
 Surface splat_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, out uint dominant) {
-    uint ids[4];
-    vec4 bil;
-    splat_texels(world.xy, ids, bil);
-    Texel t[4];
-    float a[4];
-    float top = -1e9;
-    for (int k = 0; k < 4; ++k) {
-        t[k] = sample_material(ids[k], world.xy, ddx.xy, ddy.xy, 1.0);
-        a[k] = bil[k] + t[k].height * HEIGHT_BLEND;
-        top = max(top, a[k]);
-    }
-    Surface s = Surface(vec3(0.0), vec3(0.0), 0.0);
-    vec2 tangent = vec2(0.0);
-    float sum = 0.0, best = -1.0;
-    dominant = ids[0];
-    for (int k = 0; k < 4; ++k) {
-        float w = max(a[k] - top + BLEND_DEPTH, 0.0) * step(1e-6, bil[k]);
-        if (w > best) {
-            best = w;
-            dominant = ids[k];
-        }
-        s.albedo += w * t[k].albedo;
-        tangent += w * t[k].tangent;
-        s.roughness += w * t[k].roughness;
-        sum += w;
-    }
-    sum = max(sum, 1e-6);
-    s.albedo /= sum;
-    s.roughness /= sum;
-    tangent /= sum;
-    s.normal = normalize(vec3(ng.xy + tangent, ng.z));
-    return s;
+    SplatBlend b = splat_blend(world.xy, ddx.xy, ddy.xy);
+    dominant = b.dominant;
+    return Surface(b.albedo, normalize(vec3(ng.xy + b.tangent, ng.z)), b.roughness);
 }
 
 // Index picked by uniform `u` in proportion to `w` (which sums to 1).
@@ -280,6 +203,53 @@ Surface cliff_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, bool far_cliff, f
 #include "control_surface.glsl"
 #endif
 
+#ifdef VIRTUAL_TEXTURE
+// The cached page texels at `xy` of `level`, or of the nearest coarser
+// level resident (false: none is, not even level 0).
+bool vt_fetch(VtSub s, vec2 xy, uint level, out vec4 albedo, out vec4 detail) {
+    vec2 texel;
+    uint found;
+    if (!vt_find(s, xy, level, texel, found)) {
+        return false;
+    }
+    vec2 cache = vec2(uintBitsToFloat(vt_state.words[5]), uintBitsToFloat(vt_state.words[6]));
+    albedo = textureLod(sampler2D(vt_albedo, linear_clamp), texel / cache, 0.0);
+    detail = textureLod(sampler2D(vt_detail, linear_clamp), texel / cache, 0.0);
+    // The material id is not filtered: the nearest texel's.
+    detail.z = texelFetch(sampler2D(vt_detail, nearest), ivec2(texel), 0).z;
+    return true;
+}
+
+// The virtual texture's material (the splat blend cached in pages),
+// trilinear between the two levels the footprint falls between; `served`
+// is false where no page covers the point (the caller falls back to the
+// far atlas, seed 001's low-resolution callback).
+Surface vt_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, out uint material, out bool served) {
+    material = 0u;
+    served = false;
+    VtSub s = vt_sub_texture(world.xy);
+    if (!s.valid) {
+        return Surface(vec3(0.0), ng, 1.0);
+    }
+    float level = clamp(vt_level(max(length(ddx.xy), length(ddy.xy)), s.region_m), 0.0, float(s.k));
+    uint fine = uint(ceil(level));
+    uint coarse = uint(floor(level));
+    vec4 a0, d0, a1, d1;
+    if (!vt_fetch(s, world.xy, fine, a0, d0)) {
+        return Surface(vec3(0.0), ng, 1.0);
+    }
+    served = true;
+    float t = float(fine) - level;
+    if (coarse != fine && t > 0.0 && vt_fetch(s, world.xy, coarse, a1, d1)) {
+        a0 = mix(a0, a1, t);
+        d0.xy = mix(d0.xy, d1.xy, t);
+    }
+    material = uint(d0.z * 255.0 + 0.5);
+    vec2 tangent = (d0.xy - 0.5) * 4.0;
+    return Surface(a0.rgb * a0.rgb, normalize(vec3(ng.xy + tangent, ng.z)), a0.a);
+}
+#endif
+
 void main() {
     uint variant = VARIANT_BITS;
     // A variable, not a constant expression: naga reads no SpecConstantOp.
@@ -303,7 +273,7 @@ void main() {
     // Only the pixel's own flavours (its tile's variant contains them).
     shares *= vec4(0.0, (bits & FLAVOUR_FAR_ATLAS) != 0u ? 1.0 : 0.0, (bits & FLAVOUR_NEAR_CLIFF) != 0u ? 1.0 : 0.0,
                    (bits & FLAVOUR_FAR_CLIFF) != 0u ? 1.0 : 0.0);
-    splat_share *= (bits & (FLAVOUR_SPLAT | FLAVOUR_CONTROL_MAP)) != 0u ? 1.0 : 0.0;
+    splat_share *= (bits & (FLAVOUR_SPLAT | FLAVOUR_CONTROL_MAP | FLAVOUR_VIRTUAL_TEXTURE)) != 0u ? 1.0 : 0.0;
     float total = shares.y + shares.z + shares.w + splat_share;
     if (total <= 0.0) {
         // Rounding left the pixel with none of its flavours' shares: the
@@ -326,8 +296,22 @@ void main() {
         s.normal += shares.y * f.normal;
         s.roughness += shares.y * f.roughness;
     }
+#ifdef VIRTUAL_TEXTURE
+    if ((variant & FLAVOUR_VIRTUAL_TEXTURE) != 0u && (every || splat_share > 0.0)) {
+        uint m;
+        bool served;
+        Surface f = vt_surface(world, ng, ddx, ddy, m, served);
+        if (!served) {
+            f = far_atlas(world, ng);
+        }
+        material = splat_share > 0.0 ? m : material;
+        s.albedo += splat_share * f.albedo;
+        s.normal += splat_share * f.normal;
+        s.roughness += splat_share * f.roughness;
+    }
+#endif
 #ifdef MATERIALS
-    if ((variant & (FLAVOUR_SPLAT | FLAVOUR_VIRTUAL_TEXTURE)) != 0u && (every || splat_share > 0.0)) {
+    if ((variant & FLAVOUR_SPLAT) != 0u && (every || splat_share > 0.0)) {
         uint m;
         Surface f = splat_surface(world, ng, ddx, ddy, m);
         material = splat_share > 0.0 ? m : material;

@@ -340,7 +340,13 @@ fn variants_leave_out_what_their_switches_add() {
         assert!(!names(tiles::variant(0)).contains(&name), "far atlas only: no {name}");
     }
     assert!(!control.contains(&"splat_atlas") && !control.contains(&"materials"));
-    let full = tiles::VARIANT_MATERIALS | tiles::VARIANT_CONTROL_MAP;
+    // The virtual-texture flavour: its state buffer and cache images only
+    // where its switch is on.
+    let vt = names(tiles::variant(tiles::VARIANT_MATERIALS | tiles::VARIANT_VIRTUAL_TEXTURE));
+    for name in ["vt_state", "vt_albedo", "vt_detail"] {
+        assert!(vt.contains(&name) && !names(tiles::variant(tiles::VARIANT_MATERIALS)).contains(&name), "{name}");
+    }
+    let full = tiles::VARIANT_MATERIALS | tiles::VARIANT_CONTROL_MAP | tiles::VARIANT_VIRTUAL_TEXTURE;
     assert!(std::ptr::eq(tiles::variant(full), &tiles::SHADER), "SHADER is the full variant");
     let bare = names(cull::variant(0));
     for gone in ["patch_cones", "patch_holes", "hole_list"] {

@@ -151,4 +151,35 @@
 #define SUN_SHADOW_MAX_JOBS 80u
 #define SUN_SHADOW_MAX_SIDE 257u
 
+// Adaptive virtual texture (effect virtual_texture, render/virtual_texture):
+// physical tiles of VT_TILE_TEXELS texels a side plus VT_TILE_BORDER on
+// each side; a region's sub-texture has levels 0..K (2^L pages a side at
+// level L), K at most VT_MAX_LEVEL.
+#define VT_TILE_TEXELS 128u
+#define VT_TILE_BORDER 4u
+#define VT_MAX_LEVEL 7u
+#define VT_NONE 0xFFFFFFFFu
+// The state buffer: VT_STATE_HEADER words (regions x, regions y,
+// indirection side, cache tiles per row, region metres as float bits,
+// cache texels x, y, unused), one sub-texture word per region, then the
+// indirection's mips (a physical tile index per texel, or VT_NONE).
+#define VT_STATE_HEADER 8u
+// Sub-texture word: mip-0 x | y << 11 | K << 22 (VT_NONE: no sub-texture).
+#define VT_SUB_Y_SHIFT 11u
+#define VT_SUB_COORD_MASK 0x7FFu
+#define VT_SUB_K_SHIFT 22u
+// Page request: word 0 the region, word 1 level | x << 4 | y << 12.
+#define VT_REQ_X_SHIFT 4u
+#define VT_REQ_Y_SHIFT 12u
+#define VT_REQ_LEVEL_MASK 15u
+#define VT_REQ_COORD_MASK 0xFFu
+// Feedback: one sample per VT_FEEDBACK_STRIDE^2 pixels, its place in the
+// block jittered over VT_FEEDBACK_STRIDE^2 frames (seed 000: 1/8 size).
+#define VT_FEEDBACK_STRIDE 8u
+// Requests one frame can list (more are counted, not listed).
+#define VT_REQUEST_CAPACITY 16384u
+// Pages vt_pages renders in one frame at most, and state writes vt_update applies.
+#define VT_MAX_JOBS 256u
+#define VT_MAX_WRITES 8192u
+
 #endif

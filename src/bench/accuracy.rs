@@ -17,6 +17,7 @@
 use super::accuracy_error::{accuracy_error, AccuracyError};
 use super::accuracy_floor::{grid_floors, Floors};
 use super::accuracy_shadows::{shadow_rows, ShadowPoint, ShadowSweep};
+use super::accuracy_vt::{vt_rows, VtPoint, VtSweep};
 use crate::error::Result;
 use crate::frame::profiler::summarize;
 use crate::frame::FrameTimings;
@@ -66,6 +67,9 @@ pub struct AccuracyBenchConfig {
     /// Shadow rows (when the scene has the `shadows` effect), at the
     /// shading target.
     pub shadows: Option<ShadowSweep>,
+    /// Virtual-texture rows (when the scene has `virtual_texture` and
+    /// splat), at the shading target.
+    pub virtual_texture: Option<VtSweep>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -135,6 +139,9 @@ pub struct AccuracyBench {
     pub shadow_points: Vec<ShadowPoint>,
     /// Why shadow rows are absent, when they are.
     pub shadows_skipped: Option<String>,
+    pub vt_points: Vec<VtPoint>,
+    /// Why virtual-texture rows are absent, when they are.
+    pub vt_skipped: Option<String>,
     #[serde(skip)]
     pub images: Vec<ViewImages>,
 }
@@ -225,6 +232,10 @@ pub fn bench_accuracy(
         .then(|| "the scene does not ask for effect shadows".to_string())
         .or_else(|| (!effects.is_on(Effect::Lighting)).then(|| "the scene's lighting is off".to_string()))
         .or_else(|| cfg.shadows.is_none().then(|| "not asked for".to_string()));
+    let vt_skipped = (!effects.is_on(Effect::VirtualTexture))
+        .then(|| "the scene does not ask for effect virtual_texture".to_string())
+        .or_else(|| (!effects.is_on(Effect::Splat)).then(|| "the scene's splat is off".to_string()))
+        .or_else(|| cfg.virtual_texture.is_none().then(|| "not asked for".to_string()));
     let shading_skipped = (!(fx.is_on(Effect::Splat) || fx.is_on(Effect::Cliffs)))
         .then(|| "the scene has neither splat nor cliffs: every shading setting draws the same".to_string())
         .or_else(|| (!cfg.shading).then(|| "not asked for".to_string()));
@@ -251,6 +262,8 @@ pub fn bench_accuracy(
         shading_skipped,
         shadow_points: Vec::new(),
         shadows_skipped,
+        vt_points: Vec::new(),
+        vt_skipped,
         images: Vec::new(),
     };
     for (name, camera) in views {
@@ -302,6 +315,11 @@ pub fn bench_accuracy(
             let with = |fx: Effects| RendererOptions { effects: fx, ..geometry.clone() };
             let v = view(cfg.shading_target_px);
             out.shadow_points.extend(shadow_rows(&mut run, &with, &geometry_fx, sweep, &v, &shadowed, name)?);
+        }
+        if let (None, Some(sweep)) = (&out.vt_skipped, &cfg.virtual_texture) {
+            let with = |fx: Effects| RendererOptions { effects: fx, ..options(Shading::Tiled) };
+            let v = view(cfg.shading_target_px);
+            out.vt_points.extend(vt_rows(&mut run, &with, &fx, sweep, &v, name)?);
         }
     }
     Ok(out)

@@ -7,6 +7,7 @@ pub mod accuracy;
 pub mod accuracy_error;
 pub mod accuracy_floor;
 pub mod accuracy_shadows;
+pub mod accuracy_vt;
 pub mod cull;
 pub mod effects;
 pub mod shade;

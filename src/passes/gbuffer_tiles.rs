@@ -56,6 +56,16 @@ pub struct MaterialBindings<'a> {
     pub albedo: &'a Image,
     pub normal: &'a Image,
     pub height: &'a Image,
+    /// Effect `virtual_texture`: its state buffer and cache images.
+    pub virtual_texture: Option<VtBindings<'a>>,
+}
+
+/// What the virtual-texture flavour samples.
+#[derive(Clone, Copy)]
+pub struct VtBindings<'a> {
+    pub state: &'a Buffer,
+    pub albedo: &'a Image,
+    pub detail: &'a Image,
 }
 
 /// Which fragment shader a renderer's tile shading uses: the splat and
@@ -65,6 +75,8 @@ pub struct MaterialBindings<'a> {
 pub enum TileMaterials {
     None,
     Splat,
+    /// Splat's materials, the near flavour from the virtual texture.
+    SplatVirtualTexture,
     ControlMap,
 }
 
@@ -94,6 +106,7 @@ impl GbufferTiles {
         let fragment = fs::variant(match materials {
             TileMaterials::None => 0,
             TileMaterials::Splat => fs::VARIANT_MATERIALS,
+            TileMaterials::SplatVirtualTexture => fs::VARIANT_MATERIALS | fs::VARIANT_VIRTUAL_TEXTURE,
             TileMaterials::ControlMap => fs::VARIANT_CONTROL_MAP,
         });
         let pipelines = variants
@@ -204,7 +217,7 @@ impl GbufferTiles {
             ]);
         }
         match self.materials {
-            TileMaterials::Splat => bindings.extend([
+            TileMaterials::Splat | TileMaterials::SplatVirtualTexture => bindings.extend([
                 (fs::SPLAT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_SPLAT), ATLAS_LAYOUT)),
                 (fs::MATERIALS, Resource::Buffer(materials.expect("checked").table)),
             ]),
@@ -213,6 +226,15 @@ impl GbufferTiles {
                 (fs::CONTROL, Resource::Buffer(materials.and_then(|m| m.control).expect("the control table"))),
             ]),
             TileMaterials::None => {}
+        }
+        if self.materials == TileMaterials::SplatVirtualTexture {
+            let vt = materials.and_then(|m| m.virtual_texture).expect("the virtual texture's resources");
+            let general = vk::ImageLayout::GENERAL;
+            bindings.extend([
+                (fs::VT_STATE, Resource::Buffer(vt.state)),
+                (fs::VT_ALBEDO, Resource::Image(vt.albedo, general)),
+                (fs::VT_DETAIL, Resource::Image(vt.detail, general)),
+            ]);
         }
         rec.push_descriptors(pipeline, &bindings);
         rec.push_constants(pipeline, &TileDrawPush { tiles: lists.push, terrain });

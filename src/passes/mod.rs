@@ -17,3 +17,6 @@ pub mod terrain_geometry;
 pub mod terrain_holes;
 pub mod terrain_query;
 pub mod traverse;
+pub mod vt_feedback;
+pub mod vt_pages;
+pub mod vt_update;

@@ -14,6 +14,7 @@ pub mod sector_data;
 pub mod sun_shadow;
 pub mod tonemap;
 pub mod traverse;
+pub mod vt_feedback;
 
 pub use classify::{classify_tiles_cpu, plane_tiles_cpu};
 pub use finest::FinestSurface;

@@ -19,6 +19,7 @@ use crate::render::atmosphere::AtmosphereParams;
 use crate::render::shading::ShadeRules;
 use crate::render::tonemap::Tonemap;
 use crate::render::view::Lighting;
+use crate::render::virtual_texture::VtParams;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -38,6 +39,10 @@ pub enum Effect {
     Cliffs,
     /// Detail materials from the splat map.
     Splat,
+    /// Adaptive virtual texturing (seed 001): the splat blend cached in
+    /// pages (`vt_update`, `vt_pages`, `vt_feedback`) and the
+    /// virtual-texture flavour of `gbuffer_tiles` in place of splat's
+    /// (needs `splat`'s materials).
     VirtualTexture,
     /// Sun and sky lighting of the output (the normal atlas); off, the
     /// output is unlit albedo.
@@ -103,11 +108,9 @@ impl Effect {
     /// scene may ask for them (and is checked), the report says they are off.
     pub fn unavailable(self) -> Option<&'static str> {
         match self {
-            Effect::VirtualTexture => {
-                Some("not implemented in this version (its flavour bit exists; splat shading stands in for it)")
-            }
             Effect::Decals | Effect::Grass => Some("not implemented in this version"),
-            Effect::Holes
+            Effect::VirtualTexture
+            | Effect::Holes
             | Effect::ConeCull
             | Effect::Occlusion
             | Effect::Lighting
@@ -133,7 +136,7 @@ impl Effect {
             ],
             Effect::Cliffs => &["slope_deg", "band_deg", "near_far_m", "stochastic", "hash_seed"],
             Effect::Splat => &["materials", "far_start_m", "far_band_m"],
-            Effect::VirtualTexture => &["cache_mb"],
+            Effect::VirtualTexture => &["cache_mb", "pages_per_frame", "region_m", "indirection"],
             Effect::Decals => &["file"],
             Effect::Shadows => &["resolution", "steps", "update_budget", "softness_deg", "reach_m"],
             Effect::Atmosphere => {
@@ -186,7 +189,7 @@ pub struct Effects {
     /// A painted control map (16-bit PNG over the world's extent); `None`
     /// in control-map mode: words made from the material rules.
     pub control_map: Option<PathBuf>,
-    pub virtual_texture_cache_mb: u32,
+    pub virtual_texture: VtParams,
     pub decals_file: Option<PathBuf>,
     pub shadows: ShadowParams,
     pub atmosphere: AtmosphereParams,
@@ -261,7 +264,7 @@ impl Default for Effects {
             splat_materials: None,
             materials: MaterialsMode::Splat,
             control_map: None,
-            virtual_texture_cache_mb: 256,
+            virtual_texture: VtParams::default(),
             decals_file: None,
             shadows: ShadowParams::default(),
             atmosphere: AtmosphereParams::default(),
@@ -397,10 +400,18 @@ impl Effects {
                     self.shade.far_end_m = self.shade.far_start_m + band;
                 }
                 "far_band_m" => self.shade.far_end_m = self.shade.far_start_m + number(&key, v, 1.0, 1e7)? as f32,
-                "cache_mb" => {
-                    let mb = v.as_integer().filter(|m| (1..=65536).contains(m));
-                    self.virtual_texture_cache_mb =
-                        mb.ok_or_else(|| wrong(&key, "a whole number 1..=65536", v))? as u32;
+                "cache_mb" => self.virtual_texture.cache_mb = whole(&key, v, 1, 4096)?,
+                "pages_per_frame" => {
+                    let max = i64::from(crate::shaders::consts::VT_MAX_JOBS);
+                    self.virtual_texture.pages_per_frame = whole(&key, v, 1, max)?;
+                }
+                "region_m" => self.virtual_texture.region_m = number(&key, v, 1.0, 1e5)?,
+                "indirection" => {
+                    let side = whole(&key, v, 64, 2048)?;
+                    if !side.is_power_of_two() {
+                        return Err(bad(format!("{key} = {side}: the indirection's side must be a power of two")));
+                    }
+                    self.virtual_texture.indirection = side;
                 }
                 "resolution" => {
                     let max = i64::from(crate::shaders::consts::SUN_SHADOW_MAX_SIDE);
@@ -531,6 +542,15 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                          ([materials] mode = \"control_map\")"
                             .into(),
                     ),
+                    (Effect::VirtualTexture, _) if fx.materials == MaterialsMode::ControlMap => (
+                        false,
+                        "requested, but its pages cache the splat blend and the materials are the control map's \
+                         ([materials] mode = \"control_map\")"
+                            .into(),
+                    ),
+                    (Effect::VirtualTexture, _) if !fx.is_on(Effect::Splat) => {
+                        (false, "requested, but its pages cache the splat materials and effect splat is off".into())
+                    }
                     (Effect::Splat, _) if fx.materials == MaterialsMode::ControlMap => {
                         (true, format!("requested{how}: the control-map flavour ([materials] mode = \"control_map\")"))
                     }

@@ -11,7 +11,7 @@ use crate::gpu::{vk, Buffer, Recorder};
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_patches::{CullFrame, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
-use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles};
+use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles, MaterialBindings};
 use crate::passes::lighting_resolve::{LightingResolve, ResolveInputs};
 use crate::passes::lod_map::LodMap;
 use crate::passes::sector_data::SectorData;
@@ -26,6 +26,7 @@ use crate::render::graph::{FrameLog, FramePass, Skip};
 use crate::render::materials_gpu::MaterialResources;
 use crate::render::renderer::Occlusion;
 use crate::render::view::TerrainViewGpu;
+use crate::render::virtual_texture::{VirtualTexture, VtFrame};
 use crate::terrain::gpu_quadtree::GpuQuadtree;
 use crate::terrain::selection::TraverseParams;
 use crate::world::WorldDesc;
@@ -53,6 +54,8 @@ pub(crate) struct FramePasses<'a> {
     /// Effect `atmosphere`: the fog's push vectors.
     pub fog: Option<[[f32; 4]; 3]>,
     pub materials: Option<&'a MaterialResources>,
+    /// Effect `virtual_texture`, with this frame's planned work.
+    pub virtual_texture: Option<(&'a VirtualTexture, &'a VtFrame)>,
     pub view_buffer: &'a Buffer,
     pub stages: CullStages,
     /// Effect `holes` is built but switched off this frame: every patch is
@@ -154,6 +157,42 @@ impl FramePasses<'_> {
         }
     }
 
+    /// The virtual texture's writes, pages and feedback (each skipped
+    /// where the CPU knows it has nothing to do).
+    #[allow(clippy::too_many_arguments)]
+    fn record_virtual_texture(
+        &self,
+        frame: &mut Frame<'_, '_>,
+        log: &mut FrameLog,
+        vt: &VirtualTexture,
+        f: &VtFrame,
+        terrain: VistaTerrain,
+        tree: &GpuQuadtree,
+        targets: &RenderTargets,
+        gb: &GBuffer,
+        m: &MaterialBindings,
+    ) {
+        if f.init {
+            frame.untimed(QueueKind::Graphics, |r| vt.record_init(r));
+        }
+        if f.writes.is_empty() {
+            log.skipped(FramePass::VtUpdate, Skip::NoVtWrites);
+        } else {
+            frame.pass(FramePass::VtUpdate.name(), false, QueueKind::Graphics, |r| vt.record_update(r, &f.writes));
+            log.ran(FramePass::VtUpdate, Some(f.writes.len() as u64));
+        }
+        if f.jobs.is_empty() {
+            log.skipped(FramePass::VtPages, Skip::NoVtPages);
+        } else {
+            let sector = &self.sector_data.buffer;
+            frame.pass(FramePass::VtPages.name(), false, QueueKind::Graphics, |r| {
+                vt.record_pages(r, &f.jobs, terrain, sector, tree, m)
+            });
+            log.ran(FramePass::VtPages, Some(f.jobs.len() as u64));
+        }
+        pass(frame, log, FramePass::VtFeedback, |r| vt.record_feedback(r, f, self.view_buffer, targets, gb));
+    }
+
     /// The G-buffer tile shading and the lit output.
     pub fn record_shading(
         &self,
@@ -168,7 +207,11 @@ impl FramePasses<'_> {
         pass(frame, log, FramePass::ClassifyTiles, |r| classify.record(r, gb, self.force_flavours));
         let lists = classify.lists.as_ref().expect("prepared before the frame");
         let terrain = VistaTerrain::new(world, self.sector_data);
-        let materials = self.materials.map(|m| m.bindings());
+        let mut materials = self.materials.map(|m| m.bindings());
+        if let (Some(m), Some((vt, f))) = (materials.as_mut(), self.virtual_texture) {
+            self.record_virtual_texture(frame, log, vt, f, terrain, tree, targets, gb, m);
+            m.virtual_texture = Some(vt.bindings());
+        }
         frame.untimed(QueueKind::Graphics, |r| GbufferTiles::begin(r, targets, gb));
         for (i, bits) in self.gbuffer_tiles.variants().into_iter().enumerate() {
             let tiles = self.gbuffer_tiles;

@@ -19,6 +19,7 @@ use crate::passes::{
     gbuffer_tiles::GbufferTiles, hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap,
     quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, select_patches::SelectPatches,
     sun_shadows::SunShadows, terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
+    vt_feedback::VtFeedback, vt_pages::VtPages, vt_update::VtUpdate,
 };
 use crate::render::effects::{Effect, EffectDecision};
 use serde::Serialize;
@@ -40,6 +41,12 @@ pub enum FramePass {
     TerrainGeometryLate,
     TerrainHolesLate,
     ClassifyTiles,
+    /// Effect `virtual_texture`: the indirection and sub-texture writes.
+    VtUpdate,
+    /// Effect `virtual_texture`: the pages missing, up to the budget.
+    VtPages,
+    /// Effect `virtual_texture`: the pages this frame samples.
+    VtFeedback,
     /// One draw per variant built, each timed on its own.
     GbufferTiles,
     /// Effect `shadows`: the shadow textures of arrived and stale nodes.
@@ -50,7 +57,7 @@ pub enum FramePass {
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 17] = [
+    pub const ALL: [FramePass; 20] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -64,6 +71,9 @@ impl FramePass {
         FramePass::TerrainGeometryLate,
         FramePass::TerrainHolesLate,
         FramePass::ClassifyTiles,
+        FramePass::VtUpdate,
+        FramePass::VtPages,
+        FramePass::VtFeedback,
         FramePass::GbufferTiles,
         FramePass::SunShadows,
         FramePass::LightingResolve,
@@ -84,6 +94,9 @@ impl FramePass {
             FramePass::HizBuild => HizBuild::NAME,
             FramePass::CullOccluded => CullOccluded::NAME,
             FramePass::ClassifyTiles => ClassifyTiles::NAME,
+            FramePass::VtUpdate => VtUpdate::NAME,
+            FramePass::VtPages => VtPages::NAME,
+            FramePass::VtFeedback => VtFeedback::NAME,
             FramePass::GbufferTiles => GbufferTiles::NAME,
             FramePass::SunShadows => SunShadows::NAME,
             FramePass::LightingResolve => LightingResolve::NAME,
@@ -123,6 +136,7 @@ impl FramePass {
             FramePass::HizBuild | FramePass::CullOccluded | FramePass::TerrainGeometryLate => &[Effect::Occlusion],
             FramePass::TerrainHolesLate => &[Effect::Holes, Effect::Occlusion],
             FramePass::SunShadows => &[Effect::Shadows],
+            FramePass::VtUpdate | FramePass::VtPages | FramePass::VtFeedback => &[Effect::VirtualTexture],
             _ => &[],
         }
     }
@@ -142,6 +156,11 @@ pub enum Skip {
     HolesOff,
     /// No debug view asked for (`TerrainRenderer::debug_view`).
     NoDebugView,
+    /// No sub-texture moved and no page arrived or left.
+    NoVtWrites,
+    /// Every page the frames read back asked for is resident, or waits for
+    /// a tile no view still uses.
+    NoVtPages,
 }
 
 impl Skip {
@@ -153,6 +172,8 @@ impl Skip {
             Skip::ShadowsOff => "shadows switched off this frame (FrameSwitches; built, redone when back on)",
             Skip::HolesOff => "holes switched off this frame (FrameSwitches; every patch drawn solid)",
             Skip::NoDebugView => "no debug view asked for (TerrainRenderer::debug_view)",
+            Skip::NoVtWrites => "idle: no sub-texture moved and no page arrived or left (known on the CPU)",
+            Skip::NoVtPages => "idle: no page the read-back requests named is missing (known on the CPU)",
         }
     }
 }

@@ -56,6 +56,7 @@ impl MaterialResources {
             albedo: &self.textures.albedo,
             normal: &self.textures.normal,
             height: &self.textures.height,
+            virtual_texture: None,
         }
     }
 

@@ -21,6 +21,7 @@ pub mod sun_shadows;
 pub mod telemetry;
 pub mod tonemap;
 pub mod view;
+pub mod virtual_texture;
 
 pub use crate::passes::terrain_geometry::RenderTargets;
 pub use effects::{Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode};

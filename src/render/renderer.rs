@@ -41,6 +41,7 @@ use crate::render::stats::TRIANGLES_PER_PATCH;
 use crate::render::sun_shadows::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
+use crate::render::virtual_texture::{VirtualTexture, VtCamera, VtFrame};
 use crate::shaders::structs;
 use crate::terrain::gpu_quadtree::{
     AtlasSet, ATLAS_CONTROL, ATLAS_NORMAL, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_SPLAT,
@@ -117,6 +118,8 @@ pub struct TerrainRenderer {
     pub shadow_schedule: ShadowSchedule,
     /// Effects `splat` or `cliffs`: the material table and detail textures.
     pub materials: Option<MaterialResources>,
+    /// Effect `virtual_texture`: its cache, indirection and passes.
+    pub virtual_texture: Option<VirtualTexture>,
     /// Made for the view size on the first frame (remade when it changes).
     pub gbuffer: Option<GBuffer>,
     pub shade: ShadeRules,
@@ -215,6 +218,26 @@ pub fn memory_for(
     crate::terrain::mask_memory(report, atlases_for(&decisions, effects.materials))
 }
 
+/// Effect `virtual_texture`: plans the frame's pages and writes (`frame`:
+/// the renderer's and the context's numbers of it).
+fn begin_virtual_texture(
+    vt: &mut VirtualTexture,
+    terrain: &Terrain,
+    ctx: &Context,
+    frame: [u64; 2],
+    view: &View,
+    shade: &ShadeRules,
+) -> VtFrame {
+    let camera = VtCamera {
+        xy: [view.camera.position_m[0], view.camera.position_m[1]],
+        pixel_rad: 2.0 * (view.fov_y_deg.to_radians() * 0.5).tan() / f64::from(view.size[1]),
+        // A pixel at the near flavour's far end can lie this far away.
+        range_m: f64::from(shade.far_end_m) * view.corner_secant(),
+        size: view.size,
+    };
+    vt.begin_frame(ctx, frame[0], frame[1], camera, terrain)
+}
+
 /// `source_holes`: the height source has holes of its own (a DEM's no-data
 /// samples).
 fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool) -> WorldContent {
@@ -269,7 +292,10 @@ impl TerrainRenderer {
             terrain_options.bake.control = crate::render::materials::control_bake(&options.effects, world, rules)?;
         }
         let geometry = TerrainGeometry::new(ctx, depth)?;
-        let shade = ShadeRules::from_effects(&options.effects, on(Effect::Splat), on(Effect::Cliffs));
+        let mut shade = ShadeRules::from_effects(&options.effects, on(Effect::Splat), on(Effect::Cliffs));
+        if on(Effect::VirtualTexture) {
+            shade = shade.with_virtual_texture();
+        }
         let materials = if on(Effect::Splat) || on(Effect::Cliffs) {
             Some(MaterialResources::new(ctx, &options.effects)?)
         } else {
@@ -279,6 +305,7 @@ impl TerrainRenderer {
         let every = options.shading == Shading::OneShaderEveryFlavour;
         let tile_materials = match (&materials, options.effects.materials) {
             (None, _) => TileMaterials::None,
+            (Some(_), MaterialsMode::Splat) if on(Effect::VirtualTexture) => TileMaterials::SplatVirtualTexture,
             (Some(_), MaterialsMode::Splat) => TileMaterials::Splat,
             (Some(_), MaterialsMode::ControlMap) => TileMaterials::ControlMap,
         };
@@ -303,7 +330,9 @@ impl TerrainRenderer {
             &BufferDesc {
                 name: "terrain_view",
                 size: structs::TERRAIN_VIEW as u64,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC,
                 location: MemoryLocation::GpuOnly,
             },
         )?;
@@ -344,6 +373,17 @@ impl TerrainRenderer {
                 None
             },
             shadow_schedule: ShadowSchedule::default(),
+            virtual_texture: if on(Effect::VirtualTexture) {
+                let extent = world.extent_m;
+                Some(VirtualTexture::new(
+                    ctx,
+                    extent,
+                    options.effects.virtual_texture,
+                    options.terrain.frames_in_flight,
+                )?)
+            } else {
+                None
+            },
             materials,
             gbuffer: None,
             shade,
@@ -377,6 +417,12 @@ impl TerrainRenderer {
     /// The depth target it was built for.
     pub fn depth(&self) -> DepthOptions {
         self.geometry.depth()
+    }
+
+    /// The GPU's copy of the newest frame's `TerrainViewGpu` (tests read
+    /// it back).
+    pub fn view_buffer(&self) -> &Buffer {
+        &self.view_buffer
     }
 
     /// Whether `effect` is built.
@@ -472,6 +518,8 @@ impl TerrainRenderer {
         if self.sun_shadows.is_some() && shadows_on && !shadows_shown {
             log.switched_off.insert(0, Effect::Shadows);
         }
+        let vt = self.virtual_texture.as_mut();
+        let vt_frame = vt.map(|vt| begin_virtual_texture(vt, &self.terrain, ctx, [number, ctx_frame], view, &shade));
         let sw = self.switches;
         self.resolve.prepare(ctx, sw.lighting, shadows_shown, sw.on(Effect::Atmosphere))?;
         let tree = &self.terrain.tree;
@@ -496,6 +544,7 @@ impl TerrainRenderer {
             debug: self.debug_pass.as_ref().zip(self.debug_view),
             fog,
             materials: self.materials.as_ref(),
+            virtual_texture: self.virtual_texture.as_ref().zip(vt_frame.as_ref()),
             view_buffer: &self.view_buffer,
             stages: self.stages,
             holes_off: !sw.holes,
@@ -611,10 +660,13 @@ impl TerrainRenderer {
         Ok(out)
     }
 
-    /// Streaming rests and every resident node's sun shadow is current: a
-    /// frame now shows what more frames would.
+    /// Streaming rests, every resident node's sun shadow is current and
+    /// every virtual-texture page a view asks for is resident: a frame now
+    /// shows what more frames would.
     pub fn settled(&self) -> bool {
-        self.terrain.settled() && self.shadow_schedule.stale() == 0
+        self.terrain.settled()
+            && self.shadow_schedule.stale() == 0
+            && self.virtual_texture.as_ref().is_none_or(VirtualTexture::settled)
     }
 
     /// The world's height source was edited over `region` (a stamp added,
@@ -682,6 +734,9 @@ impl TerrainRenderer {
         if let Some(s) = &self.sun_shadows {
             out.push(s.pipeline_label().to_string());
         }
+        if let Some(v) = &self.virtual_texture {
+            out.extend(v.pipeline_labels().map(str::to_string));
+        }
         out.extend(self.resolve.pipeline_labels());
         out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
@@ -741,6 +796,9 @@ impl TerrainRenderer {
             let users: Vec<Effect> =
                 [Effect::Splat, Effect::Cliffs].into_iter().filter(|e| self.effect_on(*e)).collect();
             out.push(("material_table + detail textures".into(), m.memory_bytes(), users));
+        }
+        for (name, bytes) in self.virtual_texture.iter().flat_map(|v| v.memory()) {
+            out.push((name, bytes, vec![Effect::VirtualTexture]));
         }
         out
     }

@@ -50,6 +50,9 @@ pub struct PassWork {
     /// Nodes whose sun shadow texture was made (sun_shadows).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shadow_nodes: Option<u64>,
+    /// Virtual-texture pages rendered (vt_pages).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pages: Option<u64>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -332,6 +335,21 @@ fn work_of(
             let [wx, wy, _] = crate::shaders::sun_shadows::WORKGROUP_SIZE;
             let per_node = side.div_ceil(u64::from(wx)) * side.div_ceil(u64::from(wy));
             (PassWork { shadow_nodes: Some(jobs), ..groups(jobs * per_node) }, None)
+        }
+        FramePass::VtUpdate => (PassWork { writes: cpu_work, ..groups(1) }, None),
+        FramePass::VtPages => {
+            let pages = cpu_work.unwrap_or(0);
+            let [wx, wy, _] = crate::shaders::vt_pages::WORKGROUP_SIZE;
+            let side = u64::from(crate::render::virtual_texture::layout::PADDED_TILE);
+            let per_page = side.div_ceil(u64::from(wx)) * side.div_ceil(u64::from(wy));
+            (PassWork { pages: Some(pages), ..groups(pages * per_page) }, None)
+        }
+        FramePass::VtFeedback => {
+            let [wx, wy, _] = crate::shaders::vt_feedback::WORKGROUP_SIZE;
+            let stride = crate::shaders::consts::VT_FEEDBACK_STRIDE;
+            let size = r.gbuffer.as_ref().map_or([0, 0], |g| g.size());
+            let cells = size.map(|s| s.div_ceil(stride));
+            (groups(u64::from(cells[0].div_ceil(wx)) * u64::from(cells[1].div_ceil(wy))), None)
         }
         FramePass::LightingResolve | FramePass::DebugView => (PassWork::default(), None),
     }

@@ -121,7 +121,8 @@ pub const DEFAULT_TIGHTEN: f32 = 0.3;
 /// the splat or the control-map flavour, as the scene's materials mode says.
 pub fn effect_flavours(effect: Effect) -> u32 {
     match effect {
-        Effect::Splat => consts::FLAVOUR_SPLAT | consts::FLAVOUR_CONTROL_MAP,
+        Effect::Splat => consts::FLAVOUR_SPLAT | consts::FLAVOUR_CONTROL_MAP | consts::FLAVOUR_VIRTUAL_TEXTURE,
+        Effect::VirtualTexture => consts::FLAVOUR_VIRTUAL_TEXTURE,
         Effect::Cliffs => consts::FLAVOUR_NEAR_CLIFF | consts::FLAVOUR_FAR_CLIFF,
         _ => 0,
     }
@@ -140,6 +141,17 @@ impl ShadeRules {
             allowed |= effect_flavours(Effect::Cliffs);
         }
         ShadeRules { allowed, ..fx.shade }
+    }
+
+    /// These rules with the virtual-texture flavour in place of splat's
+    /// (effect `virtual_texture`: the same material, from cached pages).
+    pub fn with_virtual_texture(self) -> ShadeRules {
+        let allowed = if self.allowed & consts::FLAVOUR_SPLAT != 0 {
+            (self.allowed & !consts::FLAVOUR_SPLAT) | consts::FLAVOUR_VIRTUAL_TEXTURE
+        } else {
+            self.allowed
+        };
+        ShadeRules { allowed, ..self }
     }
 
     /// These rules with `effect`'s flavours taken out (switched off for a
@@ -190,6 +202,10 @@ mod tests {
         let all = ShadeRules::from_effects(&Effects::default(), true, true);
         assert_eq!(all.variants().len(), 15, "4 flavours: 2^4 - 1 variants");
         assert!(all.variants().iter().all(|v| v & consts::FLAVOUR_VIRTUAL_TEXTURE == 0));
+        let vt = all.with_virtual_texture();
+        assert_eq!(vt.variants().len(), 15, "the virtual texture replaces splat");
+        assert!(vt.variants().iter().all(|v| v & consts::FLAVOUR_SPLAT == 0));
+        assert_eq!(vt.without(Effect::Splat).allowed & consts::FLAVOUR_VIRTUAL_TEXTURE, 0, "splat off, its cache too");
         assert_eq!(variant_name(consts::FLAVOUR_FAR_ATLAS | consts::FLAVOUR_SPLAT), "far_atlas+splat");
     }
 }

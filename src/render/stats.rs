@@ -10,6 +10,7 @@ use crate::passes::select_patches::SelectHeader;
 use crate::reference::wanted_finer_cpu;
 use crate::render::renderer::TerrainRenderer;
 use crate::render::view::View;
+use crate::render::virtual_texture::{state::VtCounters, VirtualTexture};
 use crate::terrain::TerrainStats;
 use crate::world::PATCH_QUADS;
 use serde::Serialize;
@@ -43,6 +44,38 @@ pub struct RenderStats {
     /// Control-map tiles whose tri-planar background samples at most 1, 2
     /// and 3 planes (`None` without the control-map flavour).
     pub plane_tiles: Option<[u32; 3]>,
+    /// Effect `virtual_texture`: its pages and memory.
+    pub virtual_texture: Option<VtStats>,
+}
+
+/// The virtual texture after the last recorded frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct VtStats {
+    #[serde(flatten)]
+    pub counters: VtCounters,
+    /// Share of the requested pages that were resident.
+    pub hit_rate: f64,
+    pub cache_tiles: u32,
+    /// Bytes of the state buffer (sub-textures and indirection), the page
+    /// statuses and the cache images.
+    pub indirection_bytes: u64,
+    pub status_bytes: u64,
+    pub cache_bytes: u64,
+}
+
+impl VtStats {
+    pub fn of(vt: &VirtualTexture) -> VtStats {
+        let [indirection_bytes, status_bytes, cache_bytes] = vt.layout().memory_bytes();
+        let counters = vt.counters();
+        VtStats {
+            counters,
+            hit_rate: counters.hit_rate(),
+            cache_tiles: vt.layout().tile_count(),
+            indirection_bytes,
+            status_bytes,
+            cache_bytes,
+        }
+    }
 }
 
 /// The last recorded frame's numbers; waits for the GPU.
@@ -65,5 +98,6 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
         streaming: terrain.stats(),
         plane_tiles: (renderer.shade.allowed & crate::shaders::consts::FLAVOUR_CONTROL_MAP != 0)
             .then_some(c.plane_tiles),
+        virtual_texture: renderer.virtual_texture.as_ref().map(VtStats::of),
     })
 }

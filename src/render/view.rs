@@ -308,6 +308,16 @@ impl Lighting {
     }
 }
 
+impl View {
+    /// 1 / cos of the angle between the forward axis and the frustum's
+    /// corner rays: how much farther than its view depth a pixel can be.
+    pub fn corner_secant(&self) -> f64 {
+        let tan_h = (self.fov_y_deg.to_radians() * 0.5).tan();
+        let tan_w = tan_h * f64::from(self.size[0]) / f64::from(self.size[1].max(1));
+        (1.0 + tan_h * tan_h + tan_w * tan_w).sqrt()
+    }
+}
+
 /// Host twin of `TerrainView` (terrain_view.glsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]

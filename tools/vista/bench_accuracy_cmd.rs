@@ -80,6 +80,7 @@ pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()>
         raycast: RaycastConfig { colour_samples: 1, ..RaycastConfig::default() },
         keep_images: images.is_some(),
         shadows: Some(a.shadows.clone()),
+        virtual_texture: Some(vista::bench::accuracy_vt::VtSweep::default()),
     };
     let start = Instant::now();
     let result = bench_accuracy(ctx, &d, world.source.clone(), &world.effects, &all, &cfg);
@@ -248,6 +249,7 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         println!("shading rows skipped: {why}");
     }
     print_shadows(b);
+    print_virtual_texture(b);
     println!("({seconds:.0} s in all)");
 }
 
@@ -287,5 +289,58 @@ fn print_shadows(b: &AccuracyBench) {
          one image and shadowed in the other (frame dark: of them, shadowed in the frame only); FLIP: the clay-lit image vs that reference; ms/node: sun_shadows GPU ms \
          per node re-marched while the sun moves; full: for every resident node (a static sun costs nothing once \
          settled: the pass is idle); resolve: lighting_resolve's GPU ms"
+    );
+}
+
+fn print_virtual_texture(b: &AccuracyBench) {
+    if let Some(why) = &b.vt_skipped {
+        println!("virtual-texture rows skipped: {why}");
+        return;
+    }
+    println!(
+        "{:<12} {:<14} {:>7} {:>7} {:>9} {:>7} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9}",
+        "view",
+        "virtual tex.",
+        "frames",
+        "pages",
+        "resident",
+        "hits",
+        "FLIP",
+        "p99",
+        "VT ms",
+        "shade ms",
+        "frame ms",
+        "MiB"
+    );
+    for p in &b.vt_points {
+        let setting = match (p.cache_mb, p.pages_per_frame) {
+            (Some(c), Some(n)) => format!("{c} MiB {n}/fr"),
+            _ => "off (splat)".to_string(),
+        };
+        println!(
+            "{:<12} {:<14} {:>7} {:>7} {:>4}/{:<4} {:>6.1}% {:>8.4} {:>8.4} {:>8.2} {:>9.2} {:>9.2} {:>9.1}{}",
+            p.view,
+            setting,
+            p.frames_to_settle,
+            p.pages_rendered,
+            p.pages_resident,
+            p.cache_tiles,
+            100.0 * p.hit_rate,
+            p.flip_mean,
+            p.flip_p99,
+            p.vt_ms,
+            p.shade_ms,
+            p.frame_ms,
+            p.memory_bytes as f64 / f64::from(1u32 << 20),
+            if p.settled { "" } else { " (not settled)" }
+        );
+    }
+    println!(
+        "virtual-texture rows: at the shading target, against direct splat shading (the effect off); virtual tex.: \
+         cache size and pages rendered per frame at most; frames: from the renderer's first until streaming and \
+         pages settled (every page a whole feedback jitter cycle asked for resident); pages: rendered meanwhile; \
+         resident: pages held / cache tiles; hits: requested pages resident in the newest read-back frame; FLIP, \
+         p99: the textured image vs direct splat shading's over terrain pixels; VT ms: vt_update + vt_pages + \
+         vt_feedback once settled; shade ms: every gbuffer_tiles draw; MiB: the virtual texture's GPU memory"
     );
 }

@@ -446,6 +446,31 @@ fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
         s.missing_roots
     );
     println!("         ('wanted finer': the camera asks for more detail there but the children are not resident yet)");
+    if let Some(v) = &s.virtual_texture {
+        let c = &v.counters;
+        let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
+        println!(
+            "virtual texture: {} sub-textures ({} squeezed by a full indirection); frame {} (read back) sampled {} \
+             pages, {} resident (hit rate {:.1} %); this frame rendered {} and evicted {} ({} and {} in all), \
+             {} of {} tiles resident, {} pages waiting; indirection {:.1} MiB, page status {:.1} MiB, cache {:.1} MiB",
+            c.sub_textures,
+            c.squeezed,
+            c.harvested_frame,
+            c.requested,
+            c.hits,
+            100.0 * v.hit_rate,
+            c.rendered,
+            c.evicted,
+            c.rendered_total,
+            c.evicted_total,
+            c.resident,
+            v.cache_tiles,
+            c.waiting,
+            mib(v.indirection_bytes),
+            mib(v.status_bytes),
+            mib(v.cache_bytes)
+        );
+    }
     if let Some([one, two, three]) = s.plane_tiles {
         println!(
             "control map: tri-planar background tiles sampling 1 plane {one}, 2 planes {two}, 3 planes {three} \

@@ -1,0 +1,354 @@
+//! Adaptive virtual texturing (effect `virtual_texture`; seed 001 after Far
+//! Cry 4, as Far Cry 5 uses it in seed 000): the splat material blend is
+//! rendered once into cached pages and the frame samples the finished
+//! material. Per frame:
+//! - the CPU ([`state`]) reads the page requests of a finished frame from
+//!   the readback ring, sizes each region's sub-texture by its distance and
+//!   places it in the indirection ([`allocator`]), and picks up to a budget
+//!   of missing pages (coarser first) for tiles of the cache ([`cache`]);
+//! - `vt_update` applies the indirection and sub-texture writes, `vt_pages`
+//!   renders the picked pages, `vt_feedback` lists the pages this frame's
+//!   pixels sample (copied into the ring, read frames later, never waited
+//!   for), and `gbuffer_tiles`' virtual-texture flavour samples the cache.
+//!
+//! Owned GPU objects, destroyed in field order after the passes: the state
+//! buffer (header, sub-texture words, indirection), the page statuses, the
+//! request list, the write and job staging buffers, the two cache images
+//! and the readback ring; each is dropped through the context's deferred
+//! destruction, so frames in flight keep them.
+
+pub mod allocator;
+pub mod cache;
+pub mod layout;
+pub mod state;
+
+use crate::error::Result;
+use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
+use crate::passes::gbuffer_tiles::VtBindings;
+use crate::passes::vt_feedback::{FeedbackTargets, VtFeedback, VtFeedbackPush};
+use crate::passes::vt_pages::{PageTargets, VtPages};
+use crate::passes::vt_update::VtUpdate;
+use crate::shaders::consts::{VT_MAX_JOBS, VT_MAX_WRITES, VT_NONE, VT_REQUEST_CAPACITY, VT_STATE_HEADER};
+use layout::VtLayout;
+use serde::Serialize;
+use state::{PageJob, StateWrite, VtCounters, VtState};
+
+/// The scene's virtual-texture parameters (`[effects.virtual_texture]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct VtParams {
+    /// Side of a region, each with its own sub-texture (m).
+    pub region_m: f64,
+    /// Physical cache (both images), MiB.
+    pub cache_mb: u32,
+    /// Pages rendered per frame at most.
+    pub pages_per_frame: u32,
+    /// Texels per side of the indirection's mip 0 (a power of two).
+    pub indirection: u32,
+    /// Tests only: pages hold the position code of each texel (region,
+    /// page, level, texel) instead of the material.
+    #[doc(hidden)]
+    pub position_code: bool,
+}
+
+impl Default for VtParams {
+    fn default() -> Self {
+        VtParams { region_m: 64.0, cache_mb: 64, pages_per_frame: 16, indirection: 2048, position_code: false }
+    }
+}
+
+/// Bytes of the request list (header of 4 words, then the entries).
+const REQUEST_BYTES: u64 = 16 + VT_REQUEST_CAPACITY as u64 * 8;
+
+struct Slot {
+    buffer: Buffer,
+    frame: u64,
+    ctx_frame: u64,
+    pending: bool,
+}
+
+/// Where the camera is, for sizing the sub-textures.
+#[derive(Debug, Clone, Copy)]
+pub struct VtCamera {
+    pub xy: [f64; 2],
+    /// Radians one pixel spans (vertically, at the image centre).
+    pub pixel_rad: f64,
+    /// Regions farther than this have no sub-texture (the splat flavour's
+    /// reach).
+    pub range_m: f64,
+    /// The target's size (pixels).
+    pub size: [u32; 2],
+}
+
+/// One frame's virtual-texture work, planned before recording.
+pub struct VtFrame {
+    pub frame: u64,
+    pub writes: Vec<StateWrite>,
+    pub jobs: Vec<PageJob>,
+    /// The readback slot its requests go to.
+    slot: usize,
+    /// The first frame: the buffers are initialised first.
+    pub init: bool,
+}
+
+/// The coarsest of the finest resident LODs at region `r`'s corners and
+/// centre (the world's LOD count where none covers a point).
+fn source_lod(terrain: &crate::terrain::Terrain, layout: &VtLayout, r: u32) -> u8 {
+    let world = &terrain.world;
+    let lods = world.lod_count as u8;
+    let o = layout.region_origin(r);
+    let inset = layout.region_m * 1e-3;
+    let near = layout.region_m - inset;
+    [[inset, inset], [near, inset], [inset, near], [near, near], [layout.region_m * 0.5; 2]]
+        .iter()
+        .map(|d| {
+            let (x, y) = (o[0] + d[0], o[1] + d[1]);
+            (0..lods)
+                .find(|&l| world.node_at(l, x, y).is_some_and(|n| terrain.tree.shadow.slot_of(n).is_some()))
+                .unwrap_or(lods)
+        })
+        .max()
+        .unwrap_or(lods)
+}
+
+/// The virtual texture's GPU objects, passes and CPU state.
+pub struct VirtualTexture {
+    feedback: VtFeedback,
+    update: VtUpdate,
+    pages: VtPages,
+    pub state_buffer: Buffer,
+    status: Buffer,
+    /// This frame's page requests (count, 3 words, then the entries).
+    pub requests: Buffer,
+    writes_staging: Buffer,
+    jobs_staging: Buffer,
+    pub cache_albedo: Image,
+    pub cache_detail: Image,
+    ring: Vec<Slot>,
+    next: usize,
+    pub state: VtState,
+    /// Writes left for later frames.
+    writes: Vec<StateWrite>,
+    /// The feedback's push constants of the newest frame (tests).
+    pub last_push: Option<VtFeedbackPush>,
+    initialized: bool,
+}
+
+fn buffer(
+    ctx: &Context,
+    name: &str,
+    size: u64,
+    usage: vk::BufferUsageFlags,
+    location: MemoryLocation,
+) -> Result<Buffer> {
+    Buffer::new(ctx, &BufferDesc { name, size, usage, location })
+}
+
+impl VirtualTexture {
+    pub fn new(ctx: &Context, extent_m: [f64; 2], params: VtParams, frames_in_flight: usize) -> Result<Self> {
+        let layout = VtLayout::new(extent_m, params.region_m, params.indirection, params.cache_mb);
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let words = u64::from(VT_STATE_HEADER + layout.region_count()) + layout.indirection_texels();
+        let image = |name| {
+            Image::new(
+                ctx,
+                &ImageDesc {
+                    name,
+                    format: vk::Format::R8G8B8A8_UNORM,
+                    extent: layout.cache_texels(),
+                    mip_levels: 1,
+                    array_layers: 1,
+                    usage: vk::ImageUsageFlags::STORAGE
+                        | vk::ImageUsageFlags::SAMPLED
+                        | vk::ImageUsageFlags::TRANSFER_SRC,
+                },
+            )
+        };
+        let mut ring = Vec::new();
+        for i in 0..frames_in_flight.max(1) + 1 {
+            let name = format!("vt_requests_readback[{i}]");
+            let buffer =
+                buffer(ctx, &name, REQUEST_BYTES, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+            ring.push(Slot { buffer, frame: 0, ctx_frame: 0, pending: false });
+        }
+        Ok(VirtualTexture {
+            feedback: VtFeedback::new(ctx)?,
+            update: VtUpdate::new(ctx)?,
+            pages: VtPages::new(ctx, params.position_code)?,
+            state_buffer: buffer(
+                ctx,
+                "vt_state",
+                words * 4,
+                storage | vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::GpuOnly,
+            )?,
+            status: buffer(ctx, "vt_page_status", layout.indirection_texels() * 4, storage, MemoryLocation::GpuOnly)?,
+            requests: buffer(
+                ctx,
+                "vt_requests",
+                REQUEST_BYTES,
+                storage | vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::GpuOnly,
+            )?,
+            writes_staging: buffer(ctx, "vt_writes", u64::from(VT_MAX_WRITES) * 16, storage, MemoryLocation::GpuOnly)?,
+            jobs_staging: buffer(ctx, "vt_jobs", u64::from(VT_MAX_JOBS) * 16, storage, MemoryLocation::GpuOnly)?,
+            cache_albedo: image("vt_cache_albedo")?,
+            cache_detail: image("vt_cache_detail")?,
+            ring,
+            next: 0,
+            state: VtState::new(layout, params.pages_per_frame.min(VT_MAX_JOBS)),
+            writes: Vec::new(),
+            last_push: None,
+            initialized: false,
+        })
+    }
+
+    pub fn layout(&self) -> &VtLayout {
+        &self.state.layout
+    }
+
+    pub fn counters(&self) -> VtCounters {
+        self.state.counters
+    }
+
+    pub fn pipeline_labels(&self) -> [&str; 3] {
+        [self.update.pipeline_label(), self.pages.pipeline_label(), self.feedback.pipeline_label()]
+    }
+
+    /// (name, bytes) of every GPU object.
+    pub fn memory(&self) -> Vec<(String, u64)> {
+        let mut v: Vec<(String, u64)> =
+            [&self.state_buffer, &self.status, &self.requests, &self.writes_staging, &self.jobs_staging]
+                .iter()
+                .map(|b| (b.name.clone(), b.memory_bytes()))
+                .collect();
+        v.extend([&self.cache_albedo, &self.cache_detail].iter().map(|i| (i.name.clone(), i.memory_bytes())));
+        v.push(("vt_requests_readback".into(), self.ring.iter().map(|s| s.buffer.memory_bytes()).sum()));
+        v
+    }
+
+    /// See [`VtState::settled`].
+    pub fn settled(&self) -> bool {
+        self.state.settled()
+    }
+
+    /// What `gbuffer_tiles`' virtual-texture flavour samples.
+    pub fn bindings(&self) -> VtBindings<'_> {
+        VtBindings { state: &self.state_buffer, albedo: &self.cache_albedo, detail: &self.cache_detail }
+    }
+
+    /// Before recording frame `frame` (`ctx_frame`: the context's number of
+    /// it): takes the requests of every finished frame, places the
+    /// sub-textures for a camera at `camera_xy` whose pixels span
+    /// `pixel_rad`, out to `range_m`, plans the frame's pages and writes
+    /// (at most VT_MAX_WRITES; the rest wait, in order) and claims the
+    /// ring slot its requests go to.
+    /// `terrain`: the streamed nodes (arrivals make pages rendered from
+    /// coarser data again; pages are rendered from the finest resident).
+    pub fn begin_frame(
+        &mut self,
+        ctx: &Context,
+        frame: u64,
+        ctx_frame: u64,
+        camera: VtCamera,
+        terrain: &crate::terrain::Terrain,
+    ) -> VtFrame {
+        self.last_push = Some(VtFeedbackPush::for_frame(frame, camera.size));
+        let done = ctx.frames_completed();
+        let mut slots: Vec<&mut Slot> = self.ring.iter_mut().filter(|s| s.pending && s.ctx_frame <= done).collect();
+        slots.sort_by_key(|s| s.frame);
+        for slot in slots {
+            slot.pending = false;
+            let bytes = slot.buffer.mapped().expect("GpuToCpu buffers are mapped");
+            let words: &[u32] = bytemuck::cast_slice(bytes);
+            let n = words[0].min(VT_REQUEST_CAPACITY) as usize;
+            let entries: Vec<[u32; 2]> = words[4..4 + 2 * n].chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+            self.state.harvest(slot.frame, &entries);
+        }
+        let world = terrain.world;
+        for &(node, _) in terrain.tree.arrived() {
+            self.state.invalidate(node.bounds_m(&world), node.lod, frame);
+        }
+        self.state.place_sub_textures(frame, camera.xy, camera.pixel_rad, camera.range_m);
+        let layout = self.state.layout;
+        let (jobs, writes) = self.state.plan(frame, |r| source_lod(terrain, &layout, r));
+        self.writes.extend(writes);
+        let n = self.writes.len().min(VT_MAX_WRITES as usize);
+        let slot = self.next;
+        self.next = (self.next + 1) % self.ring.len();
+        let s = &mut self.ring[slot];
+        if s.pending {
+            log::debug!("page requests of frame {} were not back in time and are dropped", s.frame);
+        }
+        (s.frame, s.ctx_frame, s.pending) = (frame, ctx_frame, true);
+        VtFrame {
+            frame,
+            writes: self.writes.drain(..n).collect(),
+            jobs,
+            slot,
+            init: !std::mem::replace(&mut self.initialized, true),
+        }
+    }
+
+    /// First frame only: no sub-texture, no status, the header.
+    pub fn record_init(&self, rec: &mut Recorder) {
+        let l = self.state.layout;
+        let texels = l.cache_texels();
+        let header: [u32; VT_STATE_HEADER as usize] = [
+            l.regions[0],
+            l.regions[1],
+            l.indirection_side,
+            l.cache_tiles[0],
+            (l.region_m as f32).to_bits(),
+            (texels[0] as f32).to_bits(),
+            (texels[1] as f32).to_bits(),
+            0,
+        ];
+        rec.fill_buffer(&self.state_buffer, VT_NONE);
+        rec.fill_buffer(&self.status, 0);
+        rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_TRANSFER);
+        rec.update_buffer(&self.state_buffer, 0, bytemuck::cast_slice(&header));
+        rec.discard_to(&self.cache_albedo, vk::ImageLayout::GENERAL);
+        rec.discard_to(&self.cache_detail, vk::ImageLayout::GENERAL);
+        rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_COMMANDS);
+    }
+
+    pub fn record_update(&self, rec: &mut Recorder, writes: &[StateWrite]) {
+        self.update.record(rec, &self.state_buffer, &self.writes_staging, writes);
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_pages(
+        &self,
+        rec: &mut Recorder,
+        jobs: &[PageJob],
+        terrain: crate::passes::terrain_query::VistaTerrain,
+        sector_data: &Buffer,
+        tree: &crate::terrain::gpu_quadtree::GpuQuadtree,
+        m: &crate::passes::gbuffer_tiles::MaterialBindings,
+    ) {
+        let out = PageTargets {
+            state: &self.state_buffer,
+            jobs: &self.jobs_staging,
+            albedo: &self.cache_albedo,
+            detail: &self.cache_detail,
+        };
+        self.pages.record(rec, jobs, &out, terrain, sector_data, tree, m);
+    }
+
+    /// The feedback of `f`'s frame, and its copy into the slot it claimed.
+    pub fn record_feedback(
+        &self,
+        rec: &mut Recorder,
+        f: &VtFrame,
+        view: &Buffer,
+        targets: &crate::passes::terrain_geometry::RenderTargets,
+        gbuffer: &crate::render::gbuffer::GBuffer,
+    ) {
+        let out = FeedbackTargets { state: &self.state_buffer, status: &self.status, requests: &self.requests };
+        let push = self.last_push.expect("begin_frame came first");
+        assert_eq!(push.size, gbuffer.size(), "the frame's size");
+        self.feedback.record(rec, view, targets, gbuffer, &out, push);
+        rec.copy_buffer_region(&self.requests, 0, &self.ring[f.slot].buffer, 0, REQUEST_BYTES);
+        rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
+    }
+}
