@@ -15,6 +15,7 @@ use vista::passes::cull_patches::CullStages;
 use vista::render::gbuffer::{classification_colour, GBufferCapture};
 use vista::render::offscreen::{Capture, Offscreen};
 use vista::render::stats::RenderStats;
+use vista::render::virtual_texture::state::VtCounters;
 use vista::render::{overview_camera, Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
 use vista::terrain::TerrainOptions;
 use vista::world::{Progress, Work};
@@ -56,6 +57,12 @@ pub struct RenderArgs {
     /// Longest wait for the streamed set to become resident before the measured frames.
     #[arg(long, default_value_t = 120.0, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
     pub settle_seconds: f64,
+    /// A fly-through: after settling, the camera moves this many metres a
+    /// frame along its heading, keeping its height above the ground, over
+    /// the --frames frames (streaming and pages follow it); prints the
+    /// virtual texture's pages per frame. The image is the last frame's.
+    #[arg(long, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
+    pub fly: Option<f64>,
     #[command(flatten)]
     pub viewpoint: ViewpointArgs,
     /// The world to render (default: the procedural world, baked lazily).
@@ -234,7 +241,87 @@ pub fn view_of(args: &RenderArgs, world: &LoadedWorld) -> Result<View> {
     }
     let view = args.viewpoint.view(world);
     check_view(&view, world)?;
+    if let Some(m) = args.fly {
+        if !(m.is_finite() && m > 0.0) {
+            bail!("--fly {m}: metres a frame, a positive number");
+        }
+        let end = flown(&view, world, m, args.frames).camera.position_m;
+        let [ox, oy] = world.origin_m;
+        let [ex, ey] = world.desc.extent_m;
+        if !(ox..=ox + ex).contains(&end[0]) || !(oy..=oy + ey).contains(&end[1]) {
+            bail!(
+                "--fly {m} over {} frames ends at ({:.0}, {:.0}), outside the world; fly slower or fewer frames",
+                args.frames,
+                end[0],
+                end[1]
+            );
+        }
+    }
     Ok(view)
+}
+
+/// `view` moved `m` metres a frame for `frame` frames along its heading,
+/// at its height above the ground where it started.
+fn flown(view: &View, world: &LoadedWorld, m: f64, frame: u32) -> View {
+    let c = view.camera;
+    let ground = |x: f64, y: f64| f64::from(world.source.sample(x - world.origin_m[0], y - world.origin_m[1]));
+    let up = c.position_m[2] - ground(c.position_m[0], c.position_m[1]);
+    let (sin, cos) = c.yaw_deg.to_radians().sin_cos();
+    let d = m * f64::from(frame);
+    let (x, y) = (c.position_m[0] + d * sin, c.position_m[1] + d * cos);
+    View { camera: Camera { position_m: [x, y, ground(x, y) + up], ..c }, ..view.clone() }
+}
+
+/// Frame by frame along a fly-through: the timings that came back (as
+/// `Offscreen::run`), the virtual texture's counters after each frame and
+/// the last view.
+fn fly(
+    ctx: &Context,
+    off: &mut Offscreen,
+    renderer: &mut TerrainRenderer,
+    world: &LoadedWorld,
+    view: &View,
+    (m, frames): (f64, u32),
+    progress: &vista::world::Reporter,
+) -> Result<(Vec<FrameTimings>, Vec<VtCounters>, View)> {
+    let (mut timings, mut pages) = (Vec::<FrameTimings>::new(), Vec::new());
+    let mut last = view.clone();
+    for i in 1..=frames {
+        last = flown(view, world, m, i);
+        off.frame(ctx, renderer, &last)?;
+        progress.inc();
+        if let Some(t) = renderer.latest_timings() {
+            if timings.last().is_none_or(|l| l.frame < t.frame) {
+                timings.push(t.clone());
+            }
+        }
+        pages.extend(renderer.virtual_texture.as_ref().map(|v| v.counters()));
+    }
+    Ok((timings, pages, last))
+}
+
+fn print_fly(m: f64, frames: u32, pages: &[VtCounters], budget: Option<u32>) {
+    println!("fly-through: {frames} frames, {m} m a frame ({:.0} m)", m * f64::from(frames));
+    let (Some(first), Some(last)) = (pages.first(), pages.last()) else { return };
+    let n = pages.len() as f64;
+    let mean = |f: &dyn Fn(&VtCounters) -> f64| pages.iter().map(f).sum::<f64>() / n;
+    let max = |f: &dyn Fn(&VtCounters) -> u32| pages.iter().map(f).max().unwrap_or(0);
+    let lowest = pages.iter().map(VtCounters::hit_rate).fold(1.0, f64::min);
+    println!(
+        "  virtual texture per frame: {:.1} pages sampled (read back; max {}), {:.1} rendered (max {}, budget {}), \
+         {:.1} evicted, {:.1} waiting (max {}); hit rate {:.1} % mean, {:.1} % lowest; {} rendered in all",
+        mean(&|c| f64::from(c.requested)),
+        max(&|c| c.requested),
+        mean(&|c| f64::from(c.rendered)),
+        max(&|c| c.rendered),
+        budget.map_or("-".to_string(), |b| b.to_string()),
+        mean(&|c| f64::from(c.evicted)),
+        mean(&|c| f64::from(c.waiting)),
+        max(&|c| c.waiting),
+        100.0 * mean(&VtCounters::hit_rate),
+        100.0 * lowest,
+        last.rendered_total - first.rendered_total + u64::from(first.rendered)
+    );
 }
 
 /// `--camera`, or the default view above the south edge.
@@ -317,7 +404,11 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let first = renderer.frames_recorded() + 1;
     // A bar on a terminal, a line every 5 s otherwise (long runs only).
     let progress = vista::world::Reporter::new(Progress::auto(), u64::from(args.frames), Work::Frames);
-    let mut frames = off.run_observed(ctx, &mut renderer, view, args.frames, || progress.inc())?;
+    let (mut frames, pages, end) = match args.fly {
+        Some(m) => fly(ctx, &mut off, &mut renderer, world, view, (m, args.frames), &progress)?,
+        None => (off.run_observed(ctx, &mut renderer, view, args.frames, || progress.inc())?, Vec::new(), view.clone()),
+    };
+    let view = &end;
     progress.finish();
     let capture = off.capture(ctx)?;
     // The last frame's timings are back once capture waited for it; they
@@ -347,7 +438,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         view.size[1]
     );
     println!(
-        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m, yaw {:.1}, pitch {:.1}, fov {:.1}, target error {} px",
+        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m, yaw {:.1}, pitch {:.1}, fov {:.1}, target error {} px{}",
         world.label,
         c.position_m[0],
         c.position_m[1],
@@ -355,7 +446,8 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         c.yaw_deg,
         c.pitch_deg,
         view.fov_y_deg,
-        view.target_error_px
+        view.target_error_px,
+        if args.fly.is_some() { " (where the fly-through ended)" } else { "" }
     );
     let st = renderer.terrain.stats();
     println!(
@@ -381,6 +473,10 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         hole: args.viewpoint.cull.hole && renderer.cull.build.holes,
         occlusion: args.viewpoint.cull.occlusion && renderer.cull.build.occlusion,
     };
+    if let Some(m) = args.fly {
+        let budget = renderer.virtual_texture.as_ref().map(|v| v.state.budget);
+        print_fly(m, args.frames, &pages, budget);
+    }
     print_stats(&stats, built, built.occlusion);
     print_timings(timed);
     if args.report {
