@@ -37,20 +37,12 @@ Texel sample_control(uint tex, vec2 plane, vec2 dx, vec2 dy, float scale) {
 // The four control texels around `xy` and their bilinear weights (as the
 // splat map's: one texel per two samples).
 void control_texels(vec2 xy, out uint words[4], out vec4 weights) {
-    VistaNodeHit hit = vista_find_node(xy);
-    if (!hit.found) {
-        words = uint[4](0u, 0u, 0u, 0u);
-        weights = vec4(1.0, 0.0, 0.0, 0.0);
-        return;
-    }
-    vec2 t = hit.local * 0.5;
-    ivec2 i0 = min(ivec2(floor(t)), ivec2(int(SPLAT_TEXELS) - 2));
-    vec2 f = clamp(t - vec2(i0), 0.0, 1.0);
+    ivec3 base;
+    bool found = vista_map_texels(xy, base, weights);
     for (int k = 0; k < 4; ++k) {
-        ivec2 o = ivec2(k & 1, k >> 1);
-        words[k] = texelFetch(usampler2DArray(control_atlas, nearest), ivec3(i0 + o, int(hit.slot)), 0).r;
+        ivec3 at = base + ivec3(k & 1, k >> 1, 0);
+        words[k] = found ? texelFetch(usampler2DArray(control_atlas, nearest), at, 0).r : 0u;
     }
-    weights = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
 }
 
 // The tri-planar weights of the background at vertex normal `nv`,

@@ -41,20 +41,12 @@ const float BLEND_DEPTH = 0.2;
 
 // The four splat texels around `xy` and their bilinear weights.
 void splat_texels(vec2 xy, out uint ids[4], out vec4 weights) {
-    VistaNodeHit hit = vista_find_node(xy);
-    if (!hit.found) {
-        ids = uint[4](0u, 0u, 0u, 0u);
-        weights = vec4(1.0, 0.0, 0.0, 0.0);
-        return;
-    }
-    vec2 t = hit.local * 0.5;
-    ivec2 i0 = min(ivec2(floor(t)), ivec2(int(SPLAT_TEXELS) - 2));
-    vec2 f = clamp(t - vec2(i0), 0.0, 1.0);
+    ivec3 base;
+    bool found = vista_map_texels(xy, base, weights);
     for (int k = 0; k < 4; ++k) {
-        ivec2 o = ivec2(k & 1, k >> 1);
-        ids[k] = texelFetch(usampler2DArray(VISTA_SPLAT_ATLAS, nearest), ivec3(i0 + o, int(hit.slot)), 0).r;
+        ivec3 at = base + ivec3(k & 1, k >> 1, 0);
+        ids[k] = found ? texelFetch(usampler2DArray(VISTA_SPLAT_ATLAS, nearest), at, 0).r : 0u;
     }
-    weights = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
 }
 
 // Material `id` on a plane with coordinates `plane` (m) and their screen

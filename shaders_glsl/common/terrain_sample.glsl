@@ -73,6 +73,25 @@ VistaNodeHit vista_find_node(vec2 p) {
     return hit;
 }
 
+// The 2 x 2 texels around `p` of a map with one texel per two samples
+// (65 x 65 per node: splat, control) in the finest resident node: the
+// first texel and layer in `base` (the others at +x, +y, +xy), and their
+// bilinear weights in that order; false where no node covers `p`.
+bool vista_map_texels(vec2 p, out ivec3 base, out vec4 weights) {
+    base = ivec3(0);
+    weights = vec4(1.0, 0.0, 0.0, 0.0);
+    VistaNodeHit hit = vista_find_node(p);
+    if (!hit.found) {
+        return false;
+    }
+    vec2 t = hit.local * 0.5;
+    ivec2 i0 = min(ivec2(floor(t)), ivec2(int(SPLAT_TEXELS) - 2));
+    vec2 f = clamp(t - vec2(i0), 0.0, 1.0);
+    base = ivec3(i0, int(hit.slot));
+    weights = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+    return true;
+}
+
 // R16 height of node sample `i` (the layer has a 2-sample border).
 float vista_height_texel(uint slot, ivec2 i) {
     return texelFetch(sampler2DArray(VISTA_HEIGHT_ATLAS, VISTA_ATLAS_SAMPLER), ivec3(atlas_texel(i), int(slot)), 0).r;
