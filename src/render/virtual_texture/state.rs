@@ -310,31 +310,31 @@ impl VtState {
         self.counters.waiting = self.misses.len() as u32;
         (jobs, std::mem::take(&mut self.writes))
     }
-
-    /// The tile and texel coordinates (within the cache image) the GPU
-    /// samples for world point `xy` at `level`, or coarser when that page
-    /// is not resident (CPU twin of `vt_find_page`; tests).
-    pub fn lookup(&self, xy: [f64; 2], level: u32) -> Option<(PageKey, u32)> {
-        let l = &self.layout;
-        let c = [0, 1].map(|a| (xy[a] / l.region_m).floor());
-        if c.iter().zip(l.regions).any(|(&c, n)| c < 0.0 || c >= f64::from(n)) {
-            return None;
-        }
-        let region = c[0] as u32 + c[1] as u32 * l.regions[0];
-        let sub = self.subs[region as usize]?;
-        let o = l.region_origin(region);
-        (0..=level.min(sub.k)).rev().find_map(|lv| {
-            let page_m = l.region_m / f64::from(1u32 << lv);
-            let p = [0, 1].map(|a| (((xy[a] - o[a]) / page_m).floor() as u32).min((1 << lv) - 1));
-            let key = PageKey { region, level: lv, x: p[0], y: p[1] };
-            self.cache.tile_of(key).map(|t| (key, t))
-        })
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The page (and its tile) the GPU samples for world point `xy` at
+    /// `level`, or a coarser one when that page is not resident (as
+    /// `vt_find` in virtual_texture.glsl).
+    fn lookup(s: &VtState, xy: [f64; 2], level: u32) -> Option<(PageKey, u32)> {
+        let l = &s.layout;
+        let c = [0, 1].map(|a| (xy[a] / l.region_m).floor());
+        if c.iter().zip(l.regions).any(|(&c, n)| c < 0.0 || c >= f64::from(n)) {
+            return None;
+        }
+        let region = c[0] as u32 + c[1] as u32 * l.regions[0];
+        let sub = s.subs[region as usize]?;
+        let o = l.region_origin(region);
+        (0..=level.min(sub.k)).rev().find_map(|lv| {
+            let page_m = l.region_m / f64::from(1u32 << lv);
+            let p = [0, 1].map(|a| (((xy[a] - o[a]) / page_m).floor() as u32).min((1 << lv) - 1));
+            let key = PageKey { region, level: lv, x: p[0], y: p[1] };
+            s.cache.tile_of(key).map(|t| (key, t))
+        })
+    }
 
     /// The state buffer as the writes leave it.
     fn apply(words: &mut [u32], writes: &[StateWrite]) {
@@ -373,6 +373,6 @@ mod tests {
         assert!(jobs.is_empty());
         assert_eq!(words[s.indirection_word(key, moved) as usize], tile);
         assert_eq!(words[VT_STATE_HEADER as usize], pack_sub_texture(moved.offset, moved.k));
-        assert_eq!(s.lookup([40.0, 10.0], 7).map(|h| h.0), Some(key), "finer levels fall back to the page held");
+        assert_eq!(lookup(&s, [40.0, 10.0], 7).map(|h| h.0), Some(key), "finer levels fall back to the page held");
     }
 }
