@@ -182,4 +182,19 @@
 #define VT_MAX_JOBS 256u
 #define VT_MAX_WRITES 8192u
 
+// Decals in the virtual texture's pages (effect decals,
+// render/virtual_texture/decals.rs): at most DECAL_MAX decals with
+// DECAL_MAX_POINTS road points in all, DECAL_MAX_TEXTURES textures of
+// DECAL_TEXELS a side (one layer each, with mips), and DECAL_MAX_PER_PAGE
+// decals blended into one page.
+#define DECAL_MAX 256u
+#define DECAL_MAX_POINTS 4096u
+#define DECAL_MAX_TEXTURES 32u
+#define DECAL_TEXELS 256u
+#define DECAL_MAX_PER_PAGE 32u
+// A page job's decal word: its first index in the job decal list | count << 16.
+#define DECAL_COUNT_SHIFT 16u
+#define DECAL_KIND_QUAD 0u
+#define DECAL_KIND_ROAD 1u
+
 #endif

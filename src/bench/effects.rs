@@ -33,6 +33,8 @@ pub struct EffectsBenchConfig {
     /// The world's error tree, shared by every renderer of the bench (`None`:
     /// made under `cache_dir`).
     pub errors: Option<std::sync::Arc<crate::world::ErrorTree>>,
+    /// The scene's decals (effect `decals`).
+    pub decals: crate::render::virtual_texture::decals::DecalSet,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -89,7 +91,12 @@ pub fn bench_effects(
         ..TerrainOptions::default()
     };
     let make = |fx: &Effects| {
-        let options = RendererOptions { terrain: terrain.clone(), effects: fx.clone(), ..RendererOptions::default() };
+        let options = RendererOptions {
+            terrain: terrain.clone(),
+            effects: fx.clone(),
+            decals: cfg.decals.clone(),
+            ..RendererOptions::default()
+        };
         TerrainRenderer::new(ctx, world, source.clone(), holes.to_vec(), &options)
     };
     let probe = make(full)?;

@@ -50,6 +50,9 @@ pub enum Effect {
     /// Sector data each frame, for `TerrainQuery` (height, normal and
     /// material at any point, on the GPU).
     Queries,
+    /// Decals (`RendererOptions::decals`, a scene's `[[decals]]`) blended
+    /// into the virtual texture's pages by `vt_pages`' DECALS variant
+    /// (needs `virtual_texture`).
     Decals,
     Grass,
     /// Terrain sun shadows from the height field: the `sun_shadows` pass and
@@ -108,8 +111,9 @@ impl Effect {
     /// scene may ask for them (and is checked), the report says they are off.
     pub fn unavailable(self) -> Option<&'static str> {
         match self {
-            Effect::Decals | Effect::Grass => Some("not implemented in this version"),
-            Effect::VirtualTexture
+            Effect::Grass => Some("not implemented in this version"),
+            Effect::Decals
+            | Effect::VirtualTexture
             | Effect::Holes
             | Effect::ConeCull
             | Effect::Occlusion
@@ -137,7 +141,6 @@ impl Effect {
             Effect::Cliffs => &["slope_deg", "band_deg", "near_far_m", "stochastic", "hash_seed"],
             Effect::Splat => &["materials", "far_start_m", "far_band_m"],
             Effect::VirtualTexture => &["cache_mb", "pages_per_frame", "region_m", "indirection"],
-            Effect::Decals => &["file"],
             Effect::Shadows => &["resolution", "steps", "update_budget", "softness_deg", "reach_m"],
             Effect::Atmosphere => {
                 &["visibility_km", "scale_height_m", "haze_color", "sun_g", "zenith_color", "air_depth"]
@@ -190,7 +193,6 @@ pub struct Effects {
     /// in control-map mode: words made from the material rules.
     pub control_map: Option<PathBuf>,
     pub virtual_texture: VtParams,
-    pub decals_file: Option<PathBuf>,
     pub shadows: ShadowParams,
     pub atmosphere: AtmosphereParams,
 }
@@ -265,7 +267,6 @@ impl Default for Effects {
             materials: MaterialsMode::Splat,
             control_map: None,
             virtual_texture: VtParams::default(),
-            decals_file: None,
             shadows: ShadowParams::default(),
             atmosphere: AtmosphereParams::default(),
         }
@@ -434,7 +435,6 @@ impl Effects {
                 "zenith_color" => self.atmosphere.zenith_color = colour(&key, v)?,
                 "air_depth" => self.atmosphere.air_depth = number(&key, v, 0.0, 10.0)? as f32,
                 "materials" => self.splat_materials = Some(file(&key, v, base)?),
-                "file" => self.decals_file = Some(file(&key, v, base)?),
                 _ => unreachable!("{key} is in the parameter list but not read"),
             }
         }
@@ -515,13 +515,15 @@ pub struct EffectDecision {
 pub struct WorldContent {
     pub holes_missing: Option<String>,
     pub holes_present: String,
+    /// Decals given to the renderer.
+    pub decals: usize,
 }
 
 /// Decides every effect: requested and implemented and backed by the
 /// world's data means on. `force` (tests only) keeps an effect on although
 /// the world lacks its data, to show its path changes nothing there.
 pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDecision> {
-    Effect::ALL
+    let mut decisions = Effect::ALL
         .into_iter()
         .map(|effect| {
             let requested = fx.is_on(effect);
@@ -551,6 +553,9 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                     (Effect::VirtualTexture, _) if !fx.is_on(Effect::Splat) => {
                         (false, "requested, but its pages cache the splat materials and effect splat is off".into())
                     }
+                    (Effect::Decals, _) if content.decals == 0 => {
+                        (false, "requested, but the scene has no decals ([[decals]])".into())
+                    }
                     (Effect::Splat, _) if fx.materials == MaterialsMode::ControlMap => {
                         (true, format!("requested{how}: the control-map flavour ([materials] mode = \"control_map\")"))
                     }
@@ -562,7 +567,20 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
             };
             EffectDecision { effect, requested, on, reason }
         })
-        .collect()
+        .collect::<Vec<_>>();
+    decals_need_pages(&mut decisions);
+    decisions
+}
+
+/// Decals live in the virtual texture's pages: off with it, whatever
+/// switched it off.
+fn decals_need_pages(decisions: &mut [EffectDecision]) {
+    let vt_on = decisions.iter().any(|d| d.effect == Effect::VirtualTexture && d.on);
+    if let Some(d) = decisions.iter_mut().find(|d| d.effect == Effect::Decals && d.on && !vt_on) {
+        d.on = false;
+        d.reason =
+            "requested, but decals are drawn into the virtual texture's pages and effect virtual_texture is off".into();
+    }
 }
 
 #[cfg(test)]
@@ -581,6 +599,27 @@ mod tests {
         }
         let d = Effects::default();
         assert!(d.is_on(Effect::Holes) && d.is_on(Effect::Lighting) && !d.is_on(Effect::Queries));
+    }
+
+    /// Decals live in the pages: on only with the virtual texture and with
+    /// decals to draw, each refusal saying why.
+    #[test]
+    fn decals_need_the_virtual_texture_and_decals() {
+        let fx = |vt: bool| {
+            Effects::default().with(Effect::Splat, true).with(Effect::VirtualTexture, vt).with(Effect::Decals, true)
+        };
+        let decals = |fx: &Effects, n: usize| {
+            let content = WorldContent { decals: n, ..WorldContent::default() };
+            decide(fx, &content, false).into_iter().find(|d| d.effect == Effect::Decals).unwrap()
+        };
+        assert!(decals(&fx(true), 2).on);
+        let no_vt = decals(&fx(false), 2);
+        assert!(!no_vt.on && no_vt.reason.contains("virtual_texture is off"), "{}", no_vt.reason);
+        let no_splat = decals(&fx(true).with(Effect::Splat, false), 2);
+        assert!(!no_splat.on && no_splat.reason.contains("virtual_texture is off"), "{}", no_splat.reason);
+        let none = decals(&fx(true), 0);
+        assert!(!none.on && none.reason.contains("no decals"), "{}", none.reason);
+        assert!(parse("decals = { file = \"x\" }").unwrap_err().to_string().contains("unknown parameter"));
     }
 
     #[test]

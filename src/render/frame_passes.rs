@@ -186,7 +186,7 @@ impl FramePasses<'_> {
         } else {
             let sector = &self.sector_data.buffer;
             frame.pass(FramePass::VtPages.name(), false, QueueKind::Graphics, |r| {
-                vt.record_pages(r, &f.jobs, terrain, sector, tree, m)
+                vt.record_pages(r, f, terrain, sector, tree, m)
             });
             log.ran(FramePass::VtPages, Some(f.jobs.len() as u64));
         }

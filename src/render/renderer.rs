@@ -41,6 +41,7 @@ use crate::render::stats::TRIANGLES_PER_PATCH;
 use crate::render::sun_shadows::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
+use crate::render::virtual_texture::decals::{Decal, DecalSet};
 use crate::render::virtual_texture::{VirtualTexture, VtCamera, VtFrame};
 use crate::shaders::structs;
 use crate::terrain::gpu_quadtree::{
@@ -74,6 +75,9 @@ pub struct RendererOptions {
     pub lod: LodOptions,
     /// The engine's depth target: format and terrain stencil bit.
     pub depth: DepthOptions,
+    /// Effect `decals`: the decals (world metres, like holes) and their
+    /// textures; [`TerrainRenderer::set_decals`] edits them later.
+    pub decals: DecalSet,
 }
 
 /// Per-patch LOD selection settings.
@@ -210,7 +214,7 @@ pub fn memory_for(
     holes: &[Hole],
     source_holes: bool,
 ) -> crate::world::MemoryReport {
-    let decisions = decide(effects, &world_content(world, holes, source_holes), false);
+    let decisions = decide(effects, &world_content(world, holes, source_holes, 0), false);
     let mut report = crate::world::MemoryReport::for_format(slots, format);
     if effects.materials == MaterialsMode::ControlMap {
         report = report.with_control();
@@ -240,7 +244,7 @@ fn begin_virtual_texture(
 
 /// `source_holes`: the height source has holes of its own (a DEM's no-data
 /// samples).
-fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool) -> WorldContent {
+fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool, decals: usize) -> WorldContent {
     let root = world.node_size_m(world.root_lod());
     let ragged = world.extent_m.iter().any(|e| e % root != 0.0);
     let [ex, ey] = world.extent_m;
@@ -265,7 +269,7 @@ fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool) -> World
         let outside = if holes.is_empty() { String::new() } else { format!(" ({} lie outside it)", holes.len()) };
         format!("the world has no hole regions{outside} and its extent is a whole number of root nodes")
     });
-    WorldContent { holes_missing: missing, holes_present: present.join("; ") }
+    WorldContent { holes_missing: missing, holes_present: present.join("; "), decals }
 }
 
 impl TerrainRenderer {
@@ -280,8 +284,8 @@ impl TerrainRenderer {
         crate::terrain::check_plan(ctx, world, &options.terrain)?;
         options.depth.check().map_err(Error::BadInput)?;
         let depth = options.depth;
-        let decisions =
-            decide(&options.effects, &world_content(world, &holes, source.has_holes()), options.force_content_gated);
+        let content = world_content(world, &holes, source.has_holes(), options.decals.decals.len());
+        let decisions = decide(&options.effects, &content, options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         let atlases = atlases_for(&decisions, options.effects.materials);
         let mut terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
@@ -380,6 +384,7 @@ impl TerrainRenderer {
                     extent,
                     options.effects.virtual_texture,
                     options.terrain.frames_in_flight,
+                    on(Effect::Decals).then_some(&options.decals),
                 )?)
             } else {
                 None
@@ -667,6 +672,24 @@ impl TerrainRenderer {
         self.terrain.settled()
             && self.shadow_schedule.stale() == 0
             && self.virtual_texture.as_ref().is_none_or(VirtualTexture::settled)
+    }
+
+    /// Effect `decals`: replaces the decal list (world metres; the textures
+    /// stay those given at creation). The resident virtual-texture pages
+    /// an added, removed or changed decal touches, before or after, are
+    /// dropped and rendered again over the next frames; returns how many.
+    /// Errors: the effect is off, or a decal is bad (one line).
+    pub fn set_decals(&mut self, decals: Vec<Decal>) -> Result<u32> {
+        let next = self.frames_recorded() + 1;
+        match &mut self.virtual_texture {
+            Some(vt) => vt.set_decals(decals, next),
+            None => Err(Error::BadInput("effect decals is off in this renderer".into())),
+        }
+    }
+
+    /// Effect `decals`: the decals drawn (empty when off).
+    pub fn decals(&self) -> &[Decal] {
+        self.virtual_texture.as_ref().map_or(&[], VirtualTexture::decals)
     }
 
     /// The world's height source was edited over `region` (a stamp added,

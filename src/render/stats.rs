@@ -61,6 +61,8 @@ pub struct VtStats {
     pub indirection_bytes: u64,
     pub status_bytes: u64,
     pub cache_bytes: u64,
+    /// Effect `decals`: decals drawn into the pages (0: off).
+    pub decals: u32,
 }
 
 impl VtStats {
@@ -74,6 +76,7 @@ impl VtStats {
             indirection_bytes,
             status_bytes,
             cache_bytes,
+            decals: vt.decals().len() as u32,
         }
     }
 }

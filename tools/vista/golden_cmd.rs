@@ -210,6 +210,7 @@ fn render(ctx: &Context, g: &Golden, payload: PayloadFormat) -> Result<Vec<u8>> 
     let view = View { camera, fov_y_deg: 60.0, size: SIZE, target_error_px: 1.0, near_m: DEFAULT_NEAR_M };
     let options = RendererOptions {
         effects: world.effects.clone(),
+        decals: world.decals.clone(),
         // Loads on the streaming thread: the resident set, and so the
         // picture, is the same on every run (threads finishing in another
         // order leave another set where the slot budget is short).

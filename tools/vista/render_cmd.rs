@@ -128,6 +128,7 @@ impl ViewpointArgs {
             stages: self.cull,
             effects: world.effects.clone(),
             origin_m: world.origin_m,
+            decals: world.decals.clone(),
             ..RendererOptions::default()
         }
     }
@@ -566,6 +567,13 @@ fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
             mib(v.status_bytes),
             mib(v.cache_bytes)
         );
+        if v.decals > 0 {
+            println!(
+                "decals: {} drawn into the pages; this frame's pages blended {} (a page's decals each once); \
+                 {} pages dropped by decal edits, {} decals left out of pages touched by too many",
+                v.decals, c.decal_blends, c.decal_pages_invalidated, c.decals_left_out
+            );
+        }
     }
     if let Some([one, two, three]) = s.plane_tiles {
         println!(

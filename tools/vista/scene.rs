@@ -33,6 +33,15 @@
 //! falloff = 20                 # metres inside the edge over which it fades in
 //! control_map = "crater-control.png"  # optional (control-map mode): its words where it weighs >= 0.5
 //!
+//! [[decals]]                   # drawn into the virtual texture's pages, in order (effect decals)
+//! texture = "decals/paint.png" # RGBA image (alpha: coverage), resampled to 256 x 256
+//! quad = { center = [1000, 1200], size = [12, 8], rotation_deg = 30 }
+//! opacity = 1                  # times the texture's alpha (default 1)
+//! roughness = 0.3              # optional: blended towards (else the ground's)
+//! [[decals]]
+//! texture = "decals/road.png"  # u across the road, v along it
+//! road = { points = [[900, 1100], [1000, 1150], [1040, 1260]], width = 6, repeat = 12 }
+//!
 //! [materials]                  # the near material flavour (effect splat)
 //! mode = "control_map"         # or "splat" (the default): REDengine 3's control map
 //! control_map = "control.png"  # 16-bit PNG over the world (else made from the material rules)
@@ -50,6 +59,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
 use serde::Deserialize;
+use vista::render::virtual_texture::decals::{Decal, DecalShape};
 use vista::render::Effects;
 use vista::world::{Hole, MaterialRules, StampBlend, StampPlacement};
 
@@ -58,6 +68,7 @@ pub struct Scene {
     pub world: SceneWorld,
     holes: Vec<SceneHole>,
     stamps: Vec<SceneStamp>,
+    decals: Vec<SceneDecal>,
     pub effects: Effects,
     pub material_rules: MaterialRules,
     /// For error messages.
@@ -74,6 +85,8 @@ struct RawScene {
     holes: Vec<SceneHole>,
     #[serde(default)]
     stamps: Vec<SceneStamp>,
+    #[serde(default)]
+    decals: Vec<SceneDecal>,
     #[serde(default)]
     effects: toml::Table,
     #[serde(default)]
@@ -160,6 +173,46 @@ pub struct SceneStampSpec {
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct SceneDecal {
+    texture: PathBuf,
+    quad: Option<SceneQuad>,
+    road: Option<SceneRoad>,
+    #[serde(default = "full")]
+    opacity: f32,
+    roughness: Option<f32>,
+}
+
+fn full() -> f32 {
+    1.0
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneQuad {
+    center: [f64; 2],
+    size: [f64; 2],
+    #[serde(default)]
+    rotation_deg: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneRoad {
+    points: Vec<[f64; 2]>,
+    width: f64,
+    repeat: f64,
+}
+
+/// The scene's decals, checked, relative to the world's corner: the
+/// texture files (each once) and the decals, whose `texture` indexes them.
+#[derive(Debug, Clone, Default)]
+pub struct SceneDecals {
+    pub textures: Vec<PathBuf>,
+    pub decals: Vec<Decal>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct SceneHole {
     circle: Option<[f64; 3]>,
     polygon: Option<Vec<[f64; 2]>>,
@@ -202,6 +255,10 @@ impl Scene {
             .read_materials(&raw.materials, dir)
             .map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
         raw.material_rules.validate().map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
+        let mut decals = raw.decals;
+        for d in &mut decals {
+            d.texture = vista::world::resolve_relative(dir, &d.texture);
+        }
         let mut stamps = raw.stamps;
         for st in &mut stamps {
             st.source = vista::world::resolve_relative(dir, &st.source);
@@ -211,6 +268,7 @@ impl Scene {
             world,
             holes: raw.holes,
             stamps,
+            decals,
             effects,
             material_rules: raw.material_rules,
             path: path.to_path_buf(),
@@ -241,6 +299,39 @@ impl Scene {
                 bail!("{at}: control_map needs [materials] mode = \"control_map\"");
             }
             out.push(SceneStampSpec { source: st.source.clone(), placement, control_map: st.control_map.clone() });
+        }
+        Ok(out)
+    }
+
+    /// The decals, each checked (one shape, finite numbers, opacity and
+    /// roughness in 0..=1), moved from the user's coordinates by `-origin_m`.
+    pub fn decals(&self, origin_m: [f64; 2]) -> Result<SceneDecals> {
+        let mut out = SceneDecals::default();
+        for (i, d) in self.decals.iter().enumerate() {
+            let at = format!("scene file {}: decal {}", self.path.display(), i + 1);
+            let shape = match (&d.quad, &d.road) {
+                (Some(q), None) => DecalShape::Quad {
+                    center_m: q.center.into(),
+                    size_m: q.size.into(),
+                    rotation_deg: q.rotation_deg,
+                },
+                (None, Some(r)) => DecalShape::Road {
+                    points_m: r.points.iter().map(|&p| p.into()).collect(),
+                    width_m: r.width,
+                    repeat_m: r.repeat,
+                },
+                _ => bail!("{at}: give exactly one of quad = {{ center, size, rotation_deg }} or road = {{ points, width, repeat }}"),
+            };
+            let texture = match out.textures.iter().position(|t| *t == d.texture) {
+                Some(t) => t,
+                None => {
+                    out.textures.push(d.texture.clone());
+                    out.textures.len() - 1
+                }
+            };
+            let decal = Decal { shape, texture: texture as u32, opacity: d.opacity, roughness: d.roughness };
+            decal.check(out.textures.len()).map_err(|why| anyhow::anyhow!("{at}: {why}"))?;
+            out.decals.push(decal.translated(-glam::DVec2::from(origin_m)));
         }
         Ok(out)
     }
@@ -300,6 +391,32 @@ mod tests {
         let e = format!("{:#}", Scene::load(&path).unwrap_err());
         assert!(e.contains("scree_slope_deg (60) must not exceed rock_slope_deg (40)"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn decals_parse_share_textures_move_by_the_origin_and_fail_in_one_line() {
+        let s = parse(
+            "[[decals]]\ntexture = \"a.png\"\nquad = { center = [10, 20], size = [4, 2], rotation_deg = 30 }\n\
+             [[decals]]\ntexture = \"b.png\"\nroad = { points = [[0, 0], [5, 5]], width = 2, repeat = 3 }\n\
+             opacity = 0.5\nroughness = 0.2\n[[decals]]\ntexture = \"a.png\"\nquad = { center = [1, 1], size = [1, 1] }\n",
+        )
+        .unwrap();
+        let d = s.decals([10.0, 0.0]).unwrap();
+        assert_eq!(d.textures.len(), 2);
+        assert_eq!(d.decals.iter().map(|d| d.texture).collect::<Vec<_>>(), [0, 1, 0]);
+        assert!(matches!(&d.decals[0].shape, DecalShape::Quad { center_m, .. } if center_m.to_array() == [0.0, 20.0]));
+        assert_eq!((d.decals[1].opacity, d.decals[1].roughness), (0.5, Some(0.2)));
+        for bad in [
+            "[[decals]]\ntexture = \"a.png\"\n",
+            "[[decals]]\ntexture = \"a.png\"\nquad = { center = [0, 0], size = [0, 1] }\n",
+            "[[decals]]\ntexture = \"a.png\"\nroad = { points = [[0, 0]], width = 1, repeat = 1 }\n",
+            "[[decals]]\ntexture = \"a.png\"\nquad = { center = [0, 0], size = [1, 1] }\nopacity = 2\n",
+        ] {
+            let e = format!("{:#}", parse(bad).unwrap().decals([0.0; 2]).unwrap_err());
+            assert!(e.contains("decal 1") && e.lines().count() == 1, "{e}");
+        }
+        let e = format!("{:#}", parse("[[decals]]\ntexture = \"a.png\"\nquad = { centre = [0, 0] }\n").unwrap_err());
+        assert!(e.contains("centre") && e.lines().count() == 1, "{e}");
     }
 
     #[test]

@@ -98,6 +98,8 @@ pub struct LoadedWorld {
     pub limits: Limits,
     /// Each stamp's id and box, in order: what a scene edit compares.
     pub stamps: Vec<(u64, [f64; 4])>,
+    /// The scene's decals (world metres) with their textures read.
+    pub decals: vista::render::virtual_texture::decals::DecalSet,
 }
 
 /// Refuses a slot budget the renderer cannot use for `world`, in the
@@ -180,6 +182,8 @@ pub struct WorldSpec {
     holes: Vec<Hole>,
     /// The scene's stamps, placed relative to the world's corner.
     stamps: Vec<crate::scene::SceneStampSpec>,
+    /// The scene's decals, relative to the world's corner (textures unread).
+    decals: crate::scene::SceneDecals,
     effects: Effects,
     origin_m: [f64; 2],
     pub limits: Limits,
@@ -266,6 +270,7 @@ impl WorldArgs {
         let mut holes = scene.holes()?;
         holes.extend(self.hole_circle.iter().cloned());
         let holes: Vec<Hole> = holes.iter().map(|h| h.relative_to(origin_m)).collect();
+        let decals = scene.decals(origin_m)?;
         let mut stamps = scene.stamps()?;
         for st in &mut stamps {
             let c = &mut st.placement.center_m;
@@ -310,7 +315,7 @@ impl WorldArgs {
         let max_sectors_per_side = self.max_sectors.unwrap_or(DEFAULT_MAX_SECTORS_PER_SIDE);
         let limits = Limits { max_sectors_per_side, ..Limits::default() };
         let bake = BakeSettings { format: self.payload, materials: scene.material_rules, control: None };
-        Ok(WorldSpec { desc, source, holes, stamps, effects: scene.effects, origin_m, limits, bake })
+        Ok(WorldSpec { desc, source, holes, stamps, decals, effects: scene.effects, origin_m, limits, bake })
     }
 }
 
@@ -413,7 +418,7 @@ impl WorldSpec {
             let what = if height_range.is_some() { "bake" } else { "heights and bake" };
             let label = format!("{} ({what} from its first {cw} x {ch} strip or tile)", path.display());
             let range = height_range.map_or_else(|| auto_range(corner.grid()), |r| r.range);
-            let mut world = self.with_source(Arc::new(corner), label);
+            let mut world = self.with_source(Arc::new(corner), label)?;
             world.desc.height_range_m = range;
             return Ok(world);
         }
@@ -425,13 +430,14 @@ impl WorldSpec {
         let Some(corner) = corner else { return self.open() };
         let (cw, ch) = (corner.grid().width(), corner.grid().height());
         let label = format!("{} (bake timed on its {cw} x {ch} corner)", path.display());
-        Ok(self.with_source(Arc::new(corner), label))
+        self.with_source(Arc::new(corner), label)
     }
 
-    fn with_source(self, source: Arc<dyn HeightSource>, label: String) -> LoadedWorld {
+    fn with_source(self, source: Arc<dyn HeightSource>, label: String) -> Result<LoadedWorld> {
+        let decals = load_decals(&self.decals).map_err(input_error)?;
         let (desc, holes, effects, origin_m, limits, bake) =
             (self.desc, self.holes, self.effects, self.origin_m, self.limits, self.bake);
-        LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps: Vec::new() }
+        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps: Vec::new(), decals })
     }
 
     /// The stamps' own control maps, in stamp order.
@@ -505,8 +511,9 @@ impl WorldSpec {
         if !self.stamps.is_empty() {
             label += &format!(" with {} stamp{}", self.stamps.len(), if self.stamps.len() == 1 { "" } else { "s" });
         }
+        let decals = load_decals(&self.decals).map_err(input_error)?;
         let (holes, effects, origin_m, limits) = (self.holes, self.effects, self.origin_m, self.limits);
-        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps })
+        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps, decals })
     }
 }
 
@@ -517,6 +524,15 @@ pub fn plan_error_is_input(e: vista::Error) -> anyhow::Error {
         vista::Error::World(WorldError::Plan(p)) => anyhow::Error::new(crate::InputError(p.to_string())),
         e => e.into(),
     }
+}
+
+/// Reads each decal texture once.
+fn load_decals(d: &crate::scene::SceneDecals) -> Result<vista::render::virtual_texture::decals::DecalSet> {
+    use vista::render::virtual_texture::decals::{DecalSet, DecalTexture};
+    let textures = d.textures.iter().map(|p| DecalTexture::load(p)).collect::<Result<Vec<_>, _>>()?;
+    let set = DecalSet { textures: textures.into(), decals: d.decals.clone() };
+    set.check()?;
+    Ok(set)
 }
 
 fn input_error(e: impl Into<anyhow::Error>) -> anyhow::Error {

@@ -112,6 +112,17 @@ impl VtLayout {
         self.region_m / f64::from(VT_TILE_TEXELS << level)
     }
 
+    /// The world rectangle (x0, y0, x1, y1 m) the texels of `key`'s padded
+    /// tile cover: the page and its border.
+    pub fn padded_rect(&self, key: PageKey) -> [f64; 4] {
+        let o = self.region_origin(key.region);
+        let page_m = self.region_m / f64::from(1u32 << key.level);
+        let border = self.texel_m(key.level) * f64::from(VT_TILE_BORDER);
+        let x0 = o[0] + f64::from(key.x) * page_m - border;
+        let y0 = o[1] + f64::from(key.y) * page_m - border;
+        [x0, y0, x0 + page_m + 2.0 * border, y0 + page_m + 2.0 * border]
+    }
+
     /// Bytes of the indirection, the page statuses and the cache images.
     pub fn memory_bytes(&self) -> [u64; 3] {
         let ind = self.indirection_texels() * 4;

@@ -7,18 +7,22 @@
 //!   places it in the indirection ([`allocator`]), and picks up to a budget
 //!   of missing pages (coarser first) for tiles of the cache ([`cache`]);
 //! - `vt_update` applies the indirection and sub-texture writes, `vt_pages`
-//!   renders the picked pages, `vt_feedback` lists the pages this frame's
+//!   renders the picked pages (with effect `decals`, blending the [`decals`]
+//!   touching each), `vt_feedback` lists the pages this frame's
 //!   pixels sample (copied into the ring, read frames later, never waited
 //!   for), and `gbuffer_tiles`' virtual-texture flavour samples the cache.
 //!
 //! Owned GPU objects, destroyed in field order after the passes: the state
 //! buffer (header, sub-texture words, indirection), the page statuses, the
-//! request list, the write and job staging buffers, the two cache images
-//! and the readback ring; each is dropped through the context's deferred
-//! destruction, so frames in flight keep them.
+//! request list, the write and job staging buffers, the two cache images,
+//! the readback ring and the decals' objects ([`decal_gpu`]); each is
+//! dropped through the context's deferred destruction, so frames in flight
+//! keep them.
 
 pub mod allocator;
 pub mod cache;
+pub mod decal_gpu;
+pub mod decals;
 pub mod layout;
 pub mod state;
 
@@ -28,7 +32,11 @@ use crate::passes::gbuffer_tiles::VtBindings;
 use crate::passes::vt_feedback::{FeedbackTargets, VtFeedback, VtFeedbackPush};
 use crate::passes::vt_pages::{PageTargets, VtPages};
 use crate::passes::vt_update::VtUpdate;
-use crate::shaders::consts::{VT_MAX_JOBS, VT_MAX_WRITES, VT_NONE, VT_REQUEST_CAPACITY, VT_STATE_HEADER};
+use crate::shaders::consts::{
+    DECAL_COUNT_SHIFT, DECAL_MAX_PER_PAGE, VT_MAX_JOBS, VT_MAX_WRITES, VT_NONE, VT_REQUEST_CAPACITY, VT_STATE_HEADER,
+};
+use decal_gpu::DecalResources;
+use decals::{Decal, DecalSet};
 use layout::VtLayout;
 use serde::Serialize;
 use state::{PageJob, StateWrite, VtCounters, VtState};
@@ -88,6 +96,20 @@ pub struct VtFrame {
     slot: usize,
     /// The first frame: the buffers are initialised first.
     pub init: bool,
+    /// Effect `decals`: the decal indices of the jobs (each job's word
+    /// points into it), and the decal and point lists where they changed
+    /// since the last frame that rendered pages.
+    pub job_decals: Vec<u32>,
+    pub decal_lists: Option<(Vec<decals::DecalGpu>, Vec<[f32; 4]>)>,
+}
+
+/// Effect `decals`: the decals, their GPU objects, and whether the lists
+/// wait to be uploaded.
+struct Decals {
+    set: DecalSet,
+    gpu: DecalResources,
+    /// The lists changed since a frame last uploaded them.
+    dirty: bool,
 }
 
 /// The coarsest of the finest resident LODs at region `r`'s corners and
@@ -131,6 +153,7 @@ pub struct VirtualTexture {
     /// The feedback's push constants of the newest frame (tests).
     pub last_push: Option<VtFeedbackPush>,
     initialized: bool,
+    decals: Option<Decals>,
 }
 
 fn buffer(
@@ -144,7 +167,18 @@ fn buffer(
 }
 
 impl VirtualTexture {
-    pub fn new(ctx: &Context, extent_m: [f64; 2], params: VtParams, frames_in_flight: usize) -> Result<Self> {
+    /// `decals`: effect `decals` (the page renderer's DECALS variant).
+    pub fn new(
+        ctx: &Context,
+        extent_m: [f64; 2],
+        params: VtParams,
+        frames_in_flight: usize,
+        decals: Option<&DecalSet>,
+    ) -> Result<Self> {
+        let decals = match decals {
+            Some(set) => Some(Decals { set: set.clone(), gpu: DecalResources::new(ctx, set)?, dirty: true }),
+            None => None,
+        };
         let layout = VtLayout::new(extent_m, params.region_m, params.indirection, params.cache_mb);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let words = u64::from(VT_STATE_HEADER + layout.region_count()) + layout.indirection_texels();
@@ -173,7 +207,7 @@ impl VirtualTexture {
         Ok(VirtualTexture {
             feedback: VtFeedback::new(ctx)?,
             update: VtUpdate::new(ctx)?,
-            pages: VtPages::new(ctx, params.position_code)?,
+            pages: VtPages::new(ctx, params.position_code, decals.is_some())?,
             state_buffer: buffer(
                 ctx,
                 "vt_state",
@@ -199,6 +233,7 @@ impl VirtualTexture {
             writes: Vec::new(),
             last_push: None,
             initialized: false,
+            decals,
         })
     }
 
@@ -223,7 +258,66 @@ impl VirtualTexture {
                 .collect();
         v.extend([&self.cache_albedo, &self.cache_detail].iter().map(|i| (i.name.clone(), i.memory_bytes())));
         v.push(("vt_requests_readback".into(), self.ring.iter().map(|s| s.buffer.memory_bytes()).sum()));
+        v.extend(self.decals.iter().flat_map(|d| d.gpu.memory()));
         v
+    }
+
+    /// Effect `decals`: the decals drawn into the pages (empty when off).
+    pub fn decals(&self) -> &[Decal] {
+        self.decals.as_ref().map_or(&[], |d| &d.set.decals)
+    }
+
+    /// Effect `decals`: replaces the decal list (same textures); the
+    /// resident pages that an added, removed or changed decal touches,
+    /// before or after, are dropped and rendered again from frame `frame`
+    /// on. Returns how many were dropped.
+    pub fn set_decals(&mut self, decals: Vec<Decal>, frame: u64) -> Result<u32> {
+        let Some(d) = &mut self.decals else {
+            return Err(crate::error::Error::BadInput("effect decals is off in this renderer".into()));
+        };
+        let next = DecalSet { textures: d.set.textures.clone(), decals };
+        next.check()?;
+        let old = &d.set.decals;
+        let n = old.len().max(next.decals.len());
+        let changed: Vec<&Decal> = (0..n)
+            .filter(|&i| old.get(i) != next.decals.get(i))
+            .flat_map(|i| old.get(i).into_iter().chain(next.decals.get(i)))
+            .collect();
+        let layout = self.state.layout;
+        let dropped = self.state.invalidate_pages(frame, |key| {
+            let rect = layout.padded_rect(key);
+            changed.iter().any(|c| c.touches(rect, layout.texel_m(key.level)))
+        });
+        self.state.counters.decal_pages_invalidated += u64::from(dropped);
+        d.set = next;
+        d.dirty = true;
+        Ok(dropped)
+    }
+
+    /// Each job's decals (those touching its padded tile, grown by a texel
+    /// for the blended edge), in order, at most DECAL_MAX_PER_PAGE.
+    fn assign_decals(&mut self, jobs: &mut [PageJob]) -> Vec<u32> {
+        let mut list = Vec::new();
+        let (mut blends, mut over) = (0, 0);
+        if let Some(d) = &self.decals {
+            let layout = self.state.layout;
+            for job in jobs {
+                let key = state::unpack_request([job.region, job.page]);
+                let first = list.len() as u32;
+                let mine: Vec<u32> = d.set.touching(layout.padded_rect(key), layout.texel_m(key.level)).collect();
+                let kept = mine.len().min(DECAL_MAX_PER_PAGE as usize);
+                over += mine.len() - kept;
+                list.extend(&mine[..kept]);
+                job.decals = first | (kept as u32) << DECAL_COUNT_SHIFT;
+                blends += kept as u32;
+            }
+        }
+        if over > 0 {
+            log::warn!("{over} decal(s) left out of pages touched by more than {DECAL_MAX_PER_PAGE}");
+        }
+        self.state.counters.decal_blends = blends;
+        self.state.counters.decals_left_out += over as u64;
+        list
     }
 
     /// See [`VtState::settled`].
@@ -270,7 +364,15 @@ impl VirtualTexture {
         }
         self.state.place_sub_textures(frame, camera.xy, camera.pixel_rad, camera.range_m);
         let layout = self.state.layout;
-        let (jobs, writes) = self.state.plan(frame, |r| source_lod(terrain, &layout, r));
+        let (mut jobs, writes) = self.state.plan(frame, |r| source_lod(terrain, &layout, r));
+        let job_decals = self.assign_decals(&mut jobs);
+        let decal_lists = match &mut self.decals {
+            Some(d) if !jobs.is_empty() && d.dirty => {
+                d.dirty = false;
+                Some(d.set.gpu_words())
+            }
+            _ => None,
+        };
         self.writes.extend(writes);
         let n = self.writes.len().min(VT_MAX_WRITES as usize);
         let slot = self.next;
@@ -286,6 +388,8 @@ impl VirtualTexture {
             jobs,
             slot,
             init: !std::mem::replace(&mut self.initialized, true),
+            job_decals,
+            decal_lists,
         }
     }
 
@@ -320,7 +424,7 @@ impl VirtualTexture {
     pub fn record_pages(
         &self,
         rec: &mut Recorder,
-        jobs: &[PageJob],
+        f: &VtFrame,
         terrain: crate::passes::terrain_query::VistaTerrain,
         sector_data: &Buffer,
         tree: &crate::terrain::gpu_quadtree::GpuQuadtree,
@@ -332,7 +436,11 @@ impl VirtualTexture {
             albedo: &self.cache_albedo,
             detail: &self.cache_detail,
         };
-        self.pages.record(rec, jobs, &out, terrain, sector_data, tree, m);
+        if let Some(d) = &self.decals {
+            d.gpu.record_upload(rec, f.decal_lists.as_ref(), &f.job_decals);
+        }
+        let decals = self.decals.as_ref().map(|d| &d.gpu);
+        self.pages.record(rec, &f.jobs, &out, terrain, sector_data, tree, m, decals);
     }
 
     /// The feedback of `f`'s frame, and its copy into the slot it claimed.

@@ -39,7 +39,9 @@ pub struct PageJob {
     pub region: u32,
     /// level | x << VT_REQ_X_SHIFT | y << VT_REQ_Y_SHIFT (a request's word).
     pub page: u32,
-    pub pad: u32,
+    /// Its decals: first index in the frame's job decal list | count <<
+    /// DECAL_COUNT_SHIFT (0: none).
+    pub decals: u32,
 }
 
 /// Unpacks a page request (`virtual_texture.glsl` `vt_request`).
@@ -77,6 +79,13 @@ pub struct VtCounters {
     pub evicted_total: u64,
     /// Frame of the newest harvested requests (0: none came back yet).
     pub harvested_frame: u64,
+    /// Effect `decals`: decals blended into this frame's pages (a page's
+    /// decals each count once), pages dropped by decal edits since the
+    /// renderer was made, and decals left out of pages touched by more than
+    /// DECAL_MAX_PER_PAGE.
+    pub decal_blends: u32,
+    pub decal_pages_invalidated: u64,
+    pub decals_left_out: u64,
 }
 
 impl VtCounters {
@@ -211,7 +220,18 @@ impl VtState {
         let cache = &self.cache;
         let stale: Vec<PageKey> =
             cache.pages().filter(|p| inside(p.region) && cache.source_lod(*p).is_some_and(|s| s > lod)).collect();
-        for page in &stale {
+        self.drop_pages(&stale, frame)
+    }
+
+    /// Drops every resident page `stale` says is stale (its content
+    /// changed: a decal edit), to be rendered again; returns how many.
+    pub fn invalidate_pages(&mut self, frame: u64, stale: impl Fn(PageKey) -> bool) -> u32 {
+        let pages: Vec<PageKey> = self.cache.pages().filter(|p| stale(*p)).collect();
+        self.drop_pages(&pages, frame)
+    }
+
+    fn drop_pages(&mut self, stale: &[PageKey], frame: u64) -> u32 {
+        for page in stale {
             self.cache.remove(*page);
             if let Some(h) = &mut self.history {
                 h.push(PageEvent::Invalidated(*page));
@@ -296,7 +316,7 @@ impl VtState {
             }
             let w = self.indirection_word(page, sub);
             self.write(w, 1, tile);
-            jobs.push(PageJob { tile, region: page.region, page: pack_page(page), pad: 0 });
+            jobs.push(PageJob { tile, region: page.region, page: pack_page(page), decals: 0 });
         }
         if !jobs.is_empty() {
             self.changed = frame;
