@@ -823,6 +823,9 @@ impl TerrainRenderer {
         for (name, bytes) in self.virtual_texture.iter().flat_map(|v| v.memory()) {
             out.push((name, bytes, vec![Effect::VirtualTexture]));
         }
+        for (name, bytes) in self.virtual_texture.iter().flat_map(|v| v.decal_memory()) {
+            out.push((name, bytes, vec![Effect::Decals]));
+        }
         out
     }
 }

@@ -249,7 +249,7 @@ impl VirtualTexture {
         [self.update.pipeline_label(), self.pages.pipeline_label(), self.feedback.pipeline_label()]
     }
 
-    /// (name, bytes) of every GPU object.
+    /// (name, bytes) of every GPU object but the decals'.
     pub fn memory(&self) -> Vec<(String, u64)> {
         let mut v: Vec<(String, u64)> =
             [&self.state_buffer, &self.status, &self.requests, &self.writes_staging, &self.jobs_staging]
@@ -258,8 +258,12 @@ impl VirtualTexture {
                 .collect();
         v.extend([&self.cache_albedo, &self.cache_detail].iter().map(|i| (i.name.clone(), i.memory_bytes())));
         v.push(("vt_requests_readback".into(), self.ring.iter().map(|s| s.buffer.memory_bytes()).sum()));
-        v.extend(self.decals.iter().flat_map(|d| d.gpu.memory()));
         v
+    }
+
+    /// (name, bytes) of the decals' GPU objects (effect `decals`).
+    pub fn decal_memory(&self) -> Vec<(String, u64)> {
+        self.decals.iter().flat_map(|d| d.gpu.memory()).collect()
     }
 
     /// Effect `decals`: the decals drawn into the pages (empty when off).
