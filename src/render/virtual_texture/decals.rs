@@ -69,53 +69,27 @@ fn disc_overlaps(c: DVec2, r: f64, rect: [f64; 4]) -> bool {
 }
 
 impl Decal {
-    /// The shape's parts grown by `margin` m: rectangles (a quad, or each
-    /// road segment) and the discs of the road's bends.
-    fn parts(&self, margin: f64) -> (Vec<Obb>, Vec<(DVec2, f64)>) {
+    /// Whether any point within `margin` m of the decal lies in `rect`
+    /// (x0, y0, x1, y1 m): the pages whose texels it may colour. A quad is
+    /// one rectangle grown by `margin`; a road is a rectangle per segment
+    /// and a disc per bend.
+    pub fn touches(&self, rect: [f64; 4], margin: f64) -> bool {
         match &self.shape {
             DecalShape::Quad { center_m, size_m, rotation_deg } => {
                 let u = DVec2::from_angle(rotation_deg.to_radians());
-                (vec![Obb { c: *center_m, u, half: *size_m * 0.5 + margin }], Vec::new())
+                Obb { c: *center_m, u, half: *size_m * 0.5 + margin }.overlaps(rect)
             }
             DecalShape::Road { points_m, width_m, .. } => {
                 let half = width_m * 0.5 + margin;
-                let boxes = points_m
-                    .windows(2)
-                    .map(|s| {
-                        let along = s[1] - s[0];
-                        let h = DVec2::new(along.length() * 0.5 + margin, half);
-                        Obb { c: (s[0] + s[1]) * 0.5, u: along.normalize(), half: h }
-                    })
-                    .collect();
-                let bends = points_m[1..points_m.len() - 1].iter().map(|&p| (p, half)).collect();
-                (boxes, bends)
+                let segment = |s: &[DVec2]| {
+                    let along = s[1] - s[0];
+                    let h = DVec2::new(along.length() * 0.5 + margin, half);
+                    Obb { c: (s[0] + s[1]) * 0.5, u: along.normalize(), half: h }.overlaps(rect)
+                };
+                let bends = &points_m[1..points_m.len() - 1];
+                points_m.windows(2).any(segment) || bends.iter().any(|&p| disc_overlaps(p, half, rect))
             }
         }
-    }
-
-    /// Whether any point within `margin` m of the decal lies in `rect`
-    /// (x0, y0, x1, y1 m): the pages whose texels it may colour.
-    pub fn touches(&self, rect: [f64; 4], margin: f64) -> bool {
-        let (boxes, discs) = self.parts(margin);
-        boxes.iter().any(|b| b.overlaps(rect)) || discs.iter().any(|&(c, r)| disc_overlaps(c, r, rect))
-    }
-
-    /// Axis-aligned bounds (x0, y0, x1, y1 m).
-    pub fn bounds(&self) -> [f64; 4] {
-        let (boxes, _) = self.parts(0.0);
-        let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
-        for o in boxes {
-            let v = o.u.perp();
-            let r = DVec2::new(
-                o.half.x * o.u.x.abs() + o.half.y * v.x.abs(),
-                o.half.x * o.u.y.abs() + o.half.y * v.y.abs(),
-            );
-            b = [b[0].min(o.c.x - r.x), b[1].min(o.c.y - r.y), b[2].max(o.c.x + r.x), b[3].max(o.c.y + r.y)];
-        }
-        if let DecalShape::Road { width_m, .. } = &self.shape {
-            b = [b[0] - width_m * 0.5, b[1] - width_m * 0.5, b[2] + width_m * 0.5, b[3] + width_m * 0.5];
-        }
-        b
     }
 
     /// Moved by `by` m (a caller's coordinates into the world's).
@@ -405,8 +379,11 @@ mod tests {
                 assert!(!t || near, "{rect:?} is touched by {d:?} but holds no point near it");
             }
         }
-        let b = decals[0].bounds();
-        assert!(decals[0].touches(b, 0.0) && !decals[0].touches([b[2] + 0.01, b[1], b[2] + 1.0, b[3]], 0.0));
+        // The quad's corner (+-6, +-2 rotated by 37 degrees) reaches x = 16.0
+        // from its centre's 10: just beyond it nothing is touched.
+        let far_x = 10.0 + 6.0 * 37f64.to_radians().cos() + 2.0 * 37f64.to_radians().sin();
+        assert!(decals[0].touches([far_x - 0.01, 0.0, far_x + 1.0, 20.0], 0.0));
+        assert!(!decals[0].touches([far_x + 0.01, 0.0, far_x + 1.0, 20.0], 0.0));
     }
 
     #[test]
