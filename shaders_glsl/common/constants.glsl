@@ -197,4 +197,22 @@
 #define DECAL_KIND_QUAD 0u
 #define DECAL_KIND_ROAD 1u
 
+// Grass (effect grass, render/grass.rs): one possible tuft per world cell
+// in a square of at most GRASS_MAX_SIDE cells a side around the camera,
+// GRASS_BLADES blades of GRASS_BLADE_VERTICES vertices each (a triangle
+// list), coloured from a pigment map of GRASS_PIGMENT_TEXELS a side. The
+// rule table has one entry per material id (GRASS_RULES).
+#define GRASS_MAX_SIDE 512u
+#define GRASS_BLADES 3u
+#define GRASS_BLADE_VERTICES 9u
+#define GRASS_PIGMENT_TEXELS 256u
+#define GRASS_RULES 256u
+// grass_place's flags: holes cut (FrameSwitches::holes), frustum culling,
+// Hi-Z culling (the HIZ variant).
+#define GRASS_FLAG_HOLES 1u
+#define GRASS_FLAG_FRUSTUM 2u
+#define GRASS_FLAG_HIZ 4u
+// The G-buffer material target's y on a grass pixel (above the flavour bits).
+#define GBUFFER_GRASS 128u
+
 #endif

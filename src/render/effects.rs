@@ -16,6 +16,7 @@
 use crate::error::{Error, Result};
 use crate::passes::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
 use crate::render::atmosphere::AtmosphereParams;
+use crate::render::grass::GrassParams;
 use crate::render::shading::ShadeRules;
 use crate::render::tonemap::Tonemap;
 use crate::render::view::Lighting;
@@ -54,6 +55,9 @@ pub enum Effect {
     /// into the virtual texture's pages by `vt_pages`' DECALS variant
     /// (needs `virtual_texture`).
     Decals,
+    /// GPU grass (render/grass): `grass_pigment`, `grass_place` and the
+    /// one indirect draw `grass_draw` into the G-buffer (needs `splat`'s
+    /// material ids, in splat mode).
     Grass,
     /// Terrain sun shadows from the height field: the `sun_shadows` pass and
     /// its per-node shadow atlas, sampled by `lighting_resolve` (needs
@@ -111,8 +115,8 @@ impl Effect {
     /// scene may ask for them (and is checked), the report says they are off.
     pub fn unavailable(self) -> Option<&'static str> {
         match self {
-            Effect::Grass => Some("not implemented in this version"),
-            Effect::Decals
+            Effect::Grass
+            | Effect::Decals
             | Effect::VirtualTexture
             | Effect::Holes
             | Effect::ConeCull
@@ -141,6 +145,7 @@ impl Effect {
             Effect::Cliffs => &["slope_deg", "band_deg", "near_far_m", "stochastic", "hash_seed"],
             Effect::Splat => &["materials", "far_start_m", "far_band_m"],
             Effect::VirtualTexture => &["cache_mb", "pages_per_frame", "region_m", "indirection"],
+            Effect::Grass => &GrassParams::PARAMETERS,
             Effect::Shadows => &["resolution", "steps", "update_budget", "softness_deg", "reach_m"],
             Effect::Atmosphere => {
                 &["visibility_km", "scale_height_m", "haze_color", "sun_g", "zenith_color", "air_depth"]
@@ -195,6 +200,7 @@ pub struct Effects {
     pub virtual_texture: VtParams,
     pub shadows: ShadowParams,
     pub atmosphere: AtmosphereParams,
+    pub grass: GrassParams,
 }
 
 /// Effects a built renderer switches off for a frame without rebuilding
@@ -269,6 +275,7 @@ impl Default for Effects {
             virtual_texture: VtParams::default(),
             shadows: ShadowParams::default(),
             atmosphere: AtmosphereParams::default(),
+            grass: GrassParams::default(),
         }
     }
 }
@@ -368,6 +375,7 @@ impl Effects {
             }
             match k.as_str() {
                 "enabled" => on = v.as_bool().ok_or_else(|| wrong(&key, "true or false", v))?,
+                _ if effect == Effect::Grass => self.grass.read(&key, k, v)?,
                 "sun_azimuth_deg" => self.lighting.sun_azimuth_deg = number(&key, v, -360.0, 360.0)?,
                 "sun_elevation_deg" => self.lighting.sun_elevation_deg = number(&key, v, -90.0, 90.0)?,
                 "sun_color" => self.lighting.sun_color = colour(&key, v)?,
@@ -438,6 +446,9 @@ impl Effects {
                 _ => unreachable!("{key} is in the parameter list but not read"),
             }
         }
+        if effect == Effect::Grass {
+            self.grass.validate()?;
+        }
         self.set(effect, on);
         Ok(())
     }
@@ -459,11 +470,11 @@ fn type_name(v: &toml::Value) -> &'static str {
     }
 }
 
-fn wrong(key: &str, want: &str, v: &toml::Value) -> Error {
+pub(super) fn wrong(key: &str, want: &str, v: &toml::Value) -> Error {
     bad(format!("{key} must be {want}, not {}", type_name(v)))
 }
 
-fn number(key: &str, v: &toml::Value, lo: f64, hi: f64) -> Result<f64> {
+pub(super) fn number(key: &str, v: &toml::Value, lo: f64, hi: f64) -> Result<f64> {
     let x = v.as_float().or(v.as_integer().map(|i| i as f64));
     match x {
         Some(x) if x.is_finite() && (lo..=hi).contains(&x) => Ok(x),
@@ -480,7 +491,7 @@ fn whole(key: &str, v: &toml::Value, lo: i64, hi: i64) -> Result<u32> {
     })? as u32)
 }
 
-fn colour(key: &str, v: &toml::Value) -> Result<[f32; 3]> {
+pub(super) fn colour(key: &str, v: &toml::Value) -> Result<[f32; 3]> {
     let want = "an array of 3 non-negative numbers (linear RGB)";
     let arr = v.as_array().filter(|a| a.len() == 3).ok_or_else(|| wrong(key, want, v))?;
     let mut out = [0.0f32; 3];
@@ -553,6 +564,18 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                     (Effect::VirtualTexture, _) if !fx.is_on(Effect::Splat) => {
                         (false, "requested, but its pages cache the splat materials and effect splat is off".into())
                     }
+                    (Effect::Grass, _) if fx.materials == MaterialsMode::ControlMap => (
+                        false,
+                        "requested, but its rules are by splat material id and the materials are the control map's \
+                         ([materials] mode = \"control_map\")"
+                            .into(),
+                    ),
+                    (Effect::Grass, _) if !fx.is_on(Effect::Splat) => {
+                        (false, "requested, but it grows by the splat material ids and effect splat is off".into())
+                    }
+                    (Effect::Grass, _) if !fx.grass.grows() => {
+                        (false, "requested, but no material grows grass (effects.grass.density)".into())
+                    }
                     (Effect::Decals, _) if content.decals == 0 => {
                         (false, "requested, but the scene has no decals ([[decals]])".into())
                     }
@@ -620,6 +643,39 @@ mod tests {
         let none = decals(&fx(true), 0);
         assert!(!none.on && none.reason.contains("no decals"), "{}", none.reason);
         assert!(parse("decals = { file = \"x\" }").unwrap_err().to_string().contains("unknown parameter"));
+    }
+
+    /// Grass grows by splat material ids: off without splat, in control-map
+    /// mode or when no material grows it, each refusal saying why; its
+    /// parameters are read by material name and checked together.
+    #[test]
+    fn grass_needs_splat_ids_and_a_material_that_grows_it() {
+        let grass = |fx: &Effects| {
+            decide(fx, &WorldContent::default(), false).into_iter().find(|d| d.effect == Effect::Grass).unwrap()
+        };
+        let fx = parse("splat = true\ngrass = { radius_m = 20, density = { grass = 2, rock = 0.5 }, tint = { rock = [1, 0.5, 0.5] } }").unwrap();
+        assert!(grass(&fx).on, "{}", grass(&fx).reason);
+        assert_eq!(
+            (fx.grass.radius_m, fx.grass.rules[1].density, fx.grass.rules[1].tint),
+            (20.0, 0.5, [1.0, 0.5, 0.5])
+        );
+        let no_splat = grass(&fx.clone().with(Effect::Splat, false));
+        assert!(!no_splat.on && no_splat.reason.contains("splat is off"), "{}", no_splat.reason);
+        let mut control = fx.clone();
+        control.materials = MaterialsMode::ControlMap;
+        assert!(grass(&control).reason.contains("control map"));
+        let bare = parse("splat = true\ngrass = { density = { grass = 0, scree = 0 } }").unwrap();
+        assert!(grass(&bare).reason.contains("no material grows grass"), "{}", grass(&bare).reason);
+        for (text, key) in [
+            ("grass = { density = { moss = 1 } }", "effects.grass.density.moss: no such material"),
+            ("grass = { density = { grass = 9 } }", "needs 2.25 per 0.5 m cell, at most 1"),
+            ("grass = { radius_m = 500 }", "cells a side"),
+            ("grass = { tint = { grass = 1 } }", "effects.grass.tint.grass must be an array"),
+            ("grass = { blades = 3 }", "unknown parameter effects.grass.blades"),
+        ] {
+            let e = parse(text).unwrap_err().to_string();
+            assert!(e.contains(key) && !e.contains('\n'), "{text}: {e}");
+        }
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! One frame's passes after streaming, recorded phase by phase: the LOD
 //! phase (traverse, lod_map, sector_data, select_patches, cull_patches),
-//! the draws (terrain_geometry, terrain_holes and occlusion's phase 2) and
-//! the shading (classify_tiles, gbuffer_tiles, sun_shadows, lighting_resolve). The
+//! the draws (terrain_geometry, terrain_holes and occlusion's phase 2),
+//! grass placement, and the shading (classify_tiles, gbuffer_tiles,
+//! grass_draw, sun_shadows, lighting_resolve). The
 //! renderer lends its passes apart from the frame executor and the
 //! streaming state ([`FramePasses`]); each pass is logged in the frame's
 //! [`FrameLog`] as the graph expects.
@@ -23,6 +24,7 @@ use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FrameLog, FramePass, Skip};
+use crate::render::grass::gpu::{Grass, GrassFrame};
 use crate::render::materials_gpu::MaterialResources;
 use crate::render::renderer::Occlusion;
 use crate::render::view::TerrainViewGpu;
@@ -63,6 +65,8 @@ pub(crate) struct FramePasses<'a> {
     pub holes_off: bool,
     /// Shading flavours forced on every tile (the reference shadings), else 0.
     pub force_flavours: u32,
+    /// Effect `grass`, with this frame's plan.
+    pub grass: Option<(&'a Grass, &'a GrassFrame)>,
 }
 
 /// Records `p` in `frame` and logs it.
@@ -193,6 +197,24 @@ impl FramePasses<'_> {
         pass(frame, log, FramePass::VtFeedback, |r| vt.record_feedback(r, f, self.view_buffer, targets, gb));
     }
 
+    /// Effect `grass`: the pigment map (when due) and the placement, culled
+    /// by the pyramid this frame built, if it built one.
+    fn record_grass_place(&self, frame: &mut Frame<'_, '_>, log: &mut FrameLog, tree: &GpuQuadtree) {
+        let Some((grass, f)) = self.grass else { return };
+        let sector = &self.sector_data.buffer;
+        let decals = self.virtual_texture.and_then(|(vt, _)| vt.decal_resources());
+        if f.pigment_due {
+            let m = self.materials.expect("grass needs splat's materials").bindings();
+            pass(frame, log, FramePass::GrassPigment, |r| grass.record_pigment(r, f, sector, tree, &m, decals));
+        } else {
+            log.skipped(FramePass::GrassPigment, Skip::PigmentCurrent);
+        }
+        let hiz = self.occlusion.filter(|_| self.stages.occlusion).and_then(|o| o.hiz.pyramid());
+        pass(frame, log, FramePass::GrassPlace, |r| {
+            grass.record_place(r, f, self.view_buffer, hiz, sector, tree, decals)
+        });
+    }
+
     /// The G-buffer tile shading and the lit output.
     pub fn record_shading(
         &self,
@@ -203,6 +225,7 @@ impl FramePasses<'_> {
         targets: &RenderTargets,
         gb: &GBuffer,
     ) {
+        self.record_grass_place(frame, log, tree);
         let classify = self.classify;
         pass(frame, log, FramePass::ClassifyTiles, |r| classify.record(r, gb, self.force_flavours));
         let lists = classify.lists.as_ref().expect("prepared before the frame");
@@ -222,6 +245,9 @@ impl FramePasses<'_> {
             });
         }
         log.ran(FramePass::GbufferTiles, None);
+        if let Some((grass, f)) = self.grass {
+            pass(frame, log, FramePass::GrassDraw, |r| grass.record_draw(r, f, self.view_buffer, targets, gb));
+        }
         match self.shadows {
             Some((_, [], _, _)) => log.skipped(FramePass::SunShadows, Skip::ShadowsCurrent),
             Some((s, jobs, sun, _)) => {

@@ -7,19 +7,20 @@
 //! whose effect is off is not built; each frame logs which built passes
 //! were recorded and which were skipped because the CPU knew they had
 //! nothing to do. Occlusion culling draws twice: the drawing passes appear
-//! again as phase 2 after `hiz_build` and `cull_occluded`. Shading follows:
-//! `classify_tiles`, `gbuffer_tiles` (one timed draw per variant built) and
-//! `sun_shadows` (effect `shadows`: skipped while every resident node's
-//! shadow is current), `lighting_resolve` and, when one is asked for,
-//! `debug_view`.
+//! again as phase 2 after `hiz_build` and `cull_occluded`. Effect `grass`
+//! then renders its pigment map and places its tufts (culled by that
+//! pyramid). Shading follows: `classify_tiles`, `gbuffer_tiles` (one
+//! timed draw per variant built), `grass_draw`, `sun_shadows` (effect
+//! `shadows`: skipped while every resident node's shadow is current),
+//! `lighting_resolve` and, when one is asked for, `debug_view`.
 
 use crate::frame::QueueKind;
 use crate::passes::{
     classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches, debug_view::DebugViewPass,
-    gbuffer_tiles::GbufferTiles, hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap,
-    quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, select_patches::SelectPatches,
-    sun_shadows::SunShadows, terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
-    vt_feedback::VtFeedback, vt_pages::VtPages, vt_update::VtUpdate,
+    gbuffer_tiles::GbufferTiles, grass_draw::GrassDraw, grass_pigment::GrassPigment, grass_place::GrassPlace,
+    hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap, quadtree_update::QuadtreeUpdatePass,
+    sector_data::SectorData, select_patches::SelectPatches, sun_shadows::SunShadows, terrain_geometry::TerrainGeometry,
+    terrain_holes::TerrainHoles, traverse::Traverse, vt_feedback::VtFeedback, vt_pages::VtPages, vt_update::VtUpdate,
 };
 use crate::render::effects::{Effect, EffectDecision};
 use serde::Serialize;
@@ -40,6 +41,11 @@ pub enum FramePass {
     /// Phase 2 of occlusion culling: the patches the pyramid left visible.
     TerrainGeometryLate,
     TerrainHolesLate,
+    /// Effect `grass`: the pigment map (when its square moved or the
+    /// terrain changed).
+    GrassPigment,
+    /// Effect `grass`: placement and culling of the tufts.
+    GrassPlace,
     ClassifyTiles,
     /// Effect `virtual_texture`: the indirection and sub-texture writes.
     VtUpdate,
@@ -49,6 +55,8 @@ pub enum FramePass {
     VtFeedback,
     /// One draw per variant built, each timed on its own.
     GbufferTiles,
+    /// Effect `grass`: the one indirect draw of every tuft kept.
+    GrassDraw,
     /// Effect `shadows`: the shadow textures of arrived and stale nodes.
     SunShadows,
     LightingResolve,
@@ -57,7 +65,7 @@ pub enum FramePass {
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 20] = [
+    pub const ALL: [FramePass; 23] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -70,11 +78,14 @@ impl FramePass {
         FramePass::CullOccluded,
         FramePass::TerrainGeometryLate,
         FramePass::TerrainHolesLate,
+        FramePass::GrassPigment,
+        FramePass::GrassPlace,
         FramePass::ClassifyTiles,
         FramePass::VtUpdate,
         FramePass::VtPages,
         FramePass::VtFeedback,
         FramePass::GbufferTiles,
+        FramePass::GrassDraw,
         FramePass::SunShadows,
         FramePass::LightingResolve,
         FramePass::DebugView,
@@ -98,6 +109,9 @@ impl FramePass {
             FramePass::VtPages => VtPages::NAME,
             FramePass::VtFeedback => VtFeedback::NAME,
             FramePass::GbufferTiles => GbufferTiles::NAME,
+            FramePass::GrassPigment => GrassPigment::NAME,
+            FramePass::GrassPlace => GrassPlace::NAME,
+            FramePass::GrassDraw => GrassDraw::NAME,
             FramePass::SunShadows => SunShadows::NAME,
             FramePass::LightingResolve => LightingResolve::NAME,
             FramePass::DebugView => DebugViewPass::NAME,
@@ -136,6 +150,7 @@ impl FramePass {
             FramePass::HizBuild | FramePass::CullOccluded | FramePass::TerrainGeometryLate => &[Effect::Occlusion],
             FramePass::TerrainHolesLate => &[Effect::Holes, Effect::Occlusion],
             FramePass::SunShadows => &[Effect::Shadows],
+            FramePass::GrassPigment | FramePass::GrassPlace | FramePass::GrassDraw => &[Effect::Grass],
             FramePass::VtUpdate | FramePass::VtPages | FramePass::VtFeedback => &[Effect::VirtualTexture],
             _ => &[],
         }
@@ -161,6 +176,9 @@ pub enum Skip {
     /// Every page the frames read back asked for is resident, or waits for
     /// a tile no view still uses.
     NoVtPages,
+    /// The pigment map's square did not move a texel and the terrain did
+    /// not change.
+    PigmentCurrent,
 }
 
 impl Skip {
@@ -174,6 +192,9 @@ impl Skip {
             Skip::NoDebugView => "no debug view asked for (TerrainRenderer::debug_view)",
             Skip::NoVtWrites => "idle: no sub-texture moved and no page arrived or left (known on the CPU)",
             Skip::NoVtPages => "idle: no page the read-back requests named is missing (known on the CPU)",
+            Skip::PigmentCurrent => {
+                "idle: the pigment map's square did not move a texel and no node arrived or left (known on the CPU)"
+            }
         }
     }
 }

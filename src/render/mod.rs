@@ -10,6 +10,7 @@ pub mod effects;
 mod frame_passes;
 pub mod gbuffer;
 pub mod graph;
+pub mod grass;
 pub mod materials;
 pub mod materials_gpu;
 pub mod offscreen;

@@ -30,11 +30,13 @@ use crate::passes::select_patches::SelectPatches;
 use crate::passes::sun_shadows::{SunShadowJob, SunShadows};
 use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeometry, COLOR_FORMAT};
 use crate::passes::terrain_holes::TerrainHoles;
+use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::Traverse;
 use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode, WorldContent};
 use crate::render::frame_passes::FramePasses;
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FramePass, PassGraph, Skip};
+use crate::render::grass::gpu::{Grass, GrassFrameInputs};
 use crate::render::materials_gpu::MaterialResources;
 use crate::render::shading::{ShadeRules, Shading};
 use crate::render::stats::TRIANGLES_PER_PATCH;
@@ -124,6 +126,8 @@ pub struct TerrainRenderer {
     pub materials: Option<MaterialResources>,
     /// Effect `virtual_texture`: its cache, indirection and passes.
     pub virtual_texture: Option<VirtualTexture>,
+    /// Effect `grass`: its passes, tufts and pigment map.
+    pub grass: Option<Grass>,
     /// Made for the view size on the first frame (remade when it changes).
     pub gbuffer: Option<GBuffer>,
     pub shade: ShadeRules,
@@ -350,6 +354,7 @@ impl TerrainRenderer {
             lod_count: world.lod_count,
             list_capacity: cull.lists.capacity,
             triangles_per_patch: TRIANGLES_PER_PATCH,
+            grass: on(Effect::Grass),
         };
         Ok(TerrainRenderer {
             update: QuadtreeUpdatePass::new(ctx, build.occlusion)?,
@@ -386,6 +391,11 @@ impl TerrainRenderer {
                     options.terrain.frames_in_flight,
                     on(Effect::Decals).then_some(&options.decals),
                 )?)
+            } else {
+                None
+            },
+            grass: if on(Effect::Grass) {
+                Some(Grass::new(ctx, &options.effects.grass, build.occlusion, on(Effect::Decals), depth.format)?)
             } else {
                 None
             },
@@ -500,6 +510,18 @@ impl TerrainRenderer {
         let mut log = self.graph.begin_frame(number);
         log.switched_off = switched_off;
         let visibility = self.occlusion.as_ref().map(|o| &o.cull.visibility);
+        let uploaded = self.virtual_texture.as_ref().and_then(VirtualTexture::uploaded_decals);
+        let grass = self.grass.as_mut().map(|g| {
+            let inputs = GrassFrameInputs {
+                camera_world: [gpu.camera_world[0], gpu.camera_world[1], gpu.camera_world[2]],
+                terrain: VistaTerrain::new(&world, &self.sector_data),
+                depth_size: targets.depth.extent,
+                holes: self.holes.is_some() && self.switches.holes,
+                hiz: self.occlusion.is_some() && self.stages.occlusion,
+                terrain_changed: self.terrain.tree.has_work(),
+            };
+            g.begin_frame(&inputs, uploaded)
+        });
         if self.terrain.tree.has_work() {
             let (tree, update) = (&mut self.terrain.tree, &self.update);
             let writes = frame
@@ -554,6 +576,7 @@ impl TerrainRenderer {
             stages: self.stages,
             holes_off: !sw.holes,
             force_flavours: if self.shading == Shading::Tiled { 0 } else { shade.allowed },
+            grass: self.grass.as_ref().zip(grass.as_ref()),
         };
         let gb = self.gbuffer.as_ref().expect("made above");
         passes.record_lod(&mut frame, &mut log, tree, &params, &gpu, visibility);
@@ -564,6 +587,7 @@ impl TerrainRenderer {
             lists: counter_lists(&self.cull, &self.occlusion),
             tiles: self.classify.lists.as_ref().map(|l| &l.buffer),
             select: &self.select.levels,
+            grass: self.grass.as_ref().map(Grass::header),
         };
         let telemetry = &mut self.telemetry;
         frame.untimed(QueueKind::Graphics, |r| telemetry.record(r, number, ctx_frame, &sources));
@@ -650,6 +674,10 @@ impl TerrainRenderer {
             None => bytes.extend(vec![0; crate::passes::classify_tiles::HEAD_BYTES as usize]),
         }
         bytes.extend(&ctx.read_buffer(&self.select.levels)?[..structs::SELECT_HEADER]);
+        match &self.grass {
+            Some(g) => bytes.extend(&ctx.read_buffer(g.header())?[..structs::GRASS_HEADER]),
+            None => bytes.extend(vec![0; structs::GRASS_HEADER]),
+        }
         let frame = self.graph.last_frame().map_or(0, |l| l.frame);
         Ok(self.telemetry.layout().parse(frame, &bytes))
     }
@@ -760,6 +788,7 @@ impl TerrainRenderer {
         if let Some(v) = &self.virtual_texture {
             out.extend(v.pipeline_labels().map(str::to_string));
         }
+        out.extend(self.grass.iter().flat_map(Grass::pipeline_labels));
         out.extend(self.resolve.pipeline_labels());
         out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
@@ -825,6 +854,9 @@ impl TerrainRenderer {
         }
         for (name, bytes) in self.virtual_texture.iter().flat_map(|v| v.decal_memory()) {
             out.push((name, bytes, vec![Effect::Decals]));
+        }
+        for (name, bytes) in self.grass.iter().flat_map(Grass::memory) {
+            out.push((name, bytes, vec![Effect::Grass]));
         }
         out
     }

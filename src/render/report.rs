@@ -351,6 +351,29 @@ fn work_of(
             let cells = size.map(|s| s.div_ceil(stride));
             (groups(u64::from(cells[0].div_ceil(wx)) * u64::from(cells[1].div_ceil(wy))), None)
         }
+        FramePass::GrassPigment => {
+            let [wx, wy, _] = crate::shaders::grass_pigment::WORKGROUP_SIZE;
+            let side = crate::shaders::consts::GRASS_PIGMENT_TEXELS;
+            (groups(u64::from(side.div_ceil(wx)) * u64::from(side.div_ceil(wy))), None)
+        }
+        FramePass::GrassPlace => {
+            let [wx, wy, _] = crate::shaders::grass_place::WORKGROUP_SIZE;
+            let side = r.grass.as_ref().map_or(0, |g| g.params.side());
+            let in_range = c.grass.map_or(0, |g| u64::from(g.in_range));
+            let work = PassWork { ..groups(u64::from(side.div_ceil(wx) * side.div_ceil(wy))) };
+            (work, (in_range == 0).then_some("no cell of the square lies within the radius"))
+        }
+        FramePass::GrassDraw => {
+            let drawn = c.grass.map_or(0, |g| g.drawn);
+            let per_tuft =
+                u64::from(crate::shaders::consts::GRASS_BLADES * crate::shaders::consts::GRASS_BLADE_VERTICES / 3);
+            let work = PassWork {
+                instances: Some(u64::from(drawn)),
+                triangles: Some(u64::from(drawn) * per_tuft),
+                ..PassWork::default()
+            };
+            (work, (drawn == 0).then_some("no tuft placed and visible (0 instances)"))
+        }
         FramePass::LightingResolve | FramePass::DebugView => (PassWork::default(), None),
     }
 }

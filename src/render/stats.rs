@@ -8,9 +8,11 @@ use crate::gpu::Context;
 use crate::passes::cull_patches::CullCounters;
 use crate::passes::select_patches::SelectHeader;
 use crate::reference::wanted_finer_cpu;
+use crate::render::grass::GrassCounters;
 use crate::render::renderer::TerrainRenderer;
 use crate::render::view::View;
 use crate::render::virtual_texture::{state::VtCounters, VirtualTexture};
+use crate::shaders::consts::{GRASS_BLADES, GRASS_BLADE_VERTICES};
 use crate::terrain::TerrainStats;
 use crate::world::PATCH_QUADS;
 use serde::Serialize;
@@ -46,6 +48,18 @@ pub struct RenderStats {
     pub plane_tiles: Option<[u32; 3]>,
     /// Effect `virtual_texture`: its pages and memory.
     pub virtual_texture: Option<VtStats>,
+    /// Effect `grass`: its counters, triangles and memory.
+    pub grass: Option<GrassStats>,
+}
+
+/// Effect `grass` in the last recorded frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct GrassStats {
+    #[serde(flatten)]
+    pub counters: GrassCounters,
+    /// Triangles of the tufts drawn.
+    pub triangles: u64,
+    pub memory_bytes: u64,
 }
 
 /// The virtual texture after the last recorded frame.
@@ -102,5 +116,10 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
         plane_tiles: (renderer.shade.allowed & crate::shaders::consts::FLAVOUR_CONTROL_MAP != 0)
             .then_some(c.plane_tiles),
         virtual_texture: renderer.virtual_texture.as_ref().map(VtStats::of),
+        grass: renderer.grass.as_ref().zip(c.grass).map(|(g, counters)| GrassStats {
+            counters,
+            triangles: u64::from(counters.drawn) * u64::from(GRASS_BLADES * GRASS_BLADE_VERTICES / 3),
+            memory_bytes: g.memory().iter().map(|(_, b)| b).sum(),
+        }),
     })
 }

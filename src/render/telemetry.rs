@@ -12,6 +12,8 @@ use crate::passes::classify_tiles::{ARGS_BYTES, HEAD_BYTES};
 use crate::passes::cull_patches::{CullCounters, PatchListHeader};
 use crate::passes::select_patches::SelectHeader;
 use crate::passes::traverse::TraverseHeader;
+use crate::render::grass::gpu::GrassHeaderGpu;
+use crate::render::grass::GrassCounters;
 use crate::shaders::structs;
 use serde::Serialize;
 
@@ -47,6 +49,8 @@ pub struct FrameCounters {
     /// Control-map tiles whose tri-planar background samples at most 1, 2
     /// and 3 planes (the tightened blend).
     pub plane_tiles: [u32; 3],
+    /// Effect `grass`: cells in range, tufts placed, culled, drawn.
+    pub grass: Option<GrassCounters>,
 }
 
 /// Which lists a renderer has: phase 1's hole list, phase 2's lists.
@@ -57,6 +61,8 @@ pub struct CounterLayout {
     pub lod_count: u32,
     pub list_capacity: u32,
     pub triangles_per_patch: u64,
+    /// Effect `grass` is built.
+    pub grass: bool,
 }
 
 const TRAVERSE_BYTES: u64 = std::mem::size_of::<TraverseHeader>() as u64;
@@ -65,12 +71,15 @@ const SELECT_BYTES: u64 = structs::SELECT_HEADER as u64;
 /// Readback bytes: the traversal header, then 4 list headers (phase 1
 /// solid, holes; phase 2 solid, holes), absent ones left zero, the tile
 /// lists' head (draw arguments and plane counters) and the selection
-/// counters.
-const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + HEAD_BYTES + SELECT_BYTES;
+/// counters, and grass's header (zero without the effect).
+const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + HEAD_BYTES + SELECT_BYTES + GRASS_BYTES;
 /// Where the tile lists' draw arguments start in a slot.
 const TILES_AT: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES;
 /// Where the selection counters start.
 const SELECT_AT: u64 = TILES_AT + HEAD_BYTES;
+const GRASS_BYTES: u64 = GrassHeaderGpu::BYTES;
+/// Where grass's header starts.
+const GRASS_AT: u64 = SELECT_AT + SELECT_BYTES;
 
 impl CounterLayout {
     /// Parses a slot's bytes (also used on a waiting readback in tests).
@@ -88,6 +97,11 @@ impl CounterLayout {
         let tiles = bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(args).iter().map(|a| a[1]).collect();
         let planes: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[(TILES_AT + ARGS_BYTES) as usize..][..16]);
         let select = bytemuck::pod_read_unaligned(&bytes[SELECT_AT as usize..(SELECT_AT + SELECT_BYTES) as usize]);
+        let grass = self.grass.then(|| {
+            let h: GrassHeaderGpu =
+                bytemuck::pod_read_unaligned(&bytes[GRASS_AT as usize..(GRASS_AT + GRASS_BYTES) as usize]);
+            h.counters()
+        });
         FrameCounters {
             select,
             tiles,
@@ -102,6 +116,7 @@ impl CounterLayout {
             },
             triangles: u64::from(cull.drawn) * self.triangles_per_patch,
             cull,
+            grass,
         }
     }
 }
@@ -115,6 +130,8 @@ pub struct CounterSources<'a> {
     pub tiles: Option<&'a Buffer>,
     /// `select_patches`' levels buffer (its counters come first).
     pub select: &'a Buffer,
+    /// Effect `grass`'s header.
+    pub grass: Option<&'a Buffer>,
 }
 
 struct Slot {
@@ -201,6 +218,9 @@ impl Telemetry {
             rec.copy_buffer_region(tiles, 0, &slot.buffer, TILES_AT, HEAD_BYTES);
         }
         rec.copy_buffer_region(src.select, 0, &slot.buffer, SELECT_AT, SELECT_BYTES);
+        if let Some(grass) = src.grass {
+            rec.copy_buffer_region(grass, 0, &slot.buffer, GRASS_AT, GRASS_BYTES);
+        }
         rec.transfer_to_host_barrier();
     }
 

@@ -439,11 +439,14 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         view.size[1]
     );
     println!(
-        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m, yaw {:.1}, pitch {:.1}, fov {:.1}, target error {} px{}",
+        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m ({:.1} m above the height source), yaw {:.1}, pitch {:.1}, \
+         fov {:.1}, target error {} px{}",
         world.label,
         c.position_m[0],
         c.position_m[1],
         c.position_m[2],
+        c.position_m[2]
+            - f64::from(world.source.sample(c.position_m[0] - world.origin_m[0], c.position_m[1] - world.origin_m[1])),
         c.yaw_deg,
         c.pitch_deg,
         view.fov_y_deg,
@@ -574,6 +577,20 @@ fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
                 v.decals, c.decal_blends, c.decal_pages_invalidated, c.decals_left_out
             );
         }
+    }
+    if let Some(g) = &s.grass {
+        let c = &g.counters;
+        println!(
+            "grass: {} cells in range, {} tufts placed, {} culled by the frustum, {} by the depth pyramid, {} drawn \
+             ({} triangles); {:.2} MiB",
+            c.in_range,
+            c.placed,
+            c.culled_frustum,
+            c.culled_hiz,
+            c.drawn,
+            g.triangles,
+            g.memory_bytes as f64 / f64::from(1u32 << 20)
+        );
     }
     if let Some([one, two, three]) = s.plane_tiles {
         println!(

@@ -266,6 +266,17 @@ impl VirtualTexture {
         self.decals.iter().flat_map(|d| d.gpu.memory()).collect()
     }
 
+    /// Effect `decals`: the decals whose lists an earlier frame uploaded
+    /// (what other passes may read this frame; None while an edit waits).
+    pub fn uploaded_decals(&self) -> Option<&[Decal]> {
+        self.decals.as_ref().filter(|d| !d.dirty).map(|d| &d.set.decals[..])
+    }
+
+    /// Effect `decals`: their GPU objects.
+    pub fn decal_resources(&self) -> Option<&DecalResources> {
+        self.decals.as_ref().map(|d| &d.gpu)
+    }
+
     /// Effect `decals`: the decals drawn into the pages (empty when off).
     pub fn decals(&self) -> &[Decal] {
         self.decals.as_ref().map_or(&[], |d| &d.set.decals)
