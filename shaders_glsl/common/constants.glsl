@@ -212,7 +212,9 @@
 #define GRASS_FLAG_HOLES 1u
 #define GRASS_FLAG_FRUSTUM 2u
 #define GRASS_FLAG_HIZ 4u
-// The G-buffer material target's y on a grass pixel (above the flavour bits).
+// The G-buffer material target's y on a grass pixel and on an asset's
+// (above the flavour bits).
 #define GBUFFER_GRASS 128u
+#define GBUFFER_ASSET 64u
 
 #endif

@@ -12,6 +12,9 @@
 //   VISTA_NORMAL_ATLAS       -> a texture2DArray of RGBA8 normals
 //   VISTA_SPLAT_ATLAS        -> a utexture2DArray of R8_UINT material ids
 //   VISTA_ATLAS_SAMPLER      -> a sampler (nearest)
+// and, for vista_terrain_albedo only:
+//   VISTA_ALBEDO_ATLAS       -> a texture2DArray of the baked albedo (linear RGB)
+//   VISTA_LINEAR_SAMPLER     -> a sampler (linear, clamped)
 //   VISTA_TERRAIN            -> an lvalue of type VistaTerrain (e.g. a push-constant
 //                               member), read in place: a by-value copy out of a
 //                               block is OpCopyLogical, which naga cannot parse
@@ -125,6 +128,22 @@ bool vista_terrain_normal(vec2 p, out vec3 normal) {
     normal = vec3(xy, sqrt(max(1.0 - dot(xy, xy), 0.0)));
     return true;
 }
+
+#ifdef VISTA_ALBEDO_ATLAS
+// Whether terrain covers `p`; its baked albedo there (linear RGB, filtered
+// over the finest resident node's albedo layer: the far atlas flavour's
+// colour; mid grey where not).
+bool vista_terrain_albedo(vec2 p, out vec3 albedo) {
+    albedo = vec3(0.5);
+    VistaNodeHit h = vista_find_node(p);
+    if (!h.found) {
+        return false;
+    }
+    vec3 uvw = vec3(atlas_texel_uv(h.local), float(h.slot));
+    albedo = textureLod(sampler2DArray(VISTA_ALBEDO_ATLAS, VISTA_LINEAR_SAMPLER), uvw, 0.0).rgb;
+    return true;
+}
+#endif
 
 #ifndef VISTA_NO_MATERIAL_QUERY
 // Whether terrain covers `p`; its material id at the nearest splat texel

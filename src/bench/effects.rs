@@ -35,6 +35,8 @@ pub struct EffectsBenchConfig {
     pub errors: Option<std::sync::Arc<crate::world::ErrorTree>>,
     /// The scene's decals (effect `decals`).
     pub decals: crate::render::virtual_texture::decals::DecalSet,
+    /// The scene's assets (effect `assets`).
+    pub assets: Vec<crate::render::assets::Asset>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -95,6 +97,7 @@ pub fn bench_effects(
             terrain: terrain.clone(),
             effects: fx.clone(),
             decals: cfg.decals.clone(),
+            assets: cfg.assets.clone(),
             ..RendererOptions::default()
         };
         TerrainRenderer::new(ctx, world, source.clone(), holes.to_vec(), &options)

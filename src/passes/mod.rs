@@ -1,5 +1,6 @@
 //! One pass per file; the pass, its shader and its timer label share a name.
 
+pub mod asset_draw;
 pub mod classify_tiles;
 pub mod cull_occluded;
 pub mod cull_patches;

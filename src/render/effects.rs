@@ -15,6 +15,7 @@
 
 use crate::error::{Error, Result};
 use crate::passes::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
+use crate::render::assets::AssetParams;
 use crate::render::atmosphere::AtmosphereParams;
 use crate::render::grass::GrassParams;
 use crate::render::shading::ShadeRules;
@@ -59,6 +60,10 @@ pub enum Effect {
     /// one indirect draw `grass_draw` into the G-buffer (needs `splat`'s
     /// material ids, in splat mode).
     Grass,
+    /// The example assets grounded in the terrain (render/assets.rs): the
+    /// `asset_draw` pass of a scene's `[[assets]]`, blended into the
+    /// terrain by terrain_blend.glsl.
+    Assets,
     /// Terrain sun shadows from the height field: the `sun_shadows` pass and
     /// its per-node shadow atlas, sampled by `lighting_resolve` (needs
     /// `lighting`).
@@ -69,7 +74,7 @@ pub enum Effect {
 }
 
 impl Effect {
-    pub const ALL: [Effect; 12] = [
+    pub const ALL: [Effect; 13] = [
         Effect::Holes,
         Effect::ConeCull,
         Effect::Occlusion,
@@ -80,6 +85,7 @@ impl Effect {
         Effect::Queries,
         Effect::Decals,
         Effect::Grass,
+        Effect::Assets,
         Effect::Shadows,
         Effect::Atmosphere,
     ];
@@ -97,6 +103,7 @@ impl Effect {
             Effect::Queries => "queries",
             Effect::Decals => "decals",
             Effect::Grass => "grass",
+            Effect::Assets => "assets",
             Effect::Shadows => "shadows",
             Effect::Atmosphere => "atmosphere",
         }
@@ -116,6 +123,7 @@ impl Effect {
     pub fn unavailable(self) -> Option<&'static str> {
         match self {
             Effect::Grass
+            | Effect::Assets
             | Effect::Decals
             | Effect::VirtualTexture
             | Effect::Holes
@@ -146,6 +154,7 @@ impl Effect {
             Effect::Splat => &["materials", "far_start_m", "far_band_m"],
             Effect::VirtualTexture => &["cache_mb", "pages_per_frame", "region_m", "indirection"],
             Effect::Grass => &GrassParams::PARAMETERS,
+            Effect::Assets => &["blend_height_m"],
             Effect::Shadows => &["resolution", "steps", "update_budget", "softness_deg", "reach_m"],
             Effect::Atmosphere => {
                 &["visibility_km", "scale_height_m", "haze_color", "sun_g", "zenith_color", "air_depth"]
@@ -201,6 +210,7 @@ pub struct Effects {
     pub shadows: ShadowParams,
     pub atmosphere: AtmosphereParams,
     pub grass: GrassParams,
+    pub assets: AssetParams,
 }
 
 /// Effects a built renderer switches off for a frame without rebuilding
@@ -276,6 +286,7 @@ impl Default for Effects {
             shadows: ShadowParams::default(),
             atmosphere: AtmosphereParams::default(),
             grass: GrassParams::default(),
+            assets: AssetParams::default(),
         }
     }
 }
@@ -442,6 +453,7 @@ impl Effects {
                 "sun_g" => self.atmosphere.sun_g = number(&key, v, 0.0, 0.95)? as f32,
                 "zenith_color" => self.atmosphere.zenith_color = colour(&key, v)?,
                 "air_depth" => self.atmosphere.air_depth = number(&key, v, 0.0, 10.0)? as f32,
+                "blend_height_m" => self.assets.blend_height_m = number(&key, v, 0.0, 100.0)? as f32,
                 "materials" => self.splat_materials = Some(file(&key, v, base)?),
                 _ => unreachable!("{key} is in the parameter list but not read"),
             }
@@ -528,6 +540,8 @@ pub struct WorldContent {
     pub holes_present: String,
     /// Decals given to the renderer.
     pub decals: usize,
+    /// Assets given to the renderer (effect assets).
+    pub assets: usize,
 }
 
 /// Decides every effect: requested and implemented and backed by the
@@ -575,6 +589,9 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                     }
                     (Effect::Grass, _) if !fx.grass.grows() => {
                         (false, "requested, but no material grows grass (effects.grass.density)".into())
+                    }
+                    (Effect::Assets, _) if content.assets == 0 => {
+                        (false, "requested, but the scene has no assets ([[assets]])".into())
                     }
                     (Effect::Decals, _) if content.decals == 0 => {
                         (false, "requested, but the scene has no decals ([[decals]])".into())

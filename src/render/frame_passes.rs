@@ -2,13 +2,14 @@
 //! phase (traverse, lod_map, sector_data, select_patches, cull_patches),
 //! the draws (terrain_geometry, terrain_holes and occlusion's phase 2),
 //! grass placement, and the shading (classify_tiles, gbuffer_tiles,
-//! grass_draw, sun_shadows, lighting_resolve). The
+//! asset_draw, grass_draw, sun_shadows, lighting_resolve). The
 //! renderer lends its passes apart from the frame executor and the
 //! streaming state ([`FramePasses`]); each pass is logged in the frame's
 //! [`FrameLog`] as the graph expects.
 
 use crate::frame::{Frame, QueueKind};
 use crate::gpu::{vk, Buffer, Recorder};
+use crate::passes::asset_draw::AssetDraw;
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_patches::{CullFrame, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
@@ -22,6 +23,7 @@ use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::{Traverse, TraverseMode};
+use crate::render::assets::AssetResources;
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FrameLog, FramePass, Skip};
 use crate::render::grass::gpu::{Grass, GrassFrame};
@@ -67,6 +69,8 @@ pub(crate) struct FramePasses<'a> {
     pub force_flavours: u32,
     /// Effect `grass`, with this frame's plan.
     pub grass: Option<(&'a Grass, &'a GrassFrame)>,
+    /// Effect `assets`: the pass and its meshes.
+    pub assets: Option<&'a (AssetDraw, AssetResources)>,
 }
 
 /// Records `p` in `frame` and logs it.
@@ -245,6 +249,12 @@ impl FramePasses<'_> {
             });
         }
         log.ran(FramePass::GbufferTiles, None);
+        if let Some((pass_, assets)) = self.assets {
+            let (view, sector) = (self.view_buffer, &self.sector_data.buffer);
+            pass(frame, log, FramePass::AssetDraw, |r| {
+                pass_.record(r, targets, gb, view, assets, terrain, sector, tree)
+            });
+        }
         if let Some((grass, f)) = self.grass {
             pass(frame, log, FramePass::GrassDraw, |r| grass.record_draw(r, f, self.view_buffer, targets, gb));
         }

@@ -10,17 +10,18 @@
 //! again as phase 2 after `hiz_build` and `cull_occluded`. Effect `grass`
 //! then renders its pigment map and places its tufts (culled by that
 //! pyramid). Shading follows: `classify_tiles`, `gbuffer_tiles` (one
-//! timed draw per variant built), `grass_draw`, `sun_shadows` (effect
+//! timed draw per variant built), `asset_draw`, `grass_draw`, `sun_shadows` (effect
 //! `shadows`: skipped while every resident node's shadow is current),
 //! `lighting_resolve` and, when one is asked for, `debug_view`.
 
 use crate::frame::QueueKind;
 use crate::passes::{
-    classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches, debug_view::DebugViewPass,
-    gbuffer_tiles::GbufferTiles, grass_draw::GrassDraw, grass_pigment::GrassPigment, grass_place::GrassPlace,
-    hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap, quadtree_update::QuadtreeUpdatePass,
-    sector_data::SectorData, select_patches::SelectPatches, sun_shadows::SunShadows, terrain_geometry::TerrainGeometry,
-    terrain_holes::TerrainHoles, traverse::Traverse, vt_feedback::VtFeedback, vt_pages::VtPages, vt_update::VtUpdate,
+    asset_draw::AssetDraw, classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches,
+    debug_view::DebugViewPass, gbuffer_tiles::GbufferTiles, grass_draw::GrassDraw, grass_pigment::GrassPigment,
+    grass_place::GrassPlace, hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap,
+    quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, select_patches::SelectPatches,
+    sun_shadows::SunShadows, terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
+    vt_feedback::VtFeedback, vt_pages::VtPages, vt_update::VtUpdate,
 };
 use crate::render::effects::{Effect, EffectDecision};
 use serde::Serialize;
@@ -55,6 +56,8 @@ pub enum FramePass {
     VtFeedback,
     /// One draw per variant built, each timed on its own.
     GbufferTiles,
+    /// Effect `assets`: the example assets, blended into the terrain.
+    AssetDraw,
     /// Effect `grass`: the one indirect draw of every tuft kept.
     GrassDraw,
     /// Effect `shadows`: the shadow textures of arrived and stale nodes.
@@ -65,7 +68,7 @@ pub enum FramePass {
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 23] = [
+    pub const ALL: [FramePass; 24] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -85,6 +88,7 @@ impl FramePass {
         FramePass::VtPages,
         FramePass::VtFeedback,
         FramePass::GbufferTiles,
+        FramePass::AssetDraw,
         FramePass::GrassDraw,
         FramePass::SunShadows,
         FramePass::LightingResolve,
@@ -112,6 +116,7 @@ impl FramePass {
             FramePass::GrassPigment => GrassPigment::NAME,
             FramePass::GrassPlace => GrassPlace::NAME,
             FramePass::GrassDraw => GrassDraw::NAME,
+            FramePass::AssetDraw => AssetDraw::NAME,
             FramePass::SunShadows => SunShadows::NAME,
             FramePass::LightingResolve => LightingResolve::NAME,
             FramePass::DebugView => DebugViewPass::NAME,
@@ -151,6 +156,7 @@ impl FramePass {
             FramePass::TerrainHolesLate => &[Effect::Holes, Effect::Occlusion],
             FramePass::SunShadows => &[Effect::Shadows],
             FramePass::GrassPigment | FramePass::GrassPlace | FramePass::GrassDraw => &[Effect::Grass],
+            FramePass::AssetDraw => &[Effect::Assets],
             FramePass::VtUpdate | FramePass::VtPages | FramePass::VtFeedback => &[Effect::VirtualTexture],
             _ => &[],
         }

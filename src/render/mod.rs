@@ -4,6 +4,7 @@
 //! [`View`]; [`report`] says what was built and what ran; [`offscreen`] is
 //! the headless frame loop of the tools and tests.
 
+pub mod assets;
 pub mod atmosphere;
 pub mod detail_textures;
 pub mod effects;

@@ -16,6 +16,7 @@
 use crate::error::{Error, Result};
 use crate::frame::{FrameExecutor, FrameTimings, QueueKind};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, FrameCommands, MemoryLocation, QueueMode, Recorder};
+use crate::passes::asset_draw::AssetDraw;
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
@@ -32,6 +33,7 @@ use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeomet
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::Traverse;
+use crate::render::assets::{Asset, AssetResources};
 use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode, WorldContent};
 use crate::render::frame_passes::FramePasses;
 use crate::render::gbuffer::GBuffer;
@@ -80,6 +82,8 @@ pub struct RendererOptions {
     /// Effect `decals`: the decals (world metres, like holes) and their
     /// textures; [`TerrainRenderer::set_decals`] edits them later.
     pub decals: DecalSet,
+    /// Effect `assets`: the example assets (world metres, like holes).
+    pub assets: Vec<Asset>,
 }
 
 /// Per-patch LOD selection settings.
@@ -128,6 +132,8 @@ pub struct TerrainRenderer {
     pub virtual_texture: Option<VirtualTexture>,
     /// Effect `grass`: its passes, tufts and pigment map.
     pub grass: Option<Grass>,
+    /// Effect `assets`: the example asset pass and its meshes.
+    pub assets: Option<(AssetDraw, AssetResources)>,
     /// Made for the view size on the first frame (remade when it changes).
     pub gbuffer: Option<GBuffer>,
     pub shade: ShadeRules,
@@ -218,7 +224,7 @@ pub fn memory_for(
     holes: &[Hole],
     source_holes: bool,
 ) -> crate::world::MemoryReport {
-    let decisions = decide(effects, &world_content(world, holes, source_holes, 0), false);
+    let decisions = decide(effects, &world_content(world, holes, source_holes, 0, 0), false);
     let mut report = crate::world::MemoryReport::for_format(slots, format);
     if effects.materials == MaterialsMode::ControlMap {
         report = report.with_control();
@@ -248,7 +254,7 @@ fn begin_virtual_texture(
 
 /// `source_holes`: the height source has holes of its own (a DEM's no-data
 /// samples).
-fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool, decals: usize) -> WorldContent {
+fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool, decals: usize, assets: usize) -> WorldContent {
     let root = world.node_size_m(world.root_lod());
     let ragged = world.extent_m.iter().any(|e| e % root != 0.0);
     let [ex, ey] = world.extent_m;
@@ -273,7 +279,7 @@ fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool, decals: 
         let outside = if holes.is_empty() { String::new() } else { format!(" ({} lie outside it)", holes.len()) };
         format!("the world has no hole regions{outside} and its extent is a whole number of root nodes")
     });
-    WorldContent { holes_missing: missing, holes_present: present.join("; "), decals }
+    WorldContent { holes_missing: missing, holes_present: present.join("; "), decals, assets }
 }
 
 impl TerrainRenderer {
@@ -288,7 +294,8 @@ impl TerrainRenderer {
         crate::terrain::check_plan(ctx, world, &options.terrain)?;
         options.depth.check().map_err(Error::BadInput)?;
         let depth = options.depth;
-        let content = world_content(world, &holes, source.has_holes(), options.decals.decals.len());
+        let content =
+            world_content(world, &holes, source.has_holes(), options.decals.decals.len(), options.assets.len());
         let decisions = decide(&options.effects, &content, options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         let atlases = atlases_for(&decisions, options.effects.materials);
@@ -396,6 +403,12 @@ impl TerrainRenderer {
             },
             grass: if on(Effect::Grass) {
                 Some(Grass::new(ctx, &options.effects.grass, build.occlusion, on(Effect::Decals), depth.format)?)
+            } else {
+                None
+            },
+            assets: if on(Effect::Assets) {
+                let res = AssetResources::new(ctx, &options.assets, options.effects.assets)?;
+                Some((AssetDraw::new(ctx, depth.format)?, res))
             } else {
                 None
             },
@@ -577,6 +590,7 @@ impl TerrainRenderer {
             holes_off: !sw.holes,
             force_flavours: if self.shading == Shading::Tiled { 0 } else { shade.allowed },
             grass: self.grass.as_ref().zip(grass.as_ref()),
+            assets: self.assets.as_ref(),
         };
         let gb = self.gbuffer.as_ref().expect("made above");
         passes.record_lod(&mut frame, &mut log, tree, &params, &gpu, visibility);
@@ -789,6 +803,7 @@ impl TerrainRenderer {
             out.extend(v.pipeline_labels().map(str::to_string));
         }
         out.extend(self.grass.iter().flat_map(Grass::pipeline_labels));
+        out.extend(self.assets.iter().map(|(p, _)| p.pipeline_label().to_string()));
         out.extend(self.resolve.pipeline_labels());
         out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
@@ -857,6 +872,9 @@ impl TerrainRenderer {
         }
         for (name, bytes) in self.grass.iter().flat_map(Grass::memory) {
             out.push((name, bytes, vec![Effect::Grass]));
+        }
+        for (name, bytes) in self.assets.iter().flat_map(|(_, a)| a.memory()) {
+            out.push((name, bytes, vec![Effect::Assets]));
         }
         out
     }

@@ -374,6 +374,16 @@ fn work_of(
             };
             (work, (drawn == 0).then_some("no tuft placed and visible (0 instances)"))
         }
+        FramePass::AssetDraw => {
+            let a = r.assets.as_ref().map(|(_, a)| a);
+            let instances = a.map_or(0, |a| a.draws.iter().map(|(_, _, n)| u64::from(*n)).sum());
+            let work = PassWork {
+                instances: Some(instances),
+                triangles: Some(a.map_or(0, |a| a.triangles())),
+                ..PassWork::default()
+            };
+            (work, None)
+        }
         FramePass::LightingResolve | FramePass::DebugView => (PassWork::default(), None),
     }
 }

@@ -35,6 +35,7 @@ pub fn effects(ctx: &Context, b: &ViewBench) -> Result<()> {
         cache_dir: cache.clone(),
         errors: Some(world.errors(ctx, None)?),
         decals: world.decals.clone(),
+        assets: world.assets.clone(),
     };
     let rows = bench_effects(ctx, &d, world.source.clone(), &world.holes, &full, &cfg);
     let _ = std::fs::remove_dir_all(&cache);

@@ -211,6 +211,7 @@ fn render(ctx: &Context, g: &Golden, payload: PayloadFormat) -> Result<Vec<u8>> 
     let options = RendererOptions {
         effects: world.effects.clone(),
         decals: world.decals.clone(),
+        assets: world.assets.clone(),
         // Loads on the streaming thread: the resident set, and so the
         // picture, is the same on every run (threads finishing in another
         // order leave another set where the slot budget is short).

@@ -129,6 +129,7 @@ impl ViewpointArgs {
             effects: world.effects.clone(),
             origin_m: world.origin_m,
             decals: world.decals.clone(),
+            assets: world.assets.clone(),
             ..RendererOptions::default()
         }
     }

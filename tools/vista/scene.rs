@@ -59,6 +59,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
 use serde::Deserialize;
+use vista::render::assets::{Asset, AssetKind};
 use vista::render::virtual_texture::decals::{Decal, DecalShape};
 use vista::render::Effects;
 use vista::world::{Hole, MaterialRules, StampBlend, StampPlacement};
@@ -69,6 +70,7 @@ pub struct Scene {
     holes: Vec<SceneHole>,
     stamps: Vec<SceneStamp>,
     decals: Vec<SceneDecal>,
+    assets: Vec<SceneAsset>,
     pub effects: Effects,
     pub material_rules: MaterialRules,
     /// For error messages.
@@ -87,6 +89,8 @@ struct RawScene {
     stamps: Vec<SceneStamp>,
     #[serde(default)]
     decals: Vec<SceneDecal>,
+    #[serde(default)]
+    assets: Vec<SceneAsset>,
     #[serde(default)]
     effects: toml::Table,
     #[serde(default)]
@@ -211,6 +215,22 @@ pub struct SceneDecals {
     pub decals: Vec<Decal>,
 }
 
+/// One `[[assets]]` entry (effect assets).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneAsset {
+    kind: String,
+    at: [f64; 2],
+    #[serde(default = "one")]
+    scale: f64,
+    #[serde(default)]
+    yaw_deg: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SceneHole {
@@ -269,6 +289,7 @@ impl Scene {
             holes: raw.holes,
             stamps,
             decals,
+            assets: raw.assets,
             effects,
             material_rules: raw.material_rules,
             path: path.to_path_buf(),
@@ -336,6 +357,23 @@ impl Scene {
         Ok(out)
     }
 
+    /// The assets, each checked (a known kind, finite numbers, a sane
+    /// scale), moved from the user's coordinates by `-origin_m`.
+    pub fn assets(&self, origin_m: [f64; 2]) -> Result<Vec<Asset>> {
+        let mut out = Vec::with_capacity(self.assets.len());
+        for (i, a) in self.assets.iter().enumerate() {
+            let at = format!("scene file {}: asset {}", self.path.display(), i + 1);
+            let Some(kind) = AssetKind::from_name(&a.kind) else {
+                let words: Vec<&str> = AssetKind::ALL.iter().map(|k| k.name()).collect();
+                bail!("{at}: kind \"{}\" is not one of {}", a.kind, words.join(", "));
+            };
+            let asset = Asset { kind, at_m: a.at, scale: a.scale, yaw_deg: a.yaw_deg };
+            asset.check().map_err(|why| anyhow::anyhow!("{at}: {why}"))?;
+            out.push(asset.relative_to(origin_m));
+        }
+        Ok(out)
+    }
+
     /// The holes, each checked: exactly one shape, finite numbers, a
     /// positive radius, at least three polygon corners.
     pub fn holes(&self) -> Result<Vec<Hole>> {
@@ -391,6 +429,24 @@ mod tests {
         let e = format!("{:#}", Scene::load(&path).unwrap_err());
         assert!(e.contains("scree_slope_deg (60) must not exceed rock_slope_deg (40)"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn assets_parse_move_by_the_origin_and_fail_in_one_line() {
+        let s = parse("[[assets]]\nkind = \"rock\"\nat = [10, 20]\n[[assets]]\nkind = \"trunk\"\nat = [1, 2]\nscale = 2\nyaw_deg = 30\n")
+            .unwrap();
+        let a = s.assets([10.0, 0.0]).unwrap();
+        assert_eq!((a[0].kind, a[0].at_m, a[0].scale), (AssetKind::Rock, [0.0, 20.0], 1.0));
+        assert_eq!((a[1].kind, a[1].scale, a[1].yaw_deg), (AssetKind::Trunk, 2.0, 30.0));
+        for (bad, want) in [
+            ("[[assets]]\nkind = \"tree\"\nat = [0, 0]\n", "kind \"tree\" is not one of rock, trunk"),
+            ("[[assets]]\nkind = \"rock\"\nat = [0, 0]\nscale = 0\n", "scale 0 is outside"),
+        ] {
+            let e = format!("{:#}", parse(bad).unwrap().assets([0.0; 2]).unwrap_err());
+            assert!(e.contains(want) && !e.contains('\n'), "{e}");
+        }
+        assert!(format!("{:#}", parse("[[assets]]\nkind = \"rock\"\nat = [0, 0]\nsize = 2\n").unwrap_err())
+            .contains("size"));
     }
 
     #[test]

@@ -100,6 +100,8 @@ pub struct LoadedWorld {
     pub stamps: Vec<(u64, [f64; 4])>,
     /// The scene's decals (world metres) with their textures read.
     pub decals: vista::render::virtual_texture::decals::DecalSet,
+    /// The scene's assets (world metres).
+    pub assets: Vec<vista::render::assets::Asset>,
 }
 
 /// Refuses a slot budget the renderer cannot use for `world`, in the
@@ -184,6 +186,7 @@ pub struct WorldSpec {
     stamps: Vec<crate::scene::SceneStampSpec>,
     /// The scene's decals, relative to the world's corner (textures unread).
     decals: crate::scene::SceneDecals,
+    assets: Vec<vista::render::assets::Asset>,
     effects: Effects,
     origin_m: [f64; 2],
     pub limits: Limits,
@@ -271,6 +274,7 @@ impl WorldArgs {
         holes.extend(self.hole_circle.iter().cloned());
         let holes: Vec<Hole> = holes.iter().map(|h| h.relative_to(origin_m)).collect();
         let decals = scene.decals(origin_m)?;
+        let assets = scene.assets(origin_m)?;
         let mut stamps = scene.stamps()?;
         for st in &mut stamps {
             let c = &mut st.placement.center_m;
@@ -315,7 +319,7 @@ impl WorldArgs {
         let max_sectors_per_side = self.max_sectors.unwrap_or(DEFAULT_MAX_SECTORS_PER_SIDE);
         let limits = Limits { max_sectors_per_side, ..Limits::default() };
         let bake = BakeSettings { format: self.payload, materials: scene.material_rules, control: None };
-        Ok(WorldSpec { desc, source, holes, stamps, decals, effects: scene.effects, origin_m, limits, bake })
+        Ok(WorldSpec { desc, source, holes, stamps, decals, assets, effects: scene.effects, origin_m, limits, bake })
     }
 }
 
@@ -435,9 +439,10 @@ impl WorldSpec {
 
     fn with_source(self, source: Arc<dyn HeightSource>, label: String) -> Result<LoadedWorld> {
         let decals = load_decals(&self.decals).map_err(input_error)?;
-        let (desc, holes, effects, origin_m, limits, bake) =
-            (self.desc, self.holes, self.effects, self.origin_m, self.limits, self.bake);
-        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps: Vec::new(), decals })
+        let (desc, holes, effects, origin_m, limits, bake, assets) =
+            (self.desc, self.holes, self.effects, self.origin_m, self.limits, self.bake, self.assets);
+        let stamps = Vec::new();
+        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps, decals, assets })
     }
 
     /// The stamps' own control maps, in stamp order.
@@ -512,8 +517,9 @@ impl WorldSpec {
             label += &format!(" with {} stamp{}", self.stamps.len(), if self.stamps.len() == 1 { "" } else { "s" });
         }
         let decals = load_decals(&self.decals).map_err(input_error)?;
-        let (holes, effects, origin_m, limits) = (self.holes, self.effects, self.origin_m, self.limits);
-        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps, decals })
+        let (holes, effects, origin_m, limits, assets) =
+            (self.holes, self.effects, self.origin_m, self.limits, self.assets);
+        Ok(LoadedWorld { desc, source, holes, effects, label, origin_m, limits, bake, stamps, decals, assets })
     }
 }
 

@@ -1,0 +1,129 @@
+//! `asset_draw` (effect `assets`): the example assets (render/assets.rs)
+//! into the G-buffer after `gbuffer_tiles`, depth-tested and
+//! depth-writing, one indexed instanced draw per mesh kind; the vertex
+//! shader sets each on the terrain and blends its vertices near the ground
+//! into the terrain's normal and colour (terrain_blend.glsl).
+
+use crate::error::Result;
+use crate::gpu::{
+    depth_layout, vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Pipeline, Recorder, Resource,
+    Sampler, SamplerDesc,
+};
+use crate::passes::cull_patches::nearest_sampler;
+use crate::passes::terrain_geometry::RenderTargets;
+use crate::passes::terrain_query::VistaTerrain;
+use crate::render::assets::AssetResources;
+use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
+use crate::shaders::{asset_draw_frag as fs, asset_draw_vert as vs, structs};
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
+
+/// Host twin of `AssetDrawPush`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct AssetDrawPush {
+    pub terrain: VistaTerrain,
+    pub instance_base: u32,
+    pub blend_height_m: f32,
+    pub pad: [u32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<AssetDrawPush>() == structs::ASSET_DRAW_PUSH);
+
+pub struct AssetDraw {
+    pipeline: Pipeline,
+    nearest: Sampler,
+    linear: Sampler,
+}
+
+impl AssetDraw {
+    pub const NAME: &'static str = vs::PASS;
+
+    pub fn new(ctx: &Context, depth_format: vk::Format) -> Result<Self> {
+        let desc = GraphicsPipelineDesc {
+            name: Self::NAME,
+            vertex: &vs::SHADER,
+            fragment: &fs::SHADER,
+            specialization: &[],
+            color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
+            depth_format: Some(depth_format),
+            depth_compare: vk::CompareOp::GREATER,
+            depth_write: true,
+            stencil: None,
+            cull_mode: vk::CullModeFlags::BACK,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            blend: false,
+        };
+        let linear = SamplerDesc {
+            name: "asset_draw_linear",
+            filter: vk::Filter::LINEAR,
+            address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+        };
+        Ok(AssetDraw {
+            pipeline: Pipeline::graphics(ctx, &desc)?,
+            nearest: nearest_sampler(ctx, "asset_draw_nearest")?,
+            linear: Sampler::new(ctx, &linear)?,
+        })
+    }
+
+    pub fn pipeline_label(&self) -> &str {
+        &self.pipeline.label
+    }
+
+    /// Draws every kind with instances; the depth target read-only on
+    /// entry and exit (as gbuffer_tiles leaves it, lighting_resolve wants it).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        targets: &RenderTargets,
+        gbuffer: &GBuffer,
+        view: &Buffer,
+        assets: &AssetResources,
+        terrain: VistaTerrain,
+        sector_data: &Buffer,
+        tree: &GpuQuadtree,
+    ) {
+        let depth = targets.depth;
+        rec.transition(depth, depth_layout(depth.format, false));
+        rec.begin_rendering(
+            &[
+                ColorTarget { image: &gbuffer.albedo, clear: None },
+                ColorTarget { image: &gbuffer.normal, clear: None },
+                ColorTarget { image: &gbuffer.material, clear: None },
+            ],
+            Some(DepthTarget { image: depth, clear: None, clear_stencil: false, read_only: false }),
+        );
+        rec.bind_pipeline(&self.pipeline);
+        rec.push_descriptors(
+            &self.pipeline,
+            &[
+                (vs::VIEW, Resource::Buffer(view)),
+                (vs::VERTICES, Resource::Buffer(&assets.vertices)),
+                (vs::INSTANCES, Resource::Buffer(&assets.instances)),
+                (vs::SECTOR_DATA, Resource::Buffer(sector_data)),
+                (vs::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
+                (vs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
+                (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),
+                (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
+                (vs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
+            ],
+        );
+        for &(kind, first, count) in &assets.draws {
+            if count == 0 {
+                continue;
+            }
+            let (_, indices, index_count) =
+                assets.indices.iter().find(|(k, _, _)| *k == kind).expect("a mesh per kind");
+            let push = AssetDrawPush {
+                terrain,
+                instance_base: first,
+                blend_height_m: assets.params.blend_height_m,
+                pad: [0; 2],
+            };
+            rec.push_constants(&self.pipeline, &push);
+            rec.draw_indexed(indices, *index_count, count);
+        }
+        rec.end_rendering();
+        rec.transition(depth, depth_layout(depth.format, true));
+    }
+}
