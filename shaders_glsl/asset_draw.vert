@@ -5,7 +5,10 @@
 // here, so it follows the resident LOD), and every vertex blended into the
 // terrain's normal and colour near the ground through terrain_blend.glsl,
 // the include an engine's own asset shaders use. One indexed instanced
-// draw per mesh kind.
+// draw per mesh kind. MATERIALS (effect splat, splat mode): the terrain's
+// colour is the splat blend over a 0.5 m footprint, as the near ground is
+// shaded; without it, the baked albedo.
+// variants: MATERIALS
 #include "constants.glsl"
 #include "terrain_view.glsl"
 #include "asset.glsl"
@@ -19,6 +22,18 @@ layout(set = 0, binding = 5) uniform texture2DArray normal_atlas;
 layout(set = 0, binding = 6) uniform texture2DArray albedo_atlas;
 layout(set = 0, binding = 7) uniform sampler nearest;
 layout(set = 0, binding = 8) uniform sampler linear_clamp;
+#ifdef MATERIALS
+#include "materials.glsl"
+layout(set = 0, binding = 9) uniform utexture2DArray splat_atlas;
+layout(set = 0, binding = 10, std430) readonly buffer Materials { TerrainMaterial m[]; } materials;
+layout(set = 0, binding = 11) uniform texture2DArray detail_albedo;
+layout(set = 0, binding = 12) uniform texture2DArray detail_normal;
+layout(set = 0, binding = 13) uniform texture2DArray detail_height;
+layout(set = 0, binding = 14) uniform sampler detail_sampler;
+#define VISTA_SPLAT_ATLAS splat_atlas
+#else
+#define VISTA_NO_MATERIAL_QUERY
+#endif
 
 #define VISTA_SECTOR_WORD(i) sector_data.words[i]
 #define VISTA_HEIGHT_ATLAS height_atlas
@@ -26,7 +41,6 @@ layout(set = 0, binding = 8) uniform sampler linear_clamp;
 #define VISTA_ALBEDO_ATLAS albedo_atlas
 #define VISTA_ATLAS_SAMPLER nearest
 #define VISTA_LINEAR_SAMPLER linear_clamp
-#define VISTA_NO_MATERIAL_QUERY
 #define VISTA_TERRAIN pc.terrain
 #define VISTA_TERRAIN_DECLARE_ONLY
 #include "terrain_sample.glsl"
@@ -41,6 +55,10 @@ layout(push_constant, std430) uniform AssetDrawPush {
 
 #undef VISTA_TERRAIN_DECLARE_ONLY
 #include "terrain_sample.glsl"
+#ifdef MATERIALS
+#include "splat_blend.glsl"
+#define VISTA_BLEND_COLOUR(p) splat_blend(p, vec2(0.5, 0.0), vec2(0.0, 0.5)).albedo
+#endif
 #include "terrain_blend.glsl"
 
 layout(location = 0) out vec3 albedo;

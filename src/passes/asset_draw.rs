@@ -2,7 +2,9 @@
 //! into the G-buffer after `gbuffer_tiles`, depth-tested and
 //! depth-writing, one indexed instanced draw per mesh kind; the vertex
 //! shader sets each on the terrain and blends its vertices near the ground
-//! into the terrain's normal and colour (terrain_blend.glsl).
+//! into the terrain's normal and colour (terrain_blend.glsl): with variant
+//! `MATERIALS` (effect splat in splat mode) the splat blend's colour, the
+//! near ground's, else the baked albedo.
 
 use crate::error::Result;
 use crate::gpu::{
@@ -10,12 +12,13 @@ use crate::gpu::{
     Sampler, SamplerDesc,
 };
 use crate::passes::cull_patches::nearest_sampler;
+use crate::passes::gbuffer_tiles::MaterialBindings;
 use crate::passes::terrain_geometry::RenderTargets;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::render::assets::AssetResources;
 use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use crate::shaders::{asset_draw_frag as fs, asset_draw_vert as vs, structs};
-use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT};
 
 /// Host twin of `AssetDrawPush`.
 #[repr(C)]
@@ -31,6 +34,8 @@ const _: () = assert!(std::mem::size_of::<AssetDrawPush>() == structs::ASSET_DRA
 
 pub struct AssetDraw {
     pipeline: Pipeline,
+    materials: bool,
+    detail: Sampler,
     nearest: Sampler,
     linear: Sampler,
 }
@@ -38,10 +43,11 @@ pub struct AssetDraw {
 impl AssetDraw {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context, depth_format: vk::Format) -> Result<Self> {
+    /// `materials`: the variant that colours by the splat blend.
+    pub fn new(ctx: &Context, depth_format: vk::Format, materials: bool) -> Result<Self> {
         let desc = GraphicsPipelineDesc {
             name: Self::NAME,
-            vertex: &vs::SHADER,
+            vertex: vs::variant(if materials { vs::VARIANT_MATERIALS } else { 0 }),
             fragment: &fs::SHADER,
             specialization: &[],
             color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
@@ -58,8 +64,15 @@ impl AssetDraw {
             filter: vk::Filter::LINEAR,
             address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
         };
+        let detail = SamplerDesc {
+            name: "asset_draw_detail",
+            filter: vk::Filter::LINEAR,
+            address_mode: vk::SamplerAddressMode::REPEAT,
+        };
         Ok(AssetDraw {
             pipeline: Pipeline::graphics(ctx, &desc)?,
+            materials,
+            detail: Sampler::mipmapped(ctx, &detail)?,
             nearest: nearest_sampler(ctx, "asset_draw_nearest")?,
             linear: Sampler::new(ctx, &linear)?,
         })
@@ -67,6 +80,11 @@ impl AssetDraw {
 
     pub fn pipeline_label(&self) -> &str {
         &self.pipeline.label
+    }
+
+    /// Built with the MATERIALS variant.
+    pub fn materials(&self) -> bool {
+        self.materials
     }
 
     /// Draws every kind with instances; the depth target read-only on
@@ -82,7 +100,9 @@ impl AssetDraw {
         terrain: VistaTerrain,
         sector_data: &Buffer,
         tree: &GpuQuadtree,
+        m: Option<&MaterialBindings>,
     ) {
+        assert_eq!(m.is_some(), self.materials, "material resources exactly for the MATERIALS variant");
         let depth = targets.depth;
         rec.transition(depth, depth_layout(depth.format, false));
         rec.begin_rendering(
@@ -94,20 +114,29 @@ impl AssetDraw {
             Some(DepthTarget { image: depth, clear: None, clear_stencil: false, read_only: false }),
         );
         rec.bind_pipeline(&self.pipeline);
-        rec.push_descriptors(
-            &self.pipeline,
-            &[
-                (vs::VIEW, Resource::Buffer(view)),
-                (vs::VERTICES, Resource::Buffer(&assets.vertices)),
-                (vs::INSTANCES, Resource::Buffer(&assets.instances)),
-                (vs::SECTOR_DATA, Resource::Buffer(sector_data)),
-                (vs::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
-                (vs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
-                (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),
-                (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
-                (vs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
-            ],
-        );
+        let mut bindings = vec![
+            (vs::VIEW, Resource::Buffer(view)),
+            (vs::VERTICES, Resource::Buffer(&assets.vertices)),
+            (vs::INSTANCES, Resource::Buffer(&assets.instances)),
+            (vs::SECTOR_DATA, Resource::Buffer(sector_data)),
+            (vs::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
+            (vs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
+            (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),
+            (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
+            (vs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
+        ];
+        if let Some(m) = m {
+            let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+            bindings.extend([
+                (vs::SPLAT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_SPLAT), ATLAS_LAYOUT)),
+                (vs::MATERIALS, Resource::Buffer(m.table)),
+                (vs::DETAIL_ALBEDO, Resource::Image(m.albedo, read)),
+                (vs::DETAIL_NORMAL, Resource::Image(m.normal, read)),
+                (vs::DETAIL_HEIGHT, Resource::Image(m.height, read)),
+                (vs::DETAIL_SAMPLER, Resource::Sampler(self.detail.raw())),
+            ]);
+        }
+        rec.push_descriptors(&self.pipeline, &bindings);
         for &(kind, first, count) in &assets.draws {
             if count == 0 {
                 continue;

@@ -251,8 +251,10 @@ impl FramePasses<'_> {
         log.ran(FramePass::GbufferTiles, None);
         if let Some((pass_, assets)) = self.assets {
             let (view, sector) = (self.view_buffer, &self.sector_data.buffer);
+            // The splat colours where the pass was built with them.
+            let m = materials.as_ref().filter(|_| pass_.materials());
             pass(frame, log, FramePass::AssetDraw, |r| {
-                pass_.record(r, targets, gb, view, assets, terrain, sector, tree)
+                pass_.record(r, targets, gb, view, assets, terrain, sector, tree, m)
             });
         }
         if let Some((grass, f)) = self.grass {

@@ -408,7 +408,8 @@ impl TerrainRenderer {
             },
             assets: if on(Effect::Assets) {
                 let res = AssetResources::new(ctx, &options.assets, options.effects.assets)?;
-                Some((AssetDraw::new(ctx, depth.format)?, res))
+                let splat = materials.is_some() && options.effects.materials == MaterialsMode::Splat;
+                Some((AssetDraw::new(ctx, depth.format, splat)?, res))
             } else {
                 None
             },
