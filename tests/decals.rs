@@ -17,7 +17,7 @@ use vista::render::virtual_texture::decals::{Decal, DecalSet, DecalShape, DecalT
 use vista::render::virtual_texture::layout::{PageKey, VtLayout, PADDED_TILE};
 use vista::render::virtual_texture::state::PageEvent;
 use vista::render::{Effect, Effects, RendererOptions, View};
-use vista::shaders::consts::DECAL_TEXELS;
+use vista::shaders::consts::{DECAL_TEXELS, FLAVOUR_VIRTUAL_TEXTURE};
 
 const SIZE: [u32; 2] = [256, 192];
 
@@ -68,6 +68,7 @@ fn quad(center: [f64; 2], size: [f64; 2], rotation_deg: f64) -> Decal {
         texture: 0,
         opacity: 1.0,
         roughness: None,
+        displace_m: None,
     }
 }
 
@@ -238,7 +239,7 @@ fn editing_a_decal_drops_exactly_the_pages_it_touches() {
         rig.renderer.virtual_texture.as_mut().unwrap().state.history = Some(Vec::new());
         // Moved 7 m and turned: the road stays as it was.
         let new = quad([524.0, 268.0], [18.0, 12.0], 60.0);
-        let dropped = rig.renderer.set_decals(vec![road, new.clone()]).unwrap();
+        let dropped = rig.renderer.set_decals(ctx, vec![road, new.clone()]).unwrap();
         let vt = rig.renderer.virtual_texture.as_ref().unwrap();
         let invalidated: BTreeSet<PageKey> = vt
             .state
@@ -277,5 +278,57 @@ fn editing_a_decal_drops_exactly_the_pages_it_touches() {
                 _ => {}
             }
         }
+    });
+}
+
+/// A displacement decal: its mesh rises from the terrain where the texture
+/// covers it, is classified and shaded as terrain from the pages the decal
+/// was blended into (its pixels show the decal's colour), and leaves every
+/// pixel it does not cover as it was: no seam where it meets the ground.
+#[test]
+fn a_displacement_decal_rises_from_the_ground_shaded_from_the_pages() {
+    gpu_test(|ctx| {
+        let n = DECAL_TEXELS;
+        let colour = [180u8, 120, 60];
+        let solid =
+            DecalTexture::from_rgba("solid", &image::RgbaImage::from_pixel(n, n, image::Rgba([180, 120, 60, 255])));
+        let (center, size, rot) = (DVec2::new(515.0, 250.0), DVec2::new(24.0, 16.0), 30.0);
+        let flat = quad(center.to_array(), size.to_array(), rot);
+        let raised = Decal { displace_m: Some(2.0), ..flat.clone() };
+        let set = |d: Decal| DecalSet { textures: vec![solid.clone()].into(), decals: vec![d] };
+        let mut plain = rig(ctx, set(flat));
+        let mut with = rig(ctx, set(raised));
+        let has = |r: &Rig| r.renderer.pipelines().iter().any(|p| p.contains("decal_meshes"));
+        assert!(!has(&plain) && has(&with), "{:?}", with.renderer.pipelines());
+        let a = plain.shot(ctx, &low(), CullStages::default());
+        let b = with.shot(ctx, &low(), CullStages::default());
+        let [ga, gb] = [&plain, &with].map(|r| r.renderer.gbuffer.as_ref().unwrap().capture(ctx).unwrap());
+        let points = world_points(ctx, &with, &b);
+        let (mut raised_px, mut vt, mut inside, mut seam) = (0, 0, 0, 0);
+        for (i, point) in points.iter().enumerate() {
+            // Reversed-Z: nearer is larger.
+            if b.depth[i] > a.depth[i] * 1.0001 {
+                raised_px += 1;
+                vt += usize::from(gb.classification[i] & FLAVOUR_VIRTUAL_TEXTURE as u8 != 0);
+                let (_, inside_m) = quad_uv(center, size, rot, point.expect("a mesh pixel"));
+                if inside_m > 1.5 {
+                    let got = gb.albedo[i];
+                    for c in 0..3 {
+                        // 8-bit square-root albedo in the page, 8-bit sRGB here.
+                        assert!(got[c].abs_diff(colour[c]) <= 3, "pixel {i}: albedo {got:?}, decal {colour:?}");
+                    }
+                    inside += 1;
+                }
+            } else if b.depth[i] == a.depth[i] {
+                // Untouched by the mesh: the same terrain pixel.
+                let (x, y) = (ga.albedo[i], gb.albedo[i]);
+                assert!((0..3).all(|c| x[c].abs_diff(y[c]) <= 1), "pixel {i} changed: {x:?} -> {y:?}");
+                seam += 1;
+            }
+        }
+        println!(
+            "{raised_px} pixels raised ({vt} classified virtual texture, {inside} checked inside), {seam} unchanged"
+        );
+        assert!(raised_px > 500 && vt == raised_px && inside > 200, "{raised_px} {vt} {inside}");
     });
 }

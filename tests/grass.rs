@@ -292,6 +292,7 @@ fn no_grass_grows_under_an_opaque_decal() {
             texture: 0,
             opacity: 1.0,
             roughness: None,
+            displace_m: None,
         };
         let mut fx = effects(true).with(Effect::VirtualTexture, true).with(Effect::Decals, true);
         fx.virtual_texture.cache_mb = 16;

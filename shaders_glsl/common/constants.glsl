@@ -196,6 +196,8 @@
 #define DECAL_COUNT_SHIFT 16u
 #define DECAL_KIND_QUAD 0u
 #define DECAL_KIND_ROAD 1u
+// A displacement decal's mesh: this many quads a side over its quad.
+#define DECAL_MESH_QUADS 64u
 
 // Grass (effect grass, render/grass.rs): one possible tuft per world cell
 // in a square of at most GRASS_MAX_SIDE cells a side around the camera,

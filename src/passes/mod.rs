@@ -5,6 +5,7 @@ pub mod classify_tiles;
 pub mod cull_occluded;
 pub mod cull_patches;
 pub mod debug_view;
+pub mod decal_meshes;
 pub mod gbuffer_tiles;
 pub mod grass_draw;
 pub mod grass_pigment;

@@ -13,6 +13,7 @@ use crate::passes::asset_draw::AssetDraw;
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_patches::{CullFrame, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
+use crate::passes::decal_meshes::DecalMeshPass;
 use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles, MaterialBindings};
 use crate::passes::lighting_resolve::{LightingResolve, ResolveInputs};
 use crate::passes::lod_map::LodMap;
@@ -71,6 +72,8 @@ pub(crate) struct FramePasses<'a> {
     pub grass: Option<(&'a Grass, &'a GrassFrame)>,
     /// Effect `assets`: the pass and its meshes.
     pub assets: Option<&'a (AssetDraw, AssetResources)>,
+    /// Effect `decals` with displacement decals: their meshes.
+    pub decal_meshes: Option<&'a DecalMeshPass>,
 }
 
 /// Records `p` in `frame` and logs it.
@@ -199,6 +202,26 @@ impl FramePasses<'_> {
             log.ran(FramePass::VtPages, Some(f.jobs.len() as u64));
         }
         pass(frame, log, FramePass::VtFeedback, |r| vt.record_feedback(r, f, self.view_buffer, targets, gb));
+    }
+
+    /// The displacement decals' meshes, over the terrain's geometry pass.
+    pub fn record_decal_meshes(
+        &self,
+        frame: &mut Frame<'_, '_>,
+        log: &mut FrameLog,
+        tree: &GpuQuadtree,
+        world: &WorldDesc,
+        targets: &RenderTargets,
+        gb: &GBuffer,
+    ) {
+        let Some(m) = self.decal_meshes else { return };
+        if m.is_empty() {
+            log.skipped(FramePass::DecalMeshes, Skip::NoDisplacement);
+            return;
+        }
+        let terrain = VistaTerrain::new(world, self.sector_data);
+        let (view, sector) = (self.view_buffer, &self.sector_data.buffer);
+        pass(frame, log, FramePass::DecalMeshes, |r| m.record(r, targets, gb, view, terrain, sector, tree));
     }
 
     /// Effect `grass`: the pigment map (when due) and the placement, culled

@@ -17,9 +17,9 @@
 use crate::frame::QueueKind;
 use crate::passes::{
     asset_draw::AssetDraw, classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches,
-    debug_view::DebugViewPass, gbuffer_tiles::GbufferTiles, grass_draw::GrassDraw, grass_pigment::GrassPigment,
-    grass_place::GrassPlace, hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap,
-    quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, select_patches::SelectPatches,
+    debug_view::DebugViewPass, decal_meshes::DecalMeshPass, gbuffer_tiles::GbufferTiles, grass_draw::GrassDraw,
+    grass_pigment::GrassPigment, grass_place::GrassPlace, hiz_build::HizBuild, lighting_resolve::LightingResolve,
+    lod_map::LodMap, quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, select_patches::SelectPatches,
     sun_shadows::SunShadows, terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
     vt_feedback::VtFeedback, vt_pages::VtPages, vt_update::VtUpdate,
 };
@@ -42,6 +42,9 @@ pub enum FramePass {
     /// Phase 2 of occlusion culling: the patches the pyramid left visible.
     TerrainGeometryLate,
     TerrainHolesLate,
+    /// Effect `decals`: the displacement decals' meshes (built only where
+    /// a decal displaces).
+    DecalMeshes,
     /// Effect `grass`: the pigment map (when its square moved or the
     /// terrain changed).
     GrassPigment,
@@ -68,7 +71,7 @@ pub enum FramePass {
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 24] = [
+    pub const ALL: [FramePass; 25] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -81,6 +84,7 @@ impl FramePass {
         FramePass::CullOccluded,
         FramePass::TerrainGeometryLate,
         FramePass::TerrainHolesLate,
+        FramePass::DecalMeshes,
         FramePass::GrassPigment,
         FramePass::GrassPlace,
         FramePass::ClassifyTiles,
@@ -117,6 +121,7 @@ impl FramePass {
             FramePass::GrassPlace => GrassPlace::NAME,
             FramePass::GrassDraw => GrassDraw::NAME,
             FramePass::AssetDraw => AssetDraw::NAME,
+            FramePass::DecalMeshes => DecalMeshPass::NAME,
             FramePass::SunShadows => SunShadows::NAME,
             FramePass::LightingResolve => LightingResolve::NAME,
             FramePass::DebugView => DebugViewPass::NAME,
@@ -157,6 +162,7 @@ impl FramePass {
             FramePass::SunShadows => &[Effect::Shadows],
             FramePass::GrassPigment | FramePass::GrassPlace | FramePass::GrassDraw => &[Effect::Grass],
             FramePass::AssetDraw => &[Effect::Assets],
+            FramePass::DecalMeshes => &[Effect::Decals],
             FramePass::VtUpdate | FramePass::VtPages | FramePass::VtFeedback => &[Effect::VirtualTexture],
             _ => &[],
         }
@@ -185,6 +191,8 @@ pub enum Skip {
     /// The pigment map's square did not move a texel and the terrain did
     /// not change.
     PigmentCurrent,
+    /// A decal edit left no displacement decal.
+    NoDisplacement,
 }
 
 impl Skip {
@@ -198,6 +206,7 @@ impl Skip {
             Skip::NoDebugView => "no debug view asked for (TerrainRenderer::debug_view)",
             Skip::NoVtWrites => "idle: no sub-texture moved and no page arrived or left (known on the CPU)",
             Skip::NoVtPages => "idle: no page the read-back requests named is missing (known on the CPU)",
+            Skip::NoDisplacement => "idle: a decal edit left no displacement decal (known on the CPU)",
             Skip::PigmentCurrent => {
                 "idle: the pigment map's square did not move a texel and no node arrived or left (known on the CPU)"
             }
@@ -269,6 +278,15 @@ impl PassGraph {
             })
             .collect();
         PassGraph { nodes, last: None }
+    }
+
+    /// Marks a pass of an effect that is on as not built: it has nothing
+    /// to do for this scene (`why`).
+    pub fn not_built(&mut self, pass: FramePass, why: String) {
+        if let Some(n) = self.nodes.iter_mut().find(|n| n.pass == pass) {
+            n.built = false;
+            n.why_not = Some(why);
+        }
     }
 
     pub fn nodes(&self) -> &[PassNode] {

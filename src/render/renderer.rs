@@ -21,6 +21,7 @@ use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
+use crate::passes::decal_meshes::DecalMeshPass;
 use crate::passes::gbuffer_tiles::{GbufferTiles, TileMaterials};
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lighting_resolve::LightingResolve;
@@ -45,6 +46,7 @@ use crate::render::stats::TRIANGLES_PER_PATCH;
 use crate::render::sun_shadows::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
+use crate::render::virtual_texture::decal_mesh::DecalMeshes;
 use crate::render::virtual_texture::decals::{Decal, DecalSet};
 use crate::render::virtual_texture::{VirtualTexture, VtCamera, VtFrame};
 use crate::shaders::structs;
@@ -134,6 +136,8 @@ pub struct TerrainRenderer {
     pub grass: Option<Grass>,
     /// Effect `assets`: the example asset pass and its meshes.
     pub assets: Option<(AssetDraw, AssetResources)>,
+    /// Effect `decals` with a displacement decal: their meshes' pass.
+    pub decal_meshes: Option<DecalMeshPass>,
     /// Made for the view size on the first frame (remade when it changes).
     pub gbuffer: Option<GBuffer>,
     pub shade: ShadeRules,
@@ -351,7 +355,16 @@ impl TerrainRenderer {
                 location: MemoryLocation::GpuOnly,
             },
         )?;
-        let graph = PassGraph::new(&decisions);
+        let mut graph = PassGraph::new(&decisions);
+        let meshes = DecalMeshes::build(&options.decals.decals, &options.decals.textures);
+        let decal_meshes = if on(Effect::Decals) && meshes.meshes > 0 {
+            Some(DecalMeshPass::new(ctx, &meshes, depth)?)
+        } else {
+            if on(Effect::Decals) {
+                graph.not_built(FramePass::DecalMeshes, "no decal displaces the terrain (displace_m)".into());
+            }
+            None
+        };
         // gbuffer_tiles records one timed draw per variant.
         let max_passes = graph.max_recorded() + variants.len() as u32;
         let exec = FrameExecutor::new(ctx, options.terrain.frames_in_flight, max_passes)?;
@@ -413,6 +426,7 @@ impl TerrainRenderer {
             } else {
                 None
             },
+            decal_meshes,
             materials,
             gbuffer: None,
             shade,
@@ -592,10 +606,12 @@ impl TerrainRenderer {
             force_flavours: if self.shading == Shading::Tiled { 0 } else { shade.allowed },
             grass: self.grass.as_ref().zip(grass.as_ref()),
             assets: self.assets.as_ref(),
+            decal_meshes: self.decal_meshes.as_ref(),
         };
         let gb = self.gbuffer.as_ref().expect("made above");
         passes.record_lod(&mut frame, &mut log, tree, &params, &gpu, visibility);
         passes.record_draws(&mut frame, &mut log, tree, targets, gb);
+        passes.record_decal_meshes(&mut frame, &mut log, tree, &world, targets, gb);
         passes.record_shading(&mut frame, &mut log, tree, &world, targets, gb);
         let sources = CounterSources {
             traverse: &self.traverse.output,
@@ -722,12 +738,28 @@ impl TerrainRenderer {
     /// an added, removed or changed decal touches, before or after, are
     /// dropped and rendered again over the next frames; returns how many.
     /// Errors: the effect is off, or a decal is bad (one line).
-    pub fn set_decals(&mut self, decals: Vec<Decal>) -> Result<u32> {
+    /// Displacement decals' meshes are made again; a renderer made
+    /// without any cannot take one (its pass was not built).
+    pub fn set_decals(&mut self, ctx: &Context, decals: Vec<Decal>) -> Result<u32> {
         let next = self.frames_recorded() + 1;
-        match &mut self.virtual_texture {
-            Some(vt) => vt.set_decals(decals, next),
-            None => Err(Error::BadInput("effect decals is off in this renderer".into())),
+        let Some(vt) = &mut self.virtual_texture else {
+            return Err(Error::BadInput("effect decals is off in this renderer".into()));
+        };
+        let meshes = DecalMeshes::build(&decals, vt.decal_textures());
+        match &mut self.decal_meshes {
+            None if meshes.meshes > 0 => {
+                return Err(Error::BadInput(
+                    "a displacement decal (displace_m) added to a renderer made without one: give one at creation"
+                        .into(),
+                ))
+            }
+            _ => {}
         }
+        let dropped = vt.set_decals(decals, next)?;
+        if let Some(pass) = &mut self.decal_meshes {
+            pass.replace(ctx, &meshes)?;
+        }
+        Ok(dropped)
     }
 
     /// Effect `decals`: the decals drawn (empty when off).
@@ -805,6 +837,7 @@ impl TerrainRenderer {
         }
         out.extend(self.grass.iter().flat_map(Grass::pipeline_labels));
         out.extend(self.assets.iter().map(|(p, _)| p.pipeline_label().to_string()));
+        out.extend(self.decal_meshes.iter().map(|p| p.pipeline_label().to_string()));
         out.extend(self.resolve.pipeline_labels());
         out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
@@ -873,6 +906,9 @@ impl TerrainRenderer {
         }
         for (name, bytes) in self.grass.iter().flat_map(Grass::memory) {
             out.push((name, bytes, vec![Effect::Grass]));
+        }
+        for (name, bytes) in self.decal_meshes.iter().flat_map(DecalMeshPass::memory) {
+            out.push((name, bytes, vec![Effect::Decals]));
         }
         for (name, bytes) in self.assets.iter().flat_map(|(_, a)| a.memory()) {
             out.push((name, bytes, vec![Effect::Assets]));

@@ -374,6 +374,15 @@ fn work_of(
             };
             (work, (drawn == 0).then_some("no tuft placed and visible (0 instances)"))
         }
+        FramePass::DecalMeshes => {
+            let m = r.decal_meshes.as_ref();
+            let work = PassWork {
+                instances: m.map(|m| u64::from(m.meshes)),
+                triangles: m.map(|m| m.triangles),
+                ..PassWork::default()
+            };
+            (work, None)
+        }
         FramePass::AssetDraw => {
             let a = r.assets.as_ref().map(|(_, a)| a);
             let instances = a.map_or(0, |a| a.draws.iter().map(|(_, _, n)| u64::from(*n)).sum());

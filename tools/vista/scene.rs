@@ -38,9 +38,15 @@
 //! quad = { center = [1000, 1200], size = [12, 8], rotation_deg = 30 }
 //! opacity = 1                  # times the texture's alpha (default 1)
 //! roughness = 0.3              # optional: blended towards (else the ground's)
+//! displace_m = 0.5             # optional (quads): a displacement decal, its mesh raised by alpha x this
 //! [[decals]]
 //! texture = "decals/road.png"  # u across the road, v along it
 //! road = { points = [[900, 1100], [1000, 1150], [1040, 1260]], width = 6, repeat = 12 }
+//! [[assets]]                   # the example assets, blended into the ground (effect assets)
+//! kind = "rock"                # or "trunk"
+//! at = [1010, 1190]
+//! scale = 1.5                  # optional (1)
+//! yaw_deg = 30                 # optional (0)
 //!
 //! [materials]                  # the near material flavour (effect splat)
 //! mode = "control_map"         # or "splat" (the default): REDengine 3's control map
@@ -184,6 +190,9 @@ struct SceneDecal {
     #[serde(default = "full")]
     opacity: f32,
     roughness: Option<f32>,
+    /// A displacement decal (quads): its mesh is raised this much where
+    /// the texture's alpha is 1.
+    displace_m: Option<f32>,
 }
 
 fn full() -> f32 {
@@ -350,7 +359,8 @@ impl Scene {
                     out.textures.len() - 1
                 }
             };
-            let decal = Decal { shape, texture: texture as u32, opacity: d.opacity, roughness: d.roughness };
+            let (opacity, roughness, displace_m) = (d.opacity, d.roughness, d.displace_m);
+            let decal = Decal { shape, texture: texture as u32, opacity, roughness, displace_m };
             decal.check(out.textures.len()).map_err(|why| anyhow::anyhow!("{at}: {why}"))?;
             out.decals.push(decal.translated(-glam::DVec2::from(origin_m)));
         }

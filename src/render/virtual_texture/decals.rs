@@ -30,12 +30,16 @@ pub enum DecalShape {
 /// One decal: a shape, the texture it shows (an index into the set's
 /// textures) and how it blends: its texture's alpha times `opacity`;
 /// roughness towards `roughness` when given, else the material's kept.
+/// `displace_m` (quads only) makes it a displacement decal: a mesh over the
+/// quad raised by `displace_m` x alpha x opacity above the terrain,
+/// shaded from the same pages (decal_mesh.rs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Decal {
     pub shape: DecalShape,
     pub texture: u32,
     pub opacity: f32,
     pub roughness: Option<f32>,
+    pub displace_m: Option<f32>,
 }
 
 /// An oriented rectangle: centre, unit axes, half sizes along them.
@@ -117,6 +121,15 @@ impl Decal {
         }
         if self.roughness.is_some_and(|r| !(0.0..=1.0).contains(&r)) {
             return Err(format!("roughness {:?} is not in 0..=1", self.roughness.unwrap_or_default()));
+        }
+        if let Some(d) = self.displace_m {
+            // Drawn over the terrain, depth-tested: a mesh below it would never show.
+            if !(d > 0.0 && d <= 50.0) {
+                return Err(format!("displace_m {d} is not in 0..=50 (above 0: the mesh rises from the terrain)"));
+            }
+            if !matches!(self.shape, DecalShape::Quad { .. }) {
+                return Err("displace_m needs a quad decal (a road has no displacement mesh)".into());
+            }
         }
         match &self.shape {
             DecalShape::Quad { center_m, size_m, rotation_deg } => {
@@ -315,6 +328,7 @@ mod tests {
             texture: 0,
             opacity: 1.0,
             roughness: None,
+            displace_m: None,
         }
     }
 

@@ -22,6 +22,7 @@
 pub mod allocator;
 pub mod cache;
 pub mod decal_gpu;
+pub mod decal_mesh;
 pub mod decals;
 pub mod layout;
 pub mod state;
@@ -270,6 +271,11 @@ impl VirtualTexture {
     /// (what other passes may read this frame; None while an edit waits).
     pub fn uploaded_decals(&self) -> Option<&[Decal]> {
         self.decals.as_ref().filter(|d| !d.dirty).map(|d| &d.set.decals[..])
+    }
+
+    /// Effect `decals`: the textures (fixed at creation; empty when off).
+    pub fn decal_textures(&self) -> &[decals::DecalTexture] {
+        self.decals.as_ref().map_or(&[], |d| &d.set.textures[..])
     }
 
     /// Effect `decals`: their GPU objects.
