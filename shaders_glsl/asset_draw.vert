@@ -14,8 +14,8 @@
 #include "asset.glsl"
 
 layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
-layout(set = 0, binding = 1, std430) readonly buffer Vertices { AssetVertex v[]; } vertices;
-layout(set = 0, binding = 2, std430) readonly buffer Instances { AssetInstance i[]; } instances;
+layout(set = 0, binding = 1, std430) readonly buffer AssetVertices { AssetVertex v[]; } vertices;
+layout(set = 0, binding = 2, std430) readonly buffer AssetInstances { AssetInstance i[]; } instances;
 layout(set = 0, binding = 3, std430) readonly buffer SectorData { uint words[]; } sector_data;
 layout(set = 0, binding = 4) uniform texture2DArray height_atlas;
 layout(set = 0, binding = 5) uniform texture2DArray normal_atlas;

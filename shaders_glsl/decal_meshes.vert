@@ -15,7 +15,7 @@ struct DecalMeshVertex {
 };
 
 layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
-layout(set = 0, binding = 1, std430) readonly buffer Vertices { DecalMeshVertex v[]; } vertices;
+layout(set = 0, binding = 1, std430) readonly buffer DecalMeshVertices { DecalMeshVertex v[]; } vertices;
 layout(set = 0, binding = 2, std430) readonly buffer SectorData { uint words[]; } sector_data;
 layout(set = 0, binding = 3) uniform texture2DArray height_atlas;
 layout(set = 0, binding = 4) uniform texture2DArray normal_atlas;

@@ -214,6 +214,9 @@
 #define GRASS_FLAG_HOLES 1u
 #define GRASS_FLAG_FRUSTUM 2u
 #define GRASS_FLAG_HIZ 4u
+// Procedural cliff meshes (effect cliff_meshes): quads a side of one cell's patch.
+#define CLIFF_CELL_QUADS 4u
+
 // The G-buffer material target's y on a grass pixel and on an asset's
 // (above the flavour bits).
 #define GBUFFER_GRASS 128u

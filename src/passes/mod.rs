@@ -2,6 +2,8 @@
 
 pub mod asset_draw;
 pub mod classify_tiles;
+pub mod cliff_mesh_build;
+pub mod cliff_meshes;
 pub mod cull_occluded;
 pub mod cull_patches;
 pub mod debug_view;

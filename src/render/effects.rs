@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::passes::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
 use crate::render::assets::AssetParams;
 use crate::render::atmosphere::AtmosphereParams;
+use crate::render::cliff_meshes::CliffMeshParams;
 use crate::render::grass::GrassParams;
 use crate::render::shading::ShadeRules;
 use crate::render::tonemap::Tonemap;
@@ -39,6 +40,10 @@ pub enum Effect {
     Occlusion,
     /// Tri-planar cliff shading.
     Cliffs,
+    /// Procedural cliff meshes near the camera (render/cliff_meshes.rs):
+    /// `cliff_mesh_build` and the `cliff_meshes` draw into the geometry
+    /// pass, shaded by the cliff flavours (needs `cliffs`).
+    CliffMeshes,
     /// Detail materials from the splat map.
     Splat,
     /// Adaptive virtual texturing (seed 001): the splat blend cached in
@@ -74,11 +79,12 @@ pub enum Effect {
 }
 
 impl Effect {
-    pub const ALL: [Effect; 13] = [
+    pub const ALL: [Effect; 14] = [
         Effect::Holes,
         Effect::ConeCull,
         Effect::Occlusion,
         Effect::Cliffs,
+        Effect::CliffMeshes,
         Effect::Splat,
         Effect::VirtualTexture,
         Effect::Lighting,
@@ -97,6 +103,7 @@ impl Effect {
             Effect::ConeCull => "cone_cull",
             Effect::Occlusion => "occlusion",
             Effect::Cliffs => "cliffs",
+            Effect::CliffMeshes => "cliff_meshes",
             Effect::Splat => "splat",
             Effect::VirtualTexture => "virtual_texture",
             Effect::Lighting => "lighting",
@@ -123,6 +130,7 @@ impl Effect {
     pub fn unavailable(self) -> Option<&'static str> {
         match self {
             Effect::Grass
+            | Effect::CliffMeshes
             | Effect::Assets
             | Effect::Decals
             | Effect::VirtualTexture
@@ -155,6 +163,7 @@ impl Effect {
             Effect::VirtualTexture => &["cache_mb", "pages_per_frame", "region_m", "indirection"],
             Effect::Grass => &GrassParams::PARAMETERS,
             Effect::Assets => &["blend_height_m"],
+            Effect::CliffMeshes => &CliffMeshParams::PARAMETERS,
             Effect::Shadows => &["resolution", "steps", "update_budget", "softness_deg", "reach_m"],
             Effect::Atmosphere => {
                 &["visibility_km", "scale_height_m", "haze_color", "sun_g", "zenith_color", "air_depth"]
@@ -211,6 +220,7 @@ pub struct Effects {
     pub atmosphere: AtmosphereParams,
     pub grass: GrassParams,
     pub assets: AssetParams,
+    pub cliff_meshes: CliffMeshParams,
 }
 
 /// Effects a built renderer switches off for a frame without rebuilding
@@ -287,6 +297,7 @@ impl Default for Effects {
             atmosphere: AtmosphereParams::default(),
             grass: GrassParams::default(),
             assets: AssetParams::default(),
+            cliff_meshes: CliffMeshParams::default(),
         }
     }
 }
@@ -387,6 +398,7 @@ impl Effects {
             match k.as_str() {
                 "enabled" => on = v.as_bool().ok_or_else(|| wrong(&key, "true or false", v))?,
                 _ if effect == Effect::Grass => self.grass.read(&key, k, v)?,
+                _ if effect == Effect::CliffMeshes => self.cliff_meshes.read(&key, k, v)?,
                 "sun_azimuth_deg" => self.lighting.sun_azimuth_deg = number(&key, v, -360.0, 360.0)?,
                 "sun_elevation_deg" => self.lighting.sun_elevation_deg = number(&key, v, -90.0, 90.0)?,
                 "sun_color" => self.lighting.sun_color = colour(&key, v)?,
@@ -460,6 +472,9 @@ impl Effects {
         }
         if effect == Effect::Grass {
             self.grass.validate()?;
+        }
+        if effect == Effect::CliffMeshes {
+            self.cliff_meshes.validate()?;
         }
         self.set(effect, on);
         Ok(())
@@ -589,6 +604,11 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                     }
                     (Effect::Grass, _) if !fx.grass.grows() => {
                         (false, "requested, but no material grows grass (effects.grass.density)".into())
+                    }
+                    (Effect::CliffMeshes, _)
+                        if fx.materials == MaterialsMode::ControlMap || !fx.is_on(Effect::Cliffs) =>
+                    {
+                        (false, "requested, but the cliff flavours shade the meshes and effect cliffs is off".into())
                     }
                     (Effect::Assets, _) if content.assets == 0 => {
                         (false, "requested, but the scene has no assets ([[assets]])".into())
@@ -737,6 +757,9 @@ mod tests {
             ("atmosphere = { visibility_km = 0 }", "effects.atmosphere.visibility_km = 0 is outside"),
             ("atmosphere = { haze_color = [1, 2, 0] }", "effects.atmosphere.haze_color = [1.0, 2.0, 0.0]: a share"),
             ("atmosphere = { sun_g = 1 }", "effects.atmosphere.sun_g = 1 is outside"),
+            ("cliff_meshes = { radius_m = 3000 }", "effects.cliff_meshes.radius_m = 3000 is outside"),
+            ("cliff_meshes = { radius_m = 1000, cell_m = 1 }", "effects.cliff_meshes: radius_m 1000 over cell_m 1"),
+            ("cliff_meshes = { seed = 1 }", "unknown parameter effects.cliff_meshes.seed"),
         ] {
             let e = parse(text).unwrap_err().to_string();
             assert!(e.contains(key) && !e.contains('\n'), "{text}: {e}");

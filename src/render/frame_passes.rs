@@ -11,6 +11,7 @@ use crate::frame::{Frame, QueueKind};
 use crate::gpu::{vk, Buffer, Recorder};
 use crate::passes::asset_draw::AssetDraw;
 use crate::passes::classify_tiles::ClassifyTiles;
+use crate::passes::cliff_mesh_build::CliffBuildPush;
 use crate::passes::cull_patches::{CullFrame, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
 use crate::passes::decal_meshes::DecalMeshPass;
@@ -25,6 +26,7 @@ use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::{Traverse, TraverseMode};
 use crate::render::assets::AssetResources;
+use crate::render::cliff_meshes::CliffMeshes;
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FrameLog, FramePass, Skip};
 use crate::render::grass::gpu::{Grass, GrassFrame};
@@ -74,6 +76,8 @@ pub(crate) struct FramePasses<'a> {
     pub assets: Option<&'a (AssetDraw, AssetResources)>,
     /// Effect `decals` with displacement decals: their meshes.
     pub decal_meshes: Option<&'a DecalMeshPass>,
+    /// Effect `cliff_meshes`, with this frame's build (None: current).
+    pub cliff_meshes: Option<(&'a CliffMeshes, Option<&'a CliffBuildPush>)>,
 }
 
 /// Records `p` in `frame` and logs it.
@@ -202,6 +206,25 @@ impl FramePasses<'_> {
             log.ran(FramePass::VtPages, Some(f.jobs.len() as u64));
         }
         pass(frame, log, FramePass::VtFeedback, |r| vt.record_feedback(r, f, self.view_buffer, targets, gb));
+    }
+
+    /// Effect `cliff_meshes`: their build (when due) and draw, over the
+    /// terrain's geometry pass.
+    pub fn record_cliff_meshes(
+        &self,
+        frame: &mut Frame<'_, '_>,
+        log: &mut FrameLog,
+        tree: &GpuQuadtree,
+        targets: &RenderTargets,
+        gb: &GBuffer,
+    ) {
+        let Some((c, build)) = self.cliff_meshes else { return };
+        let (view, sector) = (self.view_buffer, &self.sector_data.buffer);
+        match build {
+            Some(push) => pass(frame, log, FramePass::CliffMeshBuild, |r| c.record_build(r, push, view, sector, tree)),
+            None => log.skipped(FramePass::CliffMeshBuild, Skip::CliffMeshesCurrent),
+        }
+        pass(frame, log, FramePass::CliffMeshes, |r| c.record_draw(r, targets, gb, view));
     }
 
     /// The displacement decals' meshes, over the terrain's geometry pass.

@@ -16,10 +16,11 @@
 
 use crate::frame::QueueKind;
 use crate::passes::{
-    asset_draw::AssetDraw, classify_tiles::ClassifyTiles, cull_occluded::CullOccluded, cull_patches::CullPatches,
-    debug_view::DebugViewPass, decal_meshes::DecalMeshPass, gbuffer_tiles::GbufferTiles, grass_draw::GrassDraw,
-    grass_pigment::GrassPigment, grass_place::GrassPlace, hiz_build::HizBuild, lighting_resolve::LightingResolve,
-    lod_map::LodMap, quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, select_patches::SelectPatches,
+    asset_draw::AssetDraw, classify_tiles::ClassifyTiles, cliff_mesh_build::CliffMeshBuild,
+    cliff_meshes::CliffMeshDraw, cull_occluded::CullOccluded, cull_patches::CullPatches, debug_view::DebugViewPass,
+    decal_meshes::DecalMeshPass, gbuffer_tiles::GbufferTiles, grass_draw::GrassDraw, grass_pigment::GrassPigment,
+    grass_place::GrassPlace, hiz_build::HizBuild, lighting_resolve::LightingResolve, lod_map::LodMap,
+    quadtree_update::QuadtreeUpdatePass, sector_data::SectorData, select_patches::SelectPatches,
     sun_shadows::SunShadows, terrain_geometry::TerrainGeometry, terrain_holes::TerrainHoles, traverse::Traverse,
     vt_feedback::VtFeedback, vt_pages::VtPages, vt_update::VtUpdate,
 };
@@ -42,6 +43,11 @@ pub enum FramePass {
     /// Phase 2 of occlusion culling: the patches the pyramid left visible.
     TerrainGeometryLate,
     TerrainHolesLate,
+    /// Effect `cliff_meshes`: the meshes of the steep cells near the camera
+    /// (when the grid moved a cell or the terrain changed).
+    CliffMeshBuild,
+    /// Effect `cliff_meshes`: their draw into the geometry pass.
+    CliffMeshes,
     /// Effect `decals`: the displacement decals' meshes (built only where
     /// a decal displaces).
     DecalMeshes,
@@ -71,7 +77,7 @@ pub enum FramePass {
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 25] = [
+    pub const ALL: [FramePass; 27] = [
         FramePass::QuadtreeUpdate,
         FramePass::Traverse,
         FramePass::LodMap,
@@ -84,6 +90,8 @@ impl FramePass {
         FramePass::CullOccluded,
         FramePass::TerrainGeometryLate,
         FramePass::TerrainHolesLate,
+        FramePass::CliffMeshBuild,
+        FramePass::CliffMeshes,
         FramePass::DecalMeshes,
         FramePass::GrassPigment,
         FramePass::GrassPlace,
@@ -122,6 +130,8 @@ impl FramePass {
             FramePass::GrassDraw => GrassDraw::NAME,
             FramePass::AssetDraw => AssetDraw::NAME,
             FramePass::DecalMeshes => DecalMeshPass::NAME,
+            FramePass::CliffMeshBuild => CliffMeshBuild::NAME,
+            FramePass::CliffMeshes => CliffMeshDraw::NAME,
             FramePass::SunShadows => SunShadows::NAME,
             FramePass::LightingResolve => LightingResolve::NAME,
             FramePass::DebugView => DebugViewPass::NAME,
@@ -163,6 +173,7 @@ impl FramePass {
             FramePass::GrassPigment | FramePass::GrassPlace | FramePass::GrassDraw => &[Effect::Grass],
             FramePass::AssetDraw => &[Effect::Assets],
             FramePass::DecalMeshes => &[Effect::Decals],
+            FramePass::CliffMeshBuild | FramePass::CliffMeshes => &[Effect::CliffMeshes],
             FramePass::VtUpdate | FramePass::VtPages | FramePass::VtFeedback => &[Effect::VirtualTexture],
             _ => &[],
         }
@@ -193,6 +204,8 @@ pub enum Skip {
     PigmentCurrent,
     /// A decal edit left no displacement decal.
     NoDisplacement,
+    /// The cliff grid did not move a cell and the terrain did not change.
+    CliffMeshesCurrent,
 }
 
 impl Skip {
@@ -206,6 +219,9 @@ impl Skip {
             Skip::NoDebugView => "no debug view asked for (TerrainRenderer::debug_view)",
             Skip::NoVtWrites => "idle: no sub-texture moved and no page arrived or left (known on the CPU)",
             Skip::NoVtPages => "idle: no page the read-back requests named is missing (known on the CPU)",
+            Skip::CliffMeshesCurrent => {
+                "idle: the cliff grid did not move a cell and no node arrived or left (known on the CPU)"
+            }
             Skip::NoDisplacement => "idle: a decal edit left no displacement decal (known on the CPU)",
             Skip::PigmentCurrent => {
                 "idle: the pigment map's square did not move a texel and no node arrived or left (known on the CPU)"

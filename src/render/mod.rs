@@ -6,6 +6,7 @@
 
 pub mod assets;
 pub mod atmosphere;
+pub mod cliff_meshes;
 pub mod detail_textures;
 pub mod effects;
 mod frame_passes;

@@ -35,6 +35,7 @@ use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::Traverse;
 use crate::render::assets::{Asset, AssetResources};
+use crate::render::cliff_meshes::CliffMeshes;
 use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode, WorldContent};
 use crate::render::frame_passes::FramePasses;
 use crate::render::gbuffer::GBuffer;
@@ -138,6 +139,8 @@ pub struct TerrainRenderer {
     pub assets: Option<(AssetDraw, AssetResources)>,
     /// Effect `decals` with a displacement decal: their meshes' pass.
     pub decal_meshes: Option<DecalMeshPass>,
+    /// Effect `cliff_meshes`: its passes and meshes.
+    pub cliff_meshes: Option<CliffMeshes>,
     /// Made for the view size on the first frame (remade when it changes).
     pub gbuffer: Option<GBuffer>,
     pub shade: ShadeRules,
@@ -427,6 +430,11 @@ impl TerrainRenderer {
                 None
             },
             decal_meshes,
+            cliff_meshes: if on(Effect::CliffMeshes) {
+                Some(CliffMeshes::new(ctx, options.effects.cliff_meshes, depth)?)
+            } else {
+                None
+            },
             materials,
             gbuffer: None,
             shade,
@@ -539,6 +547,10 @@ impl TerrainRenderer {
         log.switched_off = switched_off;
         let visibility = self.occlusion.as_ref().map(|o| &o.cull.visibility);
         let uploaded = self.virtual_texture.as_ref().and_then(VirtualTexture::uploaded_decals);
+        let camera_world = [gpu.camera_world[0], gpu.camera_world[1], gpu.camera_world[2]];
+        let changed = self.terrain.tree.has_work();
+        let terrain_desc = VistaTerrain::new(&world, &self.sector_data);
+        let cliff_build = self.cliff_meshes.as_mut().and_then(|c| c.plan(camera_world, terrain_desc, changed));
         let grass = self.grass.as_mut().map(|g| {
             let inputs = GrassFrameInputs {
                 camera_world: [gpu.camera_world[0], gpu.camera_world[1], gpu.camera_world[2]],
@@ -607,10 +619,12 @@ impl TerrainRenderer {
             grass: self.grass.as_ref().zip(grass.as_ref()),
             assets: self.assets.as_ref(),
             decal_meshes: self.decal_meshes.as_ref(),
+            cliff_meshes: self.cliff_meshes.as_ref().map(|c| (c, cliff_build.as_ref())),
         };
         let gb = self.gbuffer.as_ref().expect("made above");
         passes.record_lod(&mut frame, &mut log, tree, &params, &gpu, visibility);
         passes.record_draws(&mut frame, &mut log, tree, targets, gb);
+        passes.record_cliff_meshes(&mut frame, &mut log, tree, targets, gb);
         passes.record_decal_meshes(&mut frame, &mut log, tree, &world, targets, gb);
         passes.record_shading(&mut frame, &mut log, tree, &world, targets, gb);
         let sources = CounterSources {
@@ -838,6 +852,7 @@ impl TerrainRenderer {
         out.extend(self.grass.iter().flat_map(Grass::pipeline_labels));
         out.extend(self.assets.iter().map(|(p, _)| p.pipeline_label().to_string()));
         out.extend(self.decal_meshes.iter().map(|p| p.pipeline_label().to_string()));
+        out.extend(self.cliff_meshes.iter().flat_map(CliffMeshes::pipeline_labels));
         out.extend(self.resolve.pipeline_labels());
         out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
@@ -906,6 +921,9 @@ impl TerrainRenderer {
         }
         for (name, bytes) in self.grass.iter().flat_map(Grass::memory) {
             out.push((name, bytes, vec![Effect::Grass]));
+        }
+        for (name, bytes) in self.cliff_meshes.iter().flat_map(CliffMeshes::memory) {
+            out.push((name, bytes, vec![Effect::CliffMeshes]));
         }
         for (name, bytes) in self.decal_meshes.iter().flat_map(DecalMeshPass::memory) {
             out.push((name, bytes, vec![Effect::Decals]));

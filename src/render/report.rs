@@ -374,6 +374,12 @@ fn work_of(
             };
             (work, (drawn == 0).then_some("no tuft placed and visible (0 instances)"))
         }
+        FramePass::CliffMeshBuild => {
+            let side = r.cliff_meshes.as_ref().map_or(0, |c| c.params.side());
+            (groups(u64::from((side * side).div_ceil(crate::shaders::cliff_mesh_build::WORKGROUP_SIZE[0]))), None)
+        }
+        // Its instances are counted on the GPU (vista render's cliff meshes: line).
+        FramePass::CliffMeshes => (PassWork::default(), None),
         FramePass::DecalMeshes => {
             let m = r.decal_meshes.as_ref();
             let work = PassWork {

@@ -50,6 +50,8 @@ pub struct RenderStats {
     pub virtual_texture: Option<VtStats>,
     /// Effect `grass`: its counters, triangles and memory.
     pub grass: Option<GrassStats>,
+    /// Effect `cliff_meshes`: the last build's cells and triangles.
+    pub cliff_meshes: Option<crate::render::cliff_meshes::CliffCounters>,
 }
 
 /// Effect `grass` in the last recorded frame.
@@ -121,5 +123,9 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
             triangles: u64::from(counters.drawn) * u64::from(GRASS_BLADES * GRASS_BLADE_VERTICES / 3),
             memory_bytes: g.memory().iter().map(|(_, b)| b).sum(),
         }),
+        cliff_meshes: match &renderer.cliff_meshes {
+            Some(c) => Some(c.read(ctx)?.0),
+            None => None,
+        },
     })
 }

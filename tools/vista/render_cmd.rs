@@ -593,6 +593,12 @@ fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
             g.memory_bytes as f64 / f64::from(1u32 << 20)
         );
     }
+    if let Some(c) = &s.cliff_meshes {
+        println!(
+            "cliff meshes: {} cells within the radius, {} steep ones meshed ({} triangles), {} past the capacity",
+            c.tested, c.cells, c.triangles, c.overflow
+        );
+    }
     if let Some([one, two, three]) = s.plane_tiles {
         println!(
             "control map: tri-planar background tiles sampling 1 plane {one}, 2 planes {two}, 3 planes {three} \
