@@ -9,17 +9,17 @@
 // with their own normals from the displaced surface's central differences.
 // Vertices depend only on their world position, so neighbouring cells
 // share theirs bit for bit, and where the ramp is 0 a vertex lies on the
-// height field: the mesh is watertight to it. Rebuilt only when the grid
-// moves a cell or the resident terrain changes.
+// height field: the mesh is watertight to it. The cells are those within
+// the reach of a centre that snaps to a step of the radius, so the build
+// holds while the camera stays in its step; rebuilt when it leaves it or
+// the resident terrain changes.
 #include "constants.glsl"
-#include "terrain_view.glsl"
 #include "octahedral.glsl"
 #include "hashed_noise.glsl"
 #include "cliff_mesh.glsl"
 
 layout(local_size_x = 64) in;
 
-layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
 layout(set = 0, binding = 1, std430) readonly buffer SectorData { uint words[]; } sector_data;
 layout(set = 0, binding = 2) uniform texture2DArray height_atlas;
 layout(set = 0, binding = 3) uniform sampler nearest;
@@ -41,13 +41,14 @@ layout(push_constant, std430) uniform CliffBuildPush {
     uint side;          // cells a side
     uint capacity;      // cells the vertex buffer holds
     float cell_m;
-    float radius_m;
+    float reach_m;      // cells whose centre lies this close to `centre`
     float cos_start;    // normal z where the push starts (the threshold)
     float cos_full;     // normal z where it is full
     float amplitude_m;
     float step_m;       // central differences' half step
     uint seed;
     uint pad;
+    vec2 centre;        // world m
 } pc;
 
 #undef VISTA_TERRAIN_DECLARE_ONLY
@@ -97,7 +98,7 @@ void main() {
     ivec2 cell = pc.cell0 + ivec2(idx % pc.side, idx / pc.side);
     vec2 origin = vec2(cell) * pc.cell_m;
     vec2 centre = origin + 0.5 * pc.cell_m;
-    if (distance(centre, view.v.camera_world.xy) >= pc.radius_m) {
+    if (distance(centre, pc.centre) >= pc.reach_m) {
         return;
     }
     atomicAdd(header.h.tested, 1u);

@@ -54,7 +54,7 @@ fn meshes_only_on_steep_cells_watertight_and_shaded_as_cliffs() {
         let mut off = rig(ctx, effects(false));
         let b = on.shot(ctx, &low(), CullStages::default());
         let a = off.shot(ctx, &low(), CullStages::default());
-        let c = on.renderer.cliff_meshes.as_ref().unwrap();
+        let c = on.renderer.near.cliff_meshes.as_ref().unwrap();
         let p = c.params;
         let (counters, vertices) = c.read(ctx).unwrap();
         let q = p.cell_m / CLIFF_CELL_QUADS as f32;
@@ -69,15 +69,18 @@ fn meshes_only_on_steep_cells_watertight_and_shaded_as_cliffs() {
 
         // The twin: a cell is steep when any vertex's slope, from central
         // differences of the height field half a sample apart, passes the threshold.
-        let camera = [500.0f32, 200.0];
+        // Around the centre the build snapped to, out to the reach.
+        let centre = c.built_centre().unwrap();
+        let expect = [500.0f32, 200.0].map(|v| ((v / p.step_m()).floor() + 0.5) * p.step_m());
+        assert_eq!(centre, expect);
         let step = 0.5 * rig_spacing(&on);
-        let cell0 = camera.map(|c| ((c - p.radius_m) / p.cell_m).floor() as i32);
+        let cell0 = centre.map(|c| ((c - p.reach_m()) / p.cell_m).floor() as i32);
         let mut candidates = Vec::new();
         for j in 0..p.side() as i32 {
             for i in 0..p.side() as i32 {
                 let cell = [cell0[0] + i, cell0[1] + j];
-                let centre = cell.map(|c| (c as f32 + 0.5) * p.cell_m);
-                if ((centre[0] - camera[0]).powi(2) + (centre[1] - camera[1]).powi(2)).sqrt() < p.radius_m {
+                let m = cell.map(|c| (c as f32 + 0.5) * p.cell_m);
+                if ((m[0] - centre[0]).powi(2) + (m[1] - centre[1]).powi(2)).sqrt() < p.reach_m() {
                     candidates.push(cell);
                 }
             }
@@ -199,7 +202,7 @@ fn off_nothing_is_built_and_the_image_is_the_one_without_it() {
         assert!(!d.on && d.reason.contains("cliffs is off"), "{}", d.reason);
         let mut no_cliffs = rig(ctx, effects(false).with(Effect::Cliffs, false));
         for r in [&none, &refused] {
-            assert!(r.renderer.cliff_meshes.is_none());
+            assert!(r.renderer.near.cliff_meshes.is_none());
             assert!(!r.renderer.pipelines().iter().any(|p| p.contains("cliff_mesh")), "{:?}", r.renderer.pipelines());
         }
         let _ = none.shot(ctx, &low(), CullStages::default());

@@ -54,7 +54,7 @@ fn camera(ctx: &Context, rig: &Rig) -> [f32; 3] {
 }
 
 fn tufts(ctx: &Context, rig: &Rig) -> BTreeMap<[i32; 2], GrassInstanceGpu> {
-    let grass = rig.renderer.grass.as_ref().expect("grass is built");
+    let grass = rig.renderer.near.grass.as_ref().expect("grass is built");
     grass.read_instances(ctx).unwrap().into_iter().map(|t| (t.cell, t)).collect()
 }
 
@@ -95,11 +95,11 @@ fn near_hole_edge(rig: &Rig, p: [f32; 2]) -> bool {
 fn gpu_placement_equals_the_cpu_twin_and_stays_put() {
     gpu_test(|ctx| {
         let mut rig = rig(ctx, effects(true));
-        rig.renderer.grass.as_mut().unwrap().no_culling = true;
+        rig.renderer.near.grass.as_mut().unwrap().no_culling = true;
         rig.shot(ctx, &low(0.0, 0.0), CullStages::default());
         let gpu = tufts(ctx, &rig);
         let cam = camera(ctx, &rig);
-        let params = rig.renderer.grass.as_ref().unwrap().params.clone();
+        let params = rig.renderer.near.grass.as_ref().unwrap().params.clone();
 
         // Every candidate cell's ground, through the validated query include.
         let all = place_cpu(&params, [cam[0], cam[1]], false, |_| Some(Ground { material: 0, hole: false }));
@@ -227,7 +227,7 @@ fn tufts_stand_on_the_terrain_and_only_where_grass_grows() {
         // Every tuft's material grows grass; none stands in the hole.
         let points: Vec<[f32; 2]> = gpu.iter().map(|t| [t.position[0], t.position[1]]).collect();
         let answers = query(ctx, &rig, &points);
-        let rules = rig.renderer.grass.as_ref().unwrap().params.rules;
+        let rules = rig.renderer.near.grass.as_ref().unwrap().params.rules;
         let mut by_material = [0usize; 5];
         for (p, a) in points.iter().zip(&answers) {
             let (m, _) = a.expect("a tuft where no terrain is found");
@@ -258,7 +258,7 @@ fn off_nothing_is_built_and_the_image_is_the_one_without_it() {
         fx.set(Effect::Splat, true);
         let mut on = rig(ctx, fx);
         for r in [&plain, &refused] {
-            assert!(r.renderer.grass.is_none());
+            assert!(r.renderer.near.grass.is_none());
             assert!(!r.renderer.pipelines().iter().any(|p| p.contains("grass")), "{:?}", r.renderer.pipelines());
             assert!(!r.renderer.memory().iter().any(|(_, _, e)| e.contains(&Effect::Grass)));
         }
@@ -302,7 +302,7 @@ fn no_grass_grows_under_an_opaque_decal() {
         let options = RendererOptions { effects: fx, decals, ..RendererOptions::default() };
         let mut rig = Rig::with_options(ctx, world(), GROUND, holes, SIZE, false, options);
         assert!(rig.renderer.effect_on(Effect::Decals));
-        rig.renderer.grass.as_mut().unwrap().no_culling = true;
+        rig.renderer.near.grass.as_mut().unwrap().no_culling = true;
         rig.shot(ctx, &low(0.0, 0.0), CullStages::default());
         let inside = |t: &GrassInstanceGpu, margin: f64| {
             let d = [0, 1].map(|i| (f64::from(t.position[i]) - center[i]).abs() - size[i] / 2.0);
@@ -316,10 +316,13 @@ fn no_grass_grows_under_an_opaque_decal() {
         assert!(under == 0 && around > 50, "{under} under, {around} around");
         // The pigment map's texel at the decal's centre is its colour
         // (stored as the square root of linear albedo).
-        let grass = rig.renderer.grass.as_ref().unwrap();
+        let grass = rig.renderer.near.grass.as_ref().unwrap();
         let (texel, cam) = (grass.pigment_texel_m(), camera(ctx, &rig));
-        let half = (vista::shaders::consts::GRASS_PIGMENT_TEXELS / 2) as f32;
-        let origin = [0, 1].map(|i| ((cam[i] / texel).floor() - half) * texel);
+        let origin = grass.pigment_origin([cam[0], cam[1]]);
+        // Independently: the map covers the grass around the camera.
+        let side = texel * vista::shaders::consts::GRASS_PIGMENT_TEXELS as f32;
+        let r = grass.params.radius_m;
+        assert!((0..2).all(|i| origin[i] <= cam[i] - r && origin[i] + side >= cam[i] + r), "{origin:?} {cam:?}");
         let at = [0, 1].map(|i| ((center[i] as f32 - origin[i]) / texel).floor() as usize);
         let bytes = ctx.read_image(grass.pigment(), 0, 0, 4).unwrap();
         let side = vista::shaders::consts::GRASS_PIGMENT_TEXELS as usize;

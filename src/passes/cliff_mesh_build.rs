@@ -19,13 +19,15 @@ pub struct CliffBuildPush {
     pub side: u32,
     pub capacity: u32,
     pub cell_m: f32,
-    pub radius_m: f32,
+    /// Cells whose centre lies this close to `centre` are built.
+    pub reach_m: f32,
     pub cos_start: f32,
     pub cos_full: f32,
     pub amplitude_m: f32,
     pub step_m: f32,
     pub seed: u32,
     pub pad: u32,
+    pub centre: [f32; 2],
 }
 
 pub struct CliffMeshBuild {
@@ -54,7 +56,6 @@ impl CliffMeshBuild {
         &self,
         rec: &mut Recorder,
         push: &CliffBuildPush,
-        view: &Buffer,
         sector_data: &Buffer,
         tree: &GpuQuadtree,
         header: &Buffer,
@@ -64,7 +65,6 @@ impl CliffMeshBuild {
         rec.push_descriptors(
             &self.pipeline,
             &[
-                (sh::VIEW, Resource::Buffer(view)),
                 (sh::SECTOR_DATA, Resource::Buffer(sector_data)),
                 (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
                 (sh::NEAREST, Resource::Sampler(self.nearest.raw())),

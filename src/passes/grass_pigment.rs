@@ -1,7 +1,8 @@
 //! `grass_pigment` (effect `grass`): the pigment map, a top-down render of
 //! the near terrain's albedo (the splat blend at each texel, with variant
-//! `DECALS` the decals blended over it) that colours the grass. Recorded only in frames where its square moved a texel or
-//! the resident terrain changed.
+//! `DECALS` the decals blended over it) that colours the grass. Recorded
+//! only in frames where the camera crossed into another step of the map's
+//! centre, the resident terrain or the decals changed.
 
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, ComputePipelineDesc, Context, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc};

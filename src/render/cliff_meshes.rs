@@ -4,9 +4,10 @@
 //! world-anchored noise: shape the height field cannot hold, drawn into the
 //! geometry pass so the tile passes shade it with the cliff flavours, like
 //! the height field's own cliffs. `cliff_mesh_build` makes the meshes on
-//! the GPU from the resident terrain (again only when the grid moves a cell
-//! or the terrain changes); `cliff_meshes` draws them in one indexed
-//! indirect draw.
+//! the GPU from the resident terrain, around a centre snapped to an eighth
+//! of the radius and out to the radius plus that step, so it runs again only
+//! when the camera leaves its step or the terrain changes; `cliff_meshes`
+//! draws them in one indexed indirect draw.
 //!
 //! ```toml
 //! [effects]
@@ -52,13 +53,29 @@ pub const MAX_SIDE: u32 = 512;
 impl CliffMeshParams {
     pub const PARAMETERS: [&'static str; 5] = ["slope_deg", "band_deg", "amplitude_m", "radius_m", "cell_m"];
 
+    /// The step the build's centre snaps to: an eighth of the radius.
+    pub fn step_m(&self) -> f32 {
+        self.radius_m / 8.0
+    }
+
+    /// How far from the centre cells are built: the radius around any
+    /// camera within the step.
+    pub fn reach_m(&self) -> f32 {
+        self.radius_m + self.step_m() * std::f32::consts::FRAC_1_SQRT_2
+    }
+
+    /// The build's centre for a camera at `xy` (world m).
+    pub fn centre(&self, xy: [f32; 2]) -> [f32; 2] {
+        xy.map(|c| ((c / self.step_m()).floor() + 0.5) * self.step_m())
+    }
+
     pub fn side(&self) -> u32 {
-        (2.0 * self.radius_m / self.cell_m).ceil() as u32 + 1
+        (2.0 * self.reach_m() / self.cell_m).ceil() as u32 + 1
     }
 
     /// Cells the vertex buffer holds: those of the disc, with margin.
     pub fn capacity(&self) -> u32 {
-        let disc = std::f32::consts::PI * (self.radius_m / self.cell_m + 1.0).powi(2);
+        let disc = std::f32::consts::PI * (self.reach_m() / self.cell_m + 1.0).powi(2);
         (disc.ceil() as u32).min(self.side() * self.side())
     }
 
@@ -146,8 +163,8 @@ pub struct CliffMeshes {
     header: Buffer,
     vertices: Buffer,
     indices: Buffer,
-    /// The grid's first cell as last built.
-    built_at: Option<[i32; 2]>,
+    /// The centre last built around.
+    built_at: Option<[f32; 2]>,
 }
 
 impl CliffMeshes {
@@ -180,8 +197,8 @@ impl CliffMeshes {
         })
     }
 
-    /// The frame's build, or None when the last one still holds (same
-    /// cells, same terrain).
+    /// The frame's build, or None when the last one still holds (the
+    /// camera in the same step, the same terrain).
     pub fn plan(
         &mut self,
         camera_world: [f32; 3],
@@ -189,11 +206,12 @@ impl CliffMeshes {
         terrain_changed: bool,
     ) -> Option<CliffBuildPush> {
         let p = &self.params;
-        let cell0 = [0, 1].map(|i| ((camera_world[i] - p.radius_m) / p.cell_m).floor() as i32);
-        if !terrain_changed && self.built_at == Some(cell0) {
+        let centre = p.centre([camera_world[0], camera_world[1]]);
+        if !terrain_changed && self.built_at == Some(centre) {
             return None;
         }
-        self.built_at = Some(cell0);
+        self.built_at = Some(centre);
+        let cell0 = centre.map(|c| ((c - p.reach_m()) / p.cell_m).floor() as i32);
         let [cos_start, cos_full] = p.cos_range();
         Some(CliffBuildPush {
             terrain,
@@ -201,7 +219,7 @@ impl CliffMeshes {
             side: p.side(),
             capacity: p.capacity(),
             cell_m: p.cell_m,
-            radius_m: p.radius_m,
+            reach_m: p.reach_m(),
             cos_start,
             cos_full,
             amplitude_m: p.amplitude_m,
@@ -209,25 +227,24 @@ impl CliffMeshes {
             step_m: 0.5 * terrain.spacing_m,
             seed: p.seed,
             pad: 0,
+            centre,
         })
     }
 
-    pub fn record_build(
-        &self,
-        rec: &mut Recorder,
-        push: &CliffBuildPush,
-        view: &Buffer,
-        sector: &Buffer,
-        tree: &GpuQuadtree,
-    ) {
+    pub fn record_build(&self, rec: &mut Recorder, push: &CliffBuildPush, sector: &Buffer, tree: &GpuQuadtree) {
         let reset = CliffHeaderGpu { index_count: cell_indices().len() as u32, ..CliffHeaderGpu::default() };
         rec.update_buffer(&self.header, 0, bytemuck::bytes_of(&reset));
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
-        self.build.record(rec, push, view, sector, tree, &self.header, &self.vertices);
+        self.build.record(rec, push, sector, tree, &self.header, &self.vertices);
     }
 
     pub fn record_draw(&self, rec: &mut Recorder, targets: &RenderTargets, gb: &GBuffer, view: &Buffer) {
         self.draw.record(rec, targets, gb, view, &self.vertices, &self.indices, &self.header);
+    }
+
+    /// The centre the last build was made around.
+    pub fn built_centre(&self) -> Option<[f32; 2]> {
+        self.built_at
     }
 
     /// The last build's counters and vertices (waits for the GPU; tools
@@ -264,7 +281,10 @@ mod tests {
     #[test]
     fn the_capacity_covers_the_disc_and_limits_hold() {
         let p = CliffMeshParams::default();
-        assert!(p.capacity() as f32 >= std::f32::consts::PI * (p.radius_m / p.cell_m).powi(2));
+        assert!(p.capacity() as f32 >= std::f32::consts::PI * (p.reach_m() / p.cell_m).powi(2));
+        // Any camera within a step has its radius inside the build's reach.
+        let c = p.centre([101.3, 57.9]);
+        assert!(((101.3 - c[0]).powi(2) + (57.9 - c[1]).powi(2)).sqrt() + p.radius_m <= p.reach_m() + 1e-4);
         assert_eq!(cell_indices().len() as u32, 6 * CLIFF_CELL_QUADS * CLIFF_CELL_QUADS);
         let big = CliffMeshParams { radius_m: 2000.0, cell_m: 1.0, ..p };
         assert!(big.validate().unwrap_err().to_string().contains("cells a side"));

@@ -221,7 +221,7 @@ impl FramePasses<'_> {
         let Some((c, build)) = self.cliff_meshes else { return };
         let (view, sector) = (self.view_buffer, &self.sector_data.buffer);
         match build {
-            Some(push) => pass(frame, log, FramePass::CliffMeshBuild, |r| c.record_build(r, push, view, sector, tree)),
+            Some(push) => pass(frame, log, FramePass::CliffMeshBuild, |r| c.record_build(r, push, sector, tree)),
             None => log.skipped(FramePass::CliffMeshBuild, Skip::CliffMeshesCurrent),
         }
         pass(frame, log, FramePass::CliffMeshes, |r| c.record_draw(r, targets, gb, view));

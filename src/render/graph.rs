@@ -44,15 +44,15 @@ pub enum FramePass {
     TerrainGeometryLate,
     TerrainHolesLate,
     /// Effect `cliff_meshes`: the meshes of the steep cells near the camera
-    /// (when the grid moved a cell or the terrain changed).
+    /// (when the camera left their step or the terrain changed).
     CliffMeshBuild,
     /// Effect `cliff_meshes`: their draw into the geometry pass.
     CliffMeshes,
     /// Effect `decals`: the displacement decals' meshes (built only where
     /// a decal displaces).
     DecalMeshes,
-    /// Effect `grass`: the pigment map (when its square moved or the
-    /// terrain changed).
+    /// Effect `grass`: the pigment map (when the camera left its step or
+    /// the terrain changed).
     GrassPigment,
     /// Effect `grass`: placement and culling of the tufts.
     GrassPlace,
@@ -199,12 +199,13 @@ pub enum Skip {
     /// Every page the frames read back asked for is resident, or waits for
     /// a tile no view still uses.
     NoVtPages,
-    /// The pigment map's square did not move a texel and the terrain did
-    /// not change.
+    /// The camera stayed in the pigment map's step and the terrain did not
+    /// change.
     PigmentCurrent,
     /// A decal edit left no displacement decal.
     NoDisplacement,
-    /// The cliff grid did not move a cell and the terrain did not change.
+    /// The camera stayed in the cliff meshes' step and the terrain did not
+    /// change.
     CliffMeshesCurrent,
 }
 
@@ -220,11 +221,11 @@ impl Skip {
             Skip::NoVtWrites => "idle: no sub-texture moved and no page arrived or left (known on the CPU)",
             Skip::NoVtPages => "idle: no page the read-back requests named is missing (known on the CPU)",
             Skip::CliffMeshesCurrent => {
-                "idle: the cliff grid did not move a cell and no node arrived or left (known on the CPU)"
+                "idle: the camera stayed in the cliff meshes' step and no node arrived or left (known on the CPU)"
             }
             Skip::NoDisplacement => "idle: a decal edit left no displacement decal (known on the CPU)",
             Skip::PigmentCurrent => {
-                "idle: the pigment map's square did not move a texel and no node arrived or left (known on the CPU)"
+                "idle: the camera stayed in the pigment map's step and no node arrived or left (known on the CPU)"
             }
         }
     }

@@ -15,6 +15,7 @@ pub mod graph;
 pub mod grass;
 pub mod materials;
 pub mod materials_gpu;
+pub mod near_geometry;
 pub mod offscreen;
 pub mod renderer;
 pub mod report;

@@ -16,12 +16,10 @@
 use crate::error::{Error, Result};
 use crate::frame::{FrameExecutor, FrameTimings, QueueKind};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, FrameCommands, MemoryLocation, QueueMode, Recorder};
-use crate::passes::asset_draw::AssetDraw;
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
-use crate::passes::decal_meshes::DecalMeshPass;
 use crate::passes::gbuffer_tiles::{GbufferTiles, TileMaterials};
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lighting_resolve::LightingResolve;
@@ -34,20 +32,19 @@ use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeomet
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::Traverse;
-use crate::render::assets::{Asset, AssetResources};
-use crate::render::cliff_meshes::CliffMeshes;
+use crate::render::assets::Asset;
 use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode, WorldContent};
 use crate::render::frame_passes::FramePasses;
 use crate::render::gbuffer::GBuffer;
 use crate::render::graph::{FramePass, PassGraph, Skip};
 use crate::render::grass::gpu::{Grass, GrassFrameInputs};
 use crate::render::materials_gpu::MaterialResources;
+use crate::render::near_geometry::{NearBuild, NearGeometry};
 use crate::render::shading::{ShadeRules, Shading};
 use crate::render::stats::TRIANGLES_PER_PATCH;
 use crate::render::sun_shadows::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
-use crate::render::virtual_texture::decal_mesh::DecalMeshes;
 use crate::render::virtual_texture::decals::{Decal, DecalSet};
 use crate::render::virtual_texture::{VirtualTexture, VtCamera, VtFrame};
 use crate::shaders::structs;
@@ -133,14 +130,9 @@ pub struct TerrainRenderer {
     pub materials: Option<MaterialResources>,
     /// Effect `virtual_texture`: its cache, indirection and passes.
     pub virtual_texture: Option<VirtualTexture>,
-    /// Effect `grass`: its passes, tufts and pigment map.
-    pub grass: Option<Grass>,
-    /// Effect `assets`: the example asset pass and its meshes.
-    pub assets: Option<(AssetDraw, AssetResources)>,
-    /// Effect `decals` with a displacement decal: their meshes' pass.
-    pub decal_meshes: Option<DecalMeshPass>,
-    /// Effect `cliff_meshes`: its passes and meshes.
-    pub cliff_meshes: Option<CliffMeshes>,
+    /// Effects `grass`, `assets`, `cliff_meshes` and the displacement
+    /// decals' meshes: geometry beside the height field near the camera.
+    pub near: NearGeometry,
     /// Made for the view size on the first frame (remade when it changes).
     pub gbuffer: Option<GBuffer>,
     pub shade: ShadeRules,
@@ -359,15 +351,9 @@ impl TerrainRenderer {
             },
         )?;
         let mut graph = PassGraph::new(&decisions);
-        let meshes = DecalMeshes::build(&options.decals.decals, &options.decals.textures);
-        let decal_meshes = if on(Effect::Decals) && meshes.meshes > 0 {
-            Some(DecalMeshPass::new(ctx, &meshes, depth)?)
-        } else {
-            if on(Effect::Decals) {
-                graph.not_built(FramePass::DecalMeshes, "no decal displaces the terrain (displace_m)".into());
-            }
-            None
-        };
+        let near_build =
+            NearBuild { options, on: &on, occlusion: build.occlusion, materials: materials.is_some(), depth };
+        let near = NearGeometry::new(ctx, &near_build, &mut graph)?;
         // gbuffer_tiles records one timed draw per variant.
         let max_passes = graph.max_recorded() + variants.len() as u32;
         let exec = FrameExecutor::new(ctx, options.terrain.frames_in_flight, max_passes)?;
@@ -417,24 +403,7 @@ impl TerrainRenderer {
             } else {
                 None
             },
-            grass: if on(Effect::Grass) {
-                Some(Grass::new(ctx, &options.effects.grass, build.occlusion, on(Effect::Decals), depth.format)?)
-            } else {
-                None
-            },
-            assets: if on(Effect::Assets) {
-                let res = AssetResources::new(ctx, &options.assets, options.effects.assets)?;
-                let splat = materials.is_some() && options.effects.materials == MaterialsMode::Splat;
-                Some((AssetDraw::new(ctx, depth.format, splat)?, res))
-            } else {
-                None
-            },
-            decal_meshes,
-            cliff_meshes: if on(Effect::CliffMeshes) {
-                Some(CliffMeshes::new(ctx, options.effects.cliff_meshes, depth)?)
-            } else {
-                None
-            },
+            near,
             materials,
             gbuffer: None,
             shade,
@@ -546,22 +515,16 @@ impl TerrainRenderer {
         let mut log = self.graph.begin_frame(number);
         log.switched_off = switched_off;
         let visibility = self.occlusion.as_ref().map(|o| &o.cull.visibility);
+        let near_inputs = GrassFrameInputs {
+            camera_world: [gpu.camera_world[0], gpu.camera_world[1], gpu.camera_world[2]],
+            terrain: VistaTerrain::new(&world, &self.sector_data),
+            depth_size: targets.depth.extent,
+            holes: self.holes.is_some() && self.switches.holes,
+            hiz: self.occlusion.is_some() && self.stages.occlusion,
+            terrain_changed: self.terrain.tree.has_work(),
+        };
         let uploaded = self.virtual_texture.as_ref().and_then(VirtualTexture::uploaded_decals);
-        let camera_world = [gpu.camera_world[0], gpu.camera_world[1], gpu.camera_world[2]];
-        let changed = self.terrain.tree.has_work();
-        let terrain_desc = VistaTerrain::new(&world, &self.sector_data);
-        let cliff_build = self.cliff_meshes.as_mut().and_then(|c| c.plan(camera_world, terrain_desc, changed));
-        let grass = self.grass.as_mut().map(|g| {
-            let inputs = GrassFrameInputs {
-                camera_world: [gpu.camera_world[0], gpu.camera_world[1], gpu.camera_world[2]],
-                terrain: VistaTerrain::new(&world, &self.sector_data),
-                depth_size: targets.depth.extent,
-                holes: self.holes.is_some() && self.switches.holes,
-                hiz: self.occlusion.is_some() && self.stages.occlusion,
-                terrain_changed: self.terrain.tree.has_work(),
-            };
-            g.begin_frame(&inputs, uploaded)
-        });
+        let near = self.near.plan(&near_inputs, uploaded);
         if self.terrain.tree.has_work() {
             let (tree, update) = (&mut self.terrain.tree, &self.update);
             let writes = frame
@@ -616,10 +579,10 @@ impl TerrainRenderer {
             stages: self.stages,
             holes_off: !sw.holes,
             force_flavours: if self.shading == Shading::Tiled { 0 } else { shade.allowed },
-            grass: self.grass.as_ref().zip(grass.as_ref()),
-            assets: self.assets.as_ref(),
-            decal_meshes: self.decal_meshes.as_ref(),
-            cliff_meshes: self.cliff_meshes.as_ref().map(|c| (c, cliff_build.as_ref())),
+            grass: self.near.grass.as_ref().zip(near.grass.as_ref()),
+            assets: self.near.assets.as_ref(),
+            decal_meshes: self.near.decal_meshes.as_ref(),
+            cliff_meshes: self.near.cliff_meshes.as_ref().map(|c| (c, near.cliff_build.as_ref())),
         };
         let gb = self.gbuffer.as_ref().expect("made above");
         passes.record_lod(&mut frame, &mut log, tree, &params, &gpu, visibility);
@@ -632,7 +595,7 @@ impl TerrainRenderer {
             lists: counter_lists(&self.cull, &self.occlusion),
             tiles: self.classify.lists.as_ref().map(|l| &l.buffer),
             select: &self.select.levels,
-            grass: self.grass.as_ref().map(Grass::header),
+            grass: self.near.grass.as_ref().map(Grass::header),
         };
         let telemetry = &mut self.telemetry;
         frame.untimed(QueueKind::Graphics, |r| telemetry.record(r, number, ctx_frame, &sources));
@@ -719,7 +682,7 @@ impl TerrainRenderer {
             None => bytes.extend(vec![0; crate::passes::classify_tiles::HEAD_BYTES as usize]),
         }
         bytes.extend(&ctx.read_buffer(&self.select.levels)?[..structs::SELECT_HEADER]);
-        match &self.grass {
+        match &self.near.grass {
             Some(g) => bytes.extend(&ctx.read_buffer(g.header())?[..structs::GRASS_HEADER]),
             None => bytes.extend(vec![0; structs::GRASS_HEADER]),
         }
@@ -759,20 +722,9 @@ impl TerrainRenderer {
         let Some(vt) = &mut self.virtual_texture else {
             return Err(Error::BadInput("effect decals is off in this renderer".into()));
         };
-        let meshes = DecalMeshes::build(&decals, vt.decal_textures());
-        match &mut self.decal_meshes {
-            None if meshes.meshes > 0 => {
-                return Err(Error::BadInput(
-                    "a displacement decal (displace_m) added to a renderer made without one: give one at creation"
-                        .into(),
-                ))
-            }
-            _ => {}
-        }
+        let meshes = self.near.check_decals(&decals, vt.decal_textures())?;
         let dropped = vt.set_decals(decals, next)?;
-        if let Some(pass) = &mut self.decal_meshes {
-            pass.replace(ctx, &meshes)?;
-        }
+        self.near.replace_decal_meshes(ctx, &meshes)?;
         Ok(dropped)
     }
 
@@ -849,10 +801,7 @@ impl TerrainRenderer {
         if let Some(v) = &self.virtual_texture {
             out.extend(v.pipeline_labels().map(str::to_string));
         }
-        out.extend(self.grass.iter().flat_map(Grass::pipeline_labels));
-        out.extend(self.assets.iter().map(|(p, _)| p.pipeline_label().to_string()));
-        out.extend(self.decal_meshes.iter().map(|p| p.pipeline_label().to_string()));
-        out.extend(self.cliff_meshes.iter().flat_map(CliffMeshes::pipeline_labels));
+        out.extend(self.near.pipeline_labels());
         out.extend(self.resolve.pipeline_labels());
         out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
@@ -919,18 +868,7 @@ impl TerrainRenderer {
         for (name, bytes) in self.virtual_texture.iter().flat_map(|v| v.decal_memory()) {
             out.push((name, bytes, vec![Effect::Decals]));
         }
-        for (name, bytes) in self.grass.iter().flat_map(Grass::memory) {
-            out.push((name, bytes, vec![Effect::Grass]));
-        }
-        for (name, bytes) in self.cliff_meshes.iter().flat_map(CliffMeshes::memory) {
-            out.push((name, bytes, vec![Effect::CliffMeshes]));
-        }
-        for (name, bytes) in self.decal_meshes.iter().flat_map(DecalMeshPass::memory) {
-            out.push((name, bytes, vec![Effect::Decals]));
-        }
-        for (name, bytes) in self.assets.iter().flat_map(|(_, a)| a.memory()) {
-            out.push((name, bytes, vec![Effect::Assets]));
-        }
+        out.extend(self.near.memory());
         out
     }
 }

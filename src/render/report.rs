@@ -358,7 +358,7 @@ fn work_of(
         }
         FramePass::GrassPlace => {
             let [wx, wy, _] = crate::shaders::grass_place::WORKGROUP_SIZE;
-            let side = r.grass.as_ref().map_or(0, |g| g.params.side());
+            let side = r.near.grass.as_ref().map_or(0, |g| g.params.side());
             let in_range = c.grass.map_or(0, |g| u64::from(g.in_range));
             let work = PassWork { ..groups(u64::from(side.div_ceil(wx) * side.div_ceil(wy))) };
             (work, (in_range == 0).then_some("no cell of the square lies within the radius"))
@@ -375,13 +375,13 @@ fn work_of(
             (work, (drawn == 0).then_some("no tuft placed and visible (0 instances)"))
         }
         FramePass::CliffMeshBuild => {
-            let side = r.cliff_meshes.as_ref().map_or(0, |c| c.params.side());
+            let side = r.near.cliff_meshes.as_ref().map_or(0, |c| c.params.side());
             (groups(u64::from((side * side).div_ceil(crate::shaders::cliff_mesh_build::WORKGROUP_SIZE[0]))), None)
         }
         // Its instances are counted on the GPU (vista render's cliff meshes: line).
         FramePass::CliffMeshes => (PassWork::default(), None),
         FramePass::DecalMeshes => {
-            let m = r.decal_meshes.as_ref();
+            let m = r.near.decal_meshes.as_ref();
             let work = PassWork {
                 instances: m.map(|m| u64::from(m.meshes)),
                 triangles: m.map(|m| m.triangles),
@@ -390,7 +390,7 @@ fn work_of(
             (work, None)
         }
         FramePass::AssetDraw => {
-            let a = r.assets.as_ref().map(|(_, a)| a);
+            let a = r.near.assets.as_ref().map(|(_, a)| a);
             let instances = a.map_or(0, |a| a.draws.iter().map(|(_, _, n)| u64::from(*n)).sum());
             let work = PassWork {
                 instances: Some(instances),

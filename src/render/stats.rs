@@ -118,12 +118,12 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
         plane_tiles: (renderer.shade.allowed & crate::shaders::consts::FLAVOUR_CONTROL_MAP != 0)
             .then_some(c.plane_tiles),
         virtual_texture: renderer.virtual_texture.as_ref().map(VtStats::of),
-        grass: renderer.grass.as_ref().zip(c.grass).map(|(g, counters)| GrassStats {
+        grass: renderer.near.grass.as_ref().zip(c.grass).map(|(g, counters)| GrassStats {
             counters,
             triangles: u64::from(counters.drawn) * u64::from(GRASS_BLADES * GRASS_BLADE_VERTICES / 3),
             memory_bytes: g.memory().iter().map(|(_, b)| b).sum(),
         }),
-        cliff_meshes: match &renderer.cliff_meshes {
+        cliff_meshes: match &renderer.near.cliff_meshes {
             Some(c) => Some(c.read(ctx)?.0),
             None => None,
         },

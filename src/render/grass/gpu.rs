@@ -158,15 +158,30 @@ impl Grass {
         })
     }
 
-    /// The pigment map's texel: its square covers the radius with two
-    /// texels to spare each way.
+    /// The step the pigment map's centre snaps to: it is rendered again
+    /// when the camera crosses into another step (an eighth of the radius).
+    fn pigment_step_m(&self) -> f32 {
+        self.params.radius_m / 8.0
+    }
+
+    /// The pigment map's texel: its square covers the radius around any
+    /// camera within its step, with two texels to spare each way.
     pub fn pigment_texel_m(&self) -> f32 {
-        2.0 * self.params.radius_m / (GRASS_PIGMENT_TEXELS - 4) as f32
+        2.0 * (self.params.radius_m + self.pigment_step_m()) / (GRASS_PIGMENT_TEXELS - 4) as f32
+    }
+
+    /// The pigment map's south-west corner for a camera at `xy`: on the
+    /// texel grid (texels stay put in the world), the map centred on the
+    /// camera's step.
+    pub fn pigment_origin(&self, xy: [f32; 2]) -> [f32; 2] {
+        let (step, texel) = (self.pigment_step_m(), self.pigment_texel_m());
+        let half = (GRASS_PIGMENT_TEXELS / 2) as f32;
+        xy.map(|c| ((((c / step).floor() + 0.5) * step / texel).floor() - half) * texel)
     }
 
     /// Plans the frame: the cells, the flags, the decals touching each
-    /// square, and whether the pigment map is redone (first frame, moved a
-    /// texel, the terrain or the decals changed).
+    /// square, and whether the pigment map is redone (first frame, the
+    /// camera crossed into another step, the terrain or the decals changed).
     pub fn begin_frame(&mut self, f: &GrassFrameInputs, uploaded: UploadedDecals) -> GrassFrame {
         let mut decals_changed = false;
         if let (Some((seen, _)), Some(now)) = (&mut self.decals, uploaded) {
@@ -201,8 +216,7 @@ impl Grass {
             pad: [0; 3],
         };
         let texel = self.pigment_texel_m();
-        let half = (GRASS_PIGMENT_TEXELS / 2) as f32;
-        let origin = [0, 1].map(|i| ((f.camera_world[i] / texel).floor() - half) * texel);
+        let origin = self.pigment_origin([f.camera_world[0], f.camera_world[1]]);
         let due = f.terrain_changed || decals_changed || self.pigment_at != Some(origin);
         self.pigment_at = Some(origin);
         let side = texel * GRASS_PIGMENT_TEXELS as f32;
