@@ -224,19 +224,25 @@ fn effects_that_cannot_run_are_reported_off_and_cost_nothing() {
             Rig::with_options(ctx, world(), Surface::Hills, vec![], SIZE, false, options(Effects::default(), false));
         let plain = diff(before, ctx.live_objects());
         drop(rig);
+        // Each lacks what it needs: splat's materials (off by default),
+        // cliffs' flavours, the scene's assets or decals.
+        let cannot = [
+            (Effect::VirtualTexture, "effect splat is off"),
+            (Effect::Grass, "effect splat is off"),
+            (Effect::CliffMeshes, "effect cliffs is off"),
+            (Effect::Assets, "no assets"),
+            (Effect::Decals, "no decals"),
+        ];
         let mut fx = Effects::default();
-        for e in [Effect::VirtualTexture, Effect::Grass] {
+        for (e, _) in cannot {
             fx.set(e, true);
         }
         let before = ctx.live_objects();
         let mut rig = Rig::with_options(ctx, world(), Surface::Hills, vec![], SIZE, false, options(fx, false));
-        assert_eq!(diff(before, ctx.live_objects()), plain, "asking for unimplemented effects builds nothing");
+        assert_eq!(diff(before, ctx.live_objects()), plain, "asking for effects that cannot run builds nothing");
         let (_, report) = shot(ctx, &mut rig, &v);
-        for e in [Effect::VirtualTexture, Effect::Grass] {
+        for (e, why) in cannot {
             let d = report.effects.iter().find(|d| d.effect == e).unwrap();
-            // The virtual texture caches the splat blend: without splat
-            // (off by default) it has nothing to cache.
-            let why = if e == Effect::VirtualTexture { "effect splat is off" } else { "not implemented" };
             assert!(d.requested && !d.on && d.reason.contains(why), "{d:?}");
         }
     });

@@ -7,11 +7,9 @@
 //! near ground's, else the baked albedo.
 
 use crate::error::Result;
-use crate::gpu::{
-    depth_layout, vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Pipeline, Recorder, Resource,
-    Sampler, SamplerDesc,
-};
+use crate::gpu::{vk, Buffer, Context, GraphicsPipelineDesc, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
 use crate::passes::cull_patches::nearest_sampler;
+use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::gbuffer_tiles::MaterialBindings;
 use crate::passes::terrain_geometry::RenderTargets;
 use crate::passes::terrain_query::VistaTerrain;
@@ -103,16 +101,7 @@ impl AssetDraw {
         m: Option<&MaterialBindings>,
     ) {
         assert_eq!(m.is_some(), self.materials, "material resources exactly for the MATERIALS variant");
-        let depth = targets.depth;
-        rec.transition(depth, depth_layout(depth.format, false));
-        rec.begin_rendering(
-            &[
-                ColorTarget { image: &gbuffer.albedo, clear: None },
-                ColorTarget { image: &gbuffer.normal, clear: None },
-                ColorTarget { image: &gbuffer.material, clear: None },
-            ],
-            Some(DepthTarget { image: depth, clear: None, clear_stencil: false, read_only: false }),
-        );
+        GbufferTiles::begin_overlay(rec, targets, gbuffer);
         rec.bind_pipeline(&self.pipeline);
         let mut bindings = vec![
             (vs::VIEW, Resource::Buffer(view)),
@@ -152,7 +141,6 @@ impl AssetDraw {
             rec.push_constants(&self.pipeline, &push);
             rec.draw_indexed(indices, *index_count, count);
         }
-        rec.end_rendering();
-        rec.transition(depth, depth_layout(depth.format, true));
+        GbufferTiles::end_overlay(rec, targets);
     }
 }

@@ -4,9 +4,9 @@
 //! with the cliff flavours their steep normals classify them into.
 
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, Context, GraphicsPipelineDesc, Pipeline, Recorder, Resource, StencilDesc};
-use crate::passes::terrain_geometry::{begin_geometry, DepthOptions, RenderTargets};
-use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT};
+use crate::gpu::{Buffer, Context, Pipeline, Recorder, Resource};
+use crate::passes::terrain_geometry::{begin_geometry, geometry_pipeline, DepthOptions, RenderTargets};
+use crate::render::gbuffer::GBuffer;
 use crate::shaders::{cliff_meshes_frag as fs, cliff_meshes_vert as vs};
 
 pub struct CliffMeshDraw {
@@ -18,27 +18,10 @@ impl CliffMeshDraw {
     pub const NAME: &'static str = vs::PASS;
 
     pub fn new(ctx: &Context, depth: DepthOptions) -> Result<Self> {
-        let desc = GraphicsPipelineDesc {
-            name: Self::NAME,
-            vertex: &vs::SHADER,
-            fragment: &fs::SHADER,
-            specialization: &[],
-            color_formats: &[CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT],
-            depth_format: Some(depth.format),
-            depth_compare: vk::CompareOp::GREATER,
-            depth_write: true,
-            // Terrain to the engine: the terrain stencil bit.
-            stencil: depth.terrain_stencil_bit.map(|_| StencilDesc {
-                compare: vk::CompareOp::ALWAYS,
-                reference: depth.stencil_mask(),
-                compare_mask: 0,
-                write_mask: depth.stencil_mask(),
-            }),
-            cull_mode: vk::CullModeFlags::BACK,
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            blend: false,
-        };
-        Ok(CliffMeshDraw { pipeline: Pipeline::graphics(ctx, &desc)?, depth })
+        Ok(CliffMeshDraw {
+            pipeline: geometry_pipeline(ctx, Self::NAME, (&vs::SHADER, &fs::SHADER), &[], depth)?,
+            depth,
+        })
     }
 
     pub fn pipeline_label(&self) -> &str {

@@ -6,14 +6,11 @@
 //! decal was blended into.
 
 use crate::error::Result;
-use crate::gpu::{
-    vk, Buffer, BufferDesc, Context, GraphicsPipelineDesc, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
-    StencilDesc,
-};
+use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
-use crate::passes::terrain_geometry::{begin_geometry, DepthOptions, RenderTargets};
+use crate::passes::terrain_geometry::{begin_geometry, geometry_pipeline, DepthOptions, RenderTargets};
 use crate::passes::terrain_query::VistaTerrain;
-use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT};
+use crate::render::gbuffer::GBuffer;
 use crate::render::virtual_texture::decal_mesh::DecalMeshes;
 use crate::shaders::{decal_meshes_frag as fs, decal_meshes_vert as vs, structs};
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
@@ -39,28 +36,9 @@ impl DecalMeshPass {
     pub const NAME: &'static str = vs::PASS;
 
     pub fn new(ctx: &Context, meshes: &DecalMeshes, depth: DepthOptions) -> Result<Self> {
-        let desc = GraphicsPipelineDesc {
-            name: Self::NAME,
-            vertex: &vs::SHADER,
-            fragment: &fs::SHADER,
-            specialization: &[],
-            color_formats: &[CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT],
-            depth_format: Some(depth.format),
-            depth_compare: vk::CompareOp::GREATER,
-            depth_write: true,
-            stencil: depth.terrain_stencil_bit.map(|_| StencilDesc {
-                compare: vk::CompareOp::ALWAYS,
-                reference: depth.stencil_mask(),
-                compare_mask: 0,
-                write_mask: depth.stencil_mask(),
-            }),
-            cull_mode: vk::CullModeFlags::BACK,
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            blend: false,
-        };
         let (vertices, indices) = upload(ctx, meshes)?;
         Ok(DecalMeshPass {
-            pipeline: Pipeline::graphics(ctx, &desc)?,
+            pipeline: geometry_pipeline(ctx, Self::NAME, (&vs::SHADER, &fs::SHADER), &[], depth)?,
             vertices,
             indices,
             index_count: meshes.indices.len() as u32,

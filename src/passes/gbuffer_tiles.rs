@@ -166,6 +166,29 @@ impl GbufferTiles {
         }
     }
 
+    /// Opens a draw over the G-buffer the variants wrote (albedo, normal,
+    /// material loaded), writing depth: geometry drawn after the tile
+    /// shading (`asset_draw`, `grass_draw`). The depth target leaves its
+    /// read-only layout; [`GbufferTiles::end_overlay`] puts it back for
+    /// `lighting_resolve`.
+    pub fn begin_overlay(rec: &mut Recorder, targets: &RenderTargets, gbuffer: &GBuffer) {
+        let depth = targets.depth;
+        rec.transition(depth, depth_layout(depth.format, false));
+        rec.begin_rendering(
+            &[
+                ColorTarget { image: &gbuffer.albedo, clear: None },
+                ColorTarget { image: &gbuffer.normal, clear: None },
+                ColorTarget { image: &gbuffer.material, clear: None },
+            ],
+            Some(DepthTarget { image: depth, clear: None, clear_stencil: false, read_only: false }),
+        );
+    }
+
+    pub fn end_overlay(rec: &mut Recorder, targets: &RenderTargets) {
+        rec.end_rendering();
+        rec.transition(targets.depth, depth_layout(targets.depth.format, true));
+    }
+
     /// Draws variant `bits`' tiles (`first`: clears the G-buffer first).
     #[allow(clippy::too_many_arguments)]
     pub fn record_variant(

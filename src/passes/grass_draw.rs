@@ -7,9 +7,9 @@
 
 use crate::error::Result;
 use crate::gpu::{
-    depth_layout, vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, Pipeline, Recorder,
-    Resource, Sampler, SamplerDesc,
+    vk, Buffer, Context, GraphicsPipelineDesc, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc,
 };
+use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::terrain_geometry::RenderTargets;
 use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use crate::shaders::{grass_draw_frag as fs, grass_draw_vert as vs, structs};
@@ -83,16 +83,7 @@ impl GrassDraw {
         inputs: &DrawInputs,
         push: GrassDrawPush,
     ) {
-        let depth = targets.depth;
-        rec.transition(depth, depth_layout(depth.format, false));
-        rec.begin_rendering(
-            &[
-                ColorTarget { image: &gbuffer.albedo, clear: None },
-                ColorTarget { image: &gbuffer.normal, clear: None },
-                ColorTarget { image: &gbuffer.material, clear: None },
-            ],
-            Some(DepthTarget { image: depth, clear: None, clear_stencil: false, read_only: false }),
-        );
+        GbufferTiles::begin_overlay(rec, targets, gbuffer);
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(
             &self.pipeline,
@@ -106,7 +97,6 @@ impl GrassDraw {
         );
         rec.push_constants(&self.pipeline, &push);
         rec.draw_indirect(inputs.header, 0);
-        rec.end_rendering();
-        rec.transition(depth, depth_layout(depth.format, true));
+        GbufferTiles::end_overlay(rec, targets);
     }
 }

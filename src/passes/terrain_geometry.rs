@@ -134,11 +134,24 @@ pub(crate) fn terrain_pipeline(
     depth: DepthOptions,
 ) -> Result<Pipeline> {
     let spec = [(vs::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (vs::SPEC_PATCH_QUADS, PATCH_QUADS)];
+    geometry_pipeline(ctx, name, (vertex, &fs::SHADER), &spec, depth)
+}
+
+/// A pipeline of the geometry pass (the terrain's and the meshes drawn
+/// beside it): its three targets, reversed-Z depth written, the terrain
+/// stencil bit where the engine asked for one, back faces culled.
+pub(crate) fn geometry_pipeline(
+    ctx: &Context,
+    name: &str,
+    (vertex, fragment): (&'static ShaderInfo, &'static ShaderInfo),
+    specialization: crate::gpu::pipeline::Specialization,
+    depth: DepthOptions,
+) -> Result<Pipeline> {
     let desc = GraphicsPipelineDesc {
         name,
         vertex,
-        fragment: &fs::SHADER,
-        specialization: &spec,
+        fragment,
+        specialization,
         color_formats: &[CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT],
         depth_format: Some(depth.format),
         depth_compare: vk::CompareOp::GREATER,
