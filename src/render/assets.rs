@@ -207,8 +207,17 @@ pub struct AssetResources {
     pub params: AssetParams,
 }
 
+/// Most assets one renderer draws (their instances are uploaded once).
+pub const MAX_ASSETS: usize = 65536;
+
 impl AssetResources {
     pub fn new(ctx: &Context, assets: &[Asset], params: AssetParams) -> Result<AssetResources> {
+        if assets.len() > MAX_ASSETS {
+            return Err(Error::BadInput(format!(
+                "{} assets; the example asset pass draws at most {MAX_ASSETS}",
+                assets.len()
+            )));
+        }
         for (i, a) in assets.iter().enumerate() {
             a.check().map_err(|e| Error::BadInput(format!("asset {i} ({}): {e}", a.kind.name())))?;
         }

@@ -111,6 +111,7 @@ pub struct Grass {
     /// redoes the pigment), and the indices of those touching its squares.
     decals: Option<(Vec<Decal>, Buffer)>,
     /// Tests only: no frustum or Hi-Z culling (every placed tuft drawn).
+    #[doc(hidden)]
     pub no_culling: bool,
 }
 
