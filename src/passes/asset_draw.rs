@@ -7,14 +7,14 @@
 //! near ground's, else the baked albedo.
 
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, Context, GraphicsPipelineDesc, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
+use crate::gpu::{vk, Buffer, Context, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::gbuffer_tiles::MaterialBindings;
 use crate::passes::terrain_geometry::RenderTargets;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::render::assets::AssetResources;
-use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
+use crate::render::gbuffer::GBuffer;
 use crate::shaders::{asset_draw_frag as fs, asset_draw_vert as vs, structs};
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT};
 
@@ -43,20 +43,6 @@ impl AssetDraw {
 
     /// `materials`: the variant that colours by the splat blend.
     pub fn new(ctx: &Context, depth_format: vk::Format, materials: bool) -> Result<Self> {
-        let desc = GraphicsPipelineDesc {
-            name: Self::NAME,
-            vertex: vs::variant(if materials { vs::VARIANT_MATERIALS } else { 0 }),
-            fragment: &fs::SHADER,
-            specialization: &[],
-            color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
-            depth_format: Some(depth_format),
-            depth_compare: vk::CompareOp::GREATER,
-            depth_write: true,
-            stencil: None,
-            cull_mode: vk::CullModeFlags::BACK,
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            blend: false,
-        };
         let linear = SamplerDesc {
             name: "asset_draw_linear",
             filter: vk::Filter::LINEAR,
@@ -68,7 +54,13 @@ impl AssetDraw {
             address_mode: vk::SamplerAddressMode::REPEAT,
         };
         Ok(AssetDraw {
-            pipeline: Pipeline::graphics(ctx, &desc)?,
+            pipeline: GbufferTiles::overlay_pipeline(
+                ctx,
+                Self::NAME,
+                (vs::variant(if materials { vs::VARIANT_MATERIALS } else { 0 }), &fs::SHADER),
+                depth_format,
+                vk::CullModeFlags::BACK,
+            )?,
             materials,
             detail: Sampler::mipmapped(ctx, &detail)?,
             nearest: nearest_sampler(ctx, "asset_draw_nearest")?,

@@ -166,6 +166,33 @@ impl GbufferTiles {
         }
     }
 
+    /// The pipeline of a pass drawing over the G-buffer after the tile
+    /// shading (what [`GbufferTiles::begin_overlay`] opens): its three
+    /// targets, reversed-Z depth tested and written, no stencil.
+    pub fn overlay_pipeline(
+        ctx: &Context,
+        name: &str,
+        (vertex, fragment): (&'static crate::gpu::ShaderInfo, &'static crate::gpu::ShaderInfo),
+        depth_format: vk::Format,
+        cull_mode: vk::CullModeFlags,
+    ) -> Result<Pipeline> {
+        let desc = GraphicsPipelineDesc {
+            name,
+            vertex,
+            fragment,
+            specialization: &[],
+            color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
+            depth_format: Some(depth_format),
+            depth_compare: vk::CompareOp::GREATER,
+            depth_write: true,
+            stencil: None,
+            cull_mode,
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            blend: false,
+        };
+        Pipeline::graphics(ctx, &desc)
+    }
+
     /// Opens a draw over the G-buffer the variants wrote (albedo, normal,
     /// material loaded), writing depth: geometry drawn after the tile
     /// shading (`asset_draw`, `grass_draw`). The depth target leaves its

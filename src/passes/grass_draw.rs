@@ -6,12 +6,10 @@
 //! or index buffer.
 
 use crate::error::Result;
-use crate::gpu::{
-    vk, Buffer, Context, GraphicsPipelineDesc, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc,
-};
+use crate::gpu::{vk, Buffer, Context, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::terrain_geometry::RenderTargets;
-use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
+use crate::render::gbuffer::GBuffer;
 use crate::shaders::{grass_draw_frag as fs, grass_draw_vert as vs, structs};
 
 /// Host twin of `GrassDrawPush`.
@@ -44,27 +42,22 @@ impl GrassDraw {
     pub const NAME: &'static str = vs::PASS;
 
     pub fn new(ctx: &Context, depth_format: vk::Format) -> Result<Self> {
-        let desc = GraphicsPipelineDesc {
-            name: Self::NAME,
-            vertex: &vs::SHADER,
-            fragment: &fs::SHADER,
-            specialization: &[],
-            color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
-            depth_format: Some(depth_format),
-            depth_compare: vk::CompareOp::GREATER,
-            depth_write: true,
-            stencil: None,
-            // Blades are seen from both sides.
-            cull_mode: vk::CullModeFlags::NONE,
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            blend: false,
-        };
+        // Blades are seen from both sides.
         let linear = SamplerDesc {
             name: "grass_draw_linear",
             filter: vk::Filter::LINEAR,
             address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
         };
-        Ok(GrassDraw { pipeline: Pipeline::graphics(ctx, &desc)?, linear: Sampler::new(ctx, &linear)? })
+        Ok(GrassDraw {
+            pipeline: GbufferTiles::overlay_pipeline(
+                ctx,
+                Self::NAME,
+                (&vs::SHADER, &fs::SHADER),
+                depth_format,
+                vk::CullModeFlags::NONE,
+            )?,
+            linear: Sampler::new(ctx, &linear)?,
+        })
     }
 
     pub fn pipeline_label(&self) -> &str {

@@ -232,7 +232,8 @@ impl CliffMeshes {
     }
 
     pub fn record_build(&self, rec: &mut Recorder, push: &CliffBuildPush, sector: &Buffer, tree: &GpuQuadtree) {
-        let reset = CliffHeaderGpu { index_count: cell_indices().len() as u32, ..CliffHeaderGpu::default() };
+        let index_count = 6 * CLIFF_CELL_QUADS * CLIFF_CELL_QUADS;
+        let reset = CliffHeaderGpu { index_count, ..CliffHeaderGpu::default() };
         rec.update_buffer(&self.header, 0, bytemuck::bytes_of(&reset));
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         self.build.record(rec, push, sector, tree, &self.header, &self.vertices);
