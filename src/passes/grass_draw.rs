@@ -42,7 +42,6 @@ impl GrassDraw {
     pub const NAME: &'static str = vs::PASS;
 
     pub fn new(ctx: &Context, depth_format: vk::Format) -> Result<Self> {
-        // Blades are seen from both sides.
         let linear = SamplerDesc {
             name: "grass_draw_linear",
             filter: vk::Filter::LINEAR,
@@ -54,6 +53,7 @@ impl GrassDraw {
                 Self::NAME,
                 (&vs::SHADER, &fs::SHADER),
                 depth_format,
+                // Blades are seen from both sides.
                 vk::CullModeFlags::NONE,
             )?,
             linear: Sampler::new(ctx, &linear)?,
