@@ -115,7 +115,7 @@ pub struct CompiledShader {
 }
 
 /// Most variant switches a file may declare (2^N compilations).
-const MAX_VARIANT_SWITCHES: usize = 3;
+const MAX_VARIANT_SWITCHES: usize = 4;
 
 /// A file declares variants with a comment line `// variants: A B` among its
 /// first lines: it is compiled once per subset of the names, each defined as

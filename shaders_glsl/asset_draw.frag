@@ -1,5 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+// variants: ENGINE_GBUFFER
 // The example assets into the G-buffer: the blended albedo and normal, a
 // rough surface, the material target marked GBUFFER_ASSET.
 #include "constants.glsl"
@@ -7,12 +8,23 @@
 
 layout(location = 0) in vec3 albedo;
 layout(location = 1) in vec3 normal;
+#ifdef ENGINE_GBUFFER
+// Output `gbuffer`: the engine's layout (engine_gbuffer.glsl).
+#include "engine_gbuffer.glsl"
+#else
 layout(location = 0) out vec4 gb_albedo;
 layout(location = 1) out vec4 gb_normal;
 layout(location = 2) out uvec2 gb_material;
+#endif
 
 void main() {
+    vec3 n = normalize(normal);
+    const float roughness = 0.8;
+#ifdef ENGINE_GBUFFER
+    write_engine_gbuffer(albedo, n, roughness, 0u);
+#else
     gb_albedo = vec4(albedo, 1.0);
-    gb_normal = vec4(oct_encode(normalize(normal)), 0.8, 1.0);
+    gb_normal = vec4(oct_encode(n), roughness, 1.0);
     gb_material = uvec2(0u, GBUFFER_ASSET);
+#endif
 }

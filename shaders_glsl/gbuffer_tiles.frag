@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// variants: MATERIALS CONTROL_MAP VIRTUAL_TEXTURE
+// variants: MATERIALS CONTROL_MAP VIRTUAL_TEXTURE ENGINE_GBUFFER
 // Shades the tiles of one variant into the G-buffer. The variant's flavour
 // bits are a specialization constant, so each pipeline contains only the
 // flavours its tiles need; per pixel, the flavours are weighted by the
@@ -14,6 +14,10 @@
 // exists and no material resource is bound or built. CONTROL_MAP: the
 // control-map flavour (seed 004, control_surface.glsl) instead of splat,
 // with its own atlas and texture table over the same detail textures.
+// ENGINE_GBUFFER (output `gbuffer`): the surface goes into the engine's
+// own G-buffer layout (engine_gbuffer.glsl) instead of vista's. A pixel
+// the geometry pass did not classify (the engine's own, under a loaded
+// depth) is left as the engine wrote it.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
 #include "atlas_texels.glsl"
@@ -86,9 +90,13 @@ layout(push_constant, std430) uniform TileDrawPush { TilePush p; VistaTerrain te
 #undef VISTA_TERRAIN_DECLARE_ONLY
 #include "terrain_sample.glsl"
 
+#ifdef ENGINE_GBUFFER
+#include "engine_gbuffer.glsl"
+#else
 layout(location = 0) out vec4 gb_albedo;    // rgb albedo (sRGB target)
 layout(location = 1) out vec4 gb_normal;    // xy octahedral shading normal, z roughness
 layout(location = 2) out uvec2 gb_material; // x material id, y flavour bits shaded
+#endif
 
 
 struct Surface {
@@ -257,7 +265,15 @@ void main() {
     bool every = every_bits != 0u;
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(sampler2D(depth_target, nearest), px, 0).r;
-    uint bits = texelFetch(usampler2D(classification, nearest), px, 0).r & variant;
+    uint classified = texelFetch(usampler2D(classification, nearest), px, 0).r;
+    // Not terrain: the engine's own pixel under its loaded depth, left as
+    // it is by failing the depth test (1 is not LESS than any depth; naga
+    // reads no discard, which glslang makes a demote).
+    gl_FragDepth = classified == 0u ? 1.0 : 0.0;
+    if (classified == 0u) {
+        return;
+    }
+    uint bits = classified & variant;
     uvec4 codes = texelFetch(usampler2D(normals, nearest), px, 0);
     vec3 ng = oct_decode8(codes.xy);
     vec3 nt = oct_decode8(codes.zw);
@@ -347,7 +363,11 @@ void main() {
     }
 #endif
     vec3 n = normalize(s.normal);
+#ifdef ENGINE_GBUFFER
+    write_engine_gbuffer(s.albedo, n, s.roughness, material);
+#else
     gb_albedo = vec4(s.albedo, 1.0);
     gb_normal = vec4(oct_encode(n), s.roughness, 1.0);
     gb_material = uvec2(material, bits);
+#endif
 }

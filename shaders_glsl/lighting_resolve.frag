@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// variants: LIGHTING SHADOWS ATMOSPHERE
+// variants: LIGHTING SHADOWS ATMOSPHERE HDR_OUTPUT
 // The lit output of the tools and tests (an engine lights the G-buffer
 // itself): sun plus sky ambient on the G-buffer's albedo and normal
 // (variant LIGHTING, the `lighting` effect; without it, unlit albedo).
@@ -13,7 +13,10 @@
 // With ATMOSPHERE (the `atmosphere` effect), the terrain is seen through
 // the height fog of atmosphere.glsl and the background is its sky; without
 // it the pass is depth-tested to terrain pixels and the background keeps the clear colour.
-// SHADOWS and ATMOSPHERE need LIGHTING.
+// SHADOWS and ATMOSPHERE need LIGHTING. Output `lit` writes the display
+// image and vista's own HDR image; HDR_OUTPUT (output `hdr`) writes only
+// the linear radiance, into the engine's float target. A pixel vista drew
+// nothing into (the engine's own, under a loaded depth) is left as is.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
 
@@ -41,11 +44,18 @@ layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } vie
 layout(set = 0, binding = 1) uniform texture2D gb_albedo;
 layout(set = 0, binding = 2) uniform texture2D gb_normal;
 layout(set = 0, binding = 3) uniform sampler nearest;
+// x material id, y the flavour bits shaded or GBUFFER_GRASS/ASSET: 0 where
+// vista drew nothing.
+layout(set = 0, binding = 8) uniform utexture2D gb_material;
+// 1: the display target is sRGB (the hardware encodes on store).
+layout(constant_id = 0) const uint DISPLAY_SRGB_TARGET = 0u;
+// 1: the atmosphere's sky fills the background (output `hdr` may leave it).
+layout(constant_id = 1) const uint SKY = 1u;
 
+layout(set = 0, binding = 4) uniform texture2D depth_target;
 #if defined(SHADOWS) || defined(ATMOSPHERE)
 #define NEEDS_POSITION
 #include "reconstruct.glsl"
-layout(set = 0, binding = 4) uniform texture2D depth_target;
 #define VISTA_TERRAIN_DECLARE_ONLY
 #include "terrain_sample.glsl"
 #undef VISTA_TERRAIN_DECLARE_ONLY
@@ -105,35 +115,67 @@ float sun_seen(vec3 p) {
 #include "atmosphere.glsl"
 #endif
 
+#ifdef HDR_OUTPUT
+layout(location = 0) out vec4 hdr;
+#else
 layout(location = 0) out vec4 display;
 layout(location = 1) out vec4 hdr;
 
-// Writes the linear radiance and its display encoding.
-void emit(vec3 lit) {
-    hdr = vec4(lit, 1.0);
+vec3 srgb_decode(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
+}
+
+// The display encoding of linear radiance `lit`.
+vec3 display_encoded(vec3 lit) {
 #ifdef LIGHTING
     vec3 exposed = lit * view.v.image.x;
     if (view.v.image.y == 1.0) {
-        display = vec4(srgb_encode(aces_fitted(exposed)), 1.0);
-        return;
+        return srgb_encode(aces_fitted(exposed));
     }
-    display = vec4(pow(clamp(exposed, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+    return pow(clamp(exposed, 0.0, 1.0), vec3(1.0 / 2.2));
 #else
-    display = vec4(pow(clamp(lit, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+    return pow(clamp(lit, 0.0, 1.0), vec3(1.0 / 2.2));
+#endif
+}
+#endif
+
+// Writes the linear radiance and (output `lit`) its display encoding.
+void emit(vec3 lit) {
+    hdr = vec4(lit, 1.0);
+#ifndef HDR_OUTPUT
+    vec3 encoded = display_encoded(lit);
+    // A variable, not a constant expression: naga reads no SpecConstantOp.
+    uint srgb_target = DISPLAY_SRGB_TARGET;
+    display = vec4(srgb_target != 0u ? srgb_decode(encoded) : encoded, 1.0);
 #endif
 }
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
-#ifdef NEEDS_POSITION
     float depth = texelFetch(sampler2D(depth_target, nearest), px, 0).r;
+    // The pass's depth test is NOT_EQUAL: a fragment at the stored depth
+    // fails it and leaves the pixel as it is (naga reads no discard, which
+    // glslang makes a demote). So vista's pixels pass at depth 0, the
+    // background (stored 0) passes at 1 where the atmosphere draws the sky,
+    // and the engine's own pixels under its loaded depth, which vista did
+    // not draw into, fail at their own depth.
+    bool vista_drew = texelFetch(usampler2D(gb_material, nearest), px, 0).y != 0u;
+    bool sky = false;
+#ifdef ATMOSPHERE
+    // A variable, not a constant expression: naga reads no SpecConstantOp.
+    uint sky_on = SKY;
+    sky = depth == 0.0 && sky_on != 0u;
 #endif
+    gl_FragDepth = sky ? 1.0 : (vista_drew ? 0.0 : depth);
+    if (!sky && !vista_drew) {
+        return;
+    }
 #ifdef ATMOSPHERE
     vec3 view_dir = normalize(eye_ray(view.v.inv_view_proj, gl_FragCoord.xy, view.v.viewport));
     vec3 scatter = fog_inscatter(pc.fog, pc.haze.rgb, view_dir, view.v.sun_dir.xyz, view.v.sun_color.rgb,
                                  view.v.sky_color.rgb);
     // Reversed-Z: the background keeps the clear depth 0.
-    if (depth == 0.0) {
+    if (sky) {
         float t = fog_sky_transmittance(pc.fog, pc.zenith.w, view.v.camera_world.xyz, view_dir);
         emit(pc.zenith.rgb * t + scatter * (1.0 - t));
         return;

@@ -25,6 +25,7 @@ pub mod passes;
 pub mod reference;
 pub mod render;
 pub mod shaders;
+pub mod targets;
 #[cfg(feature = "stability")]
 pub mod stability;
 pub mod terrain;

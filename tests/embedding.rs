@@ -162,7 +162,7 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
                     rec.discard_to(&color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
                     rec.discard_to(&depth, DEPTH_LAYOUT);
                 }
-                renderer.record(&mut rec, &v, &RenderTargets { color: &color, depth: &depth, clear: MAGENTA }).unwrap();
+                renderer.record(&mut rec, &v, &RenderTargets::color(&color, &depth, MAGENTA)).unwrap();
                 // SAFETY: ends the recording begun above; submits to the
                 // engine's queue and waits, so nothing is in flight after.
                 unsafe {

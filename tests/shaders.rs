@@ -346,8 +346,16 @@ fn variants_leave_out_what_their_switches_add() {
     for name in ["vt_state", "vt_albedo", "vt_detail"] {
         assert!(vt.contains(&name) && !names(tiles::variant(tiles::VARIANT_MATERIALS)).contains(&name), "{name}");
     }
-    let full = tiles::VARIANT_MATERIALS | tiles::VARIANT_CONTROL_MAP | tiles::VARIANT_VIRTUAL_TEXTURE;
+    let full = tiles::VARIANT_MATERIALS
+        | tiles::VARIANT_CONTROL_MAP
+        | tiles::VARIANT_VIRTUAL_TEXTURE
+        | tiles::VARIANT_ENGINE_GBUFFER;
     assert!(std::ptr::eq(tiles::variant(full), &tiles::SHADER), "SHADER is the full variant");
+    // Output `gbuffer`'s layout arrives as specialization constants, only
+    // where its switch is on.
+    let specs = |v| tiles::variant(v).spec_constants.iter().map(|(n, _)| *n).collect::<Vec<_>>();
+    assert!(specs(tiles::VARIANT_ENGINE_GBUFFER).contains(&"GB_CHANNELS3"));
+    assert!(!specs(0).contains(&"GB_FLAGS"));
     let bare = names(cull::variant(0));
     for gone in ["patch_cones", "patch_holes", "hole_list"] {
         assert!(!bare.contains(&gone), "{gone} in the bare cull variant");

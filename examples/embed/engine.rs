@@ -23,7 +23,7 @@ pub const DEPTH_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
 );
 /// The engine's depth: depth-only, as many engines use; vista is told so
 /// (`DepthOptions`, no stencil bit) and draws into it in this layout.
-pub const DEPTH: DepthOptions = DepthOptions { format: vk::Format::D32_SFLOAT, terrain_stencil_bit: None };
+pub const DEPTH: DepthOptions = DepthOptions { format: vk::Format::D32_SFLOAT, terrain_stencil_bit: None, load: false };
 const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL;
 const FRAMES: usize = 2;
 const EXTENT: vk::Extent2D = vk::Extent2D { width: SIZE[0], height: SIZE[1] };

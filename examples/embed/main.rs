@@ -107,7 +107,7 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
             rec.discard_to(&color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
             rec.discard_to(&depth, engine::DEPTH.layout());
         }
-        let targets = RenderTargets { color: &color, depth: &depth, clear: [0.55, 0.68, 0.85, 1.0] };
+        let targets = RenderTargets::color(&color, &depth, [0.55, 0.68, 0.85, 1.0]);
         renderer.record(&mut rec, &view, &targets).map_err(|e| e.to_string())?;
         // vista leaves the targets in their attachment layouts: the engine
         // draws its markers into them, depth tested against the terrain.

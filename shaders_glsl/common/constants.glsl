@@ -222,4 +222,23 @@
 #define GBUFFER_GRASS 128u
 #define GBUFFER_ASSET 64u
 
+// Output `gbuffer` (targets/gbuffer_layout.rs, engine_gbuffer.glsl): what
+// a channel of the engine's attachment holds (a nibble per channel, r
+// lowest, in one specialization constant per attachment).
+#define GB_CHANNEL_ZERO 0u
+#define GB_CHANNEL_ONE 1u
+#define GB_CHANNEL_BASE_R 2u
+#define GB_CHANNEL_BASE_G 3u
+#define GB_CHANNEL_BASE_B 4u
+#define GB_CHANNEL_NORMAL_X 5u
+#define GB_CHANNEL_NORMAL_Y 6u
+#define GB_CHANNEL_NORMAL_Z 7u
+#define GB_CHANNEL_ROUGHNESS 8u
+#define GB_CHANNEL_MATERIAL 9u
+// Output `gbuffer`'s flags: a byte per attachment (normal stored signed;
+// base colour sRGB-encoded by the shader), and the octahedral normal.
+#define GB_FLAG_SIGNED 1u
+#define GB_FLAG_SRGB_ENCODE 2u
+#define GB_FLAG_OCTAHEDRAL 0x80000000u
+
 #endif

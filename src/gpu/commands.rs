@@ -33,6 +33,9 @@ pub struct Recorder<'a> {
     pub(super) cmd: vk::CommandBuffer,
     /// A dynamic rendering scope is open.
     pub(super) rendering: bool,
+    /// The open scope's colour attachment count, whether it has depth, and
+    /// its size (`clear_rect`).
+    scope: (u32, bool, [u32; 2]),
     compute: Option<vk::Pipeline>,
     graphics: Option<vk::Pipeline>,
 }
@@ -66,7 +69,7 @@ impl<'a> Recorder<'a> {
     /// recorded into elsewhere while this recorder lives. Images used here
     /// must be in the layouts their [`Image::layout`] reports.
     pub unsafe fn from_raw(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
-        Recorder { ctx, cmd, rendering: false, compute: None, graphics: None }
+        Recorder { ctx, cmd, rendering: false, scope: (0, false, [0, 0]), compute: None, graphics: None }
     }
 
     pub fn context(&self) -> &'a Context {
@@ -323,6 +326,42 @@ impl<'a> Recorder<'a> {
             self.d().cmd_set_scissor(self.cmd, 0, &[area]);
         }
         self.rendering = true;
+        self.scope = (colors.len() as u32, depth_target.is_some(), extent);
+    }
+
+    /// Clears `rect` (x0, y0, x1, y1 in pixels, row 0 at the top) of every
+    /// colour attachment of the open scope to `color` and of its depth to
+    /// `depth`: an engine's flat stand-in geometry (tools, tests).
+    pub fn clear_rect(&mut self, rect: [u32; 4], color: [f32; 4], depth: Option<f32>) {
+        let (colors, has_depth, extent) = self.scope;
+        assert!(self.rendering, "clear_rect outside a rendering scope");
+        assert!(depth.is_none() || has_depth, "clear_rect of depth in a scope without depth");
+        assert!(rect[0] < rect[2] && rect[1] < rect[3] && rect[2] <= extent[0] && rect[3] <= extent[1], "{rect:?}");
+        let mut clears: Vec<vk::ClearAttachment> = (0..colors)
+            .map(|i| vk::ClearAttachment {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                color_attachment: i,
+                clear_value: vk::ClearValue { color: vk::ClearColorValue { float32: color } },
+            })
+            .collect();
+        if let Some(d) = depth {
+            clears.push(vk::ClearAttachment {
+                aspect_mask: vk::ImageAspectFlags::DEPTH,
+                color_attachment: 0,
+                clear_value: vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: d, stencil: 0 } },
+            });
+        }
+        let r = vk::ClearRect {
+            rect: vk::Rect2D {
+                offset: vk::Offset2D { x: rect[0] as i32, y: rect[1] as i32 },
+                extent: vk::Extent2D { width: rect[2] - rect[0], height: rect[3] - rect[1] },
+            },
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        // SAFETY: inside a rendering scope (checked) whose attachments are
+        // the ones addressed; the rect lies inside the render area (checked).
+        unsafe { self.d().cmd_clear_attachments(self.cmd, &clears, &[r]) };
     }
 
     pub fn end_rendering(&mut self) {

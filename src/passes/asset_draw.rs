@@ -9,6 +9,7 @@
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, Context, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
 use crate::passes::cull_patches::nearest_sampler;
+use crate::targets::GbufferLayout;
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::gbuffer_tiles::MaterialBindings;
 use crate::passes::terrain_geometry::RenderTargets;
@@ -41,8 +42,14 @@ pub struct AssetDraw {
 impl AssetDraw {
     pub const NAME: &'static str = vs::PASS;
 
-    /// `materials`: the variant that colours by the splat blend.
-    pub fn new(ctx: &Context, depth_format: vk::Format, materials: bool) -> Result<Self> {
+    /// `materials`: the variant that colours by the splat blend; `layout`:
+    /// the engine's G-buffer (output `gbuffer`), else vista's.
+    pub fn new(
+        ctx: &Context,
+        depth_format: vk::Format,
+        materials: bool,
+        layout: Option<&GbufferLayout>,
+    ) -> Result<Self> {
         let linear = SamplerDesc {
             name: "asset_draw_linear",
             filter: vk::Filter::LINEAR,
@@ -57,9 +64,13 @@ impl AssetDraw {
             pipeline: GbufferTiles::overlay_pipeline(
                 ctx,
                 Self::NAME,
-                (vs::variant(if materials { vs::VARIANT_MATERIALS } else { 0 }), &fs::SHADER),
+                (
+                    vs::variant(if materials { vs::VARIANT_MATERIALS } else { 0 }),
+                    fs::variant(if layout.is_some() { fs::VARIANT_ENGINE_GBUFFER } else { 0 }),
+                ),
                 depth_format,
                 vk::CullModeFlags::BACK,
+                layout,
             )?,
             materials,
             detail: Sampler::mipmapped(ctx, &detail)?,

@@ -9,7 +9,7 @@
 use crate::error::Result;
 use crate::gpu::{vk, ColorTarget, Context, GraphicsPipelineDesc, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
-use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT};
+use crate::passes::terrain_geometry::RenderTargets;
 use crate::render::gbuffer::{classification_palette, GBuffer, FLAVOUR_COUNT};
 use crate::shaders::consts as k;
 use crate::shaders::{debug_view_frag as fs, debug_view_vert as vs};
@@ -115,13 +115,14 @@ pub struct DebugViewPass {
 impl DebugViewPass {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context) -> Result<Self> {
+    /// `format`: the colour target's (outputs `lit` and `hdr`).
+    pub fn new(ctx: &Context, format: vk::Format) -> Result<Self> {
         let desc = GraphicsPipelineDesc {
             name: Self::NAME,
             vertex: &vs::SHADER,
             fragment: &fs::SHADER,
             specialization: &[],
-            color_formats: &[COLOR_FORMAT],
+            color_formats: &[format],
             depth_format: None,
             depth_compare: vk::CompareOp::ALWAYS,
             depth_write: false,
@@ -146,7 +147,7 @@ impl DebugViewPass {
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         rec.transition(&gbuffer.patch_info, read);
         rec.transition(&gbuffer.classification, read);
-        rec.begin_rendering(&[ColorTarget { image: targets.color, clear: None }], None);
+        rec.begin_rendering(&[ColorTarget { image: targets.required_color(), clear: None }], None);
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(
             &self.pipeline,

@@ -1,7 +1,9 @@
 //! `gbuffer_tiles`: one indirect draw per shader variant over the tiles
 //! `classify_tiles` listed for it, depth-tested to terrain pixels,
-//! writing the G-buffer (albedo, normal + roughness, material id + flavour
-//! bits). A variant is a specialization constant (its flavour bits);
+//! writing vista's G-buffer (albedo, normal + roughness, material id +
+//! flavour bits) or, with output `gbuffer`, the engine's own images in
+//! its layout (variant ENGINE_GBUFFER, the layout in specialization
+//! constants). A variant is a specialization constant (its flavour bits);
 //! pipelines exist only for the variants the scene can produce (every
 //! non-empty subset of its allowed flavours), and the fragment shader's
 //! MATERIALS switch, with the material resources, only where splat or
@@ -12,7 +14,7 @@
 use crate::error::Result;
 use crate::gpu::{
     depth_layout, vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, Pipeline, Recorder,
-    Resource, Sampler, SamplerDesc,
+    Resource, Sampler, SamplerDesc, ShaderInfo,
 };
 use crate::passes::classify_tiles::{TileLists, TilePush};
 use crate::passes::cull_patches::nearest_sampler;
@@ -22,6 +24,7 @@ use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FOR
 use crate::render::shading::variant_name;
 use crate::shaders::consts::FLAVOUR_VARIANTS;
 use crate::shaders::{gbuffer_tiles_frag as fs, gbuffer_tiles_vert as vs, structs};
+use crate::targets::GbufferLayout;
 use crate::terrain::gpu_quadtree::{
     GpuQuadtree, ATLAS_ALBEDO, ATLAS_CONTROL, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT,
 };
@@ -84,9 +87,48 @@ pub struct GbufferTiles {
     /// (flavour bits, pipeline), in increasing bits.
     pipelines: Vec<(u32, Pipeline)>,
     materials: TileMaterials,
+    /// Output `gbuffer`: the engine's layout (None: vista's own G-buffer).
+    layout: Option<GbufferLayout>,
     nearest: Sampler,
     linear: Sampler,
     detail: Sampler,
+}
+
+/// The colour formats of a pass writing the G-buffer: vista's own, or the
+/// engine's `layout`.
+fn gbuffer_formats(layout: Option<&GbufferLayout>) -> Vec<vk::Format> {
+    match layout {
+        Some(l) => l.formats(),
+        None => vec![ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
+    }
+}
+
+/// The specialization constants of `engine_gbuffer.glsl` for `layout`,
+/// by the ids `fragment` reflects for them (none for vista's own).
+pub fn engine_gbuffer_spec(fragment: &ShaderInfo, layout: Option<&GbufferLayout>) -> Vec<(u32, u32)> {
+    let Some(layout) = layout else { return Vec::new() };
+    let spec = layout.spec();
+    let id = |name: &str| {
+        let found = fragment.spec_constants.iter().find(|(n, _)| *n == name);
+        found.unwrap_or_else(|| panic!("{} has no specialization constant {name}", fragment.file)).1
+    };
+    let names = ["GB_CHANNELS0", "GB_CHANNELS1", "GB_CHANNELS2", "GB_CHANNELS3"];
+    let mut out: Vec<(u32, u32)> = names.iter().zip(spec.channels).map(|(n, v)| (id(n), v)).collect();
+    out.push((id("GB_FLAGS"), spec.flags));
+    out
+}
+
+/// The colour attachments of a pass writing the G-buffer (the engine's
+/// images with output `gbuffer`), each cleared to `clear` or kept.
+fn gbuffer_attachments<'a>(
+    targets: &RenderTargets<'a>,
+    gbuffer: &'a GBuffer,
+    clear: Option<[f32; 4]>,
+) -> Vec<ColorTarget<'a>> {
+    match gbuffer.own() {
+        Some(o) => [&o.albedo, &o.normal, &o.material].into_iter().map(|image| ColorTarget { image, clear }).collect(),
+        None => targets.gbuffer.iter().map(|image| ColorTarget { image, clear }).collect(),
+    }
 }
 
 impl GbufferTiles {
@@ -95,30 +137,39 @@ impl GbufferTiles {
     /// Pipelines for `variants`; `materials`: the shader with the splat and
     /// cliff paths, or the control-map one (bound to material resources at
     /// record time); `every_flavour`: evaluate each variant's every flavour
-    /// at every pixel. `depth_format`: the renderer's depth target's.
+    /// at every pixel. `depth_format`: the renderer's depth target's;
+    /// `layout`: the engine's G-buffer (output `gbuffer`), else vista's.
     pub fn new(
         ctx: &Context,
         variants: &[u32],
         materials: TileMaterials,
         every_flavour: bool,
         depth_format: vk::Format,
+        layout: Option<&GbufferLayout>,
     ) -> Result<Self> {
-        let fragment = fs::variant(match materials {
-            TileMaterials::None => 0,
-            TileMaterials::Splat => fs::VARIANT_MATERIALS,
-            TileMaterials::SplatVirtualTexture => fs::VARIANT_MATERIALS | fs::VARIANT_VIRTUAL_TEXTURE,
-            TileMaterials::ControlMap => fs::VARIANT_CONTROL_MAP,
-        });
+        let engine = if layout.is_some() { fs::VARIANT_ENGINE_GBUFFER } else { 0 };
+        let fragment = fs::variant(
+            engine
+                | match materials {
+                    TileMaterials::None => 0,
+                    TileMaterials::Splat => fs::VARIANT_MATERIALS,
+                    TileMaterials::SplatVirtualTexture => fs::VARIANT_MATERIALS | fs::VARIANT_VIRTUAL_TEXTURE,
+                    TileMaterials::ControlMap => fs::VARIANT_CONTROL_MAP,
+                },
+        );
+        let formats = gbuffer_formats(layout);
+        let engine_spec = engine_gbuffer_spec(fragment, layout);
         let pipelines = variants
             .iter()
             .map(|&bits| {
-                let spec = [(vs::SPEC_VARIANT_BITS, bits), (fs::SPEC_EVERY_FLAVOUR, u32::from(every_flavour))];
+                let mut spec = vec![(vs::SPEC_VARIANT_BITS, bits), (fs::SPEC_EVERY_FLAVOUR, u32::from(every_flavour))];
+                spec.extend(&engine_spec);
                 let desc = GraphicsPipelineDesc {
                     name: variant_label(bits),
                     vertex: &vs::SHADER,
                     fragment,
                     specialization: &spec,
-                    color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
+                    color_formats: &formats,
                     depth_format: Some(depth_format),
                     depth_compare: TERRAIN_ONLY,
                     depth_write: false,
@@ -134,6 +185,7 @@ impl GbufferTiles {
         Ok(GbufferTiles {
             pipelines,
             materials,
+            layout: layout.cloned(),
             nearest: nearest_sampler(ctx, "gbuffer_tiles_nearest")?,
             linear: sampler("gbuffer_tiles_linear", vk::Filter::LINEAR, vk::SamplerAddressMode::CLAMP_TO_EDGE)?,
             detail: Sampler::mipmapped(
@@ -156,32 +208,38 @@ impl GbufferTiles {
         self.pipelines.iter().map(|(_, p)| p.label.clone()).collect()
     }
 
-    /// Moves the inputs into the layouts the draws read them in and the
-    /// G-buffer into attachment layout (before the first variant).
+    /// Moves the inputs into the layouts the draws read them in and vista's
+    /// own G-buffer into attachment layout (before the first variant; the
+    /// engine's images are there already).
     pub fn begin(rec: &mut Recorder, targets: &RenderTargets, gbuffer: &GBuffer) {
         rec.transition(&gbuffer.geometry_normals, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
         rec.transition(targets.depth, depth_layout(targets.depth.format, true));
-        for img in [&gbuffer.albedo, &gbuffer.normal, &gbuffer.material] {
+        for img in gbuffer.own().map(|o| [&o.albedo, &o.normal, &o.material]).into_iter().flatten() {
             rec.discard_to(img, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
         }
     }
 
     /// The pipeline of a pass drawing over the G-buffer after the tile
-    /// shading (what [`GbufferTiles::begin_overlay`] opens): its three
-    /// targets, reversed-Z depth tested and written, no stencil.
+    /// shading (what [`GbufferTiles::begin_overlay`] opens): its targets
+    /// (vista's, or the engine's `layout`, which `fragment`, the pass's
+    /// ENGINE_GBUFFER variant then, writes), reversed-Z depth tested and
+    /// written, no stencil.
     pub fn overlay_pipeline(
         ctx: &Context,
         name: &str,
-        (vertex, fragment): (&'static crate::gpu::ShaderInfo, &'static crate::gpu::ShaderInfo),
+        (vertex, fragment): (&'static ShaderInfo, &'static ShaderInfo),
         depth_format: vk::Format,
         cull_mode: vk::CullModeFlags,
+        layout: Option<&GbufferLayout>,
     ) -> Result<Pipeline> {
+        let formats = gbuffer_formats(layout);
+        let spec = engine_gbuffer_spec(fragment, layout);
         let desc = GraphicsPipelineDesc {
             name,
             vertex,
             fragment,
-            specialization: &[],
-            color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, MATERIAL_FORMAT],
+            specialization: &spec,
+            color_formats: &formats,
             depth_format: Some(depth_format),
             depth_compare: vk::CompareOp::GREATER,
             depth_write: true,
@@ -193,20 +251,15 @@ impl GbufferTiles {
         Pipeline::graphics(ctx, &desc)
     }
 
-    /// Opens a draw over the G-buffer the variants wrote (albedo, normal,
-    /// material loaded), writing depth: geometry drawn after the tile
-    /// shading (`asset_draw`, `grass_draw`). The depth target leaves its
-    /// read-only layout; [`GbufferTiles::end_overlay`] puts it back for
-    /// `lighting_resolve`.
+    /// Opens a draw over the G-buffer the variants wrote (kept), writing
+    /// depth: geometry drawn after the tile shading (`asset_draw`,
+    /// `grass_draw`). The depth target leaves its read-only layout;
+    /// [`GbufferTiles::end_overlay`] puts it back for `lighting_resolve`.
     pub fn begin_overlay(rec: &mut Recorder, targets: &RenderTargets, gbuffer: &GBuffer) {
         let depth = targets.depth;
         rec.transition(depth, depth_layout(depth.format, false));
         rec.begin_rendering(
-            &[
-                ColorTarget { image: &gbuffer.albedo, clear: None },
-                ColorTarget { image: &gbuffer.normal, clear: None },
-                ColorTarget { image: &gbuffer.material, clear: None },
-            ],
+            &gbuffer_attachments(targets, gbuffer, None),
             Some(DepthTarget { image: depth, clear: None, clear_stencil: false, read_only: false }),
         );
     }
@@ -233,13 +286,14 @@ impl GbufferTiles {
         materials: Option<&MaterialBindings>,
     ) {
         let (_, pipeline) = self.pipelines.iter().find(|(b, _)| *b == bits).expect("variant was built");
-        let clear = first.then_some([0.0; 4]);
+        // vista's own G-buffer is cleared to 0 (no terrain); the engine's
+        // as the frame's targets say.
+        let clear = match self.layout {
+            None => first.then_some([0.0; 4]),
+            Some(_) => targets.clear.filter(|_| first),
+        };
         rec.begin_rendering(
-            &[
-                ColorTarget { image: &gbuffer.albedo, clear },
-                ColorTarget { image: &gbuffer.normal, clear },
-                ColorTarget { image: &gbuffer.material, clear },
-            ],
+            &gbuffer_attachments(targets, gbuffer, clear),
             Some(DepthTarget { image: targets.depth, clear: None, clear_stencil: false, read_only: true }),
         );
         rec.bind_pipeline(pipeline);

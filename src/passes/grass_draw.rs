@@ -8,6 +8,7 @@
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, Context, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
 use crate::passes::gbuffer_tiles::GbufferTiles;
+use crate::targets::GbufferLayout;
 use crate::passes::terrain_geometry::RenderTargets;
 use crate::render::gbuffer::GBuffer;
 use crate::shaders::{grass_draw_frag as fs, grass_draw_vert as vs, structs};
@@ -41,7 +42,8 @@ pub struct GrassDraw {
 impl GrassDraw {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context, depth_format: vk::Format) -> Result<Self> {
+    /// `layout`: the engine's G-buffer (output `gbuffer`), else vista's.
+    pub fn new(ctx: &Context, depth_format: vk::Format, layout: Option<&GbufferLayout>) -> Result<Self> {
         let linear = SamplerDesc {
             name: "grass_draw_linear",
             filter: vk::Filter::LINEAR,
@@ -51,10 +53,11 @@ impl GrassDraw {
             pipeline: GbufferTiles::overlay_pipeline(
                 ctx,
                 Self::NAME,
-                (&vs::SHADER, &fs::SHADER),
+                (&vs::SHADER, fs::variant(if layout.is_some() { fs::VARIANT_ENGINE_GBUFFER } else { 0 })),
                 depth_format,
                 // Blades are seen from both sides.
                 vk::CullModeFlags::NONE,
+                layout,
             )?,
             linear: Sampler::new(ctx, &linear)?,
         })

@@ -5,12 +5,12 @@
 //! The fragment shader writes what the G-buffer tile passes shade from:
 //! the classification bits and two octahedral normals; the pipeline writes
 //! the terrain stencil bit. Depth is reversed-Z D32_SFLOAT_S8_UINT
-//! (cleared to 0, GREATER passes).
+//! (cleared to 0, or the engine's kept: `DepthOptions::load`; GREATER passes).
 
 use crate::error::Result;
 use crate::gpu::{
-    depth_layout, has_stencil, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget,
-    GraphicsPipelineDesc, Image, MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo,
+    depth_layout, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget,
+    GraphicsPipelineDesc, MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo,
     StencilDesc,
 };
 use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT};
@@ -19,74 +19,7 @@ use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLA
 use crate::terrain::patch_grid::diamond_indices;
 use crate::world::{PATCHES_PER_NODE_SIDE, PATCH_QUADS};
 
-/// Colour target format of the lit output (gamma-encoded by the shader).
-pub const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-/// The default depth format: reversed-Z, infinite far plane, with a
-/// stencil aspect for the engine's terrain bit ([`DepthOptions`]).
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT_S8_UINT;
-
-/// The default depth target's layout on entry to and exit from a frame
-/// (`DepthOptions::layout` for another format).
-pub const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-
-/// The depth test of the passes that shade terrain pixels only
-/// (`gbuffer_tiles`, `lighting_resolve`): their fragments lie at depth 0,
-/// the far plane the target is cleared to, so LESS passes exactly where the
-/// geometry pass wrote terrain (reversed-Z: every finite distance is above
-/// 0). Needs no stencil, so any depth format of [`DepthOptions`] works.
-pub const TERRAIN_ONLY: vk::CompareOp = vk::CompareOp::LESS;
-
-/// The engine's depth target: its format and the stencil bit vista sets
-/// where there is terrain (`RendererOptions::depth`). vista clears the
-/// depth each frame; where it writes a stencil bit it clears the stencil
-/// too, and otherwise leaves the stencil aspect as it was.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DepthOptions {
-    /// `D32_SFLOAT_S8_UINT` (the default) or `D32_SFLOAT`.
-    pub format: vk::Format,
-    /// The stencil bit (0-7) set on terrain pixels; `None`: the stencil is
-    /// not touched (and must be `None` for a format without stencil).
-    pub terrain_stencil_bit: Option<u32>,
-}
-
-impl Default for DepthOptions {
-    fn default() -> Self {
-        DepthOptions { format: DEPTH_FORMAT, terrain_stencil_bit: Some(0) }
-    }
-}
-
-impl DepthOptions {
-    /// The formats vista draws reversed-Z depth into (32-bit float: a
-    /// 24-bit integer depth would lose the far field's precision).
-    pub const FORMATS: [vk::Format; 2] = [vk::Format::D32_SFLOAT_S8_UINT, vk::Format::D32_SFLOAT];
-
-    /// Refuses a format vista cannot use or a bit the format cannot hold.
-    pub fn check(&self) -> std::result::Result<(), String> {
-        if !Self::FORMATS.contains(&self.format) {
-            return Err(format!(
-                "depth format {:?} is not one vista draws into (D32_SFLOAT_S8_UINT or D32_SFLOAT)",
-                self.format
-            ));
-        }
-        match self.terrain_stencil_bit {
-            Some(b) if !has_stencil(self.format) => {
-                Err(format!("terrain stencil bit {b} asked for, but depth format {:?} has no stencil", self.format))
-            }
-            Some(b) if b > 7 => Err(format!("terrain stencil bit {b} is not a bit of an 8-bit stencil (0-7)")),
-            _ => Ok(()),
-        }
-    }
-
-    /// The layout the target is in on entry to and exit from a frame.
-    pub fn layout(&self) -> vk::ImageLayout {
-        depth_layout(self.format, false)
-    }
-
-    /// The stencil mask vista writes (0: none).
-    pub fn stencil_mask(&self) -> u32 {
-        self.terrain_stencil_bit.map_or(0, |b| 1 << b)
-    }
-}
+pub use crate::targets::{DepthOptions, RenderTargets, COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT, TERRAIN_ONLY};
 
 /// The patch's index list: the diamond pattern (every odd/odd vertex the
 /// centre of 8 triangles), triangles reordered for the post-transform
@@ -116,14 +49,6 @@ impl TerrainDrawPush {
     pub fn new(late: bool) -> Self {
         TerrainDrawPush { nan_bits: QUIET_NAN_BITS, phase: u32::from(late), pad: [0; 2] }
     }
-}
-
-/// The colour and depth images a frame renders into, and the clear colour.
-/// Layouts on entry and exit: COLOR_ATTACHMENT_OPTIMAL and [`DEPTH_LAYOUT`].
-pub struct RenderTargets<'a> {
-    pub color: &'a Image,
-    pub depth: &'a Image,
-    pub clear: [f32; 4],
 }
 
 /// The terrain pipeline of pass `name` with vertex shader `vertex`.
@@ -272,8 +197,9 @@ impl TerrainGeometry {
 }
 
 /// Opens the geometry pass's rendering scope: classification (cleared to
-/// 0 = no terrain), geometry normals, patch info, depth (cleared to far)
-/// and, where vista writes a bit of it, stencil (cleared to 0).
+/// 0 = no terrain), geometry normals, patch info, depth (cleared to far
+/// unless the engine's is loaded) and, where vista writes a bit of it and
+/// clears the depth, stencil (cleared to 0).
 pub(crate) fn begin_geometry(
     rec: &mut Recorder,
     targets: &RenderTargets,
@@ -299,7 +225,8 @@ pub(crate) fn begin_geometry(
         ],
         Some(DepthTarget {
             image: targets.depth,
-            clear: clear.then_some(0.0),
+            // The engine's depth (and stencil) kept: its occluders hide terrain.
+            clear: (clear && !depth.load).then_some(0.0),
             clear_stencil: depth.terrain_stencil_bit.is_some(),
             read_only: false,
         }),

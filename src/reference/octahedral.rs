@@ -2,6 +2,7 @@
 //! shader marks every step `precise`, so an IEEE device gives the same
 //! codes), and the decoder in f64 for measuring the codes' angular error.
 
+use crate::targets::gbuffer_layout::oct_decode;
 use glam::DVec3;
 
 /// The largest code (octahedral.glsl's OCT_CODE_MAX): 255 codes per axis,
@@ -33,24 +34,14 @@ pub fn oct_encode8(n: [f32; 3]) -> [u32; 2] {
 /// Codes -> unit vector, in f64 (the exact value the codes stand for).
 pub fn oct_decode8(code: [u32; 2]) -> [f64; 3] {
     let f = code.map(|c| f64::from(c) / f64::from(OCT_CODE_MAX) * 2.0 - 1.0);
-    let mut n = [f[0], f[1], 1.0 - f[0].abs() - f[1].abs()];
-    let t = (-n[2]).max(0.0);
-    n[0] += if n[0] >= 0.0 { -t } else { t };
-    n[1] += if n[1] >= 0.0 { -t } else { t };
-    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    n.map(|v| v / len)
+    oct_decode(f).to_array()
 }
 
 /// An octahedral code stored as two UNORM8 channels (the G-buffer's
 /// shading normal: `oct_encode` written to RGBA8) -> unit vector, as
 /// `oct_decode` reads it.
 pub fn oct_decode_unorm8(code: [u8; 2]) -> DVec3 {
-    let f = code.map(|c| f64::from(c) / 255.0 * 2.0 - 1.0);
-    let mut n = DVec3::new(f[0], f[1], 1.0 - f[0].abs() - f[1].abs());
-    let t = (-n.z).max(0.0);
-    n.x += if n.x >= 0.0 { -t } else { t };
-    n.y += if n.y >= 0.0 { -t } else { t };
-    n.normalize()
+    oct_decode(code.map(|c| f64::from(c) / 255.0 * 2.0 - 1.0))
 }
 
 #[cfg(test)]

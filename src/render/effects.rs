@@ -557,6 +557,9 @@ pub struct WorldContent {
     pub decals: usize,
     /// Assets given to the renderer (effect assets).
     pub assets: usize,
+    /// Output `gbuffer`: the engine lights the frame, so vista's lighting
+    /// effects have nothing to change.
+    pub engine_lights: bool,
 }
 
 /// Decides every effect: requested and implemented and backed by the
@@ -574,6 +577,9 @@ pub fn decide(fx: &Effects, content: &WorldContent, force: bool) -> Vec<EffectDe
                 (false, format!("requested, but {why}"))
             } else {
                 match (effect, &content.holes_missing) {
+                    (Effect::Lighting | Effect::Shadows | Effect::Atmosphere, _) if content.engine_lights => {
+                        (false, "requested, but output gbuffer leaves the lighting to the engine".into())
+                    }
                     // Both change the lit image, which lighting off does not make.
                     (Effect::Shadows | Effect::Atmosphere, _) if !fx.is_on(Effect::Lighting) => {
                         (false, "requested, but it changes the lit image and effect lighting is off".into())

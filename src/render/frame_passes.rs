@@ -8,7 +8,7 @@
 //! [`FrameLog`] as the graph expects.
 
 use crate::frame::{Frame, QueueKind};
-use crate::gpu::{vk, Buffer, Recorder};
+use crate::gpu::{depth_layout, vk, Buffer, Recorder};
 use crate::passes::asset_draw::AssetDraw;
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cliff_mesh_build::CliffBuildPush;
@@ -50,7 +50,8 @@ pub(crate) struct FramePasses<'a> {
     pub holes: Option<&'a TerrainHoles>,
     pub classify: &'a ClassifyTiles,
     pub gbuffer_tiles: &'a GbufferTiles,
-    pub resolve: &'a LightingResolve,
+    /// Outputs `lit` and `hdr` (output `gbuffer`: not built).
+    pub resolve: Option<&'a LightingResolve>,
     /// Effect `shadows`, with this frame's jobs (empty: skipped), the unit
     /// vector towards the sun and its elevation (degrees).
     pub shadows: Option<(&'a SunShadows, &'a [SunShadowJob], glam::DVec3, f64)>,
@@ -317,7 +318,14 @@ impl FramePasses<'_> {
             None if self.shadows_off => log.skipped(FramePass::SunShadows, Skip::ShadowsOff),
             None => {}
         }
-        let resolve = self.resolve;
+        let Some(resolve) = self.resolve else {
+            // Output `gbuffer`: the engine lights; neither pass is built.
+            // The depth goes back to its frame layout (the tile passes left
+            // it read-only).
+            let layout = depth_layout(targets.depth.format, false);
+            frame.untimed(QueueKind::Graphics, |r| r.transition(targets.depth, layout));
+            return;
+        };
         let inputs = ResolveInputs {
             terrain,
             sector_data: self.sector_data,

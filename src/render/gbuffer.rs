@@ -1,11 +1,14 @@
-//! The renderer's own screen-sized targets between the geometry pass and
-//! the lit output: the classification and geometry-normal targets the
-//! geometry pass writes, the G-buffer the tile passes write, and the HDR
-//! lit image. Made for the first view size seen and remade (the old ones
-//! deferred-destroyed) when it changes.
+//! The renderer's own screen-sized targets: the classification and
+//! geometry-normal targets the geometry pass writes (every output), and,
+//! where vista lights the frame itself (outputs `lit`, `hdr`), its own
+//! G-buffer the tile passes write and (output `lit`) the HDR lit image.
+//! With output `gbuffer` the tile passes write the engine's images and
+//! none of those is made. Made for the first view size seen and remade
+//! (the old ones deferred-destroyed) when it changes.
 
 use crate::error::Result;
 use crate::gpu::{vk, Context, Image, ImageDesc};
+use crate::targets::Output;
 
 /// One bit per flavour the pixel needs (0 = no terrain).
 pub const CLASSIFICATION_FORMAT: vk::Format = vk::Format::R8_UINT;
@@ -27,14 +30,21 @@ pub struct GBuffer {
     pub classification: Image,
     pub geometry_normals: Image,
     pub patch_info: Image,
+    /// Outputs `lit` and `hdr`: the G-buffer vista lights.
+    own: Option<OwnGbuffer>,
+}
+
+/// The G-buffer vista lights itself (outputs `lit`, `hdr`).
+pub struct OwnGbuffer {
     pub albedo: Image,
     pub normal: Image,
     pub material: Image,
-    pub hdr: Image,
+    /// Output `lit`: the linear radiance beside the display image.
+    pub hdr: Option<Image>,
 }
 
 impl GBuffer {
-    pub fn new(ctx: &Context, size: [u32; 2]) -> Result<GBuffer> {
+    pub fn new(ctx: &Context, size: [u32; 2], output: &Output) -> Result<GBuffer> {
         let attach = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
         let image = |name, format| {
             Image::new(
@@ -50,14 +60,23 @@ impl GBuffer {
                 },
             )
         };
+        let own = match output {
+            Output::Gbuffer(_) => None,
+            Output::Lit { .. } | Output::Hdr { .. } => Some(OwnGbuffer {
+                albedo: image("gbuffer_albedo", ALBEDO_FORMAT)?,
+                normal: image("gbuffer_normal", NORMAL_FORMAT)?,
+                material: image("gbuffer_material", MATERIAL_FORMAT)?,
+                hdr: match output {
+                    Output::Lit { .. } => Some(image("lit_hdr", HDR_FORMAT)?),
+                    _ => None,
+                },
+            }),
+        };
         Ok(GBuffer {
             classification: image("classification", CLASSIFICATION_FORMAT)?,
             geometry_normals: image("geometry_normals", GEOMETRY_NORMALS_FORMAT)?,
             patch_info: image("patch_info", PATCH_INFO_FORMAT)?,
-            albedo: image("gbuffer_albedo", ALBEDO_FORMAT)?,
-            normal: image("gbuffer_normal", NORMAL_FORMAT)?,
-            material: image("gbuffer_material", MATERIAL_FORMAT)?,
-            hdr: image("lit_hdr", HDR_FORMAT)?,
+            own,
         })
     }
 
@@ -65,16 +84,18 @@ impl GBuffer {
         self.classification.extent
     }
 
-    pub fn images(&self) -> [&Image; 7] {
-        [
-            &self.classification,
-            &self.geometry_normals,
-            &self.patch_info,
-            &self.albedo,
-            &self.normal,
-            &self.material,
-            &self.hdr,
-        ]
+    /// vista's own G-buffer (outputs `lit`, `hdr`).
+    pub fn own(&self) -> Option<&OwnGbuffer> {
+        self.own.as_ref()
+    }
+
+    pub fn images(&self) -> Vec<&Image> {
+        let mut out = vec![&self.classification, &self.geometry_normals, &self.patch_info];
+        if let Some(o) = &self.own {
+            out.extend([&o.albedo, &o.normal, &o.material]);
+            out.extend(o.hdr.as_ref());
+        }
+        out
     }
 
     pub fn memory_bytes(&self) -> u64 {
@@ -83,6 +104,8 @@ impl GBuffer {
 }
 
 /// The G-buffer and lit image of the last frame, read back (tools, tests).
+/// What the output does not make is empty: `hdr` outside output `lit`,
+/// `albedo`, `normal` and `material` with output `gbuffer`.
 pub struct GBufferCapture {
     pub size: [u32; 2],
     /// Linear lit radiance, RGBA.
@@ -104,19 +127,26 @@ impl GBuffer {
     pub fn capture(&self, ctx: &Context) -> Result<GBufferCapture> {
         let rgba8 =
             |img: &Image| -> Result<Vec<[u8; 4]>> { Ok(bytemuck::pod_collect_to_vec(&ctx.read_image(img, 0, 0, 4)?)) };
-        let hdr_bytes = ctx.read_image(&self.hdr, 0, 0, 8)?;
-        let halves: Vec<u16> = bytemuck::pod_collect_to_vec(&hdr_bytes);
-        let hdr = halves.chunks_exact(4).map(|c| [0, 1, 2, 3].map(|i| half::f16::from_bits(c[i]).to_f32())).collect();
-        Ok(GBufferCapture {
+        let mut capture = GBufferCapture {
             size: self.size(),
-            hdr,
+            hdr: Vec::new(),
             classification: ctx.read_image(&self.classification, 0, 0, 1)?,
             geometry_normals: rgba8(&self.geometry_normals)?,
             patch_info: ctx.read_image(&self.patch_info, 0, 0, 1)?,
-            albedo: rgba8(&self.albedo)?,
-            normal: rgba8(&self.normal)?,
-            material: bytemuck::pod_collect_to_vec(&ctx.read_image(&self.material, 0, 0, 2)?),
-        })
+            albedo: Vec::new(),
+            normal: Vec::new(),
+            material: Vec::new(),
+        };
+        let Some(own) = &self.own else { return Ok(capture) };
+        capture.albedo = rgba8(&own.albedo)?;
+        capture.normal = rgba8(&own.normal)?;
+        capture.material = bytemuck::pod_collect_to_vec(&ctx.read_image(&own.material, 0, 0, 2)?);
+        if let Some(hdr) = &own.hdr {
+            let halves: Vec<u16> = bytemuck::pod_collect_to_vec(&ctx.read_image(hdr, 0, 0, 8)?);
+            capture.hdr =
+                halves.chunks_exact(4).map(|c| [0, 1, 2, 3].map(|i| half::f16::from_bits(c[i]).to_f32())).collect();
+        }
+        Ok(capture)
     }
 }
 

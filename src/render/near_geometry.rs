@@ -20,6 +20,7 @@ use crate::render::grass::gpu::{Grass, GrassFrame, GrassFrameInputs, UploadedDec
 use crate::render::renderer::RendererOptions;
 use crate::render::virtual_texture::decal_mesh::DecalMeshes;
 use crate::render::virtual_texture::decals::{Decal, DecalTexture};
+use crate::targets::GbufferLayout;
 
 pub struct NearGeometry {
     /// Effect `grass`: its passes, tufts and pigment map.
@@ -41,6 +42,8 @@ pub struct NearBuild<'a> {
     /// The material resources exist (the assets' colour from the splat blend).
     pub materials: bool,
     pub depth: DepthOptions,
+    /// Output `gbuffer`: the engine's G-buffer grass and assets draw into.
+    pub layout: Option<&'a GbufferLayout>,
 }
 
 /// One frame's CPU plans.
@@ -63,12 +66,12 @@ impl NearGeometry {
         let splat_colours = b.materials && o.effects.materials == MaterialsMode::Splat;
         Ok(NearGeometry {
             grass: match on(Effect::Grass) {
-                true => Some(Grass::new(ctx, &o.effects.grass, b.occlusion, on(Effect::Decals), b.depth.format)?),
+                true => Some(Grass::new(ctx, &o.effects.grass, (b.occlusion, on(Effect::Decals)), b.depth.format, b.layout)?),
                 false => None,
             },
             assets: match on(Effect::Assets) {
                 true => Some((
-                    AssetDraw::new(ctx, b.depth.format, splat_colours)?,
+                    AssetDraw::new(ctx, b.depth.format, splat_colours, b.layout)?,
                     AssetResources::new(ctx, &o.assets, o.effects.assets)?,
                 )),
                 false => None,

@@ -22,13 +22,14 @@ use crate::passes::cull_patches::{CullBuild, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
 use crate::passes::gbuffer_tiles::{GbufferTiles, TileMaterials};
 use crate::passes::hiz_build::HizBuild;
-use crate::passes::lighting_resolve::LightingResolve;
+use crate::passes::lighting_resolve::{LightingResolve, ResolveTarget};
 use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
 use crate::passes::sun_shadows::{SunShadowJob, SunShadows};
-use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeometry, COLOR_FORMAT};
+use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeometry};
+use crate::targets::Output;
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::Traverse;
@@ -84,6 +85,9 @@ pub struct RendererOptions {
     pub decals: DecalSet,
     /// Effect `assets`: the example assets (world metres, like holes).
     pub assets: Vec<Asset>,
+    /// What a frame writes for the engine: vista's lit picture (`lit`,
+    /// the default), linear radiance (`hdr`) or the engine's G-buffer.
+    pub output: Output,
 }
 
 /// Per-patch LOD selection settings.
@@ -122,7 +126,8 @@ pub struct TerrainRenderer {
     pub holes: Option<TerrainHoles>,
     pub classify: ClassifyTiles,
     pub gbuffer_tiles: GbufferTiles,
-    pub resolve: LightingResolve,
+    /// Outputs `lit` and `hdr` (None with output `gbuffer`: the engine lights).
+    pub resolve: Option<LightingResolve>,
     /// Effect `shadows`: the pass, its atlas, and which nodes it redoes when.
     pub sun_shadows: Option<SunShadows>,
     pub shadow_schedule: ShadowSchedule,
@@ -155,6 +160,7 @@ pub struct TerrainRenderer {
     /// Its pass, made the first time a view is asked for.
     debug_pass: Option<DebugViewPass>,
     pub effects: Effects,
+    output: Output,
     /// See [`RendererOptions::origin_m`]; may change between frames.
     pub origin_m: [f64; 2],
     decisions: Vec<EffectDecision>,
@@ -224,6 +230,7 @@ pub fn memory_for(
     source_holes: bool,
 ) -> crate::world::MemoryReport {
     let decisions = decide(effects, &world_content(world, holes, source_holes, 0, 0), false);
+    // (The output does not change what the atlases hold.)
     let mut report = crate::world::MemoryReport::for_format(slots, format);
     if effects.materials == MaterialsMode::ControlMap {
         report = report.with_control();
@@ -278,7 +285,7 @@ fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool, decals: 
         let outside = if holes.is_empty() { String::new() } else { format!(" ({} lie outside it)", holes.len()) };
         format!("the world has no hole regions{outside} and its extent is a whole number of root nodes")
     });
-    WorldContent { holes_missing: missing, holes_present: present.join("; "), decals, assets }
+    WorldContent { holes_missing: missing, holes_present: present.join("; "), decals, assets, engine_lights: false }
 }
 
 impl TerrainRenderer {
@@ -292,9 +299,11 @@ impl TerrainRenderer {
         // Before any pass allocates: a world over its limits fails alone.
         crate::terrain::check_plan(ctx, world, &options.terrain)?;
         options.depth.check().map_err(Error::BadInput)?;
+        options.output.check().map_err(Error::BadInput)?;
         let depth = options.depth;
-        let content =
+        let mut content =
             world_content(world, &holes, source.has_holes(), options.decals.decals.len(), options.assets.len());
+        content.engine_lights = !options.output.lights();
         let decisions = decide(&options.effects, &content, options.force_content_gated);
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         let atlases = atlases_for(&decisions, options.effects.materials);
@@ -323,7 +332,8 @@ impl TerrainRenderer {
             (Some(_), MaterialsMode::Splat) => TileMaterials::Splat,
             (Some(_), MaterialsMode::ControlMap) => TileMaterials::ControlMap,
         };
-        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, tile_materials, every, depth.format)?;
+        let layout = options.output.gbuffer();
+        let gbuffer_tiles = GbufferTiles::new(ctx, &variants, tile_materials, every, depth.format, layout)?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
         let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
         // Per-slot resources cover the reload slots too (gpu_quadtree::RELOAD_SLOTS).
@@ -351,8 +361,12 @@ impl TerrainRenderer {
             },
         )?;
         let mut graph = PassGraph::new(&decisions);
+        if layout.is_some() {
+            graph.not_built(FramePass::LightingResolve, "output gbuffer: the engine lights the G-buffer".into());
+            graph.not_built(FramePass::DebugView, "output gbuffer: no colour target to draw a debug view over".into());
+        }
         let near_build =
-            NearBuild { options, on: &on, occlusion: build.occlusion, materials: materials.is_some(), depth };
+            NearBuild { options, on: &on, occlusion: build.occlusion, materials: materials.is_some(), depth, layout };
         let near = NearGeometry::new(ctx, &near_build, &mut graph)?;
         // gbuffer_tiles records one timed draw per variant.
         let max_passes = graph.max_recorded() + variants.len() as u32;
@@ -378,13 +392,15 @@ impl TerrainRenderer {
             holes: holes_pass,
             classify: ClassifyTiles::new(ctx)?,
             gbuffer_tiles,
-            resolve: LightingResolve::new(
-                ctx,
-                on(Effect::Lighting),
-                on(Effect::Shadows),
-                on(Effect::Atmosphere),
-                depth.format,
-            )?,
+            resolve: match ResolveTarget::of(&options.output) {
+                Some(target) => Some(LightingResolve::new(
+                    ctx,
+                    (on(Effect::Lighting), on(Effect::Shadows), on(Effect::Atmosphere)),
+                    depth.format,
+                    target,
+                )?),
+                None => None,
+            },
             sun_shadows: if on(Effect::Shadows) {
                 Some(SunShadows::new(ctx, options.effects.shadows, slot_capacity)?)
             } else {
@@ -419,6 +435,7 @@ impl TerrainRenderer {
             debug_view: None,
             debug_pass: None,
             effects: options.effects.clone(),
+            output: options.output.clone(),
             origin_m: options.origin_m,
             decisions,
             mode: None,
@@ -453,9 +470,11 @@ impl TerrainRenderer {
     /// Records one frame of `view` into `rec` (the caller submits it, at most
     /// `frames_in_flight` frames ahead of the GPU, and reports its completion
     /// with `Context::frame_completed`). `targets` must match the view's
-    /// size, [`COLOR_FORMAT`] and the depth format of `RendererOptions::depth`
-    /// (by default [`crate::passes::terrain_geometry::DEPTH_FORMAT`]); the
-    /// depth target needs SAMPLED usage.
+    /// size, the output's colour format or G-buffer layout
+    /// (`RendererOptions::output`) and the depth format of
+    /// `RendererOptions::depth` (by default
+    /// [`crate::passes::terrain_geometry::DEPTH_FORMAT`]); the depth target
+    /// needs SAMPLED usage.
     pub fn record(&mut self, rec: &mut Recorder, view: &View, targets: &RenderTargets) -> Result<()> {
         self.record_frame(FrameCommands::One(rec), QueueMode::Single, view, targets)
     }
@@ -551,7 +570,9 @@ impl TerrainRenderer {
         let vt = self.virtual_texture.as_mut();
         let vt_frame = vt.map(|vt| begin_virtual_texture(vt, &self.terrain, ctx, [number, ctx_frame], view, &shade));
         let sw = self.switches;
-        self.resolve.prepare(ctx, sw.lighting, shadows_shown, sw.on(Effect::Atmosphere))?;
+        if let Some(resolve) = &mut self.resolve {
+            resolve.prepare(ctx, sw.lighting, shadows_shown, sw.on(Effect::Atmosphere))?;
+        }
         let tree = &self.terrain.tree;
         let passes = FramePasses {
             traverse: &self.traverse,
@@ -564,7 +585,7 @@ impl TerrainRenderer {
             holes: self.holes.as_ref(),
             classify: &self.classify,
             gbuffer_tiles: &self.gbuffer_tiles,
-            resolve: &self.resolve,
+            resolve: self.resolve.as_ref(),
             shadows: self
                 .sun_shadows
                 .as_ref()
@@ -614,7 +635,38 @@ impl TerrainRenderer {
         }
         let view = view.relative_to(self.origin_m);
         let depth_format = self.geometry.depth().format;
-        for (what, image, format) in [("colour", targets.color, COLOR_FORMAT), ("depth", targets.depth, depth_format)] {
+        let mut expected = vec![("depth", targets.depth, depth_format)];
+        match (&self.output, targets.color) {
+            (Output::Gbuffer(layout), None) => {
+                if targets.gbuffer.len() != layout.attachments.len() {
+                    return Err(Error::BadInput(format!(
+                        "output gbuffer: {} G-buffer image(s) given, the layout has {}",
+                        targets.gbuffer.len(),
+                        layout.attachments.len()
+                    )));
+                }
+                expected.extend(targets.gbuffer.iter().zip(&layout.attachments).map(|(i, a)| ("G-buffer", *i, a.format)));
+                if self.debug_view.is_some() {
+                    return Err(Error::BadInput("output gbuffer has no colour target to draw a debug view over".into()));
+                }
+            }
+            (Output::Gbuffer(_), Some(c)) => {
+                return Err(Error::BadInput(format!(
+                    "output gbuffer writes the engine's G-buffer images, not a colour target ({} given)",
+                    c.name
+                )))
+            }
+            (output, Some(color)) if targets.gbuffer.is_empty() => {
+                expected.push(("colour", color, output.color_format().expect("lit and hdr have one")));
+            }
+            (output, _) => {
+                return Err(Error::BadInput(format!(
+                    "output {} writes one colour target and no G-buffer images",
+                    output.name()
+                )))
+            }
+        }
+        for (what, image, format) in expected {
             if image.extent != view.size || image.format != format {
                 return Err(Error::BadInput(format!(
                     "{what} target {} is {:?} {}x{}, the view needs {format:?} {}x{}",
@@ -638,11 +690,12 @@ impl TerrainRenderer {
             o.hiz.prepare(ctx, targets.depth.extent)?;
         }
         if self.gbuffer.as_ref().is_none_or(|g| g.size() != view.size) {
-            self.gbuffer = Some(GBuffer::new(ctx, view.size)?);
+            self.gbuffer = Some(GBuffer::new(ctx, view.size, &self.output)?);
         }
         self.classify.prepare(ctx, view.size)?;
         if self.debug_view.is_some() && self.debug_pass.is_none() {
-            self.debug_pass = Some(DebugViewPass::new(ctx)?);
+            let format = self.output.color_format().expect("check_frame refuses debug views without a colour target");
+            self.debug_pass = Some(DebugViewPass::new(ctx, format)?);
         }
         Ok(())
     }
@@ -802,7 +855,7 @@ impl TerrainRenderer {
             out.extend(v.pipeline_labels().map(str::to_string));
         }
         out.extend(self.near.pipeline_labels());
-        out.extend(self.resolve.pipeline_labels());
+        out.extend(self.resolve.iter().flat_map(LightingResolve::pipeline_labels));
         out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
     }
@@ -848,7 +901,7 @@ impl TerrainRenderer {
                 out.push((p.name.clone(), p.memory_bytes(), vec![Effect::Occlusion]));
             }
         }
-        for img in self.gbuffer.iter().flat_map(|g| g.images()) {
+        for img in self.gbuffer.iter().flat_map(GBuffer::images) {
             out.push((img.name.clone(), img.memory_bytes(), Vec::new()));
         }
         if let Some(l) = &self.classify.lists {

@@ -56,7 +56,7 @@ impl Rig {
     }
 
     pub fn view(&self, camera: Camera) -> View {
-        View { camera, fov_y_deg: 60.0, size: self.off.color.extent, target_error_px: 1.0, near_m: DEFAULT_NEAR_M }
+        View { camera, fov_y_deg: 60.0, size: self.off.size(), target_error_px: 1.0, near_m: DEFAULT_NEAR_M }
     }
 
     /// Streams `view` until settled and reads the frame back.

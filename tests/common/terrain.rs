@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Duration;
 use vista::gpu::Context;
 use vista::passes::cull_patches::CullStages;
-use vista::render::offscreen::{Capture, Offscreen};
+use vista::render::offscreen::{Capture, Offscreen, OffscreenDesc};
 use vista::render::{Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
 use vista::terrain::TerrainOptions;
 use vista::world::{HeightSource, Hole, WorldDesc};
@@ -244,7 +244,12 @@ impl Rig {
             ..options
         };
         let renderer = TerrainRenderer::new(ctx, &world, source, holes, &options).expect("renderer");
-        let off = Offscreen::with_depth_format(ctx, size, 2, MAGENTA, options.depth.format).expect("targets");
+        let desc = OffscreenDesc {
+            depth_format: options.depth.format,
+            output: options.output.clone(),
+            ..OffscreenDesc::new(size, MAGENTA)
+        };
+        let off = Offscreen::with_desc(ctx, &desc).expect("targets");
         Rig { renderer, off, world }
     }
 

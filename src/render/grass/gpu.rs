@@ -4,6 +4,7 @@
 //! and each frame's plan. Teardown: fields drop in declaration order, each
 //! object retired to the context until the frames using it completed.
 
+use crate::targets::GbufferLayout;
 use super::{GrassCounters, GrassParams};
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
@@ -117,8 +118,15 @@ pub struct Grass {
 
 impl Grass {
     /// `hiz`: effect occlusion is built (the HIZ variant too); `decals`:
-    /// effect decals is (the DECALS variants).
-    pub fn new(ctx: &Context, params: &GrassParams, hiz: bool, decals: bool, depth_format: vk::Format) -> Result<Self> {
+    /// effect decals is (the DECALS variants); `layout`: the engine's
+    /// G-buffer the blades are drawn into (output `gbuffer`), else vista's.
+    pub fn new(
+        ctx: &Context,
+        params: &GrassParams,
+        (hiz, decals): (bool, bool),
+        depth_format: vk::Format,
+        layout: Option<&GbufferLayout>,
+    ) -> Result<Self> {
         params.validate()?;
         let buffer =
             |name, size, usage| Buffer::new(ctx, &BufferDesc { name, size, usage, location: MemoryLocation::GpuOnly });
@@ -131,7 +139,7 @@ impl Grass {
             params: params.clone(),
             pigment_pass: GrassPigment::new(ctx, decals)?,
             place: GrassPlace::new(ctx, hiz, decals)?,
-            draw: GrassDraw::new(ctx, depth_format)?,
+            draw: GrassDraw::new(ctx, depth_format, layout)?,
             rules,
             header: buffer("grass_header", GrassHeaderGpu::BYTES, readable | vk::BufferUsageFlags::INDIRECT_BUFFER)?,
             instances: buffer("grass_instances", cells * structs::GRASS_INSTANCE as u64, readable)?,

@@ -130,7 +130,7 @@ impl Viewer {
                 rec.discard_to(&targets.depth, renderer.depth().layout());
                 targets.fresh = false;
             }
-            let rt = RenderTargets { color: &targets.color, depth: &targets.depth, clear: SKY_CLEAR };
+            let rt = RenderTargets::color(&targets.color, &targets.depth, SKY_CLEAR);
             renderer.record(rec, view, &rt)?;
             compose(rec, &targets.color, swap, egui, overlay, shot)
         })?;
