@@ -25,9 +25,9 @@ pub mod passes;
 pub mod reference;
 pub mod render;
 pub mod shaders;
-pub mod targets;
 #[cfg(feature = "stability")]
 pub mod stability;
+pub mod targets;
 pub mod terrain;
 pub mod world;
 

@@ -101,8 +101,14 @@ fn without_a_stencil_bit_the_engines_stencil_is_left_as_it_was() {
 fn a_depth_format_or_bit_vista_cannot_use_is_refused_before_anything_is_built() {
     gpu_test(|ctx| {
         let cases = [
-            (DepthOptions { format: vk::Format::D32_SFLOAT, terrain_stencil_bit: Some(0), load: false }, "has no stencil"),
-            (DepthOptions { format: vk::Format::D24_UNORM_S8_UINT, terrain_stencil_bit: Some(0), load: false }, "D32_SFLOAT"),
+            (
+                DepthOptions { format: vk::Format::D32_SFLOAT, terrain_stencil_bit: Some(0), load: false },
+                "has no stencil",
+            ),
+            (
+                DepthOptions { format: vk::Format::D24_UNORM_S8_UINT, terrain_stencil_bit: Some(0), load: false },
+                "D32_SFLOAT",
+            ),
             (DepthOptions { terrain_stencil_bit: Some(8), ..DepthOptions::default() }, "0-7"),
         ];
         for (depth, says) in cases {

@@ -9,7 +9,6 @@
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, Context, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
 use crate::passes::cull_patches::nearest_sampler;
-use crate::targets::GbufferLayout;
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::gbuffer_tiles::MaterialBindings;
 use crate::passes::terrain_geometry::RenderTargets;
@@ -17,6 +16,7 @@ use crate::passes::terrain_query::VistaTerrain;
 use crate::render::assets::AssetResources;
 use crate::render::gbuffer::GBuffer;
 use crate::shaders::{asset_draw_frag as fs, asset_draw_vert as vs, structs};
+use crate::targets::GbufferLayout;
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT};
 
 /// Host twin of `AssetDrawPush`.

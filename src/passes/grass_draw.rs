@@ -8,10 +8,10 @@
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, Context, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
 use crate::passes::gbuffer_tiles::GbufferTiles;
-use crate::targets::GbufferLayout;
 use crate::passes::terrain_geometry::RenderTargets;
 use crate::render::gbuffer::GBuffer;
 use crate::shaders::{grass_draw_frag as fs, grass_draw_vert as vs, structs};
+use crate::targets::GbufferLayout;
 
 /// Host twin of `GrassDrawPush`.
 #[repr(C)]

@@ -9,9 +9,8 @@
 
 use crate::error::Result;
 use crate::gpu::{
-    depth_layout, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget,
-    GraphicsPipelineDesc, MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo,
-    StencilDesc,
+    depth_layout, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc,
+    MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo, StencilDesc,
 };
 use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT};
 use crate::shaders::{terrain_geometry_frag as fs, terrain_geometry_vert as vs};

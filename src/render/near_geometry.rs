@@ -66,7 +66,13 @@ impl NearGeometry {
         let splat_colours = b.materials && o.effects.materials == MaterialsMode::Splat;
         Ok(NearGeometry {
             grass: match on(Effect::Grass) {
-                true => Some(Grass::new(ctx, &o.effects.grass, (b.occlusion, on(Effect::Decals)), b.depth.format, b.layout)?),
+                true => Some(Grass::new(
+                    ctx,
+                    &o.effects.grass,
+                    (b.occlusion, on(Effect::Decals)),
+                    b.depth.format,
+                    b.layout,
+                )?),
                 false => None,
             },
             assets: match on(Effect::Assets) {

@@ -305,8 +305,13 @@ impl Offscreen {
         self.ring.wait_all(ctx)?;
         let size = self.depth.extent;
         let raw = ctx.read_image(&self.depth, 0, 0, 4)?;
-        let mut capture =
-            Capture { size, rgba: Vec::new(), hdr: Vec::new(), gbuffer: Vec::new(), depth: bytemuck::pod_collect_to_vec(&raw) };
+        let mut capture = Capture {
+            size,
+            rgba: Vec::new(),
+            hdr: Vec::new(),
+            gbuffer: Vec::new(),
+            depth: bytemuck::pod_collect_to_vec(&raw),
+        };
         match (&self.output, &self.color) {
             (Output::Lit { format }, Some(color)) => {
                 capture.rgba = ctx.read_image(color, 0, 0, 4)?;

@@ -29,7 +29,6 @@ use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
 use crate::passes::sun_shadows::{SunShadowJob, SunShadows};
 use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeometry};
-use crate::targets::Output;
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::Traverse;
@@ -49,6 +48,7 @@ use crate::render::view::{TerrainViewGpu, View};
 use crate::render::virtual_texture::decals::{Decal, DecalSet};
 use crate::render::virtual_texture::{VirtualTexture, VtCamera, VtFrame};
 use crate::shaders::structs;
+use crate::targets::Output;
 use crate::terrain::gpu_quadtree::{
     AtlasSet, ATLAS_CONTROL, ATLAS_NORMAL, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_SPLAT,
 };
@@ -645,9 +645,12 @@ impl TerrainRenderer {
                         layout.attachments.len()
                     )));
                 }
-                expected.extend(targets.gbuffer.iter().zip(&layout.attachments).map(|(i, a)| ("G-buffer", *i, a.format)));
+                expected
+                    .extend(targets.gbuffer.iter().zip(&layout.attachments).map(|(i, a)| ("G-buffer", *i, a.format)));
                 if self.debug_view.is_some() {
-                    return Err(Error::BadInput("output gbuffer has no colour target to draw a debug view over".into()));
+                    return Err(Error::BadInput(
+                        "output gbuffer has no colour target to draw a debug view over".into(),
+                    ));
                 }
             }
             (Output::Gbuffer(_), Some(c)) => {

@@ -56,12 +56,8 @@ impl Default for Output {
 
 impl Output {
     /// The colour formats output `lit` takes.
-    pub const LIT_FORMATS: [vk::Format; 4] = [
-        vk::Format::R8G8B8A8_UNORM,
-        vk::Format::R8G8B8A8_SRGB,
-        vk::Format::B8G8R8A8_UNORM,
-        vk::Format::B8G8R8A8_SRGB,
-    ];
+    pub const LIT_FORMATS: [vk::Format; 4] =
+        [vk::Format::R8G8B8A8_UNORM, vk::Format::R8G8B8A8_SRGB, vk::Format::B8G8R8A8_UNORM, vk::Format::B8G8R8A8_SRGB];
     /// The formats output `hdr` takes.
     pub const HDR_FORMATS: [vk::Format; 2] = [vk::Format::R16G16B16A16_SFLOAT, vk::Format::B10G11R11_UFLOAT_PACK32];
 

@@ -13,6 +13,7 @@ mod golden_cmd;
 mod numbers;
 mod out_path;
 mod render_cmd;
+mod render_out;
 mod scene;
 mod scene_words;
 mod stability_cmd;

@@ -3,20 +3,19 @@
 //! culling stage, triangles and nodes per LOD, and writes the picture, the
 //! depth and the numbers with `--out`.
 
+use crate::render_out::Outputs;
 use crate::world_args::{show_m, LoadedWorld, WorldArgs};
 use anyhow::{bail, Result};
 use clap::Args;
-use image::ExtendedColorType;
 use std::path::{Path, PathBuf};
 use vista::frame::FrameTimings;
 use vista::gpu::{Context, QueueMode};
-use vista::output::{encode_png, FileSet, OutputWriter};
 use vista::passes::cull_patches::CullStages;
-use vista::render::gbuffer::{classification_colour, GBufferCapture};
-use vista::render::offscreen::{Capture, Offscreen};
+use vista::render::offscreen::{Offscreen, OffscreenDesc};
 use vista::render::stats::RenderStats;
 use vista::render::virtual_texture::state::VtCounters;
-use vista::render::{overview_camera, Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
+use vista::render::{overview_camera, Camera, Effect, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
+use vista::targets::{GbufferLayout, Output};
 use vista::terrain::TerrainOptions;
 use vista::world::{Progress, Work};
 
@@ -32,12 +31,22 @@ pub struct RenderArgs {
     /// are all timed (and include first-use costs).
     #[arg(long, default_value_t = 12, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub frames: u32,
-    /// Folder for image.png, lit.exr, depth.exr, classification.png,
-    /// timings.json (the timed frames), trace.json (every frame), stats.json
-    /// and report.json: created (if needed) once the render succeeded, its
-    /// files written whole and all together, or none of them.
+    /// Folder for the output's images (lit: image.png and lit.exr; hdr:
+    /// lit.exr; gbuffer: albedo.png, normal.exr, roughness.png), depth.exr,
+    /// classification.png, timings.json (the timed frames), trace.json
+    /// (every frame), stats.json and report.json: created (if needed) once
+    /// the render succeeded, its files written whole and all together, or
+    /// none of them.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// What the frame writes, as an engine would choose: lit (vista's own
+    /// lit, tonemapped picture), hdr (linear radiance, no tonemap, into an
+    /// R16G16B16A16_SFLOAT target) or gbuffer (no lighting: base colour,
+    /// normal, roughness and material into an engine's G-buffer, the
+    /// octahedral layout: RGBA8 sRGB base colour, RG16 octahedral normal,
+    /// RG8 roughness and material).
+    #[arg(long, default_value = "lit", value_parser = parse_output)]
+    pub output: Output,
     /// Print the pass report: effects and why each is on or off, pipelines
     /// built, per pass not built / idle / ran with GPU ms and work, GPU
     /// memory per effect.
@@ -135,6 +144,15 @@ impl ViewpointArgs {
     }
 }
 
+fn parse_output(s: &str) -> Result<Output, String> {
+    match s {
+        "lit" => Ok(Output::default()),
+        "hdr" => Ok(Output::hdr()),
+        "gbuffer" => Ok(Output::Gbuffer(GbufferLayout::octahedral())),
+        _ => Err(format!("unknown output {s:?}: use lit, hdr or gbuffer")),
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 pub enum QueuesArg {
     Auto,
@@ -217,15 +235,12 @@ pub(crate) fn parse_stages(s: &str) -> Result<CullStages, String> {
     Ok(st)
 }
 
-/// What `--out` receives, for messages.
-const OUTPUTS: &str = "image.png, lit.exr, depth.exr, classification.png and the JSON reports";
-
 /// Checks that `--out` and `--cache` can be written, so a bad path fails
 /// before the render, not after it. Neither is created here: `--out`
 /// appears with the render's files, the cache with its first file.
 pub fn check_paths(args: &RenderArgs) -> Result<()> {
     if let Some(dir) = &args.out {
-        crate::out_path::check_out_dir(dir, "--out", OUTPUTS)?;
+        crate::out_path::check_out_dir(dir, "--out", crate::render_out::files(&args.output))?;
     }
     if let Some(dir) = &args.cache {
         crate::out_path::check_out_dir(dir, "--cache", "the baked node files")?;
@@ -393,7 +408,8 @@ fn note_camera_place(view: &View, world: &LoadedWorld) {
 
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
     let errors = world.errors(ctx, args.cache.as_deref())?;
-    let options = args.viewpoint.renderer_options(world, args.cache.as_deref(), errors);
+    let mut options = args.viewpoint.renderer_options(world, args.cache.as_deref(), errors);
+    options.output = args.output.clone();
     let d = &world.desc;
     let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
         .map_err(crate::world_args::plan_error_is_input)?;
@@ -401,7 +417,15 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
         QueuesArg::Auto => QueueMode::auto(ctx.info()),
         QueuesArg::Mode(m) => m,
     };
-    let mut off = Offscreen::with_mode(ctx, view.size, options.terrain.frames_in_flight, SKY_CLEAR, mode)?;
+    // An engine's G-buffer starts cleared to 0 (no surface).
+    let clear = if args.output.lights() { SKY_CLEAR } else { [0.0; 4] };
+    let desc = OffscreenDesc {
+        frames_in_flight: options.terrain.frames_in_flight,
+        mode,
+        output: args.output.clone(),
+        ..OffscreenDesc::new(view.size, clear)
+    };
+    let mut off = Offscreen::with_desc(ctx, &desc)?;
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
     let first = renderer.frames_recorded() + 1;
     // A bar on a terminal, a line every 5 s otherwise (long runs only).
@@ -471,6 +495,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     if let Some(ran) = renderer.queue_mode() {
         println!("queues: {}", ran.describe(ctx.info()));
     }
+    println!("output: {}", describe_output(&args.output, &renderer));
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
     let built = CullStages {
         frustum: args.viewpoint.cull.frustum,
@@ -489,8 +514,15 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     }
     if let Some(dir) = &args.out {
         let gbuffer = renderer.gbuffer.as_ref().expect("a frame was rendered").capture(ctx)?;
-        let files =
-            Outputs { frames: &frames, warmup: warmup_timed, capture: &capture, gbuffer: &gbuffer, stats: &stats };
+        let output = &args.output;
+        let files = Outputs {
+            frames: &frames,
+            warmup: warmup_timed,
+            capture: &capture,
+            gbuffer: &gbuffer,
+            stats: &stats,
+            output,
+        };
         files.write(dir, view, &serde_json::to_string_pretty(&report)?)?;
     }
     print!("{}", renderer.terrain.memory_report());
@@ -629,79 +661,23 @@ fn print_timings(timed: &[FrameTimings]) {
     println!("{:<44} {:<9} {:>10.4}", "sum of medians", "", total);
 }
 
-/// What `--out` receives.
-struct Outputs<'a> {
-    frames: &'a [FrameTimings],
-    warmup: usize,
-    capture: &'a Capture,
-    gbuffer: &'a GBufferCapture,
-    stats: &'a RenderStats,
-}
-
-impl Outputs<'_> {
-    /// All files or none: each is written beside its final name and the
-    /// set renamed into place once every one was written, so a full disk
-    /// leaves the previous render's files (or no folder) as they were.
-    /// timings.json holds the timed frames (what the printed table
-    /// summarises); trace.json every frame, warm-up included, for looking
-    /// at first-use costs.
-    fn write(&self, dir: &Path, view: &View, report_json: &str) -> Result<()> {
-        let mut set = FileSet::new(dir);
-        set.add("timings.json", vista::frame::profiler::to_json(&self.frames[self.warmup..]).as_bytes())?;
-        set.add("trace.json", vista::frame::profiler::to_chrome_trace(self.frames).as_bytes())?;
-        set.add("stats.json", serde_json::to_string_pretty(self.stats)?.as_bytes())?;
-        set.add("report.json", report_json.as_bytes())?;
-        let [w, h] = self.capture.size;
-        set.add_with("image.png", |f| encode_png(f, &self.capture.rgba, [w, h], ExtendedColorType::Rgba8))?;
-        let depth = self.capture.linear_depth(view.near_m);
-        let size = [w as usize, h as usize];
-        set.add_with("depth.exr", |f| write_depth_exr(f, size, depth))?;
-        set.add_with("lit.exr", |f| write_lit_exr(f, size, &self.gbuffer.hdr))?;
-        let class: Vec<u8> = self.gbuffer.classification.iter().flat_map(|&b| classification_colour(b)).collect();
-        set.add_with("classification.png", |f| encode_png(f, &class, [w, h], ExtendedColorType::Rgb8))?;
-        set.commit()?;
-        println!(
-            "wrote {}/{{image.png, lit.exr, depth.exr, classification.png, timings.json, trace.json, stats.json, \
-             report.json}}",
-            dir.display()
-        );
-        Ok(())
+/// The output in words: its target(s), and what lit it.
+fn describe_output(output: &Output, renderer: &TerrainRenderer) -> String {
+    let lit = if renderer.effect_on(Effect::Lighting) { "sun and sky" } else { "unlit albedo" };
+    match output {
+        Output::Lit { format } => format!("lit ({lit}, tonemapped for display into {format:?})"),
+        Output::Hdr { format, sky } => {
+            let sky = if *sky && renderer.effect_on(Effect::Atmosphere) {
+                "the atmosphere's sky in the background"
+            } else {
+                "the background kept"
+            };
+            format!("hdr ({lit}, linear radiance into {format:?}, no tonemap; {sky})")
+        }
+        Output::Gbuffer(layout) => {
+            let images: Vec<String> =
+                layout.attachments.iter().map(|a| format!("{} {:?} {:?}", a.name, a.format, a.channels)).collect();
+            format!("gbuffer (no lighting: the engine lights; {:?} normal; {})", layout.normal, images.join(", "))
+        }
     }
-}
-
-fn exr_io(e: exr::error::Error) -> std::io::Error {
-    match e {
-        exr::error::Error::Io(io) => io,
-        other => std::io::Error::other(other),
-    }
-}
-
-/// The lit image before display encoding: linear RGB radiance (float16
-/// channels R, G, B), row 0 at the top.
-fn write_lit_exr(w: &mut OutputWriter, size: [usize; 2], hdr: &[[f32; 4]]) -> std::io::Result<()> {
-    use exr::prelude::*;
-    let channel = |name: &str, i: usize| {
-        AnyChannel::new(name, FlatSamples::F16(hdr.iter().map(|p| f16::from_f32(p[i])).collect()))
-    };
-    let layer = Layer::new(
-        (size[0], size[1]),
-        LayerAttributes::named("lit"),
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(SmallVec::from_vec(vec![channel("R", 0), channel("G", 1), channel("B", 2)])),
-    );
-    Image::from_layer(layer).write().non_parallel().to_buffered(w).map_err(exr_io)
-}
-
-/// One float32 channel `Z`: linear view depth in metres along the camera's
-/// forward axis, 0 where no terrain; row 0 is the top of the image.
-fn write_depth_exr(w: &mut OutputWriter, size: [usize; 2], depth: Vec<f32>) -> std::io::Result<()> {
-    use exr::prelude::*;
-    let channel = AnyChannel::new("Z", FlatSamples::F32(depth));
-    let layer = Layer::new(
-        (size[0], size[1]),
-        LayerAttributes::named("depth"),
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(SmallVec::from_vec(vec![channel])),
-    );
-    Image::from_layer(layer).write().non_parallel().to_buffered(w).map_err(exr_io)
 }

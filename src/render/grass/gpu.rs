@@ -4,7 +4,6 @@
 //! and each frame's plan. Teardown: fields drop in declaration order, each
 //! object retired to the context until the frames using it completed.
 
-use crate::targets::GbufferLayout;
 use super::{GrassCounters, GrassParams};
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
@@ -22,6 +21,7 @@ use crate::shaders::consts::{
     GRASS_PIGMENT_TEXELS, GRASS_RULES,
 };
 use crate::shaders::structs;
+use crate::targets::GbufferLayout;
 
 /// Host twin of `GrassInstance` (grass.glsl).
 #[repr(C)]
