@@ -1,51 +1,26 @@
 //! The engine's side: its own Vulkan objects, made and destroyed here, none
 //! of them vista's. Two frames in flight; the queue behind a mutex the
-//! engine owns (vista submits through `submitter`, never by itself).
+//! engine owns (vista submits through `submitter`, never by itself). A
+//! frame: the engine's pass (clears its targets, draws its building into
+//! the depth vista then loads), vista, the engine's lighting or tonemap
+//! pass (per mode) and its marker, then a blit to the swapchain.
 
+use crate::passes::{BoxPush, LightPush, Marker, Passes};
+use crate::targets::{allocate, Mode, Target, Targets, EXTENT, SIZE, TERRAIN_BIT};
 use ash::vk;
-use std::ffi::{c_void, CStr};
+use std::ffi::c_void;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use vista::gpu::Context;
-use vista::passes::terrain_geometry::{DepthOptions, COLOR_FORMAT};
-use vista::render::View;
 use vista::world::{HeightSource, WorldDesc};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::Window;
 
-pub const SIZE: [u32; 2] = [640, 360];
-pub const COLOR_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
-    vk::ImageUsageFlags::COLOR_ATTACHMENT.as_raw() | vk::ImageUsageFlags::TRANSFER_SRC.as_raw(),
-);
-/// Sampled: vista's occlusion culling reads the depth.
-pub const DEPTH_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
-    vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT.as_raw() | vk::ImageUsageFlags::SAMPLED.as_raw(),
-);
-/// The engine's depth: depth-only, as many engines use; vista is told so
-/// (`DepthOptions`, no stencil bit) and draws into it in this layout.
-pub const DEPTH: DepthOptions = DepthOptions { format: vk::Format::D32_SFLOAT, terrain_stencil_bit: None, load: false };
-const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL;
 const FRAMES: usize = 2;
-const EXTENT: vk::Extent2D = vk::Extent2D { width: SIZE[0], height: SIZE[1] };
-
-pub struct Target {
-    pub image: vk::Image,
-    memory: vk::DeviceMemory,
-    view: vk::ImageView,
-}
 
 pub struct Readback {
     buffer: vk::Buffer,
     memory: vk::DeviceMemory,
-}
-
-/// Push constants of the marker: its clip-space centre and half size (NDC).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Marker {
-    clip: [f32; 4],
-    half: [f32; 2],
-    pad: [f32; 2],
 }
 
 pub struct Engine {
@@ -70,9 +45,9 @@ pub struct Engine {
     /// vista's frame number of each slot's last submission.
     frame_of: Vec<u64>,
     next: usize,
-    pub color: Target,
-    pub depth: Target,
-    marker: (vk::PipelineLayout, vk::Pipeline),
+    pub mode: Mode,
+    pub targets: Targets,
+    passes: Passes,
 }
 
 /// Counts the validation layer's messages (and prints them).
@@ -92,7 +67,7 @@ unsafe extern "system" fn on_message(
 }
 
 impl Engine {
-    pub fn new(window: &Window, validation: bool) -> Result<Engine, String> {
+    pub fn new(window: &Window, validation: bool, mode: Mode) -> Result<Engine, String> {
         let e = |what: &str| {
             let what = what.to_string();
             move |r: vk::Result| format!("{what}: {r}")
@@ -196,10 +171,9 @@ impl Engine {
             let acquired = (0..FRAMES).map(|_| sem()).collect::<Result<_, _>>().map_err(e("semaphores"))?;
             let rendered = images.iter().map(|_| sem()).collect::<Result<_, _>>().map_err(e("semaphores"))?;
             let mem = instance.get_physical_device_memory_properties(physical);
-            let color = target(&device, &mem, COLOR_FORMAT, COLOR_USAGE, vk::ImageAspectFlags::COLOR)?;
-            let depth = target(&device, &mem, DEPTH.format, DEPTH_USAGE, vk::ImageAspectFlags::DEPTH)?;
-            let marker = marker_pipeline(&device)?;
-            Ok(Engine {
+            let targets = Targets::new(&device, &mem, mode)?;
+            let passes = Passes::new(&device, mode, &targets)?;
+            let engine = Engine {
                 entry,
                 instance,
                 physical,
@@ -220,11 +194,46 @@ impl Engine {
                 rendered,
                 frame_of: vec![0; FRAMES],
                 next: 0,
-                color,
-                depth,
-                marker,
-            })
+                mode,
+                targets,
+                passes,
+            };
+            engine.rest_layouts()?;
+            Ok(engine)
         }
+    }
+
+    /// Leaves UNDEFINED for the layouts the targets rest in between frames
+    /// (what vista is told they are in).
+    fn rest_layouts(&self) -> Result<(), String> {
+        self.one_shot(|d, cmd| {
+            for t in self.targets.all() {
+                // SAFETY: recording the engine's own one-shot buffer.
+                unsafe { transition(d, cmd, t, vk::ImageLayout::UNDEFINED, rest_layout(t)) };
+            }
+        })
+    }
+
+    /// Records `f` into a fresh command buffer, submits it and waits.
+    fn one_shot(&self, f: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<(), String> {
+        let d = &self.device;
+        // SAFETY: the engine's pool and queue; the buffer is freed after the wait.
+        unsafe {
+            let info = vk::CommandBufferAllocateInfo::default().command_pool(self.pool).command_buffer_count(1);
+            let cmd = d.allocate_command_buffers(&info).map_err(|x| x.to_string())?[0];
+            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).map_err(|x| x.to_string())?;
+            f(d, cmd);
+            d.end_command_buffer(cmd).map_err(|x| x.to_string())?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            {
+                let queue = self.queue.lock().unwrap();
+                d.queue_submit(*queue, &[submit], vk::Fence::null()).map_err(|x| x.to_string())?;
+                d.queue_wait_idle(*queue).map_err(|x| x.to_string())?;
+            }
+            d.free_command_buffers(self.pool, &cmds);
+        }
+        Ok(())
     }
 
     pub fn queue(&self) -> vk::Queue {
@@ -263,53 +272,116 @@ impl Engine {
         }
     }
 
-    pub fn marker_push(&self, view: &View, world_m: glam::DVec3) -> Marker {
-        let rel = world_m - glam::DVec3::from_array(view.camera.position_m);
-        let clip = view.view_proj() * rel.extend(1.0);
-        Marker { clip: clip.as_vec4().to_array(), half: [0.03, 0.03 * 640.0 / 360.0], pad: [0.0; 2] }
-    }
-
-    /// The markers over vista's picture, tested against vista's depth.
-    pub fn draw_markers(&self, cmd: vk::CommandBuffer, markers: &[Marker]) {
-        let d = &self.device;
-        let color = vk::RenderingAttachmentInfo::default()
-            .image_view(self.color.view)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::LOAD)
-            .store_op(vk::AttachmentStoreOp::STORE);
-        let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(self.depth.view)
-            .image_layout(DEPTH_LAYOUT)
-            .load_op(vk::AttachmentLoadOp::LOAD)
-            .store_op(vk::AttachmentStoreOp::STORE);
-        let colors = [color];
-        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: EXTENT };
-        let info = vk::RenderingInfo::default()
-            .render_area(area)
-            .layer_count(1)
-            .color_attachments(&colors)
-            .depth_attachment(&depth);
-        let viewport =
-            vk::Viewport { width: SIZE[0] as f32, height: SIZE[1] as f32, max_depth: 1.0, ..Default::default() };
-        // SAFETY: recording; vista left both targets in these layouts and
-        // its passes end in full barriers; the pipeline matches the formats.
+    /// The engine's pass before vista: clears its targets (depth to far,
+    /// stencil to 0) and draws its building, when `building` is given.
+    pub fn engine_pass(&self, cmd: vk::CommandBuffer, light: &LightPush, building: Option<&BoxPush>) {
+        let background = match self.mode {
+            Mode::Lit => light.background(),
+            // Radiance the tonemap turns into the background colour, near enough.
+            Mode::Hdr => light.background().map(|c| c * 0.5),
+            // No surface: the lighting pass draws the background by depth.
+            Mode::Gbuffer => [0.0; 4],
+        };
+        let clear = vk::ClearValue { color: vk::ClearColorValue { float32: background } };
+        let colours: Vec<_> = self
+            .targets
+            .engine_colours(self.mode)
+            .into_iter()
+            .map(|t| attachment(t.view, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Some(clear)))
+            .collect();
+        let far = vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } };
+        let depth = attachment(self.targets.depth.view, rest_layout(&self.targets.depth), Some(far));
+        // SAFETY: recording since begin_frame; the targets rest in these layouts.
         unsafe {
-            full_barrier(d, cmd);
-            d.cmd_begin_rendering(cmd, &info);
-            d.cmd_set_viewport(cmd, 0, &[viewport]);
-            d.cmd_set_scissor(cmd, 0, &[area]);
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.marker.1);
-            for m in markers {
-                d.cmd_push_constants(cmd, self.marker.0, vk::ShaderStageFlags::VERTEX, 0, bytemuck::bytes_of(m));
-                d.cmd_draw(cmd, 6, 1, 0, 0);
+            self.begin_rendering(cmd, &colours, Some(&depth));
+            if let Some(b) = building {
+                self.passes.draw_building(&self.device, cmd, light, b);
             }
-            d.cmd_end_rendering(cmd);
+            self.device.cmd_end_rendering(cmd);
+            full_barrier(&self.device, cmd);
         }
     }
 
-    pub fn readback_buffer(&self) -> Result<Readback, String> {
-        let size = u64::from(SIZE[0] * SIZE[1] * 4);
-        // SAFETY: plain creation and binding of the engine's own buffer.
+    /// After vista: the engine lights its G-buffer or tonemaps vista's
+    /// radiance into the display image (per mode), then draws its markers
+    /// depth-tested against the depth vista wrote; every target rests
+    /// again afterwards.
+    pub fn after_vista(&self, cmd: vk::CommandBuffer, light: &LightPush, markers: &[Marker]) {
+        let (d, t) = (&self.device, &self.targets);
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let depth_read = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+        let inputs: Vec<&Target> = t.hdr.iter().chain(&t.gbuffer).collect();
+        let ldr = attachment(t.ldr.view, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, None);
+        let depth = attachment(t.depth.view, depth_read, None);
+        // SAFETY: recording since begin_frame; vista's passes end in full
+        // barriers and leave the targets in their rest layouts.
+        unsafe {
+            full_barrier(d, cmd);
+            inputs.iter().for_each(|i| transition(d, cmd, i, rest_layout(i), read));
+            transition(d, cmd, &t.depth, rest_layout(&t.depth), depth_read);
+            self.begin_rendering(cmd, std::slice::from_ref(&ldr), None);
+            self.passes.resolve(d, cmd, light);
+            d.cmd_end_rendering(cmd);
+            full_barrier(d, cmd);
+            self.begin_rendering(cmd, std::slice::from_ref(&ldr), Some(&depth));
+            self.passes.draw_markers(d, cmd, markers);
+            d.cmd_end_rendering(cmd);
+            inputs.iter().for_each(|i| transition(d, cmd, i, read, rest_layout(i)));
+            transition(d, cmd, &t.depth, depth_read, rest_layout(&t.depth));
+        }
+    }
+
+    /// # Safety
+    /// `cmd` is recording outside a scope; the attachments are in the
+    /// layouts they name.
+    unsafe fn begin_rendering(
+        &self,
+        cmd: vk::CommandBuffer,
+        colours: &[vk::RenderingAttachmentInfo],
+        depth: Option<&vk::RenderingAttachmentInfo>,
+    ) {
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: EXTENT };
+        let mut info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(colours);
+        if let Some(dp) = depth {
+            info = info.depth_attachment(dp).stencil_attachment(dp);
+        }
+        let viewport =
+            vk::Viewport { width: SIZE[0] as f32, height: SIZE[1] as f32, max_depth: 1.0, ..Default::default() };
+        // SAFETY: as the caller promises.
+        unsafe {
+            self.device.cmd_begin_rendering(cmd, &info);
+            self.device.cmd_set_viewport(cmd, 0, &[viewport]);
+            self.device.cmd_set_scissor(cmd, 0, &[area]);
+        }
+    }
+
+    /// Pixels with vista's terrain stencil bit in the last frame (the
+    /// engine is idle).
+    pub fn terrain_pixels(&self) -> Result<usize, String> {
+        let n = (SIZE[0] * SIZE[1]) as usize;
+        let r = self.host_buffer(n as u64)?;
+        let depth = &self.targets.depth;
+        let stencil = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::STENCIL).layer_count(1);
+        let region = vk::BufferImageCopy::default().image_subresource(stencil).image_extent(vk::Extent3D {
+            width: SIZE[0],
+            height: SIZE[1],
+            depth: 1,
+        });
+        let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+        self.one_shot(|d, cmd| {
+            // SAFETY: the engine's one-shot buffer; the depth rests between frames.
+            unsafe {
+                transition(d, cmd, depth, rest_layout(depth), src);
+                d.cmd_copy_image_to_buffer(cmd, depth.image, src, r.buffer, &[region]);
+                transition(d, cmd, depth, src, rest_layout(depth));
+            }
+        })?;
+        let bytes = self.take(r, n)?;
+        Ok(bytes.iter().filter(|&&s| s & TERRAIN_BIT != 0).count())
+    }
+
+    fn host_buffer(&self, size: u64) -> Result<Readback, String> {
+        // SAFETY: the engine's own host-visible buffer.
         unsafe {
             let buffer = self
                 .device
@@ -327,11 +399,31 @@ impl Engine {
         }
     }
 
-    /// Blits vista's colour into the swapchain image, copies it for a
+    /// The buffer's first `n` bytes; frees it (the engine is idle).
+    fn take(&self, r: Readback, n: usize) -> Result<Vec<u8>, String> {
+        // SAFETY: host-visible, coherent memory of the engine, idle.
+        unsafe {
+            let p = self
+                .device
+                .map_memory(r.memory, 0, n as u64, vk::MemoryMapFlags::empty())
+                .map_err(|x| x.to_string())?;
+            let v = std::slice::from_raw_parts(p as *const u8, n).to_vec();
+            self.device.unmap_memory(r.memory);
+            self.device.destroy_buffer(r.buffer, None);
+            self.device.free_memory(r.memory, None);
+            Ok(v)
+        }
+    }
+
+    pub fn readback_buffer(&self) -> Result<Readback, String> {
+        self.host_buffer(u64::from(SIZE[0] * SIZE[1] * 4))
+    }
+
+    /// Blits the display image into the swapchain image, copies it for a
     /// screenshot, submits and presents.
     pub fn end_frame(&mut self, ctx: &Context, slot: usize, image: u32, shot: Option<&Readback>) -> Result<(), String> {
         let (d, cmd, swap) = (&self.device, self.cmds[slot], self.images[image as usize]);
-        let color = self.color.image;
+        let color = self.targets.ldr.image;
         let corner = [vk::Offset3D::default(), vk::Offset3D { x: SIZE[0] as i32, y: SIZE[1] as i32, z: 1 }];
         let layer = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
         let blit = vk::ImageBlit::default()
@@ -341,8 +433,7 @@ impl Engine {
             .dst_offsets(corner);
         use vk::ImageLayout as L;
         // SAFETY: recording since begin_frame; the layouts named are the ones
-        // the images are in (vista left the colour in COLOR_ATTACHMENT and
-        // gets it back there, as its tracker expects).
+        // the images are in (the display image rests in COLOR_ATTACHMENT).
         unsafe {
             layout(d, cmd, color, L::COLOR_ATTACHMENT_OPTIMAL, L::TRANSFER_SRC_OPTIMAL);
             layout(d, cmd, swap, L::UNDEFINED, L::TRANSFER_DST_OPTIMAL);
@@ -395,20 +486,8 @@ impl Engine {
     }
 
     /// Writes the screenshot (the engine is idle).
-    pub fn write_png(&self, r: &Readback, file: &std::path::Path) -> Result<(), String> {
-        let n = (SIZE[0] * SIZE[1] * 4) as usize;
-        // SAFETY: host-visible, coherent memory of the engine, idle.
-        let mut rgba = unsafe {
-            let p = self
-                .device
-                .map_memory(r.memory, 0, n as u64, vk::MemoryMapFlags::empty())
-                .map_err(|x| x.to_string())?;
-            let v = std::slice::from_raw_parts(p as *const u8, n).to_vec();
-            self.device.unmap_memory(r.memory);
-            self.device.destroy_buffer(r.buffer, None);
-            self.device.free_memory(r.memory, None);
-            v
-        };
+    pub fn write_png(&self, r: Readback, file: &std::path::Path) -> Result<(), String> {
+        let mut rgba = self.take(r, (SIZE[0] * SIZE[1] * 4) as usize)?;
         if self.bgra {
             rgba.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
         }
@@ -421,13 +500,8 @@ impl Engine {
         let d = &self.device;
         // SAFETY: idle; each object is destroyed once, children first.
         unsafe {
-            d.destroy_pipeline(self.marker.1, None);
-            d.destroy_pipeline_layout(self.marker.0, None);
-            for t in [&self.color, &self.depth] {
-                d.destroy_image_view(t.view, None);
-                d.destroy_image(t.image, None);
-                d.free_memory(t.memory, None);
-            }
+            self.passes.destroy(d);
+            self.targets.destroy(d);
             for s in self.acquired.iter().chain(&self.rendered) {
                 d.destroy_semaphore(*s, None);
             }
@@ -490,128 +564,46 @@ unsafe fn layout(
     unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&ib)) };
 }
 
-unsafe fn allocate(
-    d: &ash::Device,
-    mem: &vk::PhysicalDeviceMemoryProperties,
-    req: vk::MemoryRequirements,
-    flags: vk::MemoryPropertyFlags,
-) -> Result<vk::DeviceMemory, String> {
-    let index = (0..mem.memory_type_count)
-        .find(|&i| req.memory_type_bits & (1 << i) != 0 && mem.memory_types[i as usize].property_flags.contains(flags))
-        .ok_or("no memory type")?;
-    let info = vk::MemoryAllocateInfo::default().allocation_size(req.size).memory_type_index(index);
-    // SAFETY: valid device and allocate info.
-    unsafe { d.allocate_memory(&info, None) }.map_err(|x| x.to_string())
-}
-
-unsafe fn target(
-    d: &ash::Device,
-    mem: &vk::PhysicalDeviceMemoryProperties,
-    format: vk::Format,
-    usage: vk::ImageUsageFlags,
-    aspect: vk::ImageAspectFlags,
-) -> Result<Target, String> {
-    let info = vk::ImageCreateInfo::default()
-        .image_type(vk::ImageType::TYPE_2D)
-        .format(format)
-        .extent(vk::Extent3D { width: SIZE[0], height: SIZE[1], depth: 1 })
-        .mip_levels(1)
-        .array_layers(1)
-        .samples(vk::SampleCountFlags::TYPE_1)
-        .tiling(vk::ImageTiling::OPTIMAL)
-        .usage(usage);
-    // SAFETY: plain creation, binding and viewing of the engine's image.
-    unsafe {
-        let image = d.create_image(&info, None).map_err(|x| x.to_string())?;
-        let memory = allocate(d, mem, d.get_image_memory_requirements(image), vk::MemoryPropertyFlags::DEVICE_LOCAL)?;
-        d.bind_image_memory(image, memory, 0).map_err(|x| x.to_string())?;
-        let range = vk::ImageSubresourceRange::default().aspect_mask(aspect).level_count(1).layer_count(1);
-        let vi = vk::ImageViewCreateInfo::default()
-            .image(image)
-            .view_type(vk::ImageViewType::TYPE_2D)
-            .format(format)
-            .subresource_range(range);
-        let view = d.create_image_view(&vi, None).map_err(|x| x.to_string())?;
-        Ok(Target { image, memory, view })
+/// The layout a target rests in between frames and passes: what vista is
+/// told (and gives back).
+pub fn rest_layout(t: &Target) -> vk::ImageLayout {
+    if t.sampled != t.view {
+        vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+    } else {
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
     }
 }
 
-const MARKER_VERT: &str = "#version 450
-layout(push_constant) uniform Marker { vec4 clip; vec2 half_size; } m;
-void main() {
-    vec2 c[6] = vec2[](vec2(-1, -1), vec2(1, -1), vec2(1, 1), vec2(-1, -1), vec2(1, 1), vec2(-1, 1));
-    gl_Position = m.clip + vec4(c[gl_VertexIndex] * m.half_size * m.clip.w, 0.0, 0.0);
-}";
-const MARKER_FRAG: &str = "#version 450
-layout(location = 0) out vec4 colour;
-void main() { colour = vec4(1.0, 0.0, 1.0, 1.0); }";
+fn attachment(
+    view: vk::ImageView,
+    layout: vk::ImageLayout,
+    clear: Option<vk::ClearValue>,
+) -> vk::RenderingAttachmentInfo<'static> {
+    vk::RenderingAttachmentInfo::default()
+        .image_view(view)
+        .image_layout(layout)
+        .load_op(if clear.is_some() { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD })
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(clear.unwrap_or_default())
+}
 
-fn spirv(text: &str, stage: glslang::ShaderStage) -> Result<Vec<u32>, String> {
-    let compiler = glslang::Compiler::acquire().ok_or("glslang")?;
-    let source = glslang::ShaderSource::from(text.to_string());
-    let options = glslang::CompilerOptions {
-        source_language: glslang::SourceLanguage::GLSL,
-        target: glslang::Target::Vulkan {
-            version: glslang::VulkanVersion::Vulkan1_3,
-            spirv_version: glslang::SpirvVersion::SPIRV1_6,
-        },
-        ..Default::default()
+/// A target's layout change, all of it (both aspects of the depth).
+unsafe fn transition(d: &ash::Device, cmd: vk::CommandBuffer, t: &Target, old: vk::ImageLayout, new: vk::ImageLayout) {
+    let aspect = if t.sampled != t.view {
+        vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+    } else {
+        vk::ImageAspectFlags::COLOR
     };
-    let input = glslang::ShaderInput::new(&source, stage, &options, None, None).map_err(|e| e.to_string())?;
-    compiler.create_shader(input).map_err(|e| e.to_string())?.compile().map_err(|e| e.to_string())
-}
-
-/// A quad in clip space, depth tested (reversed-Z: GREATER_OR_EQUAL) and
-/// not written; drawn into vista's colour target with vista's depth.
-fn marker_pipeline(d: &ash::Device) -> Result<(vk::PipelineLayout, vk::Pipeline), String> {
-    let (vs, fs) =
-        (spirv(MARKER_VERT, glslang::ShaderStage::Vertex)?, spirv(MARKER_FRAG, glslang::ShaderStage::Fragment)?);
-    // SAFETY: plain creation of the engine's pipeline objects.
-    unsafe {
-        let module = |w: &[u32]| d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(w), None);
-        let (vm, fm) = (module(&vs).map_err(|x| x.to_string())?, module(&fs).map_err(|x| x.to_string())?);
-        let range = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::VERTEX).size(32)];
-        let layout = d
-            .create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&range), None)
-            .map_err(|x| x.to_string())?;
-        let main: &CStr = c"main";
-        let stages = [
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vm).name(main),
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fm).name(main),
-        ];
-        let vertex = vk::PipelineVertexInputStateCreateInfo::default();
-        let assembly =
-            vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::default().line_width(1.0);
-        let ms = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_compare_op(vk::CompareOp::GREATER_OR_EQUAL);
-        let blend = [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)];
-        let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-        let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
-        let formats = [COLOR_FORMAT];
-        let mut rendering = vk::PipelineRenderingCreateInfo::default()
-            .color_attachment_formats(&formats)
-            .depth_attachment_format(DEPTH.format);
-        let info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex)
-            .input_assembly_state(&assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&raster)
-            .multisample_state(&ms)
-            .depth_stencil_state(&depth)
-            .color_blend_state(&blending)
-            .dynamic_state(&dynamic)
-            .layout(layout)
-            .push_next(&mut rendering);
-        let pipeline =
-            d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None).map_err(|(_, x)| x.to_string())?[0];
-        d.destroy_shader_module(vm, None);
-        d.destroy_shader_module(fm, None);
-        Ok((layout, pipeline))
-    }
+    let range = vk::ImageSubresourceRange::default().aspect_mask(aspect).level_count(1).layer_count(1);
+    let ib = [vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+        .old_layout(old)
+        .new_layout(new)
+        .image(t.image)
+        .subresource_range(range)];
+    // SAFETY: the caller records into `cmd` and names the image's layout.
+    unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&ib)) };
 }

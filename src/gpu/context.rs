@@ -429,6 +429,11 @@ impl Context {
         self.shared.frames_submitted.fetch_add(1, Ordering::AcqRel) + 1
     }
 
+    /// The number of the last frame submitted (`frame_submitted`'s).
+    pub fn frames_submitted(&self) -> u64 {
+        self.shared.frames_submitted.load(Ordering::Acquire)
+    }
+
     /// Call when the fence of frame `frame` (from `frame_submitted`) has
     /// signalled: resources dropped up to that frame are destroyed.
     pub fn frame_completed(&self, frame: u64) {
