@@ -23,11 +23,11 @@ mod engine;
 mod passes;
 mod targets;
 
-use engine::{rest_layout, Engine};
+use engine::Engine;
 use passes::{BoxPush, LightPush, Marker};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use targets::{gbuffer_layout, Mode, Target, DEPTH, HDR_FORMAT, SIZE};
+use targets::{gbuffer_layout, rest_layout, Mode, Target, DEPTH, HDR_FORMAT, SIZE};
 use vista::gpu::{Context, Image, ImageDesc, RawHandles, Recorder};
 use vista::passes::terrain_geometry::COLOR_FORMAT;
 use vista::render::{overview_camera, RenderTargets, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};

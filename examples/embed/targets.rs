@@ -173,3 +173,40 @@ unsafe fn target(
         Ok(Target { image, memory, view, sampled, format })
     }
 }
+
+/// The layout a target rests in between frames and passes: what vista is
+/// told (and gives back).
+pub fn rest_layout(t: &Target) -> vk::ImageLayout {
+    if t.sampled != t.view {
+        vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+    } else {
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
+    }
+}
+
+/// A target's layout change, all of it (both aspects of the depth).
+pub unsafe fn transition(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    t: &Target,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+) {
+    let aspect = if t.sampled != t.view {
+        vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+    } else {
+        vk::ImageAspectFlags::COLOR
+    };
+    let range = vk::ImageSubresourceRange::default().aspect_mask(aspect).level_count(1).layer_count(1);
+    let ib = [vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+        .old_layout(old)
+        .new_layout(new)
+        .image(t.image)
+        .subresource_range(range)];
+    // SAFETY: the caller records into `cmd` and names the image's layout.
+    unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&ib)) };
+}
