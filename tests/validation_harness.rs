@@ -1,5 +1,6 @@
-//! Proves the harness itself: the layer is loaded (canary), sync validation
-//! runs clean on the smoke frame, and teardown accounting works.
+//! Proves the harness itself: the layer is loaded and synchronization
+//! validation reports a hazard (canaries), sync validation runs clean on
+//! the smoke frame, and teardown accounting works.
 
 mod common;
 
@@ -15,6 +16,33 @@ fn canary_validation_layer_reports_a_provoked_error() {
     assert!(
         msgs.iter().any(|m| m.id_name.contains("VUID-VkBufferCreateInfo-size")),
         "the validation layer did not report the provoked error; got {msgs:#?}"
+    );
+}
+
+/// What the syncval tests (tests/syncval.rs) rely on: a missing barrier
+/// is reported.
+#[test]
+fn canary_synchronization_validation_reports_a_provoked_hazard() {
+    let ctx = Context::headless(&ContextOptions { sync_validation: true, ..validated() }).expect("validated context");
+    let log = ctx.validation_log();
+    let buffer = |name| {
+        let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+        Buffer::new(&ctx, &BufferDesc { name, size: 256, usage, location: MemoryLocation::GpuOnly }).unwrap()
+    };
+    let (a, b) = (buffer("written"), buffer("copied_to"));
+    ctx.submit_and_wait(|rec| {
+        rec.fill_buffer(&a, 7);
+        // No barrier: the copy reads what the fill may still be writing.
+        rec.copy_buffer(&a, &b, 256);
+        Ok(())
+    })
+    .unwrap();
+    drop((a, b));
+    ctx.wait_idle().unwrap();
+    let msgs = log.messages();
+    assert!(
+        msgs.iter().any(|m| m.id_name == "SYNC-HAZARD-READ-AFTER-WRITE"),
+        "synchronization validation did not report the provoked hazard; got {msgs:#?}"
     );
 }
 

@@ -822,6 +822,11 @@ impl TerrainRenderer {
         self.exec.latest()
     }
 
+    /// Every pass of the frame, built or not (and why not).
+    pub fn pass_graph(&self) -> &[crate::render::graph::PassNode] {
+        self.graph.nodes()
+    }
+
     /// What became of each built pass in the last recorded frame.
     pub fn last_frame_log(&self) -> Option<&crate::render::graph::FrameLog> {
         self.graph.last_frame()

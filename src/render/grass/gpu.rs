@@ -271,6 +271,8 @@ impl Grass {
         if let Some(d) = &decals {
             let offset = u64::from(DECAL_MAX) * 4;
             write_list(rec, d.list, offset, &f.pigment_decals);
+            // The list reaches the pass's reads (syncval: tests/syncval.rs).
+            rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         }
         self.pigment_pass.record(rec, &self.pigment, f.pigment, sector_data, tree, m, decals);
     }

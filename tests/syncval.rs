@@ -1,0 +1,180 @@
+//! Every pass under synchronization validation, with the scene options
+//! that build it: one renderer with every effect on (holes, cone and
+//! occlusion culling, splat, cliffs, virtual texture, decals with a
+//! displacement decal, grass, assets, cliff meshes, shadows, atmosphere,
+//! lighting, the debug views), its camera moving close over a meadow with
+//! a cone and a hole so that pages render, grass is placed and drawn, the
+//! pigment map and the cliff meshes are redone, and a moving sun redoes
+//! shadows; one and two command buffers per frame, outputs `lit`, `hdr`
+//! and `gbuffer` (the latter two over an engine's loaded depth with its
+//! occluder). The layer reports nothing, and every pass the renderer built
+//! was recorded at least once.
+
+mod common;
+
+use common::gpu_test_with;
+use common::terrain::{small_world as world, view, Rig, Surface};
+use std::collections::BTreeSet;
+use vista::gpu::{ContextOptions, QueueMode};
+use vista::passes::debug_view::DebugView;
+use vista::passes::terrain_geometry::DepthOptions;
+use vista::render::assets::{Asset, AssetKind};
+use vista::render::cliff_meshes::CliffMeshParams;
+use vista::render::graph::{FramePass, Outcome};
+use vista::render::grass::GrassParams;
+use vista::render::offscreen::{EngineWall, Offscreen, OffscreenDesc};
+use vista::render::virtual_texture::decals::{Decal, DecalSet, DecalShape, DecalTexture};
+use vista::render::{Effect, Effects, RendererOptions, View};
+use vista::shaders::consts::DECAL_TEXELS;
+use vista::targets::{GbufferLayout, Output};
+use vista::world::Hole;
+
+const SIZE: [u32; 2] = [160, 96];
+/// A meadow (grass) with a 51-degree cone (rock: cliffs, cliff meshes).
+const GROUND: Surface = Surface::Bump { z0: 300.0, c: [500.0, 232.0], r: 10.0, h: 12.0 };
+const FRAMES: u32 = 14;
+
+fn effects() -> Effects {
+    let mut fx = Effects::default();
+    for e in [
+        Effect::Splat,
+        Effect::Cliffs,
+        Effect::VirtualTexture,
+        Effect::Decals,
+        Effect::Grass,
+        Effect::Assets,
+        Effect::CliffMeshes,
+        Effect::Shadows,
+        Effect::Atmosphere,
+    ] {
+        fx.set(e, true);
+    }
+    // Scaled to the test world (as each effect's own tests do).
+    fx.grass = GrassParams { radius_m: 20.0, fade_m: 4.0, ..GrassParams::default() };
+    fx.cliff_meshes = CliffMeshParams { radius_m: 24.0, ..CliffMeshParams::default() };
+    fx.virtual_texture.cache_mb = 16;
+    fx.virtual_texture.indirection = 512;
+    fx.shade.far_start_m = 300.0;
+    fx.shade.far_end_m = 450.0;
+    fx
+}
+
+fn decals() -> DecalSet {
+    let n = DECAL_TEXELS;
+    let img = image::RgbaImage::from_fn(n, n, |x, y| image::Rgba([(x % 256) as u8, (y % 256) as u8, 90, 200]));
+    let quad = |center: [f64; 2], displace_m| Decal {
+        shape: DecalShape::Quad { center_m: center.into(), size_m: [6.0, 4.0].into(), rotation_deg: 30.0 },
+        texture: 0,
+        opacity: 1.0,
+        roughness: Some(0.8),
+        displace_m,
+    };
+    let road = Decal {
+        shape: DecalShape::Road {
+            points_m: vec![[490.0, 212.0].into(), [505.0, 218.0].into()],
+            width_m: 3.0,
+            repeat_m: 6.0,
+        },
+        ..quad([0.0, 0.0], None)
+    };
+    DecalSet {
+        textures: vec![DecalTexture::from_rgba("stripes", &img)].into(),
+        decals: vec![quad([496.0, 216.0], Some(0.5)), road],
+    }
+}
+
+fn options(output: Output, depth: DepthOptions) -> RendererOptions {
+    RendererOptions {
+        effects: effects(),
+        decals: decals(),
+        assets: vec![
+            Asset { kind: AssetKind::Rock, at_m: [503.0, 214.0], scale: 1.2, yaw_deg: 20.0 },
+            Asset { kind: AssetKind::Trunk, at_m: [494.0, 220.0], scale: 1.0, yaw_deg: 0.0 },
+        ],
+        output,
+        depth,
+        ..RendererOptions::default()
+    }
+}
+
+/// Frame `i`: 2 m over the meadow, walking north-east 1.5 m a frame
+/// towards the cone (the pigment map's and the cliff meshes' steps are
+/// crossed), turning a little.
+fn walk(i: u32) -> View {
+    let t = f64::from(i);
+    let (x, y) = (497.0 + 0.6 * t, 196.0 + 1.4 * t);
+    view([x, y, GROUND.height(x, y) + 2.0], 5.0 + t, -10.0, SIZE, 1.0)
+}
+
+/// Renders the walk in `mode` (the sun moving 7 degrees a frame, the debug
+/// views in turn on the lit output) and returns the passes recorded.
+fn run(ctx: &vista::gpu::Context, output: Output, depth: DepthOptions, mode: QueueMode) -> BTreeSet<String> {
+    let colour = output.color_format().is_some();
+    let holes = vec![Hole::Circle { center_m: [505.0, 222.0], radius_m: 3.0 }];
+    let mut rig = Rig::with_options(ctx, world(), GROUND, holes, SIZE, false, options(output.clone(), depth));
+    let desc = OffscreenDesc { mode, output, ..OffscreenDesc::new(SIZE, common::terrain::MAGENTA) };
+    rig.off = Offscreen::with_desc(ctx, &desc).unwrap();
+    if depth.load {
+        rig.off.wall = Some(EngineWall { rect: [100, 10, 150, 60], distance_m: 25.0, colour: [0.3, 0.3, 0.3, 1.0] });
+    }
+    let built: Vec<FramePass> = rig.renderer.pass_graph().iter().filter(|n| n.built).map(|n| n.pass).collect();
+    let mut ran = BTreeSet::new();
+    let mut note = |rig: &Rig| {
+        for (pass, outcome) in &rig.renderer.last_frame_log().unwrap().entries {
+            if matches!(outcome, Outcome::Recorded { .. }) {
+                ran.insert(pass.label());
+            }
+        }
+    };
+    // Streaming in (every node arriving is an upload), then the walk.
+    let start = std::time::Instant::now();
+    while !rig.renderer.settled() || rig.renderer.frames_recorded() < 3 {
+        assert!(start.elapsed().as_secs() < 300, "streaming did not settle");
+        rig.off.frame(ctx, &mut rig.renderer, &walk(0)).unwrap();
+        note(&rig);
+    }
+    let views = [DebugView::Lod, DebugView::Classification, DebugView::PatchEdges, DebugView::OcclusionPhase];
+    for i in 0..FRAMES {
+        rig.renderer.effects.lighting.sun_azimuth_deg = 200.0 + 7.0 * f64::from(i);
+        rig.renderer.debug_view = (colour && i % 3 == 2).then(|| views[(i / 3) as usize % views.len()]);
+        rig.off.frame(ctx, &mut rig.renderer, &walk(i)).unwrap();
+        note(&rig);
+    }
+    rig.off.capture(ctx).unwrap();
+    for p in built {
+        assert!(ran.contains(&p.label()), "{mode:?}: pass {} was built but never recorded: {ran:?}", p.label());
+    }
+    ran
+}
+
+fn syncval() -> ContextOptions {
+    ContextOptions { validation: true, sync_validation: true, ..Default::default() }
+}
+
+#[test]
+fn every_pass_of_every_effect_is_clean_under_synchronization_validation() {
+    gpu_test_with(&syncval(), |ctx| {
+        for mode in [QueueMode::Single, QueueMode::SplitOneQueue] {
+            let ran = run(ctx, Output::default(), DepthOptions::default(), mode);
+            // The effects' passes, each recorded (not only built).
+            for p in ["vt_pages", "vt_feedback", "grass_place", "grass_draw", "grass_pigment", "asset_draw"] {
+                assert!(ran.contains(p), "{mode:?}: {p} did not run: {ran:?}");
+            }
+            for p in ["cliff_mesh_build", "cliff_meshes", "decal_meshes", "sun_shadows", "debug_view", "terrain_holes"]
+            {
+                assert!(ran.contains(p), "{mode:?}: {p} did not run: {ran:?}");
+            }
+        }
+    });
+}
+
+#[test]
+fn hdr_and_gbuffer_over_a_loaded_depth_are_clean_under_synchronization_validation() {
+    gpu_test_with(&syncval(), |ctx| {
+        let load = DepthOptions { load: true, ..DepthOptions::default() };
+        run(ctx, Output::hdr(), load, QueueMode::SplitOneQueue);
+        let ran = run(ctx, Output::Gbuffer(GbufferLayout::octahedral()), load, QueueMode::Single);
+        assert!(!ran.contains("lighting_resolve"), "output gbuffer lights nothing: {ran:?}");
+        assert!(ran.contains("grass_draw") && ran.contains("asset_draw"), "{ran:?}");
+    });
+}
