@@ -17,6 +17,8 @@ pub struct ReflectedBinding {
     pub binding: u32,
     /// Variant name of `vista::gpu::BindingKind`.
     pub kind: &'static str,
+    /// A storage buffer or image the shader may write (not `readonly`).
+    pub writes: bool,
 }
 
 /// A named GLSL struct as the SPIR-V lays it out.
@@ -264,6 +266,17 @@ fn binding_kind(module: &naga::Module, var: &naga::GlobalVariable, file: &str) -
     })
 }
 
+/// Whether the shader may store through the binding.
+fn binding_writes(module: &naga::Module, var: &naga::GlobalVariable) -> bool {
+    match (var.space, &module.types[var.ty].inner) {
+        (naga::AddressSpace::Storage { access }, _) => access.contains(naga::StorageAccess::STORE),
+        (_, naga::TypeInner::Image { class: naga::ImageClass::Storage { access, .. }, .. }) => {
+            access.contains(naga::StorageAccess::STORE)
+        }
+        _ => false,
+    }
+}
+
 fn error_chain(e: &dyn std::error::Error) -> String {
     let mut out = e.to_string();
     let mut cur = e.source();
@@ -311,6 +324,7 @@ fn reflect(words: &[u32], file: &str, stage: naga::ShaderStage) -> Result<Compil
             set: rb.group,
             binding: rb.binding,
             kind: binding_kind(&module, var, file)?,
+            writes: binding_writes(&module, var),
         });
     }
     bindings.sort_by_key(|b| (b.set, b.binding));
@@ -396,12 +410,13 @@ pub fn generate_module(shaders: &[CompiledShader], constants: &[SharedConstant])
         for b in &sh.bindings {
             let _ = writeln!(
                 s,
-                "    pub const {}: Binding = Binding {{ name: {:?}, set: {}, binding: {}, kind: BindingKind::{} }};",
+                "    pub const {}: Binding = Binding {{ name: {:?}, set: {}, binding: {}, kind: BindingKind::{}, writes: {} }};",
                 const_ident(&b.name),
                 b.name,
                 b.set,
                 b.binding,
-                b.kind
+                b.kind,
+                b.writes
             );
         }
         for (name, id) in &sh.spec_constants {

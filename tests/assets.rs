@@ -84,7 +84,7 @@ fn probe(ctx: &Context, rig: &Rig, vertices: &[(Vec3, Vec3, Vec3)]) -> Vec<(Vec3
         rec.push_descriptors(
             &pipeline,
             &[
-                (sh::SECTOR_DATA, Resource::Buffer(&r.sector_data.buffer)),
+                (sh::SECTOR_DATA, Resource::Buffer(r.sector_data.buffer())),
                 (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
                 (sh::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
                 (sh::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),

@@ -61,7 +61,7 @@ fn node_texture_and_descriptions_match_the_shadow_after_random_updates() {
             // Over budget, the rest waits; mirror what became resident.
             resident.retain(|id| tree.shadow.slot_of(*id).is_some());
             for (lod, expect) in tree.shadow.mips.iter().enumerate() {
-                let got = ctx.read_image(&tree.node_texture, lod as u32, 0, 2).unwrap();
+                let got = ctx.read_image(tree.node_texture(), lod as u32, 0, 2).unwrap();
                 assert_eq!(bytemuck::cast_slice::<u8, u16>(&got), &expect[..], "step {step}: node texture mip {lod}");
             }
             let descs = ctx.read_buffer(&tree.node_descs).unwrap();

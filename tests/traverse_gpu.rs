@@ -182,9 +182,9 @@ fn gpu_traversal_equals_cpu_reference_for_1000_random_cases() {
                 .unwrap();
                 let (header, got) = traverse.read_result(ctx).unwrap();
                 assert_eq!(got, expect, "case {case} {mode:?}: GPU list differs from the CPU reference");
-                let map = ctx.read_image(&lod_map.image, 0, 0, 1).unwrap();
+                let map = ctx.read_image(lod_map.image(), 0, 0, 1).unwrap();
                 assert_eq!(map, lod_map_cpu(&expect, &world()), "case {case} {mode:?}: LOD map");
-                let sd = ctx.read_buffer(&sectors.buffer).unwrap();
+                let sd = ctx.read_buffer(sectors.buffer()).unwrap();
                 let sd_expect: Vec<u32> = sector_data_cpu(&scene.tree.shadow, &world()).into_iter().flatten().collect();
                 assert_eq!(bytemuck::cast_slice::<u8, u32>(&sd), &sd_expect[..], "case {case}: sector data");
                 assert_eq!(header.dispatch, [header.node_count, 1, 1], "case {case}: cull dispatch args");
@@ -373,7 +373,7 @@ fn sector_data_reaches_every_lod_of_a_10_lod_world_and_reports_uncovered_points(
             query.record(rec, VistaTerrain::new(&w, &sectors), &tree, &sectors, &points)
         })
         .unwrap();
-        let sd = ctx.read_buffer(&sectors.buffer).unwrap();
+        let sd = ctx.read_buffer(sectors.buffer()).unwrap();
         let sd_expect: Vec<u32> = sector_data_cpu(&tree.shadow, &w).into_iter().flatten().collect();
         assert_eq!(bytemuck::cast_slice::<u8, u32>(&sd), &sd_expect[..], "sector data");
         let by_slot: std::collections::HashMap<u32, Vec<u16>> =

@@ -2,6 +2,7 @@
 //! timestamps, and hands timings back as data once the GPU has finished the
 //! frame (one frame late or more; never by waiting).
 
+pub mod per_frame;
 pub mod profiler;
 
 use crate::error::Result;
@@ -147,6 +148,11 @@ impl FrameExecutor {
 
     /// Starts recording a frame into `cmds` (`mode` says how they are
     /// submitted); collects any finished timings first.
+    /// The number the next `begin` gives its frame.
+    pub fn next_frame(&self) -> u64 {
+        self.frame + 1
+    }
+
     pub fn begin<'e, 'r>(&'e mut self, mut cmds: FrameCommands<'e, 'r>, mode: QueueMode) -> Frame<'e, 'r> {
         assert_eq!(mode.is_split(), matches!(cmds, FrameCommands::Split { .. }), "{mode:?} with the wrong buffers");
         self.harvest();

@@ -9,6 +9,7 @@
 //! indirect arguments are bounds- and usage-checked. A violation is a
 //! programmer error and panics before the command reaches Vulkan.
 
+use super::access_log::Access;
 use super::context::Context;
 use super::pipeline::Pipeline;
 use super::resources::{aspect_of, depth_layout, has_stencil, Buffer, Image};
@@ -36,6 +37,8 @@ pub struct Recorder<'a> {
     /// The open scope's colour attachment count, whether it has depth, and
     /// its size (`clear_rect`).
     scope: (u32, bool, [u32; 2]),
+    /// What the commands touched, when asked (`log_accesses`).
+    accesses: Option<Vec<Access>>,
     compute: Option<vk::Pipeline>,
     graphics: Option<vk::Pipeline>,
 }
@@ -69,7 +72,38 @@ impl<'a> Recorder<'a> {
     /// recorded into elsewhere while this recorder lives. Images used here
     /// must be in the layouts their [`Image::layout`] reports.
     pub unsafe fn from_raw(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
-        Recorder { ctx, cmd, rendering: false, scope: (0, false, [0, 0]), compute: None, graphics: None }
+        Recorder {
+            ctx,
+            cmd,
+            rendering: false,
+            scope: (0, false, [0, 0]),
+            accesses: None,
+            compute: None,
+            graphics: None,
+        }
+    }
+
+    /// From now on, notes what each command touches (tests: what two
+    /// submissions that may overlap share, `access_log`).
+    pub fn log_accesses(&mut self) {
+        self.accesses.get_or_insert_with(Vec::new);
+    }
+
+    /// What was noted since `log_accesses` or the last call.
+    pub fn take_accesses(&mut self) -> Vec<Access> {
+        self.accesses.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
+    pub(super) fn note_buffer(&mut self, b: &Buffer, write: bool) {
+        if let Some(log) = &mut self.accesses {
+            log.push(Access::new(b.raw, &b.name, write, None));
+        }
+    }
+
+    pub(super) fn note_image(&mut self, i: &Image, write: bool, layer: Option<u32>) {
+        if let Some(log) = &mut self.accesses {
+            log.push(Access::new(i.raw, &i.name, write, layer));
+        }
     }
 
     pub fn context(&self) -> &'a Context {
@@ -121,6 +155,8 @@ impl<'a> Recorder<'a> {
 
     fn layout_barrier(&mut self, image: &Image, old: vk::ImageLayout, new: vk::ImageLayout) {
         self.outside_rendering("layout transition");
+        // A layout transition rewrites the image.
+        self.note_image(image, true, None);
         assert_ne!(new, vk::ImageLayout::UNDEFINED, "{}: cannot transition to UNDEFINED", image.name);
         let range = vk::ImageSubresourceRange::default()
             .aspect_mask(aspect_of(image.format))
@@ -166,7 +202,14 @@ impl<'a> Recorder<'a> {
         let mut buffer_infos = Vec::with_capacity(bindings.len());
         let mut image_infos = Vec::with_capacity(bindings.len());
         for (b, r) in bindings {
-            assert!(p.bindings.contains(b), "{}: binding {} is not part of pipeline {}", b.name, b.binding, p.name);
+            let Some(merged) = p.bindings.iter().find(|m| *m == b) else {
+                panic!("{}: binding {} is not part of pipeline {}", b.name, b.binding, p.name)
+            };
+            match r {
+                Resource::Buffer(buf) | Resource::BufferRange(buf, ..) => self.note_buffer(buf, merged.writes),
+                Resource::Image(img, _) | Resource::ImageMip(img, ..) => self.note_image(img, merged.writes, None),
+                Resource::Sampler(_) => {}
+            }
             let image_info = |img: &Image, view, layout: vk::ImageLayout| {
                 assert_eq!(img.layout(), layout, "{}: image {} bound as {layout:?}", b.name, img.name);
                 vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: view, image_layout: layout }
@@ -254,6 +297,7 @@ impl<'a> Recorder<'a> {
         self.outside_rendering("dispatch_indirect");
         assert!(self.compute.is_some(), "dispatch_indirect with no compute pipeline bound");
         indirect_range(args, offset, std::mem::size_of::<vk::DispatchIndirectCommand>() as u64);
+        self.note_buffer(args, false);
         // SAFETY: live buffer with INDIRECT usage, range checked; pipeline bound.
         unsafe { self.d().cmd_dispatch_indirect(self.cmd, args.raw, offset) };
     }
@@ -264,6 +308,10 @@ impl<'a> Recorder<'a> {
     pub fn begin_rendering(&mut self, colors: &[ColorTarget], depth_target: Option<DepthTarget>) {
         let depth = depth_target.as_ref().map(|d| (d.image, depth_layout(d.image.format, d.read_only)));
         self.outside_rendering("begin_rendering");
+        colors.iter().for_each(|c| self.note_image(c.image, true, None));
+        if let Some(d) = &depth_target {
+            self.note_image(d.image, !d.read_only, None);
+        }
         let extent = colors
             .first()
             .map(|c| c.image.extent)
@@ -385,6 +433,7 @@ impl<'a> Recorder<'a> {
     pub fn draw_indexed(&mut self, indices: &Buffer, index_count: u32, instances: u32) {
         self.drawable("draw_indexed");
         index_buffer(indices, index_count);
+        self.note_buffer(indices, false);
         // SAFETY: rendering, pipeline bound, index range checked.
         unsafe {
             self.d().cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
@@ -397,6 +446,7 @@ impl<'a> Recorder<'a> {
         self.drawable("draw_indirect");
         let size = std::mem::size_of::<vk::DrawIndirectCommand>() as u64;
         indirect_range(args, offset, size);
+        self.note_buffer(args, false);
         // SAFETY: rendering, pipeline bound, the command's range and usage checked.
         unsafe { self.d().cmd_draw_indirect(self.cmd, args.raw, offset, 1, size as u32) };
     }
@@ -408,6 +458,8 @@ impl<'a> Recorder<'a> {
         let size = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u64;
         indirect_range(args, offset, size);
         index_buffer(indices, 0);
+        self.note_buffer(args, false);
+        self.note_buffer(indices, false);
         // SAFETY: rendering, pipeline bound, the command's range and the
         // usages checked; multiDrawIndirect is not needed for one draw.
         unsafe {
@@ -430,6 +482,9 @@ impl<'a> Recorder<'a> {
         indirect_range(args, 0, u64::from(stride) * u64::from(max_draws));
         indirect_range(count, count_offset, 4);
         index_buffer(indices, 0);
+        for b in [args, count, indices] {
+            self.note_buffer(b, false);
+        }
         // SAFETY: rendering, pipeline bound, ranges and usages checked;
         // drawIndirectCount is a required feature.
         unsafe {

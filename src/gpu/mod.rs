@@ -4,9 +4,10 @@
 //! every buffer and image is created with CONCURRENT sharing between it and
 //! the graphics family, so terrain compute and graphics command buffers use
 //! the same resources without queue-family ownership transfers; ordering
-//! comes from the timeline semaphore the submitter signals and waits on
-//! ([`FrameRing`]). With one family, sharing is EXCLUSIVE.
+//! comes from the timeline semaphores the submitter signals and waits on
+//! ([`FrameRing`], [`COMPUTE_LAG`]). With one family, sharing is EXCLUSIVE.
 
+pub mod access_log;
 pub mod commands;
 pub mod context;
 pub mod device_info;
@@ -33,5 +34,5 @@ pub use resources::{
     depth_layout, has_stencil, Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation, Sampler, SamplerDesc,
 };
 pub use shader::{Binding, BindingKind, ShaderInfo, ShaderStage};
-pub use submit::{BinarySync, CommandPool, FrameCommands, FrameRing, QueueMode};
+pub use submit::{BinarySync, CommandPool, FrameCommands, FrameRing, QueueMode, COMPUTE_LAG, FRAME_COPIES};
 pub use validation::{Severity, ValidationLog, ValidationMessage};

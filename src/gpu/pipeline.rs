@@ -92,6 +92,7 @@ fn build_layout(s: &Shared, name: &str, shaders: &[&ShaderInfo]) -> Result<Layou
             match merged.iter_mut().find(|(m, _)| m.binding == b.binding) {
                 Some((m, stages)) => {
                     assert_eq!(m.kind, b.kind, "{}: binding {} differs between stages", sh.file, b.binding);
+                    m.writes |= b.writes;
                     *stages |= sh.stage.vk();
                 }
                 None => merged.push((*b, sh.stage.vk())),

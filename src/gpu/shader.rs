@@ -42,13 +42,26 @@ impl BindingKind {
 
 /// One descriptor binding, reflected from the SPIR-V. Host code names
 /// bindings through these constants, never through literal numbers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy)]
 pub struct Binding {
     pub name: &'static str,
     pub set: u32,
     pub binding: u32,
     pub kind: BindingKind,
+    /// This shader may store through it (a storage buffer or image not
+    /// declared `readonly`): the access logs count it as a write.
+    pub writes: bool,
 }
+
+/// The same binding, whichever stage's view of its access (a vertex shader
+/// may read what the fragment shader of the pipeline writes).
+impl PartialEq for Binding {
+    fn eq(&self, other: &Self) -> bool {
+        (self.name, self.set, self.binding, self.kind) == (other.name, other.set, other.binding, other.kind)
+    }
+}
+
+impl Eq for Binding {}
 
 /// A compiled, validated and reflected shader.
 #[derive(Debug)]

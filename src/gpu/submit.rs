@@ -13,6 +13,16 @@ use serde::Serialize;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
+/// Copies of each resource a frame's compute work rewrites while an older
+/// frame's graphics work may still read it (`frame::per_frame`).
+pub const FRAME_COPIES: usize = 2;
+
+/// How many frames back the graphics work a frame's compute submission
+/// must wait for: the last frame whose graphics read the copies it
+/// rewrites. A split frame's compute thus runs beside the previous
+/// frame's graphics on a compute-only queue.
+pub const COMPUTE_LAG: u64 = FRAME_COPIES as u64;
+
 /// How a frame's terrain work reaches the GPU.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -215,15 +225,19 @@ fn destroy_slot(s: &Shared, slot: &Slot) {
 }
 
 /// Per-frame command buffers for tools and tests, `depth` frames in flight.
-/// In a split mode each frame has a compute and a graphics command buffer:
-/// frame k's compute submission waits for timeline value 2k - 2 (frame
-/// k - 1's graphics work, which still reads what compute rewrites) and
-/// signals 2k - 1; its graphics submission waits for 2k - 1 and signals 2k.
+/// In a split mode each frame has a compute and a graphics command buffer,
+/// and two timeline semaphores count the frames each queue finished: frame
+/// k's compute submission waits for frame k - `COMPUTE_LAG`'s graphics
+/// (the last to read the per-frame copies it rewrites, `frame::per_frame`)
+/// and signals compute value k; its graphics submission waits for compute
+/// value k and signals graphics value k. With async compute, frame k's
+/// compute thus runs beside frame k - 1's graphics.
 pub struct FrameRing {
     slots: Vec<Slot>,
     /// Compute command buffers of a split mode, one per slot.
     compute: Vec<Slot>,
-    timeline: Option<vk::Semaphore>,
+    /// (compute done, graphics done) of a split mode.
+    timeline: Option<[vk::Semaphore; 2]>,
     mode: QueueMode,
     /// Frames recorded through this ring (timeline values derive from it).
     frames: u64,
@@ -280,7 +294,14 @@ impl FrameRing {
             }
         }
         if mode.is_split() {
-            ring.timeline = Some(create_timeline(ctx, "frame_ring_timeline")?);
+            let compute = create_timeline(ctx, "frame_ring_compute_done")?;
+            match create_timeline(ctx, "frame_ring_graphics_done") {
+                Ok(graphics) => ring.timeline = Some([compute, graphics]),
+                Err(e) => {
+                    ctx.shared.retire(Garbage::Semaphore(compute));
+                    return Err(e);
+                }
+            }
         }
         Ok(ring)
     }
@@ -388,19 +409,23 @@ impl FrameRing {
             }
         }
         let k = self.frames + 1;
-        if let (Some(c), Some(timeline)) = (self.compute.get(i), self.timeline) {
-            let info = |value| {
+        if let (Some(c), Some([compute_done, graphics_done])) = (self.compute.get(i), self.timeline) {
+            let info = |semaphore, value| {
                 vk::SemaphoreSubmitInfo::default()
-                    .semaphore(timeline)
+                    .semaphore(semaphore)
                     .value(value)
                     .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
             };
             let queue = if self.mode == QueueMode::AsyncCompute { s.compute.raw } else { s.graphics.raw };
-            end_and_submit_with(s, c, queue, &[info(2 * k - 2)], &[info(2 * k - 1)]).map_err(early)?;
-            // The timeline has moved: the next frame must signal past it.
-            // (After a failure here the ring cannot go on: 2k never comes.)
+            // Frame k - COMPUTE_LAG's graphics read the copies compute k rewrites.
+            let lagged = k.saturating_sub(COMPUTE_LAG);
+            let waits: Vec<_> = (lagged > 0).then(|| info(graphics_done, lagged)).into_iter().collect();
+            end_and_submit_with(s, c, queue, &waits, &[info(compute_done, k)]).map_err(early)?;
+            // The compute timeline has moved: the next frame must signal past
+            // it. (After a failure here the ring cannot go on: graphics k
+            // never comes.)
             self.frames = k;
-            end_and_submit_with(s, &self.slots[i], s.graphics.raw, &[info(2 * k - 1)], &[info(2 * k)])
+            end_and_submit_with(s, &self.slots[i], s.graphics.raw, &[info(compute_done, k)], &[info(graphics_done, k)])
                 .map_err(|e| (e, true))?;
         } else if let Some(b) = self.sync {
             let wait = [vk::SemaphoreSubmitInfo::default().semaphore(b.wait).stage_mask(b.wait_stage)];
@@ -432,7 +457,7 @@ impl Drop for FrameRing {
             let _ = wait_fence(&self.shared, slot.fence);
             destroy_slot(&self.shared, slot);
         }
-        if let Some(t) = self.timeline {
+        for t in self.timeline.into_iter().flatten() {
             self.shared.retire(Garbage::Semaphore(t));
         }
     }

@@ -10,6 +10,7 @@ use std::ffi::CString;
 
 impl Recorder<'_> {
     pub fn fill_buffer(&mut self, buf: &Buffer, value: u32) {
+        self.note_buffer(buf, true);
         self.outside_rendering("fill_buffer");
         // SAFETY: live buffer, whole range, outside rendering (checked).
         unsafe { self.d().cmd_fill_buffer(self.cmd, buf.raw, 0, vk::WHOLE_SIZE, value) };
@@ -17,6 +18,7 @@ impl Recorder<'_> {
 
     /// Writes up to 64 KiB of `data` at `offset` inline in the command buffer.
     pub fn update_buffer(&mut self, buf: &Buffer, offset: u64, data: &[u8]) {
+        self.note_buffer(buf, true);
         self.outside_rendering("update_buffer");
         assert!(
             data.len() <= 65536 && data.len().is_multiple_of(4) && offset + data.len() as u64 <= buf.size,
@@ -29,6 +31,7 @@ impl Recorder<'_> {
 
     /// Clears every mip and layer of an integer colour image in GENERAL layout.
     pub fn clear_color_u32(&mut self, img: &Image, value: u32) {
+        self.note_image(img, true, None);
         self.outside_rendering("clear_color_u32");
         assert_eq!(img.layout(), vk::ImageLayout::GENERAL, "clear of {}", img.name);
         let range = vk::ImageSubresourceRange::default()
@@ -41,6 +44,8 @@ impl Recorder<'_> {
     }
 
     pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, size: u64) {
+        self.note_buffer(src, false);
+        self.note_buffer(dst, true);
         self.outside_rendering("copy_buffer");
         assert!(size <= src.size && size <= dst.size, "copy of {size} bytes overruns {} or {}", src.name, dst.name);
         // SAFETY: live buffers, size checked.
@@ -56,6 +61,8 @@ impl Recorder<'_> {
 
     /// Copies `size` bytes from `src` at `src_offset` to `dst` at `dst_offset`.
     pub fn copy_buffer_region(&mut self, src: &Buffer, src_offset: u64, dst: &Buffer, dst_offset: u64, size: u64) {
+        self.note_buffer(src, false);
+        self.note_buffer(dst, true);
         self.outside_rendering("copy_buffer_region");
         assert!(
             src_offset + size <= src.size && dst_offset + size <= dst.size,
@@ -85,6 +92,8 @@ impl Recorder<'_> {
 
     /// Copies one mip of one layer of `img` (in TRANSFER_SRC_OPTIMAL), tightly packed.
     pub fn copy_image_to_buffer(&mut self, img: &Image, mip: u32, layer: u32, dst: &Buffer) {
+        self.note_image(img, false, None);
+        self.note_buffer(dst, true);
         self.outside_rendering("copy_image_to_buffer");
         assert_eq!(img.layout(), vk::ImageLayout::TRANSFER_SRC_OPTIMAL, "copy from {}", img.name);
         let region = packed_region(img, mip, layer, 0);
@@ -103,6 +112,8 @@ impl Recorder<'_> {
     /// Copies the stencil aspect of a depth-stencil image (mip 0, layer 0;
     /// TRANSFER_SRC_OPTIMAL) to `dst`, a byte per texel.
     pub fn copy_stencil_to_buffer(&mut self, img: &Image, dst: &Buffer) {
+        self.note_image(img, false, None);
+        self.note_buffer(dst, true);
         self.outside_rendering("copy_stencil_to_buffer");
         assert!(has_stencil(img.format), "{} has no stencil aspect", img.name);
         assert_eq!(img.layout(), vk::ImageLayout::TRANSFER_SRC_OPTIMAL, "copy from {}", img.name);
@@ -125,6 +136,8 @@ impl Recorder<'_> {
     /// (TRANSFER_DST_OPTIMAL), scaled to fit and converted between colour
     /// formats (e.g. RGBA to a swapchain's BGRA), nearest texel.
     pub fn blit(&mut self, src: &Image, dst: &Image) {
+        self.note_image(src, false, None);
+        self.note_image(dst, true, None);
         self.outside_rendering("blit");
         assert_eq!(src.layout(), vk::ImageLayout::TRANSFER_SRC_OPTIMAL, "blit from {}", src.name);
         assert_eq!(dst.layout(), vk::ImageLayout::TRANSFER_DST_OPTIMAL, "blit into {}", dst.name);
@@ -151,6 +164,8 @@ impl Recorder<'_> {
     /// Copies tightly packed texels at `offset` of `src` into one mip of one
     /// layer of `img`, which must be in TRANSFER_DST_OPTIMAL.
     pub fn copy_buffer_to_image(&mut self, src: &Buffer, offset: u64, img: &Image, mip: u32, layer: u32) {
+        self.note_buffer(src, false);
+        self.note_image(img, true, Some(layer));
         self.outside_rendering("copy_buffer_to_image");
         assert_eq!(img.layout(), vk::ImageLayout::TRANSFER_DST_OPTIMAL, "copy into {}", img.name);
         assert!(mip < img.mip_levels && layer < img.array_layers, "mip {mip} layer {layer} of {}", img.name);
@@ -165,6 +180,57 @@ impl Recorder<'_> {
                 &[region],
             )
         };
+    }
+
+    /// Copies packed texels from `src` at each offset into mip 0 of one
+    /// layer of an array image, touching only those layers: each goes from
+    /// the image's tracked layout to TRANSFER_DST and back, so work on
+    /// another queue may sample the image's other layers meanwhile (the
+    /// node atlases under async compute). After the copies the layers are
+    /// visible to every later command.
+    pub fn copy_into_layers(&mut self, src: &Buffer, copies: &[(u64, &Image, u32)]) {
+        self.outside_rendering("copy_into_layers");
+        if copies.is_empty() {
+            return;
+        }
+        let barrier = |img: &Image, layer: u32, old, new| {
+            assert!(layer < img.array_layers, "layer {layer} of {}", img.name);
+            let range = vk::ImageSubresourceRange::default()
+                .aspect_mask(super::resources::aspect_of(img.format))
+                .level_count(vk::REMAINING_MIP_LEVELS)
+                .base_array_layer(layer)
+                .layer_count(1);
+            vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+                .old_layout(old)
+                .new_layout(new)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(img.raw)
+                .subresource_range(range)
+        };
+        self.note_buffer(src, false);
+        for &(_, img, layer) in copies {
+            self.note_image(img, true, Some(layer));
+        }
+        let dst = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+        let to: Vec<_> = copies.iter().map(|&(_, img, layer)| barrier(img, layer, img.layout(), dst)).collect();
+        let back: Vec<_> = copies.iter().map(|&(_, img, layer)| barrier(img, layer, dst, img.layout())).collect();
+        // SAFETY: live objects; each layer goes from the image's tracked
+        // layout (every subresource is in it) to TRANSFER_DST, is written
+        // within its bounds (checked by packed_region's caller below), and
+        // goes back, so the tracked layout stays true; outside rendering.
+        unsafe {
+            self.d().cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().image_memory_barriers(&to));
+            for &(offset, img, layer) in copies {
+                let region = packed_region(img, 0, layer, offset);
+                self.d().cmd_copy_buffer_to_image(self.cmd, src.raw, img.raw, dst, &[region]);
+            }
+            self.d().cmd_pipeline_barrier2(self.cmd, &vk::DependencyInfo::default().image_memory_barriers(&back));
+        }
     }
 
     /// Opens a debug-utils label (RenderDoc / Nsight show the pass by name).

@@ -7,6 +7,7 @@
 //! start; `quadtree_update` clears a slot's when its node changes).
 
 use crate::error::Result;
+use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource};
 use crate::gpu::{Binding, Image, Sampler};
 use crate::passes::cull_patches::{
@@ -42,7 +43,11 @@ pub struct CullOccluded {
     sampler: Sampler,
     /// Phase 2's lists (patches drawn in the second draw).
     pub lists: PatchLists,
-    pub visibility: Buffer,
+    /// One bit per patch and slot, rewritten for every listed node; one per
+    /// frame parity (`frame::per_frame`): a frame's phase 1 reads the bits
+    /// its copy got two frames before, which async compute can read while
+    /// the frame between still writes the other copy.
+    visibility: PerFrame<Buffer>,
     build: CullBuild,
 }
 
@@ -56,17 +61,19 @@ impl CullOccluded {
         let capacity = list_capacity(traverse);
         let names = ["late_patch_list", "late_hole_patch_list"];
         let lists = PatchLists::new(ctx, names, capacity, build.holes, index_count)?;
-        let visibility = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "patch_visibility",
-                size: u64::from((slots + FIRST_SLOT) * k::VISIBILITY_WORDS_PER_SLOT * 4),
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
+        let visibility = PerFrame::new(|i| {
+            Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name: &copy_name("patch_visibility", i),
+                    size: u64::from((slots + FIRST_SLOT) * k::VISIBILITY_WORDS_PER_SLOT * 4),
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                    location: MemoryLocation::GpuOnly,
+                },
+            )
+        })?;
         ctx.submit_and_wait(|rec| {
-            rec.fill_buffer(&visibility, 0);
+            visibility.all().iter().for_each(|v| rec.fill_buffer(v, 0));
             Ok(())
         })?;
         let bit = |on: bool, b: u32| if on { b } else { 0 };
@@ -83,6 +90,21 @@ impl CullOccluded {
 
     pub fn pipeline_label(&self) -> &str {
         &self.pipeline.label
+    }
+
+    /// The visibility bits of the frame being (or last) recorded.
+    pub fn visibility(&self) -> &Buffer {
+        self.visibility.current()
+    }
+
+    /// Both copies (memory reports).
+    pub fn all_visibility(&self) -> &[Buffer] {
+        self.visibility.all()
+    }
+
+    /// Frame `frame` reads and rewrites its parity's bits.
+    pub fn select_frame(&mut self, frame: u64) {
+        self.visibility.select(frame);
     }
 
     /// Culls against `hiz`'s pyramid (built this frame from `depth`'s size);
@@ -103,7 +125,7 @@ impl CullOccluded {
         let pyramid = hiz.pyramid().expect("hiz_build ran before cull_occluded");
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         let extra = [
-            (sh::VISIBILITY, Resource::Buffer(&self.visibility)),
+            (sh::VISIBILITY, Resource::Buffer(self.visibility())),
             (sh::HIZ, Resource::Image(pyramid, vk::ImageLayout::GENERAL)),
         ];
         let [depth_w, depth_h] = depth.extent;

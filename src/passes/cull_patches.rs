@@ -12,6 +12,7 @@
 //! visible last frame are listed; `cull_occluded` handles the rest.
 
 use crate::error::Result;
+use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{
     vk, Binding, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource,
     Sampler, SamplerDesc,
@@ -322,7 +323,7 @@ impl<'a> CullInputs<'a> {
         bindings.extend_from_slice(extra);
         rec.push_descriptors(pipeline, &bindings);
         rec.push_constants(pipeline, push);
-        rec.dispatch_indirect(&self.traverse.output, 0);
+        rec.dispatch_indirect(self.traverse.output(), 0);
         rec.barrier(
             vk::PipelineStageFlags2::COMPUTE_SHADER,
             vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::ALL_COMMANDS,
@@ -341,15 +342,15 @@ impl<'a> CullInputs<'a> {
         lists: &'a PatchLists,
     ) -> Vec<(Binding, Resource<'a>)> {
         let mut out = vec![
-            (b[0], Resource::Buffer(&self.traverse.output)),
+            (b[0], Resource::Buffer(self.traverse.output())),
             (b[1], Resource::Buffer(self.view)),
-            (b[2], Resource::Image(&self.lod_map.image, vk::ImageLayout::GENERAL)),
+            (b[2], Resource::Image(self.lod_map.image(), vk::ImageLayout::GENERAL)),
             (b[3], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_MIN_MAX), ATLAS_LAYOUT)),
             (b[4], Resource::Sampler(sampler.raw())),
             (b[5], Resource::Buffer(&lists.list)),
-            (b[9], Resource::Image(&self.tree.node_texture, vk::ImageLayout::GENERAL)),
+            (b[9], Resource::Image(self.tree.node_texture(), vk::ImageLayout::GENERAL)),
             (b[10], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_ERRORS), ATLAS_LAYOUT)),
-            (b[11], Resource::Buffer(&self.select.levels)),
+            (b[11], Resource::Buffer(self.select.levels())),
         ];
         if build.cone {
             out.push((b[6], Resource::Image(self.tree.required_atlas(ATLAS_PATCH_CONES), ATLAS_LAYOUT)));
@@ -400,20 +401,39 @@ pub(crate) fn list_capacity(traverse: &Traverse) -> u32 {
 pub struct CullPatches {
     pipeline: Pipeline,
     sampler: Sampler,
-    /// Phase 1's lists (all visible patches without occlusion).
-    pub lists: PatchLists,
+    /// Phase 1's lists (all visible patches without occlusion); one per
+    /// frame parity (`frame::per_frame`).
+    lists: PerFrame<PatchLists>,
     pub build: CullBuild,
 }
 
 impl CullPatches {
     pub const NAME: &'static str = sh::PASS;
 
+    /// Phase 1's lists of the frame being (or last) recorded.
+    pub fn lists(&self) -> &PatchLists {
+        self.lists.current()
+    }
+
+    /// Both copies (memory reports).
+    pub fn all_lists(&self) -> &[PatchLists] {
+        self.lists.all()
+    }
+
+    /// Frame `frame` writes its parity's lists.
+    pub fn select_frame(&mut self, frame: u64) {
+        self.lists.select(frame);
+    }
+
     /// Room for every patch of the traversal's largest final list;
     /// `index_count` is the patch mesh's, written into the draw args.
     pub fn new(ctx: &Context, traverse: &Traverse, index_count: u32, build: CullBuild) -> Result<Self> {
         assert_eq!(sh::WORKGROUP_SIZE[0] as usize, PATCHES_PER_NODE, "one thread per patch of a node");
         let capacity = list_capacity(traverse);
-        let lists = PatchLists::new(ctx, ["patch_list", "hole_patch_list"], capacity, build.holes, index_count)?;
+        let lists = PerFrame::new(|i| {
+            let names = [copy_name("patch_list", i), copy_name("hole_patch_list", i)];
+            PatchLists::new(ctx, [names[0].as_str(), names[1].as_str()], capacity, build.holes, index_count)
+        })?;
         let sampler = nearest_sampler(ctx, "cull_patches_sampler")?;
         let bit = |on: bool, b: u32| if on { b } else { 0 };
         let shader = sh::variant(
@@ -449,9 +469,10 @@ impl CullPatches {
         assert_eq!(visibility.is_some(), self.build.occlusion, "visibility bits exactly with occlusion");
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         let extra: Vec<_> = visibility.map(|v| (sh::VISIBILITY, Resource::Buffer(v))).into_iter().collect();
-        let push = CullPush { stages: cull.bits(), capacity: self.lists.capacity, depth_w: 0, depth_h: 0 };
+        let lists = self.lists();
+        let push = CullPush { stages: cull.bits(), capacity: lists.capacity, depth_w: 0, depth_h: 0 };
         let inputs = CullInputs { traverse, tree, lod_map, view, select };
-        inputs.dispatch(rec, &self.pipeline, CULL_BINDINGS, self.build, &self.sampler, &self.lists, &extra, &push);
+        inputs.dispatch(rec, &self.pipeline, CULL_BINDINGS, self.build, &self.sampler, lists, &extra, &push);
     }
 }
 

@@ -227,7 +227,7 @@ impl LightingResolve {
         if shadows_on {
             let (shadows, elevation_deg) = inputs.shadows.expect("built with shadows");
             bindings.extend([
-                (fs::SECTOR_DATA, Resource::Buffer(&inputs.sector_data.buffer)),
+                (fs::SECTOR_DATA, Resource::Buffer(inputs.sector_data.buffer())),
                 (fs::HEIGHT_ATLAS, Resource::Image(inputs.tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
                 (fs::SHADOW_ATLAS, Resource::Image(&shadows.atlas, vk::ImageLayout::GENERAL)),
             ]);

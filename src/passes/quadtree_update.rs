@@ -47,35 +47,54 @@ impl QuadtreeUpdatePass {
         &self.pipeline.label
     }
 
-    /// Uploads the frame's payloads and applies its changes; the results are
-    /// visible to every later command. Returns the number of writes.
-    /// `visibility`: occlusion's bits, exactly when built with occlusion.
+    /// Uploads the frame's payloads and applies its changes to this frame's
+    /// node texture copy, after the last frame's (which the other copy
+    /// got then); the results are visible to every later command. Returns
+    /// the number of writes. `visibility`: this frame's copy of occlusion's
+    /// bits, exactly when built with occlusion.
     pub fn record(&self, rec: &mut Recorder, tree: &mut GpuQuadtree, visibility: Option<&Buffer>) -> Result<u32> {
         assert_eq!(visibility.is_some(), self.occlusion, "visibility bits exactly with occlusion");
         let count = tree.prepare_frame(rec)?;
-        let updates = tree.current_updates();
-        if count > 0 {
-            let mips = tree.node_texture.mip_levels;
-            let mut bindings: Vec<(Binding, Resource)> = vec![
-                (sh::UPDATES, Resource::Buffer(updates)),
-                (sh::NODE_DESCS, Resource::Buffer(&tree.node_descs)),
-                (sh::NODE_ERRORS, Resource::Buffer(&tree.node_errors)),
-            ];
-            for (lod, b) in NODE_LODS.iter().enumerate() {
-                // LODs past the world's count are never written: bind mip 0.
-                let mip = if (lod as u32) < mips { lod as u32 } else { 0 };
-                bindings.push((*b, Resource::ImageMip(&tree.node_texture, mip, vk::ImageLayout::GENERAL)));
+        let tree = &*tree;
+        let mut written = 0;
+        for (updates, n) in tree.previous_updates().into_iter().chain([(tree.current_updates(), count)]) {
+            if n > 0 {
+                self.dispatch(rec, tree, updates, n, visibility);
+                written += n;
             }
-            if let Some(v) = visibility {
-                bindings.push((sh::VISIBILITY, Resource::Buffer(v)));
-            }
-            rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::COMPUTE_SHADER);
-            rec.bind_pipeline(&self.pipeline);
-            rec.push_descriptors(&self.pipeline, &bindings);
-            rec.push_constants(&self.pipeline, &QuadtreeUpdatePush { count });
-            rec.dispatch(count.div_ceil(sh::WORKGROUP_SIZE[0]), 1, 1);
         }
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_COMMANDS);
-        Ok(count)
+        Ok(written)
+    }
+
+    fn dispatch(
+        &self,
+        rec: &mut Recorder,
+        tree: &GpuQuadtree,
+        updates: &Buffer,
+        count: u32,
+        visibility: Option<&Buffer>,
+    ) {
+        let node_texture = tree.node_texture();
+        let mips = node_texture.mip_levels;
+        let mut bindings: Vec<(Binding, Resource)> = vec![
+            (sh::UPDATES, Resource::Buffer(updates)),
+            (sh::NODE_DESCS, Resource::Buffer(&tree.node_descs)),
+            (sh::NODE_ERRORS, Resource::Buffer(&tree.node_errors)),
+        ];
+        for (lod, b) in NODE_LODS.iter().enumerate() {
+            // LODs past the world's count are never written: bind mip 0.
+            let mip = if (lod as u32) < mips { lod as u32 } else { 0 };
+            bindings.push((*b, Resource::ImageMip(node_texture, mip, vk::ImageLayout::GENERAL)));
+        }
+        if let Some(v) = visibility {
+            bindings.push((sh::VISIBILITY, Resource::Buffer(v)));
+        }
+        // After the payloads' copies and the last list's writes.
+        rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::COMPUTE_SHADER);
+        rec.bind_pipeline(&self.pipeline);
+        rec.push_descriptors(&self.pipeline, &bindings);
+        rec.push_constants(&self.pipeline, &QuadtreeUpdatePush { count });
+        rec.dispatch(count.div_ceil(sh::WORKGROUP_SIZE[0]), 1, 1);
     }
 }

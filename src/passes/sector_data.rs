@@ -4,6 +4,7 @@
 //! terrain_sample.glsl.
 
 use crate::error::Result;
+use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
     SamplerDesc,
@@ -28,8 +29,9 @@ pub struct SectorDataPush {
 pub struct SectorData {
     pipeline: Pipeline,
     sampler: Sampler,
-    /// `SECTOR_DATA_WORDS` u32 per sector, row-major over the padded extent.
-    pub buffer: Buffer,
+    /// `SECTOR_DATA_WORDS` u32 per sector, row-major over the padded extent;
+    /// one per frame parity (`frame::per_frame`).
+    buffer: PerFrame<Buffer>,
     pub extent: [u32; 2],
     lod_count: u32,
 }
@@ -39,15 +41,17 @@ impl SectorData {
 
     pub fn new(ctx: &Context, world: &WorldDesc) -> Result<Self> {
         let extent = texture_extent(world);
-        let buffer = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "sector_data",
-                size: u64::from(extent[0] * extent[1]) * u64::from(SECTOR_DATA_WORDS) * 4,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
+        let buffer = PerFrame::new(|i| {
+            Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name: &copy_name("sector_data", i),
+                    size: u64::from(extent[0] * extent[1]) * u64::from(SECTOR_DATA_WORDS) * 4,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+                    location: MemoryLocation::GpuOnly,
+                },
+            )
+        })?;
         let sampler = Sampler::new(
             ctx,
             &SamplerDesc {
@@ -64,6 +68,21 @@ impl SectorData {
         &self.pipeline.label
     }
 
+    /// The sector data of the frame being (or last) recorded.
+    pub fn buffer(&self) -> &Buffer {
+        self.buffer.current()
+    }
+
+    /// Both copies (memory reports).
+    pub fn buffers(&self) -> &[Buffer] {
+        self.buffer.all()
+    }
+
+    /// Frame `frame` writes its parity's sector data.
+    pub fn select_frame(&mut self, frame: u64) {
+        self.buffer.select(frame);
+    }
+
     /// Workgroups of one dispatch.
     pub fn groups(&self) -> u64 {
         let [wx, wy, _] = sh::WORKGROUP_SIZE;
@@ -75,9 +94,9 @@ impl SectorData {
         rec.push_descriptors(
             &self.pipeline,
             &[
-                (sh::NODE_TEXTURE, Resource::Image(&tree.node_texture, vk::ImageLayout::GENERAL)),
+                (sh::NODE_TEXTURE, Resource::Image(tree.node_texture(), vk::ImageLayout::GENERAL)),
                 (sh::NODE_SAMPLER, Resource::Sampler(self.sampler.raw())),
-                (sh::SECTOR_DATA, Resource::Buffer(&self.buffer)),
+                (sh::SECTOR_DATA, Resource::Buffer(self.buffer())),
             ],
         );
         let push =

@@ -8,6 +8,7 @@
 //! which it is the first pass to read.
 
 use crate::error::Result;
+use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
 };
@@ -48,8 +49,9 @@ pub struct SelectPush {
 pub struct SelectPatches {
     pipeline: Pipeline,
     sampler: Sampler,
-    /// The counters, then two i32 levels (coarse, drawn) per patch of every slot.
-    pub levels: Buffer,
+    /// The counters, then two i32 levels (coarse, drawn) per patch of every
+    /// slot; one per frame parity (`frame::per_frame`).
+    levels: PerFrame<Buffer>,
     lod_count: u32,
 }
 
@@ -59,17 +61,19 @@ impl SelectPatches {
     pub fn new(ctx: &Context, world: &WorldDesc, slots: u32) -> Result<Self> {
         assert_eq!(sh::WORKGROUP_SIZE[0] as usize, PATCHES_PER_NODE, "one thread per patch of a node");
         let entries = u64::from(slots + FIRST_SLOT) * PATCHES_PER_NODE as u64 * 2;
-        let levels = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "select_levels",
-                size: structs::SELECT_HEADER as u64 + entries * 4,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_DST
-                    | vk::BufferUsageFlags::TRANSFER_SRC,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
+        let levels = PerFrame::new(|i| {
+            Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name: &copy_name("select_levels", i),
+                    size: structs::SELECT_HEADER as u64 + entries * 4,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_DST
+                        | vk::BufferUsageFlags::TRANSFER_SRC,
+                    location: MemoryLocation::GpuOnly,
+                },
+            )
+        })?;
         let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &spec_constants() };
         Ok(SelectPatches {
             pipeline: Pipeline::compute(ctx, &desc)?,
@@ -81,6 +85,21 @@ impl SelectPatches {
 
     pub fn pipeline_label(&self) -> &str {
         &self.pipeline.label
+    }
+
+    /// The levels of the frame being (or last) recorded.
+    pub fn levels(&self) -> &Buffer {
+        self.levels.current()
+    }
+
+    /// Both copies (memory reports).
+    pub fn all_levels(&self) -> &[Buffer] {
+        self.levels.all()
+    }
+
+    /// Frame `frame` writes its parity's levels.
+    pub fn select_frame(&mut self, frame: u64) {
+        self.levels.select(frame);
     }
 
     /// Writes this frame's view (`view_bytes`, a TerrainView, into `view`)
@@ -99,25 +118,25 @@ impl SelectPatches {
     ) {
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         rec.update_buffer(view, 0, view_bytes);
-        rec.update_buffer(&self.levels, 0, bytemuck::bytes_of(&SelectHeader::default()));
+        rec.update_buffer(self.levels(), 0, bytemuck::bytes_of(&SelectHeader::default()));
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(
             &self.pipeline,
             &[
-                (sh::TRAVERSE_OUT, Resource::Buffer(&traverse.output)),
+                (sh::TRAVERSE_OUT, Resource::Buffer(traverse.output())),
                 (sh::VIEW, Resource::Buffer(view)),
-                (sh::LOD_MAP, Resource::Image(&lod_map.image, vk::ImageLayout::GENERAL)),
+                (sh::LOD_MAP, Resource::Image(lod_map.image(), vk::ImageLayout::GENERAL)),
                 (sh::PATCH_MIN_MAX, Resource::Image(tree.required_atlas(ATLAS_PATCH_MIN_MAX), ATLAS_LAYOUT)),
                 (sh::NEAREST, Resource::Sampler(self.sampler.raw())),
-                (sh::NODE_TEXTURE, Resource::Image(&tree.node_texture, vk::ImageLayout::GENERAL)),
+                (sh::NODE_TEXTURE, Resource::Image(tree.node_texture(), vk::ImageLayout::GENERAL)),
                 (sh::PATCH_ERRORS, Resource::Image(tree.required_atlas(ATLAS_PATCH_ERRORS), ATLAS_LAYOUT)),
-                (sh::SELECT_LEVELS, Resource::Buffer(&self.levels)),
+                (sh::SELECT_LEVELS, Resource::Buffer(self.levels())),
             ],
         );
         for phase in 0..2 {
             rec.push_constants(&self.pipeline, &SelectPush { phase, lod_count: self.lod_count, pad: [0; 2] });
-            rec.dispatch_indirect(&traverse.output, 0);
+            rec.dispatch_indirect(traverse.output(), 0);
             rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::ALL_COMMANDS);
         }
     }

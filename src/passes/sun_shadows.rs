@@ -177,7 +177,7 @@ impl SunShadows {
         rec.push_descriptors(
             &self.pipeline,
             &[
-                (sh::SECTOR_DATA, Resource::Buffer(&sector_data.buffer)),
+                (sh::SECTOR_DATA, Resource::Buffer(sector_data.buffer())),
                 (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
                 (sh::NEAREST, Resource::Sampler(self.nearest.raw())),
                 (sh::SHADOW_ATLAS, Resource::Image(&self.atlas, vk::ImageLayout::GENERAL)),

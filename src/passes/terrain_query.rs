@@ -141,7 +141,7 @@ impl TerrainQuery {
         rec.push_descriptors(
             &self.pipeline,
             &[
-                (sh::SECTOR_DATA, Resource::Buffer(&sectors.buffer)),
+                (sh::SECTOR_DATA, Resource::Buffer(sectors.buffer())),
                 (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
                 (sh::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
                 (sh::SPLAT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_SPLAT), ATLAS_LAYOUT)),

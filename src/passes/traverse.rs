@@ -5,6 +5,7 @@
 //! the indirect dispatch arguments for patch culling.
 
 use crate::error::{Error, Result};
+use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{
     vk, Binding, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource,
     Sampler, SamplerDesc,
@@ -83,7 +84,8 @@ pub struct Traverse {
     multi: Option<Pipeline>,
     sampler: Sampler,
     /// Header + final node list; also the indirect args of patch culling.
-    pub output: Buffer,
+    /// One per frame parity (`frame::per_frame`).
+    output: PerFrame<Buffer>,
     levels: Option<Buffer>,
     world: WorldDesc,
     list_capacity: u32,
@@ -119,7 +121,17 @@ impl Traverse {
 
     /// Device memory: (name, bytes) of each buffer.
     pub fn memory(&self) -> Vec<(String, u64)> {
-        std::iter::once(&self.output).chain(&self.levels).map(|b| (b.name.clone(), b.memory_bytes())).collect()
+        self.output.all().iter().chain(&self.levels).map(|b| (b.name.clone(), b.memory_bytes())).collect()
+    }
+
+    /// The node list of the frame being (or last) recorded.
+    pub fn output(&self) -> &Buffer {
+        self.output.current()
+    }
+
+    /// Frame `frame` writes its parity's node list.
+    pub fn select_frame(&mut self, frame: u64) {
+        self.output.select(frame);
     }
 
     fn build(ctx: &Context, world: &WorldDesc, slots: u32, per_level: bool) -> Result<Self> {
@@ -153,15 +165,17 @@ impl Traverse {
                     address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
                 },
             )?,
-            output: Buffer::new(
-                ctx,
-                &BufferDesc {
-                    name: "traverse_output",
-                    size: header + u64::from(final_capacity) * 8,
-                    usage: storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-                    location: MemoryLocation::GpuOnly,
-                },
-            )?,
+            output: PerFrame::new(|i| {
+                Buffer::new(
+                    ctx,
+                    &BufferDesc {
+                        name: &copy_name("traverse_output", i),
+                        size: header + u64::from(final_capacity) * 8,
+                        usage: storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                        location: MemoryLocation::GpuOnly,
+                    },
+                )
+            })?,
             levels: if per_level {
                 Some(Buffer::new(
                     ctx,
@@ -212,17 +226,17 @@ impl Traverse {
     /// Records the traversal; the output is visible to every later command.
     pub fn record(&self, rec: &mut Recorder, tree: &GpuQuadtree, params: &TraverseParams, mode: TraverseMode) {
         let header = std::mem::size_of::<TraverseHeader>();
-        rec.update_buffer(&self.output, 0, &vec![0u8; header]);
+        rec.update_buffer(self.output(), 0, &vec![0u8; header]);
         let p = match mode {
             TraverseMode::SingleDispatch => &self.single,
             TraverseMode::MultiDispatch => self.multi.as_ref().expect("per-level mode needs Traverse::with_per_level"),
         };
         let mut bindings: Vec<(Binding, Resource)> = vec![
-            (single::NODE_TEXTURE, Resource::Image(&tree.node_texture, vk::ImageLayout::GENERAL)),
+            (single::NODE_TEXTURE, Resource::Image(tree.node_texture(), vk::ImageLayout::GENERAL)),
             (single::NODE_SAMPLER, Resource::Sampler(self.sampler.raw())),
             (single::NODE_DESCS, Resource::Buffer(&tree.node_descs)),
             (single::NODE_ERRORS, Resource::Buffer(&tree.node_errors)),
-            (single::TRAVERSE_OUT, Resource::Buffer(&self.output)),
+            (single::TRAVERSE_OUT, Resource::Buffer(self.output())),
         ];
         if mode == TraverseMode::MultiDispatch {
             let init = [LevelArgs { x: 0, y: 1, z: 1, count: 0 }; MAX_LEVELS];
@@ -261,7 +275,7 @@ impl Traverse {
 
     /// Reads the output back (tests, debug CLI): waits for the GPU.
     pub fn read_result(&self, ctx: &Context) -> Result<(TraverseHeader, TraverseResult)> {
-        let bytes = ctx.read_buffer(&self.output)?;
+        let bytes = ctx.read_buffer(self.output())?;
         let hsize = std::mem::size_of::<TraverseHeader>();
         let header: TraverseHeader = bytemuck::pod_read_unaligned(&bytes[..hsize]);
         let n = (header.node_count.min(self.final_capacity)) as usize;

@@ -137,11 +137,11 @@ impl FramePasses<'_> {
     ) {
         let (geometry, view) = (self.geometry, self.view_buffer);
         pass(frame, log, FramePass::TerrainGeometry, |r| {
-            geometry.record(r, targets, gb, view, &self.cull.lists.list, tree, true)
+            geometry.record(r, targets, gb, view, &self.cull.lists().list, tree, true)
         });
         if let Some(holes) = self.holes_drawn(log, FramePass::TerrainHoles) {
             pass(frame, log, FramePass::TerrainHoles, |r| {
-                holes.record(r, targets, gb, view, &self.cull.lists, geometry, tree, false)
+                holes.record(r, targets, gb, view, self.cull.lists(), geometry, tree, false)
             });
         }
         let Some(o) = self.occlusion else { return };
@@ -200,7 +200,7 @@ impl FramePasses<'_> {
         if f.jobs.is_empty() {
             log.skipped(FramePass::VtPages, Skip::NoVtPages);
         } else {
-            let sector = &self.sector_data.buffer;
+            let sector = self.sector_data.buffer();
             frame.pass(FramePass::VtPages.name(), false, QueueKind::Graphics, |r| {
                 vt.record_pages(r, f, terrain, sector, tree, m)
             });
@@ -220,7 +220,7 @@ impl FramePasses<'_> {
         gb: &GBuffer,
     ) {
         let Some((c, build)) = self.cliff_meshes else { return };
-        let (view, sector) = (self.view_buffer, &self.sector_data.buffer);
+        let (view, sector) = (self.view_buffer, self.sector_data.buffer());
         match build {
             Some(push) => pass(frame, log, FramePass::CliffMeshBuild, |r| c.record_build(r, push, sector, tree)),
             None => log.skipped(FramePass::CliffMeshBuild, Skip::CliffMeshesCurrent),
@@ -244,7 +244,7 @@ impl FramePasses<'_> {
             return;
         }
         let terrain = VistaTerrain::new(world, self.sector_data);
-        let (view, sector) = (self.view_buffer, &self.sector_data.buffer);
+        let (view, sector) = (self.view_buffer, self.sector_data.buffer());
         pass(frame, log, FramePass::DecalMeshes, |r| m.record(r, targets, gb, view, terrain, sector, tree));
     }
 
@@ -252,7 +252,7 @@ impl FramePasses<'_> {
     /// by the pyramid this frame built, if it built one.
     fn record_grass_place(&self, frame: &mut Frame<'_, '_>, log: &mut FrameLog, tree: &GpuQuadtree) {
         let Some((grass, f)) = self.grass else { return };
-        let sector = &self.sector_data.buffer;
+        let sector = self.sector_data.buffer();
         let decals = self.virtual_texture.and_then(|(vt, _)| vt.decal_resources());
         if f.pigment_due {
             let m = self.materials.expect("grass needs splat's materials").bindings();
@@ -290,14 +290,14 @@ impl FramePasses<'_> {
         for (i, bits) in self.gbuffer_tiles.variants().into_iter().enumerate() {
             let tiles = self.gbuffer_tiles;
             frame.pass(variant_label(bits), false, QueueKind::Graphics, |r| {
-                let sector = &self.sector_data.buffer;
+                let sector = self.sector_data.buffer();
                 let m = materials.as_ref();
                 tiles.record_variant(r, bits, i == 0, targets, gb, self.view_buffer, lists, sector, terrain, tree, m)
             });
         }
         log.ran(FramePass::GbufferTiles, None);
         if let Some((pass_, assets)) = self.assets {
-            let (view, sector) = (self.view_buffer, &self.sector_data.buffer);
+            let (view, sector) = (self.view_buffer, self.sector_data.buffer());
             // The splat colours where the pass was built with them.
             let m = materials.as_ref().filter(|_| pass_.materials());
             pass(frame, log, FramePass::AssetDraw, |r| {

@@ -212,7 +212,7 @@ pub enum Skip {
 impl Skip {
     pub fn reason(self) -> &'static str {
         match self {
-            Skip::NothingToUpload => "no node arrived or left this frame (known on the CPU)",
+            Skip::NothingToUpload => "no node arrived or left this frame or the last (known on the CPU)",
             Skip::OcclusionOff => "occlusion switched off this frame (culling stages)",
             Skip::ShadowsCurrent => "idle: every resident node's shadow is made for this sun (known on the CPU)",
             Skip::ShadowsOff => "shadows switched off this frame (FrameSwitches; built, redone when back on)",

@@ -14,6 +14,7 @@
 //! retired to the context and destroyed once the frames using it completed.
 
 use crate::error::{Error, Result};
+use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::frame::{FrameExecutor, FrameTimings, QueueKind};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, FrameCommands, MemoryLocation, QueueMode, Recorder};
 use crate::passes::classify_tiles::ClassifyTiles;
@@ -144,7 +145,9 @@ pub struct TerrainRenderer {
     shading: Shading,
     /// Per-patch LOD settings of the next recorded frame.
     pub lod: LodOptions,
-    view_buffer: Buffer,
+    /// One per frame parity (`frame::per_frame`), like what the LOD phase
+    /// writes: the compute submission writes it.
+    view_buffer: PerFrame<Buffer>,
     telemetry: Telemetry,
     exec: FrameExecutor,
     pub(crate) graph: PassGraph,
@@ -199,8 +202,8 @@ fn effect_atlases(mode: MaterialsMode) -> [(Effect, usize); 5] {
 fn counter_lists<'a>(cull: &'a CullPatches, occlusion: &'a Option<Occlusion>) -> [Option<&'a Buffer>; 4] {
     let late = occlusion.as_ref().map(|o| &o.cull.lists);
     [
-        Some(&cull.lists.list),
-        cull.lists.hole_list.as_ref(),
+        Some(&cull.lists().list),
+        cull.lists().hole_list.as_ref(),
         late.map(|l| &l.list),
         late.and_then(|l| l.hole_list.as_ref()),
     ]
@@ -349,17 +352,19 @@ impl TerrainRenderer {
         };
         let holes_pass = if build.holes { Some(TerrainHoles::new(ctx, depth)?) } else { None };
         let sector_data = SectorData::new(ctx, world)?;
-        let view_buffer = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "terrain_view",
-                size: structs::TERRAIN_VIEW as u64,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_DST
-                    | vk::BufferUsageFlags::TRANSFER_SRC,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
+        let view_buffer = PerFrame::new(|i| {
+            Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name: &copy_name("terrain_view", i),
+                    size: structs::TERRAIN_VIEW as u64,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_DST
+                        | vk::BufferUsageFlags::TRANSFER_SRC,
+                    location: MemoryLocation::GpuOnly,
+                },
+            )
+        })?;
         let mut graph = PassGraph::new(&decisions);
         if layout.is_some() {
             graph.not_built(FramePass::LightingResolve, "output gbuffer: the engine lights the G-buffer".into());
@@ -375,7 +380,7 @@ impl TerrainRenderer {
             holes: build.holes,
             occlusion: build.occlusion,
             lod_count: world.lod_count,
-            list_capacity: cull.lists.capacity,
+            list_capacity: cull.lists().capacity,
             triangles_per_patch: TRIANGLES_PER_PATCH,
             grass: on(Effect::Grass),
         };
@@ -459,7 +464,7 @@ impl TerrainRenderer {
     /// The GPU's copy of the newest frame's `TerrainViewGpu` (tests read
     /// it back).
     pub fn view_buffer(&self) -> &Buffer {
-        &self.view_buffer
+        self.view_buffer.current()
     }
 
     /// Whether `effect` is built.
@@ -485,10 +490,13 @@ impl TerrainRenderer {
     /// submits `compute` first, to a queue of the compute family
     /// (`async_queue`) or the graphics queue, signalling a timeline
     /// semaphore value that the `graphics` submission waits for at
-    /// [`GRAPHICS_WAIT_STAGE`]; `compute` must also wait for the previous
-    /// frame's `graphics` submission, which still reads what it rewrites
-    /// (see `FrameRing` for the scheme on its own semaphore). Resources that
-    /// cross the queues are created with concurrent sharing (`gpu` docs).
+    /// [`GRAPHICS_WAIT_STAGE`]; `compute` must also wait for the `graphics`
+    /// submission of the frame [`crate::gpu::COMPUTE_LAG`] (2) frames back,
+    /// the last to read the per-frame copies it rewrites
+    /// (`frame::per_frame`), and need not wait for the previous frame's: on
+    /// a compute-only queue it runs beside it (see `FrameRing` for the
+    /// scheme on two timeline semaphores). Resources that cross the queues
+    /// are created with concurrent sharing (`gpu` docs).
     pub fn record_split<'c>(
         &mut self,
         compute: &mut Recorder<'c>,
@@ -528,12 +536,12 @@ impl TerrainRenderer {
         let fog = (self.effect_on(Effect::Atmosphere) && self.switches.on(Effect::Atmosphere))
             .then(|| self.effects.atmosphere.gpu(world.height_range_m[0]));
         let switched_off = self.switched_off();
+        self.select_copies(self.exec.next_frame());
         let mut frame = self.exec.begin(cmds, mode);
         let number = frame.number();
-        self.terrain.tree.begin_frame(number);
         let mut log = self.graph.begin_frame(number);
         log.switched_off = switched_off;
-        let visibility = self.occlusion.as_ref().map(|o| &o.cull.visibility);
+        let visibility = self.occlusion.as_ref().map(|o| o.cull.visibility());
         let near_inputs = GrassFrameInputs {
             camera_world: [gpu.camera_world[0], gpu.camera_world[1], gpu.camera_world[2]],
             terrain: VistaTerrain::new(&world, &self.sector_data),
@@ -544,7 +552,8 @@ impl TerrainRenderer {
         };
         let uploaded = self.virtual_texture.as_ref().and_then(VirtualTexture::uploaded_decals);
         let near = self.near.plan(&near_inputs, uploaded);
-        if self.terrain.tree.has_work() {
+        // The last frame's changes reach this frame's node texture copy too.
+        if self.terrain.tree.has_work() || self.terrain.tree.previous_updates().is_some() {
             let (tree, update) = (&mut self.terrain.tree, &self.update);
             let writes = frame
                 .pass(QuadtreeUpdatePass::NAME, false, QueueKind::Compute, |r| update.record(r, tree, visibility))?;
@@ -596,7 +605,7 @@ impl TerrainRenderer {
             fog,
             materials: self.materials.as_ref(),
             virtual_texture: self.virtual_texture.as_ref().zip(vt_frame.as_ref()),
-            view_buffer: &self.view_buffer,
+            view_buffer: self.view_buffer.current(),
             stages: self.stages,
             holes_off: !sw.holes,
             force_flavours: if self.shading == Shading::Tiled { 0 } else { shade.allowed },
@@ -612,10 +621,10 @@ impl TerrainRenderer {
         passes.record_decal_meshes(&mut frame, &mut log, tree, &world, targets, gb);
         passes.record_shading(&mut frame, &mut log, tree, &world, targets, gb);
         let sources = CounterSources {
-            traverse: &self.traverse.output,
+            traverse: self.traverse.output(),
             lists: counter_lists(&self.cull, &self.occlusion),
             tiles: self.classify.lists.as_ref().map(|l| &l.buffer),
-            select: &self.select.levels,
+            select: self.select.levels(),
             grass: self.near.grass.as_ref().map(Grass::header),
         };
         let telemetry = &mut self.telemetry;
@@ -624,6 +633,21 @@ impl TerrainRenderer {
         self.graph.end_frame(log);
         self.mode = Some(mode);
         Ok(())
+    }
+
+    /// Frame `frame` writes its parity's copy of what the compute work
+    /// rewrites each frame (`frame::per_frame`).
+    fn select_copies(&mut self, frame: u64) {
+        self.terrain.tree.begin_frame(frame);
+        self.traverse.select_frame(frame);
+        self.lod_map.select_frame(frame);
+        self.sector_data.select_frame(frame);
+        self.select.select_frame(frame);
+        self.cull.select_frame(frame);
+        if let Some(o) = &mut self.occlusion {
+            o.cull.select_frame(frame);
+        }
+        self.view_buffer.select(frame);
     }
 
     /// What a user can get wrong in a frame's view and targets; returns the
@@ -724,7 +748,7 @@ impl TerrainRenderer {
     /// Reads the last recorded frame's counters back, waiting for the GPU
     /// (tests and tools; the frame path uses `latest_counters`).
     pub fn read_counters(&self, ctx: &Context) -> Result<FrameCounters> {
-        let mut bytes = ctx.read_buffer(&self.traverse.output)?;
+        let mut bytes = ctx.read_buffer(self.traverse.output())?;
         bytes.truncate(std::mem::size_of::<crate::passes::traverse::TraverseHeader>());
         for list in counter_lists(&self.cull, &self.occlusion) {
             let header = match list {
@@ -737,7 +761,7 @@ impl TerrainRenderer {
             Some(l) => bytes.extend(&ctx.read_buffer(&l.buffer)?[..crate::passes::classify_tiles::HEAD_BYTES as usize]),
             None => bytes.extend(vec![0; crate::passes::classify_tiles::HEAD_BYTES as usize]),
         }
-        bytes.extend(&ctx.read_buffer(&self.select.levels)?[..structs::SELECT_HEADER]);
+        bytes.extend(&ctx.read_buffer(self.select.levels())?[..structs::SELECT_HEADER]);
         match &self.near.grass {
             Some(g) => bytes.extend(&ctx.read_buffer(g.header())?[..structs::GRASS_HEADER]),
             None => bytes.extend(vec![0; structs::GRASS_HEADER]),
@@ -749,7 +773,7 @@ impl TerrainRenderer {
     /// Visible patches of every list of the last frame, both phases,
     /// sorted (tests): waits.
     pub fn read_patches(&self, ctx: &Context) -> Result<Vec<crate::passes::cull_patches::PatchRecord>> {
-        let mut out = self.cull.lists.read_patches(ctx)?;
+        let mut out = self.cull.lists().read_patches(ctx)?;
         if let Some(o) = &self.occlusion {
             out.extend(o.cull.lists.read_patches(ctx)?);
         }
@@ -885,17 +909,21 @@ impl TerrainRenderer {
         for (name, bytes) in self.traverse.memory() {
             out.push((name, bytes, Vec::new()));
         }
-        let core = [
-            (&self.lod_map.image.name, self.lod_map.image.memory_bytes()),
-            (&self.cull.lists.list.name, self.cull.lists.list.memory_bytes()),
-            (&self.view_buffer.name, self.view_buffer.memory_bytes()),
-            (&self.geometry.indices().name, self.geometry.indices().memory_bytes()),
-            (&self.sector_data.buffer.name, self.sector_data.buffer.memory_bytes()),
-        ];
-        out.extend(core.into_iter().map(|(n, b)| (n.clone(), b, Vec::new())));
+        // Per-frame copies (frame::per_frame) are listed one by one.
+        let core = self
+            .lod_map
+            .images()
+            .iter()
+            .map(|i| (&i.name, i.memory_bytes()))
+            .chain(self.cull.all_lists().iter().map(|l| (&l.list.name, l.list.memory_bytes())))
+            .chain(self.view_buffer.all().iter().map(|b| (&b.name, b.memory_bytes())))
+            .chain([(&self.geometry.indices().name, self.geometry.indices().memory_bytes())])
+            .chain(self.sector_data.buffers().iter().map(|b| (&b.name, b.memory_bytes())))
+            .chain(self.select.all_levels().iter().map(|b| (&b.name, b.memory_bytes())));
+        out.extend(core.map(|(n, b)| (n.clone(), b, Vec::new())));
         let (name, bytes) = self.telemetry.memory();
         out.push((name, bytes, Vec::new()));
-        if let Some(h) = &self.cull.lists.hole_list {
+        for h in self.cull.all_lists().iter().filter_map(|l| l.hole_list.as_ref()) {
             out.push((h.name.clone(), h.memory_bytes(), vec![Effect::Holes]));
         }
         if let Some(o) = &self.occlusion {
@@ -903,8 +931,9 @@ impl TerrainRenderer {
             if let Some(h) = &o.cull.lists.hole_list {
                 out.push((h.name.clone(), h.memory_bytes(), vec![Effect::Holes, Effect::Occlusion]));
             }
-            let v = &o.cull.visibility;
-            out.push((v.name.clone(), v.memory_bytes(), vec![Effect::Occlusion]));
+            for v in o.cull.all_visibility() {
+                out.push((v.name.clone(), v.memory_bytes(), vec![Effect::Occlusion]));
+            }
             if let Some(p) = o.hiz.pyramid() {
                 out.push((p.name.clone(), p.memory_bytes(), vec![Effect::Occlusion]));
             }

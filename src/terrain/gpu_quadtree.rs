@@ -7,6 +7,7 @@
 //! transition to TRANSFER_DST_OPTIMAL and back.
 
 use crate::error::{Error, Result};
+use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
 use crate::terrain::quadtree::{texture_extent, NodeDesc, QuadtreeShadow, QuadtreeUpdate, FIRST_SLOT, MAX_SLOTS};
 use crate::world::{
@@ -161,7 +162,9 @@ struct Waiting {
 
 pub struct GpuQuadtree {
     pub shadow: QuadtreeShadow,
-    pub node_texture: Image,
+    /// One per frame parity (`frame::per_frame`): frame N+1's update writes
+    /// the copy frame N's phase-2 culling is not reading.
+    node_textures: PerFrame<Image>,
     pub node_descs: Buffer,
     /// f32 LOD error (m) per slot, beside the descriptions.
     pub node_errors: Buffer,
@@ -179,6 +182,8 @@ pub struct GpuQuadtree {
     update_capacity: u32,
     /// Nodes made resident by this frame's `prepare_frame`, with their slots.
     arrived: Vec<(NodeId, u32)>,
+    /// Per ring slot: the frame whose update list it holds, and its length.
+    written: Vec<(u64, u32)>,
 }
 
 impl GpuQuadtree {
@@ -205,21 +210,23 @@ impl GpuQuadtree {
         let mut shadow = QuadtreeShadow::new(world, crate::world::slot_capacity(slots));
         // A freed slot waits until the frames that drew its last node are done.
         shadow.set_reuse_delay(frames_in_flight.max(1) as u64);
-        let node_texture = Image::new(
-            ctx,
-            &ImageDesc {
-                name: "quadtree_nodes",
-                format: vk::Format::R16_UINT,
-                extent,
-                mip_levels: world.lod_count,
-                array_layers: 1,
-                usage: vk::ImageUsageFlags::STORAGE
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_DST
-                    | vk::ImageUsageFlags::TRANSFER_SRC,
-            },
-        )
-        .map_err(|e| node_texture_error(ctx, world, extent, Some(e)))?;
+        let node_textures = PerFrame::new(|i| {
+            Image::new(
+                ctx,
+                &ImageDesc {
+                    name: &copy_name("quadtree_nodes", i),
+                    format: vk::Format::R16_UINT,
+                    extent,
+                    mip_levels: world.lod_count,
+                    array_layers: 1,
+                    usage: vk::ImageUsageFlags::STORAGE
+                        | vk::ImageUsageFlags::SAMPLED
+                        | vk::ImageUsageFlags::TRANSFER_DST
+                        | vk::ImageUsageFlags::TRANSFER_SRC,
+                },
+            )
+            .map_err(|e| node_texture_error(ctx, world, extent, Some(e)))
+        })?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let layers = shadow.slot_capacity() + FIRST_SLOT;
         let node_descs = Buffer::new(
@@ -263,7 +270,9 @@ impl GpuQuadtree {
         // Worst case per frame: every slot freed and refilled (texel, desc, error each).
         let update_capacity = 6 * layers;
         let mut ring = Vec::new();
-        for i in 0..frames_in_flight.max(1) {
+        // Two at least: a frame also applies the last frame's list to its
+        // node texture copy.
+        for i in 0..frames_in_flight.max(2) {
             let host = |name: &str, size| {
                 Buffer::new(
                     ctx,
@@ -296,23 +305,26 @@ impl GpuQuadtree {
         )?;
         staging.mapped_mut().expect("mapped").copy_from_slice(&texels);
         ctx.submit_and_wait(|rec| {
-            rec.discard_to(&node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
             for a in atlases.iter().flatten() {
                 rec.discard_to(a, ATLAS_LAYOUT);
             }
-            let mut offset = 0;
-            for (lod, m) in shadow.mips.iter().enumerate() {
-                rec.copy_buffer_to_image(&staging, offset, &node_texture, lod as u32, 0);
-                offset += (m.len() * 2) as u64;
+            for node_texture in node_textures.all() {
+                rec.discard_to(node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+                let mut offset = 0;
+                for (lod, m) in shadow.mips.iter().enumerate() {
+                    rec.copy_buffer_to_image(&staging, offset, node_texture, lod as u32, 0);
+                    offset += (m.len() * 2) as u64;
+                }
+                rec.transition(node_texture, vk::ImageLayout::GENERAL);
             }
-            rec.transition(&node_texture, vk::ImageLayout::GENERAL);
             rec.fill_buffer(&node_descs, 0);
             rec.fill_buffer(&node_errors, 0);
             Ok(())
         })?;
+        let written = vec![(0, 0); ring.len()];
         Ok(GpuQuadtree {
             shadow,
-            node_texture,
+            node_textures,
             node_descs,
             node_errors,
             atlases,
@@ -324,6 +336,7 @@ impl GpuQuadtree {
             waiting: VecDeque::new(),
             update_capacity,
             arrived: Vec::new(),
+            written,
         })
     }
 
@@ -393,7 +406,8 @@ impl GpuQuadtree {
     /// its share of the upload ring is for, if any).
     pub fn memory(&self) -> Vec<(String, u64, Option<usize>)> {
         let mut out = vec![
-            (self.node_texture.name.clone(), self.node_texture.memory_bytes(), None),
+            (self.node_textures.all()[0].name.clone(), self.node_textures.all()[0].memory_bytes(), None),
+            (self.node_textures.all()[1].name.clone(), self.node_textures.all()[1].memory_bytes(), None),
             (self.node_descs.name.clone(), self.node_descs.memory_bytes(), None),
             (self.node_errors.name.clone(), self.node_errors.memory_bytes(), None),
         ];
@@ -424,6 +438,7 @@ impl GpuQuadtree {
     pub fn begin_frame(&mut self, frame: u64) {
         assert!(frame > self.frame, "frame {frame} after {}", self.frame);
         self.frame = frame;
+        self.node_textures.select(frame);
         self.shadow.begin_frame(frame);
         self.arrived.clear();
     }
@@ -479,29 +494,42 @@ impl GpuQuadtree {
                 }
             }
         }
-        if !uploaded.is_empty() {
-            for img in self.atlases.iter().flatten() {
-                rec.transition(img, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
-            }
-            for (i, (_, slot)) in uploaded.iter().enumerate() {
-                let mut off = (i * per_node) as u64;
-                for (k, img) in self.atlases.iter().enumerate() {
-                    if let Some(img) = img {
-                        rec.copy_buffer_to_image(&ring.payloads, off, img, 0, *slot);
-                        off += aligned_size(k, self.format);
-                    }
+        // Only the layers written change layout: they were free since before
+        // the oldest frame in flight, so work still sampling the atlases
+        // (the last frame's, beside this one's compute) reads other layers.
+        let mut copies = Vec::new();
+        for (i, (_, slot)) in uploaded.iter().enumerate() {
+            let mut off = (i * per_node) as u64;
+            for (k, img) in self.atlases.iter().enumerate() {
+                if let Some(img) = img {
+                    copies.push((off, img, *slot));
+                    off += aligned_size(k, self.format);
                 }
             }
-            for img in self.atlases.iter().flatten() {
-                rec.transition(img, ATLAS_LAYOUT);
-            }
         }
+        rec.copy_into_layers(&ring.payloads, &copies);
         self.arrived = uploaded.iter().map(|(n, slot)| (n.id, *slot)).collect();
         let updates = self.shadow.take_updates();
         assert!(updates.len() as u32 <= self.update_capacity, "{} updates exceed the ring", updates.len());
         let bytes: &[u8] = bytemuck::cast_slice::<QuadtreeUpdate, u8>(&updates);
         ring.updates.mapped_mut().expect("mapped")[..bytes.len()].copy_from_slice(bytes);
+        self.written[slot_index] = (self.frame, updates.len() as u32);
         Ok(updates.len() as u32)
+    }
+
+    /// The node texture copy of the frame being (or last) recorded.
+    pub fn node_texture(&self) -> &Image {
+        self.node_textures.current()
+    }
+
+    /// The last frame's update list and its length, when it wrote any:
+    /// this frame's node texture copy has not seen it yet.
+    pub fn previous_updates(&self) -> Option<(&Buffer, u32)> {
+        let slot = ((self.frame.checked_sub(1)?) % self.ring.len() as u64) as usize;
+        match self.written[slot] {
+            (frame, count) if frame + 1 == self.frame && count > 0 => Some((&self.ring[slot].updates, count)),
+            _ => None,
+        }
     }
 
     /// The update list written by the last `prepare_frame`.

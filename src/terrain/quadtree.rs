@@ -295,6 +295,14 @@ impl QuadtreeShadow {
     pub fn resident_count(&self) -> u32 {
         self.slot_capacity() - (self.free.len() + self.cooling.len()) as u32
     }
+
+    /// The slots a frame may read: neither free nor cooling.
+    pub fn held_slots(&self) -> Vec<u32> {
+        let cooling: Vec<u32> = self.cooling.iter().map(|(_, s)| *s).collect();
+        (FIRST_SLOT..self.slot_capacity() + FIRST_SLOT)
+            .filter(|s| !self.free.contains(s) && !cooling.contains(s))
+            .collect()
+    }
 }
 
 #[cfg(test)]

@@ -494,6 +494,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     );
     if let Some(ran) = renderer.queue_mode() {
         println!("queues: {}", ran.describe(ctx.info()));
+        println!("async overlap: {}", describe_overlap(ran, timed));
     }
     println!("output: {}", describe_output(&args.output, &renderer));
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
@@ -680,4 +681,34 @@ fn describe_output(output: &Output, renderer: &TerrainRenderer) -> String {
             format!("gbuffer (no lighting: the engine lights; {:?} normal; {})", layout.normal, images.join(", "))
         }
     }
+}
+
+/// How long each frame's compute ran beside the previous frame's graphics
+/// (async compute only; medians over the timed frames' consecutive pairs).
+fn describe_overlap(mode: QueueMode, timed: &[FrameTimings]) -> String {
+    if mode != QueueMode::AsyncCompute {
+        return format!(
+            "not measured: queue mode {} runs frame N+1's compute after frame N's graphics on one queue",
+            mode.name()
+        );
+    }
+    let geometry = vista::passes::terrain_geometry::TerrainGeometry::NAME;
+    let mut pairs: Vec<(f64, f64)> =
+        timed.windows(2).filter_map(|w| vista::frame::profiler::overlap_ms(&w[0], &w[1], geometry)).collect();
+    if pairs.is_empty() {
+        return "not measured: no two consecutive frames' timings came back".into();
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let mut all: Vec<f64> = pairs.iter().map(|p| p.0).collect();
+    let mut geo: Vec<f64> = pairs.drain(..).map(|p| p.1).collect();
+    format!(
+        "{:.3} ms of frame N+1's compute ran beside frame N's graphics, {:.3} ms beside its {geometry} \
+         (medians of {} frame pairs)",
+        median(&mut all),
+        median(&mut geo),
+        all.len()
+    )
 }
