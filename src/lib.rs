@@ -8,12 +8,15 @@
 //!   (labels, timestamps) and profiler output;
 //! - [`world`]: the CPU side of the terrain (height sources, bake, cache,
 //!   streaming), no Vulkan; [`terrain`]: streaming feeding the GPU quadtree;
-//! - [`passes`]: one pass per file; [`reference`]: a CPU twin per pass;
+//! - [`targets`]: what a frame renders into (outputs, depth, G-buffer layout);
+//! - [`passes`]: one pass per file; `reference` (feature `reference`): a
+//!   CPU twin per pass and the reference ray-caster;
 //! - [`render`]: the renderer an engine records into
 //!   ([`render::TerrainRenderer`]) and the frame order; `bench` (feature
 //!   `bench`): the `vista bench` kinds; `stability` (feature `stability`):
-//!   the hard cases. An engine that links only the renderer turns both off
-//!   (`default-features = false`) and with them NVIDIA FLIP (C++).
+//!   the hard cases. The default features build the renderer alone: the
+//!   command line is the `vista-cli` package (tools/vista), and the twins,
+//!   benches, hard cases and test switches (`test-hooks`) are features.
 
 #[cfg(feature = "bench")]
 pub mod bench;
@@ -22,6 +25,7 @@ pub mod frame;
 pub mod gpu;
 pub mod output;
 pub mod passes;
+#[cfg(feature = "reference")]
 pub mod reference;
 pub mod render;
 pub mod shaders;

@@ -201,7 +201,7 @@ fn tiles(ctx: &Context, rig: &Rig) -> BTreeMap<PageKey, Vec<u8>> {
     let vt = rig.renderer.virtual_texture.as_ref().unwrap();
     let width = vt.layout().cache_texels()[0] as usize;
     let per_row = vt.layout().cache_tiles[0];
-    let images = [&vt.cache_albedo, &vt.cache_detail].map(|img| ctx.read_image(img, 0, 0, 4).unwrap());
+    let images = vt.cache_images().map(|img| ctx.read_image(img, 0, 0, 4).unwrap());
     let cache = vt.state.cache();
     cache
         .pages()

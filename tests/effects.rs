@@ -58,7 +58,8 @@ fn an_effect_that_is_off_builds_and_records_none_of_its_work() {
     // only it has, resources only it has.
     // An empty marker: no pipeline of its own; no resources: no memory.
     let cases: [Case; 7] = [
-        (Effect::Holes, [1, 1, 1, 0], "HOLE_CULL", &["terrain_holes"], &["atlas_patch_holes", "hole_patch_list"]),
+        // The hole list has a copy per frame parity (frame::per_frame).
+        (Effect::Holes, [1, 1, 2, 0], "HOLE_CULL", &["terrain_holes"], &["atlas_patch_holes", "hole_patch_list"]),
         (Effect::ConeCull, [0, 1, 0, 0], "CONE_CULL", &[], &["atlas_patch_cones"]),
         // The lit variant of lighting_resolve replaces the unlit one.
         (Effect::Lighting, [0, 0, 0, 0], "LIGHTING", &[], &[]),
@@ -71,11 +72,12 @@ fn an_effect_that_is_off_builds_and_records_none_of_its_work() {
         // Six variants with near and far cliffs; the same resources.
         (Effect::Cliffs, [6, 4, 1, 0], "near_cliff", &[], &["atlas_splat", "material_table"]),
         // Two pipelines and their samplers; phase 2's list and the
-        // visibility bits; the pyramid is made at the first frame (its size
-        // is the target's), so it is not among the objects at creation.
+        // visibility bits (a copy per frame parity); the pyramid is made at
+        // the first frame (its size is the target's), so it is not among the
+        // objects at creation.
         (
             Effect::Occlusion,
-            [2, 0, 2, 2],
+            [2, 0, 3, 2],
             "OCCLUSION",
             &["hiz_build", "cull_occluded"],
             &["hiz_pyramid", "patch_visibility", "late_patch_list"],

@@ -68,8 +68,8 @@ fn page_requests_equal_the_cpu_twin() {
         let view_bytes = ctx.read_buffer(r.view_buffer()).unwrap();
         let view_gpu: TerrainViewGpu =
             bytemuck::pod_read_unaligned(&view_bytes[..std::mem::size_of::<TerrainViewGpu>()]);
-        let state = words(ctx.read_buffer(&vt.state_buffer).unwrap());
-        let list = words(ctx.read_buffer(&vt.requests).unwrap());
+        let state = words(ctx.read_buffer(vt.state_buffer()).unwrap());
+        let list = words(ctx.read_buffer(vt.requests()).unwrap());
         let count = list[0] as usize;
         let mut gpu: Vec<[u32; 2]> = list[4..4 + 2 * count].chunks_exact(2).map(|c| [c[0], c[1]]).collect();
         gpu.sort();
@@ -83,7 +83,7 @@ fn page_requests_equal_the_cpu_twin() {
             classification: &g.classification,
             view: &view_gpu,
             state: &state,
-            push: vt.last_push.unwrap(),
+            push: vt.last_push().unwrap(),
         });
         eprintln!(
             "gpu {} pages, twin {} firm, {} tolerated ({} boundary samples)",
@@ -132,11 +132,11 @@ fn probe(ctx: &Context, vt: &vista::render::virtual_texture::VirtualTexture, poi
         rec.push_descriptors(
             &pipeline,
             &[
-                (probe_sh::VT_STATE, Resource::Buffer(&vt.state_buffer)),
+                (probe_sh::VT_STATE, Resource::Buffer(vt.state_buffer())),
                 (probe_sh::POINTS, Resource::Buffer(&input)),
                 (probe_sh::RESULTS, Resource::Buffer(&output)),
-                (probe_sh::CACHE_ALBEDO, Resource::Image(&vt.cache_albedo, general)),
-                (probe_sh::CACHE_DETAIL, Resource::Image(&vt.cache_detail, general)),
+                (probe_sh::CACHE_ALBEDO, Resource::Image(vt.cache_images()[0], general)),
+                (probe_sh::CACHE_DETAIL, Resource::Image(vt.cache_images()[1], general)),
                 (probe_sh::NEAREST, Resource::Sampler(sampler.raw())),
             ],
         );

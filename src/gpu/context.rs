@@ -396,9 +396,9 @@ impl Context {
         (report.total_allocated_bytes, report.total_capacity_bytes)
     }
 
-    /// Tests and `vista stability` only: arm allocation failures and lost
-    /// devices (see [`super::fault`]).
-    #[doc(hidden)]
+    /// Tests and `vista stability` only (feature `test-hooks`): arm
+    /// allocation failures and lost devices (see [`super::fault`]).
+    #[cfg(feature = "test-hooks")]
     pub fn faults(&self) -> &super::fault::FaultInjector {
         &self.shared.faults
     }
@@ -464,6 +464,7 @@ impl Context {
 
     /// Makes one deliberate API misuse so a test can prove the validation
     /// layer is active (the harness canary). Creates and leaks nothing.
+    #[cfg(feature = "test-hooks")]
     pub fn provoke_validation_error(&self) {
         // A buffer of size 0 violates VUID-VkBufferCreateInfo-size-00912.
         let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::STORAGE_BUFFER);

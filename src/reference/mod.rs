@@ -4,6 +4,7 @@
 pub mod atmosphere;
 pub mod classify;
 pub mod finest;
+pub mod grass;
 #[cfg(feature = "bench")]
 pub mod image_metric;
 pub mod lod_map;

@@ -20,6 +20,9 @@ pub mod offscreen;
 pub mod renderer;
 pub mod report;
 pub mod shading;
+/// What `vista render` prints and `stats.json` holds (with the reference
+/// traversal's wanted-finer counts).
+#[cfg(feature = "reference")]
 pub mod stats;
 pub mod sun_shadows;
 pub mod telemetry;

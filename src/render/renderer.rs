@@ -42,7 +42,7 @@ use crate::render::grass::gpu::{Grass, GrassFrameInputs};
 use crate::render::materials_gpu::MaterialResources;
 use crate::render::near_geometry::{NearBuild, NearGeometry};
 use crate::render::shading::{ShadeRules, Shading};
-use crate::render::stats::TRIANGLES_PER_PATCH;
+use crate::render::telemetry::TRIANGLES_PER_PATCH;
 use crate::render::sun_shadows::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
 use crate::render::view::{TerrainViewGpu, View};
@@ -73,9 +73,9 @@ pub struct RendererOptions {
     /// (e.g. UTM metres east, north): views are given in those coordinates
     /// and made world-relative in f64 before anything is rounded to f32.
     pub origin_m: [f64; 2],
-    /// Tests only: keep an effect on although the world lacks its data, to
-    /// show that its path changes nothing there.
-    #[doc(hidden)]
+    /// Tests only (feature `test-hooks`): keep an effect on although the
+    /// world lacks its data, to show that its path changes nothing there.
+    #[cfg(feature = "test-hooks")]
     pub force_content_gated: bool,
     /// What the per-patch LOD selection may do.
     pub lod: LodOptions,
@@ -98,15 +98,41 @@ pub struct LodOptions {
     /// finest surface the error tree measures against). Below the finest,
     /// the error bound reported is the refused level's.
     pub refine_levels: u32,
-    /// Tests only: off, edges are not snapped to coarser neighbours (seams
-    /// open), to show that the watertightness tests can fail.
-    #[doc(hidden)]
+    /// Tests only (feature `test-hooks`): off, edges are not snapped to
+    /// coarser neighbours (seams open), to show that the watertightness
+    /// tests can fail.
+    #[cfg(feature = "test-hooks")]
     pub stitching: bool,
+}
+
+impl LodOptions {
+    /// Edges snap to coarser neighbours (always, but in a test that opens
+    /// the seams).
+    fn stitched(&self) -> bool {
+        #[cfg(feature = "test-hooks")]
+        return self.stitching;
+        #[cfg(not(feature = "test-hooks"))]
+        true
+    }
+}
+
+impl RendererOptions {
+    /// Effects stay on without their data (a test's override).
+    fn forced(&self) -> bool {
+        #[cfg(feature = "test-hooks")]
+        return self.force_content_gated;
+        #[cfg(not(feature = "test-hooks"))]
+        false
+    }
 }
 
 impl Default for LodOptions {
     fn default() -> Self {
-        LodOptions { refine_levels: crate::shaders::consts::REFINE_LEVELS, stitching: true }
+        LodOptions {
+            refine_levels: crate::shaders::consts::REFINE_LEVELS,
+            #[cfg(feature = "test-hooks")]
+            stitching: true,
+        }
     }
 }
 
@@ -307,7 +333,7 @@ impl TerrainRenderer {
         let mut content =
             world_content(world, &holes, source.has_holes(), options.decals.decals.len(), options.assets.len());
         content.engine_lights = !options.output.lights();
-        let decisions = decide(&options.effects, &content, options.force_content_gated);
+        let decisions = decide(&options.effects, &content, options.forced());
         let on = |e: Effect| decisions.iter().any(|d| d.effect == e && d.on);
         let atlases = atlases_for(&decisions, options.effects.materials);
         let mut terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
@@ -530,7 +556,7 @@ impl TerrainRenderer {
         let shade = self.frame_shade();
         let mut gpu: TerrainViewGpu = view.gpu(&world, texture_extent(&world), &self.effects.lighting, &shade);
         gpu.lod_params[2] = self.lod.refine_levels as f32;
-        gpu.lod_params[3] = if self.lod.stitching { 0.0 } else { 1.0 };
+        gpu.lod_params[3] = if self.lod.stitched() { 0.0 } else { 1.0 };
         let params = view.traverse_params();
         self.terrain.stream(&params)?;
         let fog = (self.effect_on(Effect::Atmosphere) && self.switches.on(Effect::Atmosphere))

@@ -14,7 +14,7 @@ use crate::passes::gbuffer_tiles::variant_label;
 use crate::render::effects::{Effect, EffectDecision};
 use crate::render::graph::{FramePass, Outcome};
 use crate::render::renderer::TerrainRenderer;
-use crate::render::stats::TRIANGLES_PER_PATCH;
+use crate::render::telemetry::TRIANGLES_PER_PATCH;
 use crate::render::telemetry::FrameCounters;
 use crate::shaders::quadtree_update as update_sh;
 use serde::Serialize;

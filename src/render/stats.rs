@@ -17,8 +17,7 @@ use crate::terrain::TerrainStats;
 use crate::world::PATCH_QUADS;
 use serde::Serialize;
 
-/// Triangles of one patch instance (8x8 quads, 2 each).
-pub const TRIANGLES_PER_PATCH: u64 = (PATCH_QUADS * PATCH_QUADS * 2) as u64;
+pub use crate::render::telemetry::TRIANGLES_PER_PATCH;
 
 #[derive(Debug, Clone, Serialize)]
 pub struct RenderStats {

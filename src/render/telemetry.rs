@@ -29,6 +29,9 @@ pub struct TraverseCounters {
     pub nodes_per_lod: Vec<u32>,
 }
 
+/// Triangles of one patch instance (8x8 quads, 2 each).
+pub const TRIANGLES_PER_PATCH: u64 = (crate::world::PATCH_QUADS * crate::world::PATCH_QUADS * 2) as u64;
+
 /// Every GPU counter of one frame.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct FrameCounters {

@@ -126,7 +126,7 @@ pub fn bake_shard(
 /// The error tiles of `tiles`, then `nodes` in parallel.
 fn bake_nodes(cache: &NodeCache, nodes: &[NodeId], tiles: Vec<NodeId>, progress: Progress) -> Result<BakeStats> {
     // Each root's error tile first, so node bakes never wait for one.
-    let errors = cache.errors().prepare_tiles(tiles, progress);
+    let errors = cache.errors().prepare_tiles(tiles, progress.clone());
     let start = Instant::now();
     let bar = Reporter::new(progress, nodes.len() as u64, Work::Nodes);
     let outcomes = nodes

@@ -69,7 +69,7 @@ pub use plan::{
 };
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
-pub use progress::{Progress, Reporter, Work};
+pub use progress::{Progress, ProgressEvent, ProgressFn, Reporter, Work};
 pub use projection::TraverseCamera;
 pub use resample_bound::RangeFit;
 pub use shard::{ShardError, ShardPlan, ShardSplit, MAX_SHARDS, UNITS_PER_SHARD};

@@ -265,9 +265,9 @@ pub fn bake(args: BakeArgs) -> Result<()> {
     let progress = match (args.no_progress, args.progress_every) {
         (true, _) => Progress::Hidden,
         (false, Some(s)) => Progress::Lines { every: std::time::Duration::from_secs_f64(s) },
-        (false, None) => Progress::auto(),
+        (false, None) => crate::progress::auto(),
     };
-    if progress != Progress::Hidden {
+    if !progress.is_hidden() {
         // Timed as the dry run times it, so both say the same.
         plan.measure_bake(&*w.source, &w.holes, &w.bake, PLAN_SAMPLES);
         let what = match (&shard, args.shard) {

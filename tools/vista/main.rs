@@ -12,6 +12,7 @@ mod bench_shade_cmd;
 mod golden_cmd;
 mod numbers;
 mod out_path;
+mod progress;
 mod render_cmd;
 mod render_out;
 mod scene;

@@ -17,7 +17,7 @@ use vista::render::virtual_texture::state::VtCounters;
 use vista::render::{overview_camera, Camera, Effect, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
 use vista::targets::{GbufferLayout, Output};
 use vista::terrain::TerrainOptions;
-use vista::world::{Progress, Work};
+use vista::world::Work;
 
 /// Frames excluded from medians (pipeline creation, first-use costs).
 const WARMUP_FRAMES: usize = 2;
@@ -429,7 +429,7 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
     let first = renderer.frames_recorded() + 1;
     // A bar on a terminal, a line every 5 s otherwise (long runs only).
-    let progress = vista::world::Reporter::new(Progress::auto(), u64::from(args.frames), Work::Frames);
+    let progress = vista::world::Reporter::new(crate::progress::auto(), u64::from(args.frames), Work::Frames);
     let (mut frames, pages, end) = match args.fly {
         Some(m) => fly(ctx, &mut off, &mut renderer, world, view, (m, args.frames), &progress)?,
         None => (off.run_observed(ctx, &mut renderer, view, args.frames, || progress.inc())?, Vec::new(), view.clone()),

@@ -10,8 +10,8 @@ use clap::Args;
 use vista::render::Effects;
 use vista::world::{
     BakeSettings, ErrorTree, ExrSource, GeoTiffInfo, GeoTiffSource, GridSource, HeightSource, Hole, Limits,
-    PayloadFormat, Png16Source, ProceduralSource, Progress, WorldDesc, WorldError, WorldPlan,
-    DEFAULT_MAX_SECTORS_PER_SIDE, MAX_LOD_COUNT, MAX_SECTORS_PER_SIDE,
+    PayloadFormat, Png16Source, ProceduralSource, WorldDesc, WorldError, WorldPlan, DEFAULT_MAX_SECTORS_PER_SIDE,
+    MAX_LOD_COUNT, MAX_SECTORS_PER_SIDE,
 };
 
 use crate::scene::{Scene, SceneSource};
@@ -148,7 +148,7 @@ impl LoadedWorld {
         vista::terrain::check_plan(ctx, &self.desc, &terrain).map_err(plan_error_is_input)?;
         let dir = cache.map(Path::to_path_buf).or_else(vista::world::default_cache_dir);
         let tree = ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?;
-        let p = tree.prepare(Progress::auto());
+        let p = tree.prepare(crate::progress::auto());
         let place = match tree.dir() {
             Some(d) => format!("cached in {}", d.display()),
             None => "in memory only ($VISTA_CACHE is empty)".to_string(),

@@ -111,8 +111,9 @@ pub struct Grass {
     /// Effect `decals`: the decal list grass last planned with (a change
     /// redoes the pigment), and the indices of those touching its squares.
     decals: Option<(Vec<Decal>, Buffer)>,
-    /// Tests only: no frustum or Hi-Z culling (every placed tuft drawn).
-    #[doc(hidden)]
+    /// Tests only (feature `test-hooks`): no frustum or Hi-Z culling
+    /// (every placed tuft drawn).
+    #[cfg(feature = "test-hooks")]
     pub no_culling: bool,
 }
 
@@ -163,6 +164,7 @@ impl Grass {
             } else {
                 None
             },
+            #[cfg(feature = "test-hooks")]
             no_culling: false,
         })
     }
@@ -205,7 +207,11 @@ impl Grass {
         if f.holes {
             flags |= GRASS_FLAG_HOLES;
         }
-        if !self.no_culling {
+        #[cfg(feature = "test-hooks")]
+        let culled = !self.no_culling;
+        #[cfg(not(feature = "test-hooks"))]
+        let culled = true;
+        if culled {
             flags |= GRASS_FLAG_FRUSTUM | if f.hiz { GRASS_FLAG_HIZ } else { 0 };
         }
         let place = GrassPlacePush {

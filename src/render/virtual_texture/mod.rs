@@ -53,15 +53,31 @@ pub struct VtParams {
     pub pages_per_frame: u32,
     /// Texels per side of the indirection's mip 0 (a power of two).
     pub indirection: u32,
-    /// Tests only: pages hold the position code of each texel (region,
-    /// page, level, texel) instead of the material.
-    #[doc(hidden)]
+    /// Tests only (feature `test-hooks`): pages hold the position code of
+    /// each texel (region, page, level, texel) instead of the material.
+    #[cfg(feature = "test-hooks")]
     pub position_code: bool,
+}
+
+impl VtParams {
+    fn position_coded(&self) -> bool {
+        #[cfg(feature = "test-hooks")]
+        return self.position_code;
+        #[cfg(not(feature = "test-hooks"))]
+        false
+    }
 }
 
 impl Default for VtParams {
     fn default() -> Self {
-        VtParams { region_m: 64.0, cache_mb: 64, pages_per_frame: 16, indirection: 2048, position_code: false }
+        VtParams {
+            region_m: 64.0,
+            cache_mb: 64,
+            pages_per_frame: 16,
+            indirection: 2048,
+            #[cfg(feature = "test-hooks")]
+            position_code: false,
+        }
     }
 }
 
@@ -138,21 +154,21 @@ pub struct VirtualTexture {
     feedback: VtFeedback,
     update: VtUpdate,
     pages: VtPages,
-    pub state_buffer: Buffer,
+    pub(crate) state_buffer: Buffer,
     status: Buffer,
     /// This frame's page requests (count, 3 words, then the entries).
-    pub requests: Buffer,
+    pub(crate) requests: Buffer,
     writes_staging: Buffer,
     jobs_staging: Buffer,
-    pub cache_albedo: Image,
-    pub cache_detail: Image,
+    pub(crate) cache_albedo: Image,
+    pub(crate) cache_detail: Image,
     ring: Vec<Slot>,
     next: usize,
     pub state: VtState,
     /// Writes left for later frames.
     writes: Vec<StateWrite>,
     /// The feedback's push constants of the newest frame (tests).
-    pub last_push: Option<VtFeedbackPush>,
+    pub(crate) last_push: Option<VtFeedbackPush>,
     initialized: bool,
     decals: Option<Decals>,
 }
@@ -208,7 +224,7 @@ impl VirtualTexture {
         Ok(VirtualTexture {
             feedback: VtFeedback::new(ctx)?,
             update: VtUpdate::new(ctx)?,
-            pages: VtPages::new(ctx, params.position_code, decals.is_some())?,
+            pages: VtPages::new(ctx, params.position_coded(), decals.is_some())?,
             state_buffer: buffer(
                 ctx,
                 "vt_state",
@@ -236,6 +252,32 @@ impl VirtualTexture {
             initialized: false,
             decals,
         })
+    }
+
+    /// Tests only (feature `test-hooks`): the indirection and sub-texture
+    /// state the shaders read.
+    #[cfg(feature = "test-hooks")]
+    pub fn state_buffer(&self) -> &Buffer {
+        &self.state_buffer
+    }
+
+    /// Tests only (feature `test-hooks`): this frame's page requests.
+    #[cfg(feature = "test-hooks")]
+    pub fn requests(&self) -> &Buffer {
+        &self.requests
+    }
+
+    /// Tests only (feature `test-hooks`): the physical cache's albedo and
+    /// detail images.
+    #[cfg(feature = "test-hooks")]
+    pub fn cache_images(&self) -> [&Image; 2] {
+        [&self.cache_albedo, &self.cache_detail]
+    }
+
+    /// Tests only (feature `test-hooks`): the newest frame's feedback push.
+    #[cfg(feature = "test-hooks")]
+    pub fn last_push(&self) -> Option<VtFeedbackPush> {
+        self.last_push
     }
 
     pub fn layout(&self) -> &VtLayout {
