@@ -4,61 +4,12 @@
 //! the `tiff` crate's encoder (stripped; tiled files go through the same
 //! decoder call but are not made here: the encoder writes strips only).
 
-use std::path::{Path, PathBuf};
-use tiff::encoder::{colortype, TiffEncoder};
-use tiff::tags::Tag;
+use std::path::Path;
+use tiff::encoder::colortype;
 use vista::world::{GeoTiffSource, HeightSource, Png16Source};
-mod vista_cmd;
+mod geotiff_files;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vista-geotiff-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create temp dir");
-    dir
-}
-
-/// Where and how a test map is placed.
-struct Tags {
-    scale: [f64; 2],
-    /// Raster position (i, j) tied to map position (x, y).
-    tie: [f64; 4],
-    point: bool,
-    no_data: Option<&'static str>,
-}
-
-const TAGS: Tags = Tags { scale: [30.0, 20.0], tie: [0.0, 0.0, 340_000.0, 5_081_000.0], point: false, no_data: None };
-
-fn write_tiff<C: colortype::ColorType>(path: &Path, w: u32, h: u32, data: &[C::Inner], t: &Tags)
-where
-    [C::Inner]: tiff::encoder::TiffValue,
-{
-    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-    let mut enc = TiffEncoder::new(file).unwrap();
-    let mut img = enc.new_image::<C>(w, h).unwrap();
-    let e = img.encoder();
-    e.write_tag(Tag::ModelPixelScaleTag, &[t.scale[0], t.scale[1], 0.0][..]).unwrap();
-    e.write_tag(Tag::ModelTiepointTag, &[t.tie[0], t.tie[1], 0.0, t.tie[2], t.tie[3], 0.0][..]).unwrap();
-    // Version 1.1.0, one key: GTRasterTypeGeoKey = 1 (area) or 2 (point).
-    e.write_tag(Tag::GeoKeyDirectoryTag, &[1u16, 1, 0, 1, 1025, 0, 1, if t.point { 2 } else { 1 }][..]).unwrap();
-    if let Some(n) = t.no_data {
-        e.write_tag(Tag::GdalNodata, n).unwrap();
-    }
-    img.write_data(data).unwrap();
-}
-
-/// Heights with every kind of neighbourhood: a ramp, a ripple and noise.
-fn heights(w: u32, h: u32) -> Vec<u16> {
-    let mut state = 0x9e37_79b9_u32;
-    (0..w * h)
-        .map(|k| {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            let (i, j) = ((k % w) as f64, (k / w) as f64);
-            (1000.0 + 20.0 * i + 300.0 * (j * 0.3).sin() + f64::from(state % 50)) as u16
-        })
-        .collect()
-}
+use geotiff_files::{heights, temp_dir, write_tiff, Tags, TAGS};
 
 fn write_png16(path: &Path, w: u32, h: u32, data: &[u16]) {
     let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
@@ -185,27 +136,6 @@ fn no_data_samples_become_holes_in_the_bake() {
     // Row 40 (y 92..96) lies in node (x, 0); pixel (10, 5) is the only
     // no-data in node (0, 1).
     assert_eq!(holed, [13 * side + 4, 13 * side + 5], "patches with holes: {holed:?}");
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-#[test]
-fn the_command_line_takes_extent_and_origin_from_the_tags() {
-    let dir = temp_dir("cli");
-    let tif = dir.join("dem.tif");
-    write_tiff::<colortype::Gray16>(&tif, 64, 48, &heights(64, 48), &TAGS);
-    let out =
-        vista_cmd::vista_cmd().args(["bake", "--dry-run", "--spacing", "5", "--heightmap"]).arg(&tif).output().unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(text.contains("(1920 x 960 m, heights"), "{text}");
-    // A hole given in map coordinates lands in the world (no "outside" note).
-    let out = vista_cmd::vista_cmd()
-        .args(["bake", "--dry-run", "--spacing", "5", "--hole-circle", "340100,5080500,20", "--heightmap"])
-        .arg(&tif)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success() && !err.contains("outside the world"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -179,18 +179,18 @@ fn hdr_and_gbuffer_over_a_loaded_depth_are_clean_under_synchronization_validatio
     });
 }
 
-/// Frame k's compute submission waits only for frame k - 2's graphics
-/// (`gpu::COMPUTE_LAG`): on a compute-only queue it runs beside frame k -
-/// 1's graphics. Syncval cannot see that on a device with one queue (its
+/// Frame k's compute submission waits only for frame k-2's graphics
+/// (`gpu::COMPUTE_LAG`): on a compute-only queue it runs beside frame
+/// k-1's graphics. Syncval cannot see that on a device with one queue (its
 /// submissions run in order there), so this test reads what each command
 /// buffer touched (`Recorder::log_accesses`, descriptor bindings by their
 /// reflected access) over a walk that streams, renders pages, grass and
-/// meshes and moves the sun, and proves that frame k's compute and frame k
-/// - 1's graphics touch nothing that either writes. The one exception are
+/// meshes and moves the sun, and proves that frame k's compute and frame
+/// k-1's graphics touch nothing that either writes. The one exception are
 /// the node atlases, which compute writes a layer at a time while graphics
-/// samples the whole array: every layer written must be one frame k - 1
+/// samples the whole array: every layer written must be one frame k-1
 /// could not read (not resident then). It is not vacuous: each frame's
-/// compute writes what its own graphics and frame k - 2's graphics read.
+/// compute writes what its own graphics and frame k-2's graphics read.
 #[test]
 fn a_frames_compute_and_the_last_frames_graphics_share_nothing_either_writes() {
     use vista::gpu::access_log::{conflicts, Access};

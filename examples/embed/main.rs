@@ -13,6 +13,7 @@
 //! 3. lights its G-buffer itself (sun and sky ambient) or tonemaps vista's
 //!    radiance into its display image, draws a marker depth-tested against
 //!    the terrain, blits and presents.
+//!
 //! Once the terrain settles, three frames are drawn without the building
 //! and three with it: the difference in patches the depth pyramid culled is
 //! what the engine's occluder culled.

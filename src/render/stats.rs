@@ -14,7 +14,6 @@ use crate::render::view::View;
 use crate::render::virtual_texture::{state::VtCounters, VirtualTexture};
 use crate::shaders::consts::{GRASS_BLADES, GRASS_BLADE_VERTICES};
 use crate::terrain::TerrainStats;
-use crate::world::PATCH_QUADS;
 use serde::Serialize;
 
 pub use crate::render::telemetry::TRIANGLES_PER_PATCH;

@@ -44,7 +44,7 @@ const FRAMES: u32 = 3;
 #[derive(Args)]
 pub struct GoldenArgs {
     /// Where the references are (default: tests/golden of the source tree).
-    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden"))]
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/golden"))]
     dir: PathBuf,
     /// Write the rendered images as the new references and print what changed.
     #[arg(long)]
@@ -87,13 +87,17 @@ struct Golden {
 /// flavours meet (the default world's "mixed cliffs" view of
 /// `vista bench shade`).
 const GOLDENS: [Golden; 3] = [
-    Golden { name: "default", scene: concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/default.toml"), camera: None },
+    Golden { name: "default", scene: concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/default.toml"), camera: None },
     Golden {
         name: "default-cliffs",
-        scene: concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/default.toml"),
+        scene: concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/default.toml"),
         camera: Some([1280.0, 1280.0, 627.0, 270.0, -15.0]),
     },
-    Golden { name: "montblanc", scene: concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/montblanc.toml"), camera: None },
+    Golden {
+        name: "montblanc",
+        scene: concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/montblanc.toml"),
+        camera: None,
+    },
 ];
 
 /// The arguments' own checks, before Vulkan starts.

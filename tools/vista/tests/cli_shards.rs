@@ -195,7 +195,7 @@ fn auto_reads_the_schedulers_index() {
 /// (Kubernetes).
 #[test]
 fn the_deploy_recipes_plan_their_shards() {
-    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let here = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let slurm = std::fs::read_to_string(here.join("deploy/slurm/bake-array.sh")).unwrap();
     let value = |prefix: &str| {
         let line = slurm.lines().find(|l| l.starts_with(prefix)).unwrap_or_else(|| panic!("no {prefix} line"));

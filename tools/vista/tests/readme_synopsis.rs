@@ -22,7 +22,7 @@ fn options(text: &str) -> BTreeSet<String> {
 /// The README's synopsis block, split by command: each `vista CMD` entry
 /// runs to the next one.
 fn readme_sections() -> Vec<(String, String)> {
-    let readme = include_str!("../README.md");
+    let readme = include_str!("../../../README.md");
     let start = readme.find("## Command line").expect("the README has a command line section");
     let block = &readme[start..];
     let block = &block[block.find("```").unwrap() + 3..];

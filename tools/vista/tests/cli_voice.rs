@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 mod vista_cmd;
 
-const MONTBLANC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/montblanc.png");
+const MONTBLANC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/montblanc.png");
 
 /// Phrases of the standard library's, serde's and clap's parsers that must
 /// not reach a user.

@@ -7,7 +7,7 @@ mod vista_cmd;
 
 use vista_cmd::vista_cmd;
 
-const MONTBLANC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/montblanc.png");
+const MONTBLANC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/montblanc.png");
 
 fn vista(args: &[&str]) -> (bool, String, String) {
     let out = vista_cmd().args(args).output().expect("run vista");
@@ -473,7 +473,7 @@ fn every_option_acts_or_is_refused() {
 #[test]
 fn a_stamp_added_to_a_baked_scene_rebakes_only_what_it_touches() {
     let dir = temp_dir("stamps");
-    let stamps = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/stamps");
+    let stamps = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/stamps");
     // The procedural world spans its whole height range: a stamp may only
     // raise the ground to within it (max), not add on top of its peaks.
     let world = "[world]\nsource = \"procedural\"\nextent = 2048\nheight_range = [0, 600]\nspacing = 2\nlods = 4\n";
