@@ -14,8 +14,9 @@
 //!    radiance into its display image, draws a marker depth-tested against
 //!    the terrain, blits and presents.
 //!
-//! Once the terrain settles, three frames are drawn without the building
-//! and three with it: the difference in patches the depth pyramid culled is
+//! Once the terrain settles, six frames are drawn without the building
+//! and six with it (each copy of occlusion's visibility bits, which frames
+//! use in turn, reaches its steady state in three): the difference in patches the depth pyramid culled is
 //! what the engine's occluder culled.
 //!
 //! `cargo run --release --example embed -- [--output gbuffer|hdr|lit] [--frames N] [--screenshot FILE.png] [--validation]`
@@ -123,6 +124,11 @@ fn wrap(ctx: &Context, engine: &Engine) -> Result<Wrapped, String> {
     Ok(Wrapped { colour, gbuffer, depth: one("engine_depth", &t.depth, targets::DEPTH_USAGE)? })
 }
 
+/// Frames drawn without the building, then with it, once settled: each
+/// copy of occlusion's visibility bits (frames use them in turn) reaches its
+/// steady state in three.
+const MEASURE: u32 = 6;
+
 /// Patches the depth pyramid culled in the newest frame that came back.
 fn culled(ctx: &Context, engine: &Engine, renderer: &mut TerrainRenderer) -> u32 {
     engine.wait_idle();
@@ -166,8 +172,8 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
     let (mut frame, mut shot, mut measured) = (0u64, None, None);
     let started = std::time::Instant::now();
     // Once settled (two frames in a row with nothing loading, as
-    // `Offscreen::settle` waits): 3 frames without the building, then 3
-    // with it.
+    // `Offscreen::settle` waits): MEASURE frames without the building, then
+    // MEASURE with it, each block's last frame counted.
     let (mut measuring, mut calm): (Option<u32>, u32) = (None, 0);
     while !done.load(Ordering::Acquire) && (args.frames == 0 || frame < args.frames || shot.is_none()) {
         calm = if renderer.settled() && frame > 0 { calm + 1 } else { 0 };
@@ -175,7 +181,7 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
         if settled && measured.is_none() && measuring.is_none() {
             measuring = Some(0);
         }
-        let without = measuring.is_some_and(|m| m < 3);
+        let without = measuring.is_some_and(|m| m < MEASURE);
         // The last frame waits for the measurement (and streaming to
         // settle), so the screenshot shows the finished terrain and building.
         let last = args.frames > 0 && frame + 1 >= args.frames && measured.is_some() && measuring.is_none();
@@ -195,11 +201,11 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
         engine.end_frame(&ctx, slot, image, shot.as_ref().and_then(Option::as_ref))?;
         frame += 1;
         measuring = match measuring {
-            Some(2) => Some(culled(&ctx, &engine, &mut renderer)).map(|open| {
+            Some(m) if m == MEASURE - 1 => Some(culled(&ctx, &engine, &mut renderer)).map(|open| {
                 measured = Some((open, 0));
-                3
+                MEASURE
             }),
-            Some(5) => {
+            Some(m) if m == 2 * MEASURE - 1 => {
                 let walled = culled(&ctx, &engine, &mut renderer);
                 measured = measured.map(|(open, _)| (open, walled));
                 None

@@ -16,6 +16,7 @@ pub mod pipeline;
 #[cfg(feature = "window")]
 pub mod present;
 pub mod query;
+pub mod queue_mode;
 pub mod resources;
 pub mod shader;
 pub mod submit;
@@ -30,9 +31,10 @@ pub use device_info::{
 };
 pub use pipeline::{ComputePipelineDesc, GraphicsPipelineDesc, Pipeline, StencilDesc};
 pub use query::TimestampPool;
+pub use queue_mode::{QueueMode, COMPUTE_LAG, FRAME_COPIES};
 pub use resources::{
     depth_layout, has_stencil, Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation, Sampler, SamplerDesc,
 };
 pub use shader::{Binding, BindingKind, ShaderInfo, ShaderStage};
-pub use submit::{BinarySync, CommandPool, FrameCommands, FrameRing, QueueMode, COMPUTE_LAG, FRAME_COPIES};
+pub use submit::{BinarySync, CommandPool, FrameCommands, FrameRing};
 pub use validation::{Severity, ValidationLog, ValidationMessage};

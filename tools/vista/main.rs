@@ -15,6 +15,7 @@ mod out_path;
 mod progress;
 mod render_cmd;
 mod render_out;
+mod render_print;
 mod scene;
 mod scene_words;
 mod stability_cmd;

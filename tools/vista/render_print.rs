@@ -1,0 +1,218 @@
+//! What `vista render` prints: the counters, the virtual texture's pages
+//! along a fly-through, the per-pass timing table, the output and the
+//! async overlap.
+
+use vista::frame::FrameTimings;
+use vista::gpu::QueueMode;
+use vista::passes::cull_patches::CullStages;
+use vista::render::stats::RenderStats;
+use vista::render::virtual_texture::state::VtCounters;
+use vista::render::{Effect, TerrainRenderer};
+use vista::targets::Output;
+
+pub fn print_fly(m: f64, frames: u32, pages: &[VtCounters], budget: Option<u32>) {
+    println!("fly-through: {frames} frames, {m} m a frame ({:.0} m)", m * f64::from(frames));
+    let (Some(first), Some(last)) = (pages.first(), pages.last()) else { return };
+    let n = pages.len() as f64;
+    let mean = |f: &dyn Fn(&VtCounters) -> f64| pages.iter().map(f).sum::<f64>() / n;
+    let max = |f: &dyn Fn(&VtCounters) -> u32| pages.iter().map(f).max().unwrap_or(0);
+    let lowest = pages.iter().map(VtCounters::hit_rate).fold(1.0, f64::min);
+    println!(
+        "  virtual texture per frame: {:.1} pages sampled (read back; max {}), {:.1} rendered (max {}, budget {}), \
+         {:.1} evicted, {:.1} waiting (max {}); hit rate {:.1} % mean, {:.1} % lowest; {} rendered in all",
+        mean(&|c| f64::from(c.requested)),
+        max(&|c| c.requested),
+        mean(&|c| f64::from(c.rendered)),
+        max(&|c| c.rendered),
+        budget.map_or("-".to_string(), |b| b.to_string()),
+        mean(&|c| f64::from(c.evicted)),
+        mean(&|c| f64::from(c.waiting)),
+        max(&|c| c.waiting),
+        100.0 * mean(&VtCounters::hit_rate),
+        100.0 * lowest,
+        last.rendered_total - first.rendered_total + u64::from(first.rendered)
+    );
+}
+
+pub fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
+    let p = &s.patches;
+    let stage = |on: bool, name: &str, n: u32| if on { format!("{n} after {name}") } else { format!("{name} off") };
+    println!(
+        "patches: {} in, {}, {}, {}, {} drawn, {} of them with holes ({} triangles submitted)",
+        p.patches_in,
+        stage(stages.frustum, "frustum", p.after_frustum),
+        stage(stages.cone, "cone", p.after_cone),
+        stage(stages.hole, "hole", p.after_hole),
+        p.drawn,
+        p.drawn_with_holes,
+        s.triangles_drawn
+    );
+    if occlusion {
+        println!(
+            "occlusion: {} drawn in phase 1 (visible last frame); {} tested against the depth pyramid, {} of them \
+             drawn in phase 2, {} culled",
+            p.drawn_phase1,
+            p.occlusion_tested,
+            p.drawn_phase2,
+            p.occlusion_tested - p.drawn_phase2
+        );
+    }
+    let sel = &s.select;
+    println!(
+        "lod:     error bound {:.2} px (target {} px); {} listed patches drawn from an ancestor, {} LOD-0 patches \
+         refined below the samples ({} refused by the per-frame budget), {} seam conflicts, {} edges clamped",
+        s.bound_px,
+        s.target_px,
+        sel.coarsened,
+        sel.refined - sel.refine_capped,
+        sel.refine_capped,
+        sel.conflicts,
+        p.seam_overflow
+    );
+    let per_lod: Vec<String> = s
+        .nodes_per_lod
+        .iter()
+        .zip(&s.wanted_finer_per_lod)
+        .enumerate()
+        .map(|(l, (n, w))| if *w > 0 { format!("LOD{l} {n} ({w} wanted finer)") } else { format!("LOD{l} {n}") })
+        .collect();
+    println!(
+        "nodes:   {} drawn: {}; overflow {}, missing roots {}",
+        s.node_count,
+        per_lod.join(", "),
+        s.overflow,
+        s.missing_roots
+    );
+    println!("         ('wanted finer': the camera asks for more detail there but the children are not resident yet)");
+    if let Some(v) = &s.virtual_texture {
+        let c = &v.counters;
+        let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
+        println!(
+            "virtual texture: {} sub-textures ({} squeezed by a full indirection); frame {} (read back) sampled {} \
+             pages, {} resident (hit rate {:.1} %); this frame rendered {} and evicted {} ({} and {} in all), \
+             {} of {} tiles resident, {} pages waiting; indirection {:.1} MiB, page status {:.1} MiB, cache {:.1} MiB",
+            c.sub_textures,
+            c.squeezed,
+            c.harvested_frame,
+            c.requested,
+            c.hits,
+            100.0 * v.hit_rate,
+            c.rendered,
+            c.evicted,
+            c.rendered_total,
+            c.evicted_total,
+            c.resident,
+            v.cache_tiles,
+            c.waiting,
+            mib(v.indirection_bytes),
+            mib(v.status_bytes),
+            mib(v.cache_bytes)
+        );
+        if v.decals > 0 {
+            println!(
+                "decals: {} drawn into the pages; this frame's pages blended {} (a page's decals each once); \
+                 {} pages dropped by decal edits, {} decals left out of pages touched by too many",
+                v.decals, c.decal_blends, c.decal_pages_invalidated, c.decals_left_out
+            );
+        }
+    }
+    if let Some(g) = &s.grass {
+        let c = &g.counters;
+        println!(
+            "grass: {} cells in range, {} tufts placed, {} culled by the frustum, {} by the depth pyramid, {} drawn \
+             ({} triangles); {:.2} MiB",
+            c.in_range,
+            c.placed,
+            c.culled_frustum,
+            c.culled_hiz,
+            c.drawn,
+            g.triangles,
+            g.memory_bytes as f64 / f64::from(1u32 << 20)
+        );
+    }
+    if let Some(c) = &s.cliff_meshes {
+        println!(
+            "cliff meshes: {} cells within the radius, {} steep ones meshed ({} triangles), {} past the capacity",
+            c.tested, c.cells, c.triangles, c.overflow
+        );
+    }
+    if let Some([one, two, three]) = s.plane_tiles {
+        println!(
+            "control map: tri-planar background tiles sampling 1 plane {one}, 2 planes {two}, 3 planes {three} \
+             (the tightened blend)"
+        );
+    }
+}
+
+pub fn print_timings(timed: &[FrameTimings]) {
+    if timed.is_empty() {
+        println!("no pass timings (timestamps unsupported or no frame finished)");
+        return;
+    }
+    println!("{:<44} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
+    let mut total = 0.0;
+    for s in vista::frame::profiler::summarize(timed) {
+        total += s.median_ms;
+        println!(
+            "{:<44} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
+            vista::frame::pass_label(s.name, s.late),
+            format!("{:?}", s.queue).to_lowercase(),
+            s.median_ms,
+            s.min_ms,
+            s.max_ms,
+            s.samples
+        );
+    }
+    println!("{:<44} {:<9} {:>10.4}", "sum of medians", "", total);
+}
+
+/// The output in words: its target(s), and what lit it.
+pub fn describe_output(output: &Output, renderer: &TerrainRenderer) -> String {
+    let lit = if renderer.effect_on(Effect::Lighting) { "sun and sky" } else { "unlit albedo" };
+    match output {
+        Output::Lit { format } => format!("lit ({lit}, tonemapped for display into {format:?})"),
+        Output::Hdr { format, sky } => {
+            let sky = if *sky && renderer.effect_on(Effect::Atmosphere) {
+                "the atmosphere's sky in the background"
+            } else {
+                "the background kept"
+            };
+            format!("hdr ({lit}, linear radiance into {format:?}, no tonemap; {sky})")
+        }
+        Output::Gbuffer(layout) => {
+            let images: Vec<String> =
+                layout.attachments.iter().map(|a| format!("{} {:?} {:?}", a.name, a.format, a.channels)).collect();
+            format!("gbuffer (no lighting: the engine lights; {:?} normal; {})", layout.normal, images.join(", "))
+        }
+    }
+}
+
+/// How long each frame's compute ran beside the previous frame's graphics
+/// (async compute only; medians over the timed frames' consecutive pairs).
+pub fn describe_overlap(mode: QueueMode, timed: &[FrameTimings]) -> String {
+    if mode != QueueMode::AsyncCompute {
+        return format!(
+            "not measured: queue mode {} runs frame N+1's compute after frame N's graphics on one queue",
+            mode.name()
+        );
+    }
+    let geometry = vista::passes::terrain_geometry::TerrainGeometry::NAME;
+    let mut pairs: Vec<(f64, f64)> =
+        timed.windows(2).filter_map(|w| vista::frame::profiler::overlap_ms(&w[0], &w[1], geometry)).collect();
+    if pairs.is_empty() {
+        return "not measured: no two consecutive frames' timings came back".into();
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let mut all: Vec<f64> = pairs.iter().map(|p| p.0).collect();
+    let mut geo: Vec<f64> = pairs.drain(..).map(|p| p.1).collect();
+    format!(
+        "{:.3} ms of frame N+1's compute ran beside frame N's graphics, {:.3} ms beside its {geometry} \
+         (medians of {} frame pairs)",
+        median(&mut all),
+        median(&mut geo),
+        all.len()
+    )
+}
