@@ -6,7 +6,7 @@
 //! pass (per mode) and its marker, then a blit to the swapchain.
 
 use crate::passes::{BoxPush, LightPush, Marker, Passes};
-use crate::targets::{allocate, rest_layout, transition, Mode, Target, Targets, EXTENT, SIZE, TERRAIN_BIT};
+use crate::targets::{allocate, barrier, rest_layout, transition, Mode, Target, Targets, EXTENT, SIZE, TERRAIN_BIT};
 use ash::vk;
 use std::ffi::c_void;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -435,8 +435,8 @@ impl Engine {
         // SAFETY: recording since begin_frame; the layouts named are the ones
         // the images are in (the display image rests in COLOR_ATTACHMENT).
         unsafe {
-            layout(d, cmd, color, L::COLOR_ATTACHMENT_OPTIMAL, L::TRANSFER_SRC_OPTIMAL);
-            layout(d, cmd, swap, L::UNDEFINED, L::TRANSFER_DST_OPTIMAL);
+            colour_layout(d, cmd, color, L::COLOR_ATTACHMENT_OPTIMAL, L::TRANSFER_SRC_OPTIMAL);
+            colour_layout(d, cmd, swap, L::UNDEFINED, L::TRANSFER_DST_OPTIMAL);
             d.cmd_blit_image(
                 cmd,
                 color,
@@ -446,18 +446,18 @@ impl Engine {
                 &[blit],
                 vk::Filter::NEAREST,
             );
-            layout(d, cmd, color, L::TRANSFER_SRC_OPTIMAL, L::COLOR_ATTACHMENT_OPTIMAL);
+            colour_layout(d, cmd, color, L::TRANSFER_SRC_OPTIMAL, L::COLOR_ATTACHMENT_OPTIMAL);
             if let Some(r) = shot {
-                layout(d, cmd, swap, L::TRANSFER_DST_OPTIMAL, L::TRANSFER_SRC_OPTIMAL);
+                colour_layout(d, cmd, swap, L::TRANSFER_DST_OPTIMAL, L::TRANSFER_SRC_OPTIMAL);
                 let region = vk::BufferImageCopy::default().image_subresource(layer).image_extent(vk::Extent3D {
                     width: SIZE[0],
                     height: SIZE[1],
                     depth: 1,
                 });
                 d.cmd_copy_image_to_buffer(cmd, swap, L::TRANSFER_SRC_OPTIMAL, r.buffer, &[region]);
-                layout(d, cmd, swap, L::TRANSFER_SRC_OPTIMAL, L::PRESENT_SRC_KHR);
+                colour_layout(d, cmd, swap, L::TRANSFER_SRC_OPTIMAL, L::PRESENT_SRC_KHR);
             } else {
-                layout(d, cmd, swap, L::TRANSFER_DST_OPTIMAL, L::PRESENT_SRC_KHR);
+                colour_layout(d, cmd, swap, L::TRANSFER_DST_OPTIMAL, L::PRESENT_SRC_KHR);
             }
             d.end_command_buffer(cmd).map_err(|x| x.to_string())?;
             let (cmds, waits, signals) = ([cmd], [self.acquired[slot]], [self.rendered[image as usize]]);
@@ -542,28 +542,6 @@ unsafe fn full_barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
     unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&mb)) };
 }
 
-unsafe fn layout(
-    d: &ash::Device,
-    cmd: vk::CommandBuffer,
-    image: vk::Image,
-    old: vk::ImageLayout,
-    new: vk::ImageLayout,
-) {
-    let range =
-        vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1);
-    let ib = [vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-        .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-        .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
-        .old_layout(old)
-        .new_layout(new)
-        .image(image)
-        .subresource_range(range)];
-    // SAFETY: the caller records into `cmd` and names the image's layout.
-    unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&ib)) };
-}
-
 fn attachment(
     view: vk::ImageView,
     layout: vk::ImageLayout,
@@ -575,4 +553,17 @@ fn attachment(
         .load_op(if clear.is_some() { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD })
         .store_op(vk::AttachmentStoreOp::STORE)
         .clear_value(clear.unwrap_or_default())
+}
+
+/// # Safety
+/// As `targets::barrier`'s, for a colour image.
+unsafe fn colour_layout(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+) {
+    // SAFETY: as the caller promises.
+    unsafe { barrier(d, cmd, image, vk::ImageAspectFlags::COLOR, old, new) };
 }

@@ -185,6 +185,9 @@ pub fn rest_layout(t: &Target) -> vk::ImageLayout {
 }
 
 /// A target's layout change, all of it (both aspects of the depth).
+///
+/// # Safety
+/// `cmd` is recording outside a rendering scope; `old` is the target's layout.
 pub unsafe fn transition(
     d: &ash::Device,
     cmd: vk::CommandBuffer,
@@ -197,6 +200,22 @@ pub unsafe fn transition(
     } else {
         vk::ImageAspectFlags::COLOR
     };
+    // SAFETY: as the caller promises.
+    unsafe { barrier(d, cmd, t.image, aspect, old, new) };
+}
+
+/// A full barrier with an image's layout change (one mip, one layer).
+///
+/// # Safety
+/// `cmd` is recording outside a rendering scope; `old` is the image's layout.
+pub unsafe fn barrier(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    aspect: vk::ImageAspectFlags,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+) {
     let range = vk::ImageSubresourceRange::default().aspect_mask(aspect).level_count(1).layer_count(1);
     let ib = [vk::ImageMemoryBarrier2::default()
         .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
@@ -205,7 +224,7 @@ pub unsafe fn transition(
         .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
         .old_layout(old)
         .new_layout(new)
-        .image(t.image)
+        .image(image)
         .subresource_range(range)];
     // SAFETY: the caller records into `cmd` and names the image's layout.
     unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&ib)) };

@@ -158,21 +158,7 @@ impl<'a> Recorder<'a> {
         // A layout transition rewrites the image.
         self.note_image(image, true, None);
         assert_ne!(new, vk::ImageLayout::UNDEFINED, "{}: cannot transition to UNDEFINED", image.name);
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(aspect_of(image.format))
-            .level_count(vk::REMAINING_MIP_LEVELS)
-            .layer_count(vk::REMAINING_ARRAY_LAYERS);
-        let ib = [vk::ImageMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
-            .old_layout(old)
-            .new_layout(new)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(image.raw)
-            .subresource_range(range)];
+        let ib = [image_barrier(image, None, old, new)];
         let dep = vk::DependencyInfo::default().image_memory_barriers(&ib);
         // SAFETY: image is live for the borrow; `old` is its tracked layout
         // (or UNDEFINED, always valid); outside rendering (checked).
@@ -519,4 +505,32 @@ fn indirect_range(args: &Buffer, offset: u64, size: u64) {
 fn index_buffer(indices: &Buffer, count: u32) {
     assert!(indices.usage.contains(vk::BufferUsageFlags::INDEX_BUFFER), "{} lacks INDEX_BUFFER usage", indices.name);
     assert!(u64::from(count) * 4 <= indices.size, "{count} indices overrun {}", indices.name);
+}
+
+/// A full barrier (every earlier write before every later access) with a
+/// layout change of every mip of `image`'s layer `layer`, or of all its
+/// layers.
+pub(super) fn image_barrier(
+    image: &Image,
+    layer: Option<u32>,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+) -> vk::ImageMemoryBarrier2<'static> {
+    let range =
+        vk::ImageSubresourceRange::default().aspect_mask(aspect_of(image.format)).level_count(vk::REMAINING_MIP_LEVELS);
+    let range = match layer {
+        Some(l) => range.base_array_layer(l).layer_count(1),
+        None => range.layer_count(vk::REMAINING_ARRAY_LAYERS),
+    };
+    vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+        .old_layout(old)
+        .new_layout(new)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image.raw)
+        .subresource_range(range)
 }

@@ -195,22 +195,7 @@ impl Recorder<'_> {
         }
         let barrier = |img: &Image, layer: u32, old, new| {
             assert!(layer < img.array_layers, "layer {layer} of {}", img.name);
-            let range = vk::ImageSubresourceRange::default()
-                .aspect_mask(super::resources::aspect_of(img.format))
-                .level_count(vk::REMAINING_MIP_LEVELS)
-                .base_array_layer(layer)
-                .layer_count(1);
-            vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
-                .old_layout(old)
-                .new_layout(new)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .image(img.raw)
-                .subresource_range(range)
+            super::commands::image_barrier(img, Some(layer), old, new)
         };
         self.note_buffer(src, false);
         for &(_, img, layer) in copies {
