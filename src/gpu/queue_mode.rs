@@ -76,13 +76,15 @@ impl QueueMode {
                 )
             }
             QueueMode::SplitOneQueue => format!(
-                "split: compute passes in their own command buffer on the graphics queue (family {}), \
-                 graphics waits on a timeline semaphore",
+                "split: compute passes in their own command buffer on the graphics queue (family {}); \
+                 graphics waits for them, they for the graphics {COMPUTE_LAG} frames back (timeline \
+                 semaphores)",
                 info.graphics_family
             ),
             QueueMode::AsyncCompute => format!(
-                "async: compute passes on the compute queue (family {}), graphics (family {}) waits on a \
-                 timeline semaphore",
+                "async: compute passes on the compute queue (family {}) beside the last frame's \
+                 graphics (family {}); graphics waits for them, they for the graphics {COMPUTE_LAG} \
+                 frames back (timeline semaphores)",
                 info.compute_family, info.graphics_family
             ),
         }
