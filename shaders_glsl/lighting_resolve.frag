@@ -19,6 +19,7 @@
 // nothing into (the engine's own, under a loaded depth) is left as is.
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
+#include "srgb.glsl"
 
 // Stephen Hill's fit of the ACES RRT + sRGB ODT (render/tonemap.rs): into
 // the RRT's input space (sRGB to AP1 with the RRT's saturation), a rational
@@ -36,9 +37,6 @@ vec3 aces_fitted(vec3 c) {
     return clamp(fit * from_odt, 0.0, 1.0);
 }
 
-vec3 srgb_encode(vec3 c) {
-    return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
-}
 
 layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
 layout(set = 0, binding = 1) uniform texture2D gb_albedo;
@@ -120,10 +118,6 @@ layout(location = 0) out vec4 hdr;
 #else
 layout(location = 0) out vec4 display;
 layout(location = 1) out vec4 hdr;
-
-vec3 srgb_decode(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
-}
 
 // The display encoding of linear radiance `lit`.
 vec3 display_encoded(vec3 lit) {

@@ -10,6 +10,7 @@
 #define VISTA_ENGINE_GBUFFER_GLSL
 #include "constants.glsl"
 #include "octahedral.glsl"
+#include "srgb.glsl"
 
 layout(constant_id = 16) const uint GB_CHANNELS0 = 0u;
 layout(constant_id = 17) const uint GB_CHANNELS1 = 0u;
@@ -22,14 +23,9 @@ layout(location = 1) out vec4 engine_gb1;
 layout(location = 2) out vec4 engine_gb2;
 layout(location = 3) out vec4 engine_gb3;
 
-vec3 gb_srgb_encode(vec3 c) {
-    c = clamp(c, 0.0, 1.0);
-    return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
-}
-
 // One attachment's texel: `channels` its nibble codes, `flags` its byte.
 vec4 gb_attachment(uint channels, uint flags, vec3 base, vec3 normal, float roughness, uint material) {
-    vec3 b = (flags & GB_FLAG_SRGB_ENCODE) != 0u ? gb_srgb_encode(base) : base;
+    vec3 b = (flags & GB_FLAG_SRGB_ENCODE) != 0u ? srgb_encode(clamp(base, 0.0, 1.0)) : base;
     vec3 n = (flags & GB_FLAG_SIGNED) != 0u ? normal : normal * 0.5 + 0.5;
     vec4 texel = vec4(0.0);
     for (uint k = 0u; k < 4u; ++k) {

@@ -748,18 +748,13 @@ mod tests {
     }
 
     #[test]
-    fn builds_are_deterministic_and_fast() {
-        let t = std::time::Instant::now();
+    fn builds_are_deterministic_and_hold_the_full_chain() {
         let a = DetailImages::build(&MaterialSet::default(), 256).unwrap();
-        let took = t.elapsed();
-        let t = std::time::Instant::now();
         let b = DetailImages::build(&MaterialSet::default(), 256).unwrap();
-        let took = took.min(t.elapsed());
-        assert!(a == b);
-        // The budget is well under 100 ms on an idle machine; the bound is
-        // loose because tests share the cores.
-        assert!(took.as_millis() < 1000, "4 sets at 256 took {took:?}");
-        eprintln!("4 procedural sets at 256 with mips: {took:?}");
+        assert!(a == b, "two builds of the same set differ");
+        // 256 down to 1x1 (mip_chain_shapes_and_sizes checks each level;
+        // the speed is for a bench to measure, not a test).
+        assert_eq!((a.size, a.mips, a.albedo.len()), (256, 9, 9));
     }
 
     fn write_set(dir: &Path, side: u32) -> MaterialSet {

@@ -95,9 +95,7 @@ fn decode(layout: &GbufferLayout, capture: &Capture) -> Vec<DecodedSurface> {
 }
 
 fn srgb8(linear: f32) -> u8 {
-    let c = linear.clamp(0.0, 1.0);
-    let e = if c <= 0.0031308 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
-    (e * 255.0).round() as u8
+    (vista::reference::tonemap::srgb_encode(f64::from(linear.clamp(0.0, 1.0))) * 255.0).round() as u8
 }
 
 fn exr_io(e: exr::error::Error) -> std::io::Error {
