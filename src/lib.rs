@@ -20,6 +20,7 @@
 
 #[cfg(feature = "bench")]
 pub mod bench;
+pub mod effects;
 pub mod error;
 pub mod frame;
 pub mod gpu;
@@ -28,6 +29,7 @@ pub mod passes;
 #[cfg(feature = "reference")]
 pub mod reference;
 pub mod render;
+pub mod scene;
 pub mod shaders;
 #[cfg(feature = "stability")]
 pub mod stability;

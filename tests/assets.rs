@@ -9,12 +9,12 @@ mod common;
 use common::gpu_test;
 use common::terrain::{small_world as world, view, Rig, Surface};
 use glam::Vec3;
+use vista::effects::assets::{rock_mesh, Asset, AssetKind};
 use vista::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Resource, Sampler, SamplerDesc,
 };
 use vista::passes::cull_patches::CullStages;
 use vista::passes::terrain_query::VistaTerrain;
-use vista::render::assets::{rock_mesh, Asset, AssetKind};
 use vista::render::{Effect, Effects, RendererOptions, View};
 use vista::shaders::consts::GBUFFER_ASSET;
 use vista::shaders::terrain_blend_probe as sh;

@@ -10,9 +10,9 @@ mod common;
 use common::gpu_test;
 use common::terrain::{small_world as world, view, Rig, Surface};
 use glam::DVec3;
+use vista::effects::atmosphere::AtmosphereParams;
 use vista::passes::cull_patches::CullStages;
 use vista::reference::atmosphere::{inscatter, sky, transmittance};
-use vista::render::atmosphere::AtmosphereParams;
 use vista::render::{linear_depth, Effect, Effects, RendererOptions, View};
 
 const SIZE: [u32; 2] = [96, 64];

@@ -10,10 +10,10 @@ mod common;
 use common::gpu_test;
 use common::terrain::{small_world as world, view, Rig, Surface};
 use std::collections::{BTreeMap, BTreeSet};
+use vista::effects::cliff_meshes::{CliffMeshParams, CELL_VERTICES};
 use vista::gpu::Context;
 use vista::passes::cull_patches::CullStages;
 use vista::passes::terrain_query::{TerrainQuery, VistaTerrain};
-use vista::render::cliff_meshes::{CliffMeshParams, CELL_VERTICES};
 use vista::render::{Effect, Effects, RendererOptions, View};
 use vista::shaders::consts::{CLIFF_CELL_QUADS, FLAVOUR_FAR_CLIFF, FLAVOUR_NEAR_CLIFF};
 

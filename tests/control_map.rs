@@ -104,7 +104,7 @@ fn render(
     surface: Surface,
     fx: Effects,
     v: &View,
-) -> (Capture, vista::render::gbuffer::GBufferCapture, [u32; 3]) {
+) -> (Capture, vista::targets::gbuffer::GBufferCapture, [u32; 3]) {
     let bake = vista::world::BakeSettings { format: PayloadFormat::Rgba8, ..Default::default() };
     let options = RendererOptions {
         effects: fx,

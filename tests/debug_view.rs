@@ -11,7 +11,7 @@ use common::terrain::{small_world, view, Rig, Surface};
 use std::collections::BTreeSet;
 use vista::passes::cull_patches::CullStages;
 use vista::passes::debug_view::DebugView;
-use vista::render::graph::{FramePass, Outcome, Skip};
+use vista::scene::graph::{FramePass, Outcome, Skip};
 use vista::shaders::consts as k;
 
 const SIZE: [u32; 2] = [128, 80];

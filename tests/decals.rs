@@ -9,14 +9,14 @@ use common::gpu_test;
 use common::terrain::{small_world as world, view, Rig, Surface};
 use glam::DVec2;
 use std::collections::{BTreeMap, BTreeSet};
+use vista::effects::virtual_texture::decals::{Decal, DecalSet, DecalShape, DecalTexture};
+use vista::effects::virtual_texture::layout::{PageKey, VtLayout, PADDED_TILE};
+use vista::effects::virtual_texture::state::PageEvent;
 use vista::gpu::Context;
 use vista::passes::cull_patches::CullStages;
 use vista::render::offscreen::Capture;
-use vista::render::view::TerrainViewGpu;
-use vista::render::virtual_texture::decals::{Decal, DecalSet, DecalShape, DecalTexture};
-use vista::render::virtual_texture::layout::{PageKey, VtLayout, PADDED_TILE};
-use vista::render::virtual_texture::state::PageEvent;
 use vista::render::{Effect, Effects, RendererOptions, View};
+use vista::scene::view::TerrainViewGpu;
 use vista::shaders::consts::{DECAL_TEXELS, FLAVOUR_VIRTUAL_TEXTURE};
 
 const SIZE: [u32; 2] = [256, 192];

@@ -10,11 +10,11 @@ use common::gpu_test;
 use common::terrain::{small_world as world, view, Rig, Surface};
 use vista::passes::cull_patches::CullStages;
 use vista::reference::classify_tiles_cpu;
-use vista::render::gbuffer::GBufferCapture;
 use vista::render::{Effect, Effects, RendererOptions, Shading, View};
 use vista::shaders::consts::{
     FLAVOUR_FAR_ATLAS, FLAVOUR_FAR_CLIFF, FLAVOUR_NEAR_CLIFF, FLAVOUR_SPLAT, FLAVOUR_VARIANTS, TILE_SIZE,
 };
+use vista::targets::gbuffer::GBufferCapture;
 
 /// Not a multiple of the tile size: the last tile column and row are partial.
 const SIZE: [u32; 2] = [100, 60];

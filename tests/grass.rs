@@ -10,14 +10,14 @@ mod common;
 use common::gpu_test;
 use common::terrain::{small_world as world, view, Rig, Surface};
 use std::collections::BTreeMap;
+use vista::effects::grass::gpu::GrassInstanceGpu;
+use vista::effects::grass::GrassParams;
 use vista::gpu::Context;
 use vista::passes::cull_patches::CullStages;
 use vista::passes::terrain_query::{TerrainQuery, VistaTerrain};
 use vista::reference::grass::{place_cpu, Ground, TuftCpu};
-use vista::render::grass::gpu::GrassInstanceGpu;
-use vista::render::grass::GrassParams;
-use vista::render::view::TerrainViewGpu;
 use vista::render::{Effect, Effects, RendererOptions, View};
+use vista::scene::view::TerrainViewGpu;
 use vista::shaders::consts::GBUFFER_GRASS;
 use vista::terrain::quadtree::{EMPTY, INVALID};
 use vista::world::Hole;
@@ -282,7 +282,7 @@ fn off_nothing_is_built_and_the_image_is_the_one_without_it() {
 /// coverage there), and the pigment map takes the decal's colour.
 #[test]
 fn no_grass_grows_under_an_opaque_decal() {
-    use vista::render::virtual_texture::decals::{Decal, DecalSet, DecalShape, DecalTexture};
+    use vista::effects::virtual_texture::decals::{Decal, DecalSet, DecalShape, DecalTexture};
     gpu_test(|ctx| {
         let n = vista::shaders::consts::DECAL_TEXELS;
         let texture =

@@ -103,7 +103,7 @@ fn the_drawn_surface_passes_through_every_post() {
                         continue;
                     }
                     let ray = v.ray([f64::from(x) + 0.5, f64::from(y) + 0.5]);
-                    let lin = f64::from(vista::render::view::linear_depth(d, v.near_m));
+                    let lin = f64::from(vista::scene::view::linear_depth(d, v.near_m));
                     let p = glam::DVec3::from(v.camera.position_m) + ray * (lin / ray.dot(forward));
                     // Post (i, j) is pixel column i, row h - 1 - j, at ((i + .5) 2, (j + .5) 2).
                     let (u, t) = (p.x / 2.0 - 0.5, p.y / 2.0 - 0.5);

@@ -16,9 +16,9 @@ use vista::gpu::vk;
 use vista::passes::cull_patches::CullStages;
 use vista::passes::terrain_geometry::DepthOptions;
 use vista::reference::{flip_map, flip_stats};
-use vista::render::gbuffer::GBufferCapture;
 use vista::render::offscreen::{Capture, EngineWall};
 use vista::render::{Effect, Effects, Lighting, RendererOptions, View};
+use vista::targets::gbuffer::GBufferCapture;
 use vista::targets::gbuffer_layout::texel_bytes;
 use vista::targets::{GbufferLayout, Output};
 

@@ -183,14 +183,14 @@ fn rust_twins_match_reflected_layouts() {
     );
     check_layout(
         "ControlGpu",
-        fields!(vista::render::materials::ControlGpu: layers, tiling_m, threshold, sharpness, slope_damp, normal_damp,
+        fields!(vista::effects::materials::ControlGpu: layers, tiling_m, threshold, sharpness, slope_damp, normal_damp,
             pad),
         layouts::CONTROL_TEXTURE,
         structs::CONTROL_TEXTURE,
     );
     check_layout(
         "MaterialGpu",
-        fields!(vista::render::materials::MaterialGpu: layers, tiling_m, cos_rot, sin_rot),
+        fields!(vista::effects::materials::MaterialGpu: layers, tiling_m, cos_rot, sin_rot),
         layouts::TERRAIN_MATERIAL,
         structs::TERRAIN_MATERIAL,
     );

@@ -9,12 +9,12 @@ mod common;
 use common::gpu_test;
 use common::terrain::{view, Rig, Surface};
 use glam::{DVec2, DVec3};
+use vista::effects::shadows::sun_shadows::ShadowParams;
 use vista::gpu::{Context, LiveObjects};
 use vista::passes::cull_patches::CullStages;
-use vista::passes::sun_shadows::ShadowParams;
 use vista::reference::sun_shadow::{texel_position, March, NONE};
-use vista::render::graph::{FramePass, Outcome, Skip};
 use vista::render::{frame_report, Effect, Effects, PassState, RendererOptions, View};
+use vista::scene::graph::{FramePass, Outcome, Skip};
 use vista::world::{NodeId, WorldDesc};
 
 const SIZE: [u32; 2] = [128, 128];
@@ -243,7 +243,7 @@ fn shadows_off_build_nothing_and_on_darken_only_the_shadow() {
 /// node's texture by then) and the shadows show only once all are done.
 #[test]
 fn switched_off_shadows_skip_their_pass_and_return_once_every_node_is_redone() {
-    use vista::passes::sun_shadows::MAX_UPDATE_BUDGET;
+    use vista::effects::shadows::sun_shadows::MAX_UPDATE_BUDGET;
     gpu_test(|ctx| {
         let mut rig = Rig::with_options(ctx, world(), CONE, vec![], SIZE, false, options(15.0, true));
         let v = over_cone();

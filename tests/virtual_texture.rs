@@ -17,8 +17,8 @@ use vista::passes::cull_patches::CullStages;
 use vista::reference::vt_feedback::{page_requests, FeedbackInputs};
 use vista::reference::{flip_map, flip_stats};
 use vista::render::offscreen::Capture;
-use vista::render::view::TerrainViewGpu;
 use vista::render::{Effect, Effects, RendererOptions, View};
+use vista::scene::view::TerrainViewGpu;
 use vista::shaders::consts::{VT_MAX_LEVEL, VT_TILE_BORDER, VT_TILE_TEXELS};
 use vista::shaders::vt_probe as probe_sh;
 
@@ -107,7 +107,7 @@ fn page_requests_equal_the_cpu_twin() {
 /// Runs `vt_probe` over `points` (x, y, level): per point (flags: 1 the
 /// region has a sub-texture, 2 a page was found; the level found << 8),
 /// the albedo and detail texels under it, and the sub-texture's K.
-fn probe(ctx: &Context, vt: &vista::render::virtual_texture::VirtualTexture, points: &[[f32; 4]]) -> Vec<[u32; 4]> {
+fn probe(ctx: &Context, vt: &vista::effects::virtual_texture::VirtualTexture, points: &[[f32; 4]]) -> Vec<[u32; 4]> {
     let host = |name: &str, bytes: &[u8], location| {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let mut b = Buffer::new(ctx, &BufferDesc { name, size: bytes.len() as u64, usage, location }).unwrap();
@@ -277,7 +277,7 @@ fn a_fly_through_keeps_the_page_budget_and_the_way_back_renders_only_what_was_ev
         let vt = rig.renderer.virtual_texture.as_ref().unwrap();
         let back = vt.state.history.clone().unwrap();
         let c = vt.counters();
-        use vista::render::virtual_texture::state::PageEvent;
+        use vista::effects::virtual_texture::state::PageEvent;
         let dropped: std::collections::HashSet<_> = away
             .iter()
             .chain(&back)

@@ -3,7 +3,7 @@
 
 use crate::reference::{flip_map, FinestSurface, ReferenceImage};
 use crate::render::offscreen::Capture;
-use crate::render::view::{linear_depth, View};
+use crate::scene::view::{linear_depth, View};
 use crate::world::{HeightSource, WorldDesc};
 use glam::DVec3;
 use serde::Serialize;

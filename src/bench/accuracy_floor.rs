@@ -21,7 +21,7 @@
 //! these grids only: an irregular triangulation is not limited to them.
 
 use crate::reference::{FinestSurface, ReferenceImage};
-use crate::render::view::View;
+use crate::scene::view::View;
 use crate::shaders::consts::REFINE_LEVELS;
 use crate::world::{HeightSource, WorldDesc, PATCH_QUADS};
 use glam::DVec3;
@@ -209,8 +209,8 @@ fn footprint_m2(reference: &ReferenceImage, view: &View, x: u32, y: u32) -> Opti
 mod tests {
     use super::*;
     use crate::reference::{RayCaster, RaycastConfig};
-    use crate::render::view::{Camera, DEFAULT_NEAR_M};
     use crate::render::Lighting;
+    use crate::scene::view::{Camera, DEFAULT_NEAR_M};
 
     struct Plane;
     impl HeightSource for Plane {

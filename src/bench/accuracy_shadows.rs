@@ -15,14 +15,14 @@
 
 use super::accuracy::{Run, CLAY_ALBEDO};
 use super::accuracy_error::terrain_flip_mean;
+use crate::effects::shadows::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
+use crate::effects::{Effect, Effects};
 use crate::error::Result;
 use crate::frame::profiler::summarize;
-use crate::passes::sun_shadows::{ShadowParams, MAX_UPDATE_BUDGET};
 use crate::reference::octahedral::oct_decode_unorm8;
 use crate::reference::ReferenceImage;
-use crate::render::effects::{Effect, Effects};
-use crate::render::view::{Lighting, View};
 use crate::render::{RendererOptions, TerrainRenderer};
+use crate::scene::view::{Lighting, View};
 use glam::DVec3;
 use serde::Serialize;
 

@@ -7,13 +7,13 @@
 //! virtual texture's passes and of the tile shading beside direct splat's.
 
 use super::accuracy::Run;
+use crate::effects::{Effect, Effects};
 use crate::error::Result;
 use crate::frame::profiler::summarize;
 use crate::frame::FrameTimings;
 use crate::reference::{flip_map, flip_stats};
-use crate::render::effects::{Effect, Effects};
-use crate::render::view::View;
 use crate::render::{RendererOptions, TerrainRenderer};
+use crate::scene::view::View;
 use serde::Serialize;
 
 /// The grid the virtual-texture rows sweep.

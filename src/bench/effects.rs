@@ -5,15 +5,15 @@
 //! variant: the GPU frame time (sum of per-pass medians after warm-up) and
 //! the GPU memory the renderer owns.
 
+use crate::effects::{Effect, Effects};
 use crate::error::Result;
 use crate::frame::profiler::summarize;
 use crate::frame::FrameTimings;
 use crate::gpu::Context;
-use crate::render::effects::{Effect, Effects};
 use crate::render::offscreen::Offscreen;
 use crate::render::report::frame_report;
-use crate::render::view::View;
 use crate::render::{RendererOptions, TerrainRenderer};
+use crate::scene::view::View;
 use crate::terrain::TerrainOptions;
 use crate::world::{HeightSource, Hole, WorldDesc};
 use serde::Serialize;
@@ -34,9 +34,9 @@ pub struct EffectsBenchConfig {
     /// made under `cache_dir`).
     pub errors: Option<std::sync::Arc<crate::world::ErrorTree>>,
     /// The scene's decals (effect `decals`).
-    pub decals: crate::render::virtual_texture::decals::DecalSet,
+    pub decals: crate::effects::virtual_texture::decals::DecalSet,
     /// The scene's assets (effect `assets`).
-    pub assets: Vec<crate::render::assets::Asset>,
+    pub assets: Vec<crate::effects::assets::Asset>,
 }
 
 #[derive(Debug, Clone, Serialize)]

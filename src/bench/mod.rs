@@ -26,8 +26,8 @@ use crate::error::Result;
 use crate::frame::FrameTimings;
 use crate::gpu::Context;
 use crate::render::offscreen::Offscreen;
-use crate::render::view::View;
 use crate::render::TerrainRenderer;
+use crate::scene::view::View;
 
 /// Warm-up then `frames` measured frames of one renderer; the timings of
 /// the measured frames only (they come back late: collected after a wait).

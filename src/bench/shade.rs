@@ -5,6 +5,7 @@
 //! one draw for a one-pipeline shader (it needs no classification; its
 //! `classify_tiles`, which only fills one list, is reported apart).
 
+use crate::effects::Effects;
 use crate::error::Result;
 use crate::frame::profiler::summarize;
 use crate::frame::FrameTimings;
@@ -13,11 +14,10 @@ use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::gbuffer_tiles::variant_label;
 use crate::passes::lighting_resolve::LightingResolve;
 use crate::reference::image_metric::{flip_map, flip_stats, FlipStats};
-use crate::render::effects::Effects;
 use crate::render::offscreen::Offscreen;
-use crate::render::shading::{variant_name, Shading};
-use crate::render::view::View;
 use crate::render::{RendererOptions, TerrainRenderer};
+use crate::scene::shading::{variant_name, Shading};
+use crate::scene::view::View;
 use crate::shaders::consts::{FLAVOUR_FAR_CLIFF, FLAVOUR_NEAR_CLIFF};
 use crate::terrain::TerrainOptions;
 use crate::world::{HeightSource, Hole, WorldDesc};

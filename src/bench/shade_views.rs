@@ -9,8 +9,8 @@
 //! starts giving cliff shading. It is an estimate for choosing views: the
 //! benchmark reports the tile counts the GPU classification measured.
 
-use crate::render::shading::ShadeRules;
-use crate::render::view::Camera;
+use crate::scene::shading::ShadeRules;
+use crate::scene::view::Camera;
 use crate::world::{HeightSource, WorldDesc};
 use glam::DVec3;
 use rayon::prelude::*;

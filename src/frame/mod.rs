@@ -10,7 +10,7 @@ use crate::gpu::{Context, FrameCommands, QueueMode, Recorder, TimestampPool};
 use serde::Serialize;
 
 /// A queue kind: where a pass belongs when compute is split off
-/// ([`FramePass::queue`](crate::render::graph::FramePass::queue)), or where
+/// ([`FramePass::queue`](crate::scene::graph::FramePass::queue)), or where
 /// it actually ran ([`PassTiming::queue`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]

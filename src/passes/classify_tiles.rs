@@ -10,9 +10,9 @@ use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
 };
 use crate::passes::cull_patches::nearest_sampler;
-use crate::render::gbuffer::GBuffer;
 use crate::shaders::consts::{FLAVOUR_VARIANTS, TILE_SIZE};
 use crate::shaders::{classify_tiles as sh, structs};
+use crate::targets::gbuffer::GBuffer;
 
 /// Host twin of `TilePush` (tile_lists.glsl).
 #[repr(C)]

@@ -10,9 +10,9 @@ use crate::error::Result;
 use crate::gpu::{vk, ColorTarget, Context, GraphicsPipelineDesc, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::terrain_geometry::RenderTargets;
-use crate::render::gbuffer::{classification_palette, GBuffer, FLAVOUR_COUNT};
 use crate::shaders::consts as k;
 use crate::shaders::{debug_view_frag as fs, debug_view_vert as vs};
+use crate::targets::gbuffer::{classification_palette, GBuffer, FLAVOUR_COUNT};
 use serde::Serialize;
 
 /// What a debug view shows at terrain pixels.

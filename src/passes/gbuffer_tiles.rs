@@ -20,10 +20,10 @@ use crate::passes::classify_tiles::{TileLists, TilePush};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::terrain_geometry::{RenderTargets, TERRAIN_ONLY};
 use crate::passes::terrain_query::VistaTerrain;
-use crate::render::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
-use crate::render::shading::variant_name;
+use crate::scene::shading::variant_name;
 use crate::shaders::consts::FLAVOUR_VARIANTS;
 use crate::shaders::{gbuffer_tiles_frag as fs, gbuffer_tiles_vert as vs, structs};
+use crate::targets::gbuffer::{GBuffer, ALBEDO_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use crate::targets::GbufferLayout;
 use crate::terrain::gpu_quadtree::{
     GpuQuadtree, ATLAS_ALBEDO, ATLAS_CONTROL, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL, ATLAS_SPLAT,

@@ -19,16 +19,15 @@
 
 use crate::error::Result;
 use crate::gpu::{
-    depth_layout, vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Pipeline, Recorder, Resource,
-    Sampler,
+    depth_layout, vk, Buffer, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc, Image, Pipeline, Recorder,
+    Resource, Sampler,
 };
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::sector_data::SectorData;
-use crate::passes::sun_shadows::SunShadows;
 use crate::passes::terrain_geometry::RenderTargets;
 use crate::passes::terrain_query::VistaTerrain;
-use crate::render::gbuffer::{GBuffer, HDR_FORMAT};
 use crate::shaders::{lighting_resolve_frag as fs, lighting_resolve_vert as vs};
+use crate::targets::gbuffer::{GBuffer, HDR_FORMAT};
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT};
 
 /// Host twin of `LightingPush` (lighting_resolve.frag, variants SHADOWS
@@ -40,8 +39,17 @@ pub struct LightingPush {
     /// x: penumbra height per metre of occluder distance; y: the shadow
     /// texture's side; zw: unused.
     pub shadow: [f32; 4],
-    /// [`AtmosphereParams::gpu`](crate::render::atmosphere::AtmosphereParams::gpu).
+    /// [`AtmosphereParams::gpu`](crate::effects::atmosphere::AtmosphereParams::gpu).
     pub fog: [[f32; 4]; 3],
+}
+
+/// What effect `shadows` gives the resolve: the per-node shadow atlas,
+/// the penumbra's height per metre of occluder distance and the atlas'
+/// texels per node side.
+pub struct ShadowInput<'a> {
+    pub atlas: &'a Image,
+    pub penumbra: f32,
+    pub resolution: u32,
 }
 
 /// What the SHADOWS and ATMOSPHERE variants read beyond the G-buffer.
@@ -49,8 +57,8 @@ pub struct ResolveInputs<'a> {
     pub terrain: VistaTerrain,
     pub sector_data: &'a SectorData,
     pub tree: &'a GpuQuadtree,
-    /// The shadow pass and the sun's elevation (degrees), with shadows.
-    pub shadows: Option<(&'a SunShadows, f64)>,
+    /// Effect `shadows`: its atlas and penumbra.
+    pub shadows: Option<ShadowInput<'a>>,
     /// The fog's push vectors, with the atmosphere.
     pub fog: Option<[[f32; 4]; 3]>,
 }
@@ -225,14 +233,13 @@ impl LightingResolve {
         let depth_read = depth_layout(targets.depth.format, true);
         bindings.push((fs::DEPTH_TARGET, Resource::Image(targets.depth, depth_read)));
         if shadows_on {
-            let (shadows, elevation_deg) = inputs.shadows.expect("built with shadows");
+            let shadows = inputs.shadows.as_ref().expect("built with shadows");
             bindings.extend([
                 (fs::SECTOR_DATA, Resource::Buffer(inputs.sector_data.buffer())),
                 (fs::HEIGHT_ATLAS, Resource::Image(inputs.tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
-                (fs::SHADOW_ATLAS, Resource::Image(&shadows.atlas, vk::ImageLayout::GENERAL)),
+                (fs::SHADOW_ATLAS, Resource::Image(shadows.atlas, vk::ImageLayout::GENERAL)),
             ]);
-            let p = &shadows.params;
-            push.shadow = [p.penumbra(elevation_deg), p.resolution as f32, 0.0, 0.0];
+            push.shadow = [shadows.penumbra, shadows.resolution as f32, 0.0, 0.0];
         }
         if atmosphere_on {
             push.fog = inputs.fog.expect("built with the atmosphere");

@@ -12,8 +12,8 @@ use crate::gpu::{
     depth_layout, vk, Binding, Buffer, BufferDesc, ColorTarget, Context, DepthTarget, GraphicsPipelineDesc,
     MemoryLocation, Pipeline, Recorder, Resource, Sampler, SamplerDesc, ShaderInfo, StencilDesc,
 };
-use crate::render::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT};
 use crate::shaders::{terrain_geometry_frag as fs, terrain_geometry_vert as vs};
+use crate::targets::gbuffer::{GBuffer, CLASSIFICATION_FORMAT, GEOMETRY_NORMALS_FORMAT, PATCH_INFO_FORMAT};
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_NORMAL};
 use crate::terrain::patch_grid::diamond_indices;
 use crate::world::{PATCHES_PER_NODE_SIDE, PATCH_QUADS};

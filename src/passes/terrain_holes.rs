@@ -11,8 +11,8 @@ use crate::passes::cull_patches::PatchLists;
 use crate::passes::terrain_geometry::{
     begin_geometry, terrain_pipeline, DepthOptions, RenderTargets, TerrainDrawPush, TerrainGeometry,
 };
-use crate::render::gbuffer::GBuffer;
 use crate::shaders::terrain_holes_vert as vs;
+use crate::targets::gbuffer::GBuffer;
 use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_ALBEDO, ATLAS_LAYOUT};
 
 pub struct TerrainHoles {

@@ -1,9 +1,9 @@
-//! The atmosphere model of [`crate::render::atmosphere`] in f64: what
+//! The atmosphere model of [`crate::effects::atmosphere`] in f64: what
 //! `lighting_resolve` (atmosphere.glsl) must reproduce, and what the
 //! reference ray-caster applies.
 
-use crate::render::atmosphere::AtmosphereParams;
-use crate::render::view::Lighting;
+use crate::effects::atmosphere::AtmosphereParams;
+use crate::scene::view::Lighting;
 use glam::DVec3;
 
 /// Optical depth of the segment from `a` to `b` (world metres) through the

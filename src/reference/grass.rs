@@ -2,7 +2,7 @@
 //! point and `grass_place`'s keep test, step for step, so the tests can
 //! compare every tuft the GPU placed.
 
-use crate::render::grass::GrassParams;
+use crate::effects::grass::GrassParams;
 
 /// PCG-based 3D integer hash, one lane kept (hashed_noise.glsl's `pcg3d_x`).
 pub fn pcg3d_x(v: [u32; 3]) -> u32 {

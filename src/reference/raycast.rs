@@ -32,8 +32,8 @@
 //! Tests check it against closed-form intersections (tests/accuracy.rs)
 //! and against brute-force fine marching on the procedural world (here).
 
-use crate::render::atmosphere::AtmosphereParams;
-use crate::render::view::{Lighting, View};
+use crate::effects::atmosphere::AtmosphereParams;
+use crate::scene::view::{Lighting, View};
 use crate::world::{HeightSource, WorldDesc};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -496,7 +496,7 @@ mod tests {
         let cfg = RaycastConfig { colour_samples: 1, shadow_rays: true, ..RaycastConfig::default() };
         let rc = RayCaster::new(&Cone, &w, cfg);
         let light = Lighting { sun_azimuth_deg: 250.0, sun_elevation_deg: 20.0, ..Lighting::default() };
-        let camera = crate::render::view::Camera { position_m: [256.0, 200.0, 300.0], yaw_deg: 60.0, pitch_deg: -60.0 };
+        let camera = crate::scene::view::Camera { position_m: [256.0, 200.0, 300.0], yaw_deg: 60.0, pitch_deg: -60.0 };
         let view = View { camera, fov_y_deg: 60.0, size: [96, 96], target_error_px: 1.0, near_m: 0.1 };
         let img = rc.image(&view, &light, 0.4, [0.0; 4]);
         // The shadow is the union of the cross-sections at each height s

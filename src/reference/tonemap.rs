@@ -4,7 +4,7 @@
 
 use glam::{DMat3, DVec3};
 
-use crate::render::Tonemap;
+use crate::scene::tonemap::Tonemap;
 
 /// Linear HDR radiance to display values in [0, 1] (unrounded).
 pub fn display(tonemap: Tonemap, exposure_ev: f32, rgb: [f64; 3]) -> [f64; 3] {

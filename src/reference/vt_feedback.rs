@@ -7,8 +7,8 @@
 //! `tolerated`, so a test can require every firm request and accept only
 //! those alternatives.
 
-use crate::passes::vt_feedback::VtFeedbackPush;
-use crate::render::view::TerrainViewGpu;
+use crate::effects::virtual_texture::vt_feedback::VtFeedbackPush;
+use crate::scene::view::TerrainViewGpu;
 use crate::shaders::consts::{
     FLAVOUR_VIRTUAL_TEXTURE, OCT_CODE_LAST, VT_FEEDBACK_STRIDE, VT_NONE, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT,
     VT_STATE_HEADER, VT_SUB_K_SHIFT, VT_TILE_TEXELS,

@@ -7,33 +7,33 @@
 //! streaming state ([`FramePasses`]); each pass is logged in the frame's
 //! [`FrameLog`] as the graph expects.
 
+use crate::effects::assets::asset_draw::AssetDraw;
+use crate::effects::assets::AssetResources;
+use crate::effects::cliff_meshes::cliff_mesh_build::CliffBuildPush;
+use crate::effects::cliff_meshes::CliffMeshes;
+use crate::effects::grass::gpu::{Grass, GrassFrame};
+use crate::effects::materials::gpu::MaterialResources;
+use crate::effects::shadows::sun_shadows::{SunShadowJob, SunShadows};
+use crate::effects::virtual_texture::decal_meshes::DecalMeshPass;
+use crate::effects::virtual_texture::{VirtualTexture, VtFrame};
 use crate::frame::{Frame, QueueKind};
 use crate::gpu::{depth_layout, vk, Buffer, Recorder};
-use crate::passes::asset_draw::AssetDraw;
 use crate::passes::classify_tiles::ClassifyTiles;
-use crate::passes::cliff_mesh_build::CliffBuildPush;
 use crate::passes::cull_patches::{CullFrame, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
-use crate::passes::decal_meshes::DecalMeshPass;
 use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles, MaterialBindings};
-use crate::passes::lighting_resolve::{LightingResolve, ResolveInputs};
+use crate::passes::lighting_resolve::{LightingResolve, ResolveInputs, ShadowInput};
 use crate::passes::lod_map::LodMap;
 use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
-use crate::passes::sun_shadows::{SunShadowJob, SunShadows};
 use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::{Traverse, TraverseMode};
-use crate::render::assets::AssetResources;
-use crate::render::cliff_meshes::CliffMeshes;
-use crate::render::gbuffer::GBuffer;
-use crate::render::graph::{FrameLog, FramePass, Skip};
-use crate::render::grass::gpu::{Grass, GrassFrame};
-use crate::render::materials_gpu::MaterialResources;
 use crate::render::renderer::Occlusion;
-use crate::render::view::TerrainViewGpu;
-use crate::render::virtual_texture::{VirtualTexture, VtFrame};
+use crate::scene::graph::{FrameLog, FramePass, Skip};
+use crate::scene::view::TerrainViewGpu;
+use crate::targets::gbuffer::GBuffer;
 use crate::terrain::gpu_quadtree::GpuQuadtree;
 use crate::terrain::selection::TraverseParams;
 use crate::world::WorldDesc;
@@ -330,7 +330,11 @@ impl FramePasses<'_> {
             terrain,
             sector_data: self.sector_data,
             tree,
-            shadows: self.shadows.map(|(s, _, _, elevation)| (s, elevation)),
+            shadows: self.shadows.map(|(s, _, _, elevation)| ShadowInput {
+                atlas: &s.atlas,
+                penumbra: s.params.penumbra(elevation),
+                resolution: s.params.resolution,
+            }),
             fog: self.fog,
         };
         pass(frame, log, FramePass::LightingResolve, |r| resolve.record(r, targets, gb, self.view_buffer, &inputs));

@@ -6,20 +6,20 @@
 //! declaration order, each object retired until the frames using it
 //! completed.
 
+use crate::effects::assets::asset_draw::AssetDraw;
+use crate::effects::assets::AssetResources;
+use crate::effects::cliff_meshes::cliff_mesh_build::CliffBuildPush;
+use crate::effects::cliff_meshes::CliffMeshes;
+use crate::effects::grass::gpu::{Grass, GrassFrame, GrassFrameInputs, UploadedDecals};
+use crate::effects::virtual_texture::decal_mesh::DecalMeshes;
+use crate::effects::virtual_texture::decal_meshes::DecalMeshPass;
+use crate::effects::virtual_texture::decals::{Decal, DecalTexture};
+use crate::effects::{Effect, MaterialsMode};
 use crate::error::{Error, Result};
 use crate::gpu::Context;
-use crate::passes::asset_draw::AssetDraw;
-use crate::passes::cliff_mesh_build::CliffBuildPush;
-use crate::passes::decal_meshes::DecalMeshPass;
 use crate::passes::terrain_geometry::DepthOptions;
-use crate::render::assets::AssetResources;
-use crate::render::cliff_meshes::CliffMeshes;
-use crate::render::effects::{Effect, MaterialsMode};
-use crate::render::graph::{FramePass, PassGraph};
-use crate::render::grass::gpu::{Grass, GrassFrame, GrassFrameInputs, UploadedDecals};
 use crate::render::renderer::RendererOptions;
-use crate::render::virtual_texture::decal_mesh::DecalMeshes;
-use crate::render::virtual_texture::decals::{Decal, DecalTexture};
+use crate::scene::graph::{FramePass, PassGraph};
 use crate::targets::GbufferLayout;
 
 pub struct NearGeometry {

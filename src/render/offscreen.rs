@@ -13,7 +13,7 @@ use crate::gpu::{
 };
 use crate::passes::terrain_geometry::{RenderTargets, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::renderer::TerrainRenderer;
-use crate::render::view::{linear_depth, View};
+use crate::scene::view::{linear_depth, View};
 use crate::targets::gbuffer_layout::texel_bytes;
 use crate::targets::Output;
 use std::time::{Duration, Instant};

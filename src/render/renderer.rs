@@ -13,6 +13,14 @@
 //! Teardown: fields drop in declaration order; every Vulkan object is
 //! retired to the context and destroyed once the frames using it completed.
 
+use crate::effects::assets::Asset;
+use crate::effects::grass::gpu::{Grass, GrassFrameInputs};
+use crate::effects::materials::gpu::MaterialResources;
+use crate::effects::shadows::sun_shadows::{SunShadowJob, SunShadows};
+use crate::effects::shadows::{MarchSun, NodeExtent, ShadowSchedule};
+use crate::effects::virtual_texture::decals::{Decal, DecalSet};
+use crate::effects::virtual_texture::{VirtualTexture, VtCamera, VtFrame};
+use crate::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode, WorldContent};
 use crate::error::{Error, Result};
 use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::frame::{FrameExecutor, FrameTimings, QueueKind};
@@ -28,27 +36,19 @@ use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
-use crate::passes::sun_shadows::{SunShadowJob, SunShadows};
 use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeometry};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::Traverse;
-use crate::render::assets::Asset;
-use crate::render::effects::{decide, Effect, EffectDecision, Effects, FrameSwitches, MaterialsMode, WorldContent};
 use crate::render::frame_passes::FramePasses;
-use crate::render::gbuffer::GBuffer;
-use crate::render::graph::{FramePass, PassGraph, Skip};
-use crate::render::grass::gpu::{Grass, GrassFrameInputs};
-use crate::render::materials_gpu::MaterialResources;
 use crate::render::near_geometry::{NearBuild, NearGeometry};
-use crate::render::shading::{ShadeRules, Shading};
-use crate::render::sun_shadows::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::render::telemetry::TRIANGLES_PER_PATCH;
 use crate::render::telemetry::{CounterLayout, CounterSources, FrameCounters, Telemetry};
-use crate::render::view::{TerrainViewGpu, View};
-use crate::render::virtual_texture::decals::{Decal, DecalSet};
-use crate::render::virtual_texture::{VirtualTexture, VtCamera, VtFrame};
+use crate::scene::graph::{FramePass, PassGraph, Skip};
+use crate::scene::shading::{ShadeRules, Shading};
+use crate::scene::view::{TerrainViewGpu, View};
 use crate::shaders::structs;
+use crate::targets::gbuffer::GBuffer;
 use crate::targets::Output;
 use crate::terrain::gpu_quadtree::{
     AtlasSet, ATLAS_CONTROL, ATLAS_NORMAL, ATLAS_PATCH_CONES, ATLAS_PATCH_HOLES, ATLAS_SPLAT,
@@ -341,10 +341,11 @@ impl TerrainRenderer {
             // The control-map flavour reads control words: bake them (from
             // the scene's map or the material rules) unless the caller did.
             let rules = terrain_options.bake.materials;
-            terrain_options.bake.control = crate::render::materials::control_bake(&options.effects, world, rules)?;
+            terrain_options.bake.control = crate::effects::materials::control_bake(&options.effects, world, rules)?;
         }
         let geometry = TerrainGeometry::new(ctx, depth)?;
-        let mut shade = ShadeRules::from_effects(&options.effects, on(Effect::Splat), on(Effect::Cliffs));
+        let mut shade =
+            options.effects.shade.allowing(options.effects.materials, on(Effect::Splat), on(Effect::Cliffs));
         if on(Effect::VirtualTexture) {
             shade = shade.with_virtual_texture();
         }
@@ -796,12 +797,12 @@ impl TerrainRenderer {
     }
 
     /// Every pass of the frame, built or not (and why not).
-    pub fn pass_graph(&self) -> &[crate::render::graph::PassNode] {
+    pub fn pass_graph(&self) -> &[crate::scene::graph::PassNode] {
         self.graph.nodes()
     }
 
     /// What became of each built pass in the last recorded frame.
-    pub fn last_frame_log(&self) -> Option<&crate::render::graph::FrameLog> {
+    pub fn last_frame_log(&self) -> Option<&crate::scene::graph::FrameLog> {
         self.graph.last_frame()
     }
 
@@ -840,7 +841,7 @@ impl ShadowState<'_> {
             self.schedule.restart(&resident);
         }
         if !self.schedule.ready() {
-            budget = crate::passes::sun_shadows::MAX_UPDATE_BUDGET;
+            budget = crate::effects::shadows::sun_shadows::MAX_UPDATE_BUDGET;
         }
         let world = terrain.world;
         let march = MarchSun { dir: sun.as_vec3().to_array(), reach_m: f64::from(s.params.reach_m) };

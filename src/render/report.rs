@@ -7,15 +7,15 @@
 //! GPU: it is for tools and tests. An engine's frame loop reads the same
 //! counters frames late with `TerrainRenderer::latest_counters`.
 
+use crate::effects::{Effect, EffectDecision};
 use crate::error::Result;
 use crate::frame::{FrameTimings, QueueKind};
 use crate::gpu::{Context, QueueMode};
 use crate::passes::gbuffer_tiles::variant_label;
-use crate::render::effects::{Effect, EffectDecision};
-use crate::render::graph::{FramePass, Outcome};
 use crate::render::renderer::TerrainRenderer;
 use crate::render::telemetry::FrameCounters;
 use crate::render::telemetry::TRIANGLES_PER_PATCH;
+use crate::scene::graph::{FramePass, Outcome};
 use crate::shaders::quadtree_update as update_sh;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -340,7 +340,7 @@ fn work_of(
         FramePass::VtPages => {
             let pages = cpu_work.unwrap_or(0);
             let [wx, wy, _] = crate::shaders::vt_pages::WORKGROUP_SIZE;
-            let side = u64::from(crate::render::virtual_texture::layout::PADDED_TILE);
+            let side = u64::from(crate::effects::virtual_texture::layout::PADDED_TILE);
             let per_page = side.div_ceil(u64::from(wx)) * side.div_ceil(u64::from(wy));
             (PassWork { pages: Some(pages), ..groups(pages * per_page) }, None)
         }

@@ -3,15 +3,15 @@
 //! after the frames (waits): for tools and tests, not for an engine's frame
 //! loop.
 
+use crate::effects::grass::GrassCounters;
+use crate::effects::virtual_texture::{state::VtCounters, VirtualTexture};
 use crate::error::Result;
 use crate::gpu::Context;
 use crate::passes::cull_patches::CullCounters;
 use crate::passes::select_patches::SelectHeader;
 use crate::reference::wanted_finer_cpu;
-use crate::render::grass::GrassCounters;
 use crate::render::renderer::TerrainRenderer;
-use crate::render::view::View;
-use crate::render::virtual_texture::{state::VtCounters, VirtualTexture};
+use crate::scene::view::View;
 use crate::shaders::consts::{GRASS_BLADES, GRASS_BLADE_VERTICES};
 use crate::terrain::TerrainStats;
 use serde::Serialize;
@@ -49,7 +49,7 @@ pub struct RenderStats {
     /// Effect `grass`: its counters, triangles and memory.
     pub grass: Option<GrassStats>,
     /// Effect `cliff_meshes`: the last build's cells and triangles.
-    pub cliff_meshes: Option<crate::render::cliff_meshes::CliffCounters>,
+    pub cliff_meshes: Option<crate::effects::cliff_meshes::CliffCounters>,
 }
 
 /// Effect `grass` in the last recorded frame.

@@ -6,14 +6,14 @@
 //! counters come back frames-in-flight + 1 frames late at most, as data,
 //! and nothing in the frame path waits for the GPU.
 
+use crate::effects::grass::gpu::GrassHeaderGpu;
+use crate::effects::grass::GrassCounters;
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
 use crate::passes::classify_tiles::{ARGS_BYTES, HEAD_BYTES};
 use crate::passes::cull_patches::{CullCounters, PatchListHeader};
 use crate::passes::select_patches::SelectHeader;
 use crate::passes::traverse::TraverseHeader;
-use crate::render::grass::gpu::GrassHeaderGpu;
-use crate::render::grass::GrassCounters;
 use crate::shaders::structs;
 use serde::Serialize;
 

@@ -5,14 +5,14 @@
 //! range `View::validate` (and so `vista render --fov`) takes, against 60
 //! degrees.
 //!
-//! Why the range ends where it does: [`crate::render::view::MIN_FOV_DEG`].
+//! Why the range ends where it does: [`crate::scene::view::MIN_FOV_DEG`].
 
 use super::rig::Rig;
 use super::{CaseReport, Form};
 use crate::error::Result;
 use crate::gpu::Context;
-use crate::render::view::{MAX_FOV_DEG, MIN_FOV_DEG};
 use crate::render::{Camera, RendererOptions};
+use crate::scene::view::{MAX_FOV_DEG, MIN_FOV_DEG};
 
 /// Odd, so a pixel centre lies on the optical axis.
 const SIZE: [u32; 2] = [65, 49];

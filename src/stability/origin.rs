@@ -9,8 +9,8 @@ use super::rig::{differing_pixels, Rig};
 use super::{CaseReport, Form};
 use crate::error::Result;
 use crate::gpu::Context;
-use crate::render::shading::ShadeRules;
 use crate::render::{Lighting, RendererOptions, View};
+use crate::scene::shading::ShadeRules;
 use crate::terrain::quadtree::texture_extent;
 
 const OFFSETS: [f64; 5] = [0.0, 1e4, 1e5, 1e6, 1e7];

@@ -3,6 +3,7 @@
 //! images of one frame ([`RenderTargets`]), the depth target's contract
 //! ([`DepthOptions`]) and the engine's G-buffer ([`GbufferLayout`]).
 
+pub mod gbuffer;
 pub mod gbuffer_layout;
 
 use crate::gpu::{depth_layout, has_stencil, vk, Image};

@@ -91,9 +91,7 @@ impl NodeDesc {
 /// to a multiple of 2^(lods-1) so every mip is exactly half the one above
 /// (plain Vulkan mip sizes would round 59 sectors down to 29 at LOD 1).
 pub fn texture_extent(world: &WorldDesc) -> [u32; 2] {
-    let root = world.grid(world.root_lod());
-    let scale = 1u32 << world.root_lod();
-    [root[0] * scale, root[1] * scale]
+    world.node_texture_extent()
 }
 
 pub struct QuadtreeShadow {

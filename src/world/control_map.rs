@@ -225,7 +225,7 @@ impl ControlSource {
 /// smoothness) and their slope parameters: what the bake blends into a
 /// control-map world's baked albedo, so far away it shows what the
 /// control-map flavour shows near. The renderer's material set makes it
-/// (`render::materials`), the world module cannot see textures.
+/// (`effects::materials`), the world module cannot see textures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ControlLooks {
     /// Per texture index: mean albedo (sRGB 8-bit) and smoothness (0..255).

@@ -141,6 +141,14 @@ impl NodeId {
 }
 
 impl WorldDesc {
+    /// Side of the node texture's mip 0 (one texel per LOD 0 node of the
+    /// root grid): the GPU quadtree's texture and a plan's estimate of it.
+    pub fn node_texture_extent(&self) -> [u32; 2] {
+        let root = self.grid(self.root_lod());
+        let scale = 1u32 << self.root_lod();
+        [root[0] * scale, root[1] * scale]
+    }
+
     /// Checks every field; the rest of the module assumes a validated desc.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(WorldError::InvalidDesc(m));

@@ -186,7 +186,7 @@ impl WorldPlan {
         let disk_bytes = nodes_per_lod.iter().sum::<u64>() * estimated_file_bytes(format);
         // Mip 0 padded to whole roots, as the renderer sizes it.
         let root = world.root_lod();
-        let node_texture = world.grid(root).map(|g| u64::from(g) << root);
+        let node_texture = world.node_texture_extent().map(u64::from);
         let node_texture_bytes =
             (0..world.lod_count).map(|l| (node_texture[0] >> l) * (node_texture[1] >> l) * 2).sum();
         // The roots over the region, clipped to the world's sectors.
@@ -598,10 +598,12 @@ mod tests {
     }
 
     #[test]
-    fn the_node_texture_matches_the_renderer() {
+    fn the_node_texture_is_one_texel_per_finest_node_padded_to_roots() {
         for w in [world(2048.0, 2.0, 4), world(1000.0, 1.0, 6), WorldDesc::default()] {
-            let t = crate::terrain::quadtree::texture_extent(&w);
-            assert_eq!(WorldPlan::new(&w, None).node_texture, t.map(u64::from));
+            // the finest nodes, padded to whole root nodes
+            let step = 1u64 << w.root_lod();
+            let padded = w.grid(0).map(|n| u64::from(n).div_ceil(step) * step);
+            assert_eq!(WorldPlan::new(&w, None).node_texture, padded);
         }
     }
 }

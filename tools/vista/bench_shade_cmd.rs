@@ -7,8 +7,8 @@ use anyhow::Result;
 use std::time::Duration;
 use vista::bench::{bench_shade, shade_views, ShadeBenchConfig};
 use vista::gpu::Context;
-use vista::render::shading::{ShadeRules, Shading};
 use vista::render::Effect;
+use vista::scene::shading::Shading;
 
 /// The floors: classification at most this share of shading time;
 /// tiled shading at most this share of the every-flavour shader's on the
@@ -24,7 +24,7 @@ pub fn shade(ctx: &Context, args: &ViewBench) -> Result<()> {
     // The scene's shading parameters with every flavour allowed.
     let fx = world.effects.clone().with(Effect::Splat, true).with(Effect::Cliffs, true);
     let fov_y_deg = 60.0;
-    let views = shade_views(&d, &*world.source, &ShadeRules::from_effects(&fx, true, true), fov_y_deg);
+    let views = shade_views(&d, &*world.source, &fx.shade.allowing(fx.materials, true, true), fov_y_deg);
     let cache = std::env::temp_dir().join(format!("vista-bench-shade-{}", std::process::id()));
     let cfg = ShadeBenchConfig {
         fov_y_deg,

@@ -9,10 +9,10 @@ use image::ExtendedColorType;
 use std::path::Path;
 use vista::frame::FrameTimings;
 use vista::output::{encode_png, FileSet, OutputWriter};
-use vista::render::gbuffer::{classification_colour, GBufferCapture};
 use vista::render::offscreen::Capture;
 use vista::render::stats::RenderStats;
 use vista::render::View;
+use vista::targets::gbuffer::{classification_colour, GBufferCapture};
 use vista::targets::gbuffer_layout::{texel_bytes, DecodedSurface};
 use vista::targets::{GbufferLayout, Output};
 

@@ -2,11 +2,11 @@
 //! along a fly-through, the per-pass timing table, the output and the
 //! async overlap.
 
+use vista::effects::virtual_texture::state::VtCounters;
 use vista::frame::FrameTimings;
 use vista::gpu::QueueMode;
 use vista::passes::cull_patches::CullStages;
 use vista::render::stats::RenderStats;
-use vista::render::virtual_texture::state::VtCounters;
 use vista::render::{Effect, TerrainRenderer};
 use vista::targets::Output;
 

@@ -1,5 +1,5 @@
 //! Scene files (TOML): which terrain, its geometry, holes and the effects
-//! the scene calls for (`vista::render::effects` documents each).
+//! the scene calls for (`vista::effects` documents each).
 //!
 //! ```toml
 //! [world]
@@ -65,8 +65,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
 use serde::Deserialize;
-use vista::render::assets::{Asset, AssetKind};
-use vista::render::virtual_texture::decals::{Decal, DecalShape};
+use vista::effects::assets::{Asset, AssetKind};
+use vista::effects::virtual_texture::decals::{Decal, DecalShape};
 use vista::render::Effects;
 use vista::world::{Hole, MaterialRules, StampBlend, StampPlacement};
 

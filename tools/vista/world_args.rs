@@ -99,9 +99,9 @@ pub struct LoadedWorld {
     /// Each stamp's id and box, in order: what a scene edit compares.
     pub stamps: Vec<(u64, [f64; 4])>,
     /// The scene's decals (world metres) with their textures read.
-    pub decals: vista::render::virtual_texture::decals::DecalSet,
+    pub decals: vista::effects::virtual_texture::decals::DecalSet,
     /// The scene's assets (world metres).
-    pub assets: Vec<vista::render::assets::Asset>,
+    pub assets: Vec<vista::effects::assets::Asset>,
 }
 
 /// Refuses a slot budget the renderer cannot use for `world`, in the
@@ -186,7 +186,7 @@ pub struct WorldSpec {
     stamps: Vec<crate::scene::SceneStampSpec>,
     /// The scene's decals, relative to the world's corner (textures unread).
     decals: crate::scene::SceneDecals,
-    assets: Vec<vista::render::assets::Asset>,
+    assets: Vec<vista::effects::assets::Asset>,
     effects: Effects,
     origin_m: [f64; 2],
     pub limits: Limits,
@@ -508,7 +508,7 @@ impl WorldSpec {
         };
         let (source, stamps) = self.stamped(source, &desc).map_err(input_error)?;
         let mut bake = self.bake.clone();
-        bake.control = vista::render::materials::control_bake(&self.effects, &desc, bake.materials)
+        bake.control = vista::effects::materials::control_bake(&self.effects, &desc, bake.materials)
             .map_err(|e| input_error(anyhow::anyhow!("{e}")))?;
         if let Some(control) = &mut bake.control {
             control.stamps = self.stamp_controls().map_err(input_error)?;
@@ -533,8 +533,8 @@ pub fn plan_error_is_input(e: vista::Error) -> anyhow::Error {
 }
 
 /// Reads each decal texture once.
-fn load_decals(d: &crate::scene::SceneDecals) -> Result<vista::render::virtual_texture::decals::DecalSet> {
-    use vista::render::virtual_texture::decals::{DecalSet, DecalTexture};
+fn load_decals(d: &crate::scene::SceneDecals) -> Result<vista::effects::virtual_texture::decals::DecalSet> {
+    use vista::effects::virtual_texture::decals::{DecalSet, DecalTexture};
     let textures = d.textures.iter().map(|p| DecalTexture::load(p)).collect::<Result<Vec<_>, _>>()?;
     let set = DecalSet { textures: textures.into(), decals: d.decals.clone() };
     set.check()?;

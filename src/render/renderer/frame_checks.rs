@@ -7,8 +7,8 @@ use crate::gpu::{vk, Context};
 use crate::passes::debug_view::DebugViewPass;
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::terrain_geometry::RenderTargets;
-use crate::render::gbuffer::GBuffer;
-use crate::render::view::View;
+use crate::scene::view::View;
+use crate::targets::gbuffer::GBuffer;
 use crate::targets::Output;
 
 impl TerrainRenderer {

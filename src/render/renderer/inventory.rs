@@ -2,9 +2,9 @@
 //! resource, with the effects each exists for.
 
 use super::{effect_atlases, TerrainRenderer};
+use crate::effects::Effect;
 use crate::passes::lighting_resolve::LightingResolve;
-use crate::render::effects::Effect;
-use crate::render::gbuffer::GBuffer;
+use crate::targets::gbuffer::GBuffer;
 
 impl TerrainRenderer {
     /// Labels of every pipeline built (variant switches included).

@@ -1,0 +1,31 @@
+//! Effect `assets` as a scene names it.
+
+use crate::effects::kind::{EffectKind, Verdict, WorldContent};
+use crate::effects::requested::Effects;
+use crate::error::Result;
+use crate::scene::effect::Effect;
+use crate::scene::params::number;
+use std::path::Path;
+
+pub struct AssetsKind;
+impl EffectKind for AssetsKind {
+    fn effect(&self) -> Effect {
+        Effect::Assets
+    }
+
+    fn parameters(&self) -> &'static [&'static str] {
+        &["blend_height_m"]
+    }
+
+    fn read(&self, fx: &mut Effects, key: &str, _: &str, v: &toml::Value, _: &Path) -> Result<()> {
+        fx.assets.blend_height_m = number(key, v, 0.0, 100.0)? as f32;
+        Ok(())
+    }
+
+    fn verdict(&self, _: &Effects, content: &WorldContent, _: bool) -> Verdict {
+        if content.assets == 0 {
+            return Verdict::Off("the scene has no assets ([[assets]])".into());
+        }
+        Verdict::On
+    }
+}

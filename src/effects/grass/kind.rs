@@ -1,0 +1,41 @@
+//! Effect `grass` as a scene names it: its parameters and when it can grow.
+
+use crate::effects::kind::{EffectKind, Verdict, WorldContent};
+use crate::effects::materials::kinds::CONTROL_MAP_MODE;
+use crate::effects::requested::Effects;
+use crate::error::Result;
+use crate::scene::effect::{Effect, MaterialsMode};
+use std::path::Path;
+
+pub struct GrassKind;
+impl EffectKind for GrassKind {
+    fn effect(&self) -> Effect {
+        Effect::Grass
+    }
+
+    fn parameters(&self) -> &'static [&'static str] {
+        &super::GrassParams::PARAMETERS
+    }
+
+    fn read(&self, fx: &mut Effects, key: &str, name: &str, v: &toml::Value, _: &Path) -> Result<()> {
+        fx.grass.read(key, name, v)
+    }
+
+    fn validate(&self, fx: &Effects) -> Result<()> {
+        fx.grass.validate()
+    }
+
+    fn verdict(&self, fx: &Effects, _: &WorldContent, _: bool) -> Verdict {
+        if fx.materials == MaterialsMode::ControlMap {
+            Verdict::Off(format!(
+                "its rules are by splat material id and the materials are the control map's {CONTROL_MAP_MODE}"
+            ))
+        } else if !fx.is_on(Effect::Splat) {
+            Verdict::Off("it grows by the splat material ids and effect splat is off".into())
+        } else if !fx.grass.grows() {
+            Verdict::Off("no material grows grass (effects.grass.density)".into())
+        } else {
+            Verdict::On
+        }
+    }
+}
