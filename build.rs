@@ -13,17 +13,13 @@ fn main() {
     let include_dir = root.join("common");
     println!("cargo:rerun-if-changed=build/shader_compiler.rs");
     println!("cargo:rerun-if-changed={}", root.display());
-    println!("cargo:rerun-if-changed={}", include_dir.display());
-    let mut files: Vec<_> = std::fs::read_dir(root)
-        .expect("shaders_glsl/ is missing")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file())
-        .collect();
-    files.sort();
-    if let Ok(dir) = std::fs::read_dir(&include_dir) {
-        for e in dir.flatten() {
-            println!("cargo:rerun-if-changed={}", e.path().display());
-        }
+    // The core passes' shaders at the top, each effect's in a folder of its
+    // name (with its headers); `common/` holds only headers.
+    let mut files = Vec::new();
+    let mut headers = Vec::new();
+    shader_compiler::walk(root, &mut files, &mut headers);
+    for h in &headers {
+        println!("cargo:rerun-if-changed={}", h.display());
     }
     let mut shaders = Vec::new();
     let mut errors = Vec::new();

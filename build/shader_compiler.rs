@@ -146,8 +146,30 @@ fn stage_of(path: &Path) -> Result<(glslang::ShaderStage, &'static str, naga::Sh
     }
 }
 
+/// Every shader under `dir` (sorted, `.glsl` headers apart), folders
+/// included; each folder is watched too.
+pub fn walk(dir: &Path, shaders: &mut Vec<PathBuf>, headers: &mut Vec<PathBuf>) {
+    println!("cargo:rerun-if-changed={}", dir.display());
+    let mut entries: Vec<PathBuf> =
+        std::fs::read_dir(dir).expect("shaders_glsl/ is missing").filter_map(|e| e.ok().map(|e| e.path())).collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            walk(&p, shaders, headers);
+        } else if p.extension().is_some_and(|e| e == "glsl") {
+            headers.push(p);
+        } else if p.is_file() {
+            shaders.push(p);
+        }
+    }
+}
+
+/// Resolves `#include "x.glsl"` in the including header's folder, the
+/// shader's folder, `common/`, then the root (`"grass/grass.glsl"`: an
+/// effect's header named from elsewhere).
 struct Includer {
-    dir: PathBuf,
+    /// The shader's folder, `common/` and the root.
+    dirs: [PathBuf; 3],
     seen: Vec<PathBuf>,
 }
 
@@ -156,13 +178,16 @@ impl glslang::include::IncludeHandler for Includer {
         &mut self,
         _ty: glslang::include::IncludeType,
         header_name: &str,
-        _includer_name: &str,
+        includer_name: &str,
         _depth: usize,
     ) -> Option<glslang::include::IncludeResult> {
-        let path = self.dir.join(header_name);
+        // A header's name is its path (as returned below); the shader's is not.
+        let includer = Path::new(includer_name).parent().filter(|d| d.is_dir()).map(Path::to_path_buf);
+        let path = includer.iter().chain(&self.dirs).map(|d| d.join(header_name)).find(|p| p.is_file())?;
         let data = std::fs::read_to_string(&path).ok()?;
+        let name = path.display().to_string();
         self.seen.push(path);
-        Some(glslang::include::IncludeResult { name: header_name.to_string(), data })
+        Some(glslang::include::IncludeResult { name, data })
     }
 }
 
@@ -219,7 +244,9 @@ fn compile_variant(path: &Path, text: &str, defines: &[String], include_dir: &Pa
         version_profile: None,
         ..Default::default()
     };
-    let mut includer = Includer { dir: include_dir.to_path_buf(), seen: Vec::new() };
+    let own = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let root = include_dir.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mut includer = Includer { dirs: [own, include_dir.to_path_buf(), root], seen: Vec::new() };
     let words = {
         let macros: Vec<(&str, Option<&str>)> = defines.iter().map(|d| (d.as_str(), Some("1"))).collect();
         let input = glslang::ShaderInput::new(&source, gl_stage, &options, Some(&macros[..]), Some(&mut includer))

@@ -24,7 +24,7 @@
 #include "shade_rules.glsl"
 #include "reconstruct.glsl"
 #include "hashed_noise.glsl"
-#include "materials.glsl"
+#include "materials/materials.glsl"
 #include "tile_lists.glsl"
 
 layout(constant_id = 0) const uint VARIANT_BITS = 0u;
@@ -67,7 +67,7 @@ layout(set = 0, binding = 19, std430) readonly buffer VtState { uint words[]; } 
 layout(set = 0, binding = 20) uniform texture2D vt_albedo;
 layout(set = 0, binding = 21) uniform texture2D vt_detail;
 #define VISTA_VT_WORD(i) vt_state.words[i]
-#include "virtual_texture.glsl"
+#include "virtual_texture/virtual_texture.glsl"
 #endif
 layout(set = 0, binding = 13) uniform sampler nearest;
 layout(set = 0, binding = 14) uniform sampler linear_clamp;
@@ -107,7 +107,7 @@ struct Surface {
 
 
 #ifdef DETAIL_TEXTURES
-#include "splat_blend.glsl"
+#include "materials/splat_blend.glsl"
 
 // Plane coordinates of tri-planar projection `p` (0: x axis, 1: y, 2: z).
 vec2 project(vec3 v, int p) {
@@ -208,7 +208,7 @@ Surface cliff_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, bool far_cliff, f
 #endif
 
 #ifdef CONTROL_MAP
-#include "control_surface.glsl"
+#include "materials/control_surface.glsl"
 #endif
 
 #ifdef VIRTUAL_TEXTURE

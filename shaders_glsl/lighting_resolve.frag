@@ -69,7 +69,7 @@ layout(push_constant, std430) uniform LightingPush {
 #endif
 
 #ifdef SHADOWS
-#include "sun_shadow.glsl"
+#include "shadows/sun_shadow.glsl"
 layout(set = 0, binding = 5, std430) readonly buffer SectorData { uint words[]; } sector_data;
 layout(set = 0, binding = 6) uniform texture2DArray height_atlas;
 layout(set = 0, binding = 7) uniform texture2DArray shadow_atlas;
@@ -110,7 +110,7 @@ float sun_seen(vec3 p) {
 #endif
 
 #ifdef ATMOSPHERE
-#include "atmosphere.glsl"
+#include "atmosphere/atmosphere.glsl"
 #endif
 
 #ifdef HDR_OUTPUT

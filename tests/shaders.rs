@@ -14,14 +14,18 @@ fn shader_dir() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders_glsl")
 }
 
+/// Every shader and header, the effects' folders included.
+fn files() -> (Vec<std::path::PathBuf>, Vec<std::path::PathBuf>) {
+    let (mut shaders, mut headers) = (Vec::new(), Vec::new());
+    shader_compiler::walk(&shader_dir(), &mut shaders, &mut headers);
+    (shaders, headers)
+}
+
 #[test]
 fn the_bank_holds_every_shader_file_once() {
-    let mut on_disk: Vec<String> = std::fs::read_dir(shader_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.is_file())
-        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
-        .collect();
+    let (shaders, _) = files();
+    let mut on_disk: Vec<String> =
+        shaders.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect();
     on_disk.sort();
     let mut in_bank: Vec<String> =
         shaders::ALL.iter().map(|s| Path::new(s.file).file_name().unwrap().to_string_lossy().into_owned()).collect();
@@ -229,8 +233,8 @@ fn shared_constants_have_one_source() {
     let parsed = shader_compiler::parse_constants(&text, "constants.glsl").unwrap();
     let exported: Vec<(String, u32)> = shaders::consts::ALL.iter().map(|(n, v)| (n.to_string(), *v)).collect();
     assert_eq!(parsed.iter().map(|c| (c.name.clone(), c.value)).collect::<Vec<_>>(), exported);
-    let files = std::fs::read_dir(&dir).unwrap().chain(std::fs::read_dir(dir.join("common")).unwrap());
-    for path in files.map(|e| e.unwrap().path()).filter(|p| p.is_file() && !p.ends_with("constants.glsl")) {
+    let (shaders, headers) = files();
+    for path in shaders.iter().chain(&headers).filter(|p| !p.ends_with("constants.glsl")) {
         let src = std::fs::read_to_string(&path).unwrap();
         for (name, _) in shaders::consts::ALL {
             for decl in [format!("const uint {name} "), format!("#define {name} ")] {

@@ -12,7 +12,7 @@
 // vt_pages blends them into the pages.
 // variants: DECALS
 #include "constants.glsl"
-#include "materials.glsl"
+#include "materials/materials.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -28,7 +28,7 @@ layout(set = 0, binding = 8) uniform sampler detail_sampler;
 layout(set = 0, binding = 9) uniform sampler nearest;
 layout(set = 0, binding = 10, rgba8) uniform writeonly image2D pigment;
 #ifdef DECALS
-#include "decal.glsl"
+#include "virtual_texture/decal.glsl"
 layout(set = 0, binding = 11, std430) readonly buffer Decals { Decal d[]; } decals;
 layout(set = 0, binding = 12, std430) readonly buffer DecalPoints { vec4 p[]; } decal_points;
 layout(set = 0, binding = 13) uniform texture2DArray decal_textures;
@@ -36,7 +36,7 @@ layout(set = 0, binding = 14) uniform sampler decal_clamp;
 layout(set = 0, binding = 15) uniform sampler decal_repeat;
 // The decals touching this pass's square: grass_place's first, grass_pigment's from DECAL_MAX.
 layout(set = 0, binding = 16, std430) readonly buffer GrassDecals { uint i[]; } grass_decals;
-#include "decal_shapes.glsl"
+#include "virtual_texture/decal_shapes.glsl"
 #endif
 
 #define VISTA_SECTOR_WORD(i) sector_data.words[i]
@@ -57,7 +57,7 @@ layout(push_constant, std430) uniform GrassPigmentPush {
 
 #undef VISTA_TERRAIN_DECLARE_ONLY
 #include "terrain_sample.glsl"
-#include "splat_blend.glsl"
+#include "materials/splat_blend.glsl"
 
 void main() {
     uvec2 t = gl_GlobalInvocationID.xy;

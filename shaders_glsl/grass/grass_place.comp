@@ -35,7 +35,7 @@ layout(set = 0, binding = 10) uniform texture2D hiz;
 #include "hiz_test.glsl"
 #endif
 #ifdef DECALS
-#include "decal.glsl"
+#include "virtual_texture/decal.glsl"
 layout(set = 0, binding = 11, std430) readonly buffer Decals { Decal d[]; } decals;
 layout(set = 0, binding = 12, std430) readonly buffer DecalPoints { vec4 p[]; } decal_points;
 layout(set = 0, binding = 13) uniform texture2DArray decal_textures;
@@ -43,7 +43,7 @@ layout(set = 0, binding = 14) uniform sampler decal_clamp;
 layout(set = 0, binding = 15) uniform sampler decal_repeat;
 // The decals touching this pass's square: grass_place's first, grass_pigment's from DECAL_MAX.
 layout(set = 0, binding = 16, std430) readonly buffer GrassDecals { uint i[]; } grass_decals;
-#include "decal_shapes.glsl"
+#include "virtual_texture/decal_shapes.glsl"
 #endif
 
 #define VISTA_SECTOR_WORD(i) sector_data.words[i]

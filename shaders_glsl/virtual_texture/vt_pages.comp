@@ -13,7 +13,7 @@
 // variants: DECALS
 #extension GL_GOOGLE_include_directive : require
 #include "constants.glsl"
-#include "materials.glsl"
+#include "materials/materials.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -66,7 +66,7 @@ layout(push_constant, std430) uniform VtPagesPush { VistaTerrain terrain; } pc;
 
 #undef VISTA_TERRAIN_DECLARE_ONLY
 #include "terrain_sample.glsl"
-#include "splat_blend.glsl"
+#include "materials/splat_blend.glsl"
 
 const uint PADDED = VT_TILE_TEXELS + 2u * VT_TILE_BORDER;
 

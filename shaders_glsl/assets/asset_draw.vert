@@ -23,7 +23,7 @@ layout(set = 0, binding = 6) uniform texture2DArray albedo_atlas;
 layout(set = 0, binding = 7) uniform sampler nearest;
 layout(set = 0, binding = 8) uniform sampler linear_clamp;
 #ifdef MATERIALS
-#include "materials.glsl"
+#include "materials/materials.glsl"
 layout(set = 0, binding = 9) uniform utexture2DArray splat_atlas;
 layout(set = 0, binding = 10, std430) readonly buffer Materials { TerrainMaterial m[]; } materials;
 layout(set = 0, binding = 11) uniform texture2DArray detail_albedo;
@@ -56,7 +56,7 @@ layout(push_constant, std430) uniform AssetDrawPush {
 #undef VISTA_TERRAIN_DECLARE_ONLY
 #include "terrain_sample.glsl"
 #ifdef MATERIALS
-#include "splat_blend.glsl"
+#include "materials/splat_blend.glsl"
 #define VISTA_BLEND_COLOUR(p) splat_blend(p, vec2(0.5, 0.0), vec2(0.0, 0.5)).albedo
 #endif
 #include "terrain_blend.glsl"
