@@ -26,7 +26,7 @@ void main() {
     }
     vec4 probe = in_.probes[i];
     uint code = floatBitsToUint(probe.w);
-    vec3 n = oct_decode8(uvec2(code & 0xFFu, code >> 8u));
+    vec3 n = oct_decode_packed(code);
     vec3 p = reconstruct_position(in_.inv_view_proj, probe.xy, in_.viewport, probe.z);
     vec3 ddx, ddy;
     position_derivatives(in_.inv_view_proj, probe.xy, in_.viewport, p, n, ddx, ddy);

@@ -177,7 +177,7 @@ fn off_nothing_is_built_and_the_image_is_the_one_without_it() {
         let mut off = rig(ctx, vec![rock()], false);
         let mut on = rig(ctx, vec![rock()], true);
         for r in [&without, &off] {
-            assert!(r.renderer.near.assets.is_none());
+            assert!(r.renderer.effect::<vista::effects::assets::frame::Assets>().is_none());
             assert!(!r.renderer.pipelines().iter().any(|p| p.contains("asset")), "{:?}", r.renderer.pipelines());
         }
         let a = without.shot(ctx, &low(), CullStages::default());

@@ -14,6 +14,7 @@ use vista::effects::cliff_meshes::{CliffMeshParams, CELL_VERTICES};
 use vista::gpu::Context;
 use vista::passes::cull_patches::CullStages;
 use vista::passes::terrain_query::{TerrainQuery, VistaTerrain};
+use vista::render::offscreen::Capture;
 use vista::render::{Effect, Effects, RendererOptions, View};
 use vista::shaders::consts::{CLIFF_CELL_QUADS, FLAVOUR_FAR_CLIFF, FLAVOUR_NEAR_CLIFF};
 
@@ -54,17 +55,11 @@ fn meshes_only_on_steep_cells_watertight_and_shaded_as_cliffs() {
         let mut off = rig(ctx, effects(false));
         let b = on.shot(ctx, &low(), CullStages::default());
         let a = off.shot(ctx, &low(), CullStages::default());
-        let c = on.renderer.near.cliff_meshes.as_ref().unwrap();
+        let c = on.renderer.effect::<vista::effects::cliff_meshes::CliffMeshes>().unwrap();
         let p = c.params;
         let (counters, vertices) = c.read(ctx).unwrap();
-        let q = p.cell_m / CLIFF_CELL_QUADS as f32;
         let side = CLIFF_CELL_QUADS + 1;
-        // Each listed cell by its first vertex (its south-west corner, on the grid).
-        let mut cells: BTreeMap<[i32; 2], &[[f32; 4]]> = BTreeMap::new();
-        for patch in vertices.chunks_exact(CELL_VERTICES as usize) {
-            let key = [0, 1].map(|i| (patch[0][i] / p.cell_m).round() as i32);
-            assert!(cells.insert(key, patch).is_none(), "cell {key:?} listed twice");
-        }
+        let cells = listed_cells(&vertices, &p);
         assert_eq!(cells.len() as u32, counters.cells);
 
         // The twin: a cell is steep when any vertex's slope, from central
@@ -74,48 +69,10 @@ fn meshes_only_on_steep_cells_watertight_and_shaded_as_cliffs() {
         let expect = [500.0f32, 200.0].map(|v| ((v / p.step_m()).floor() + 0.5) * p.step_m());
         assert_eq!(centre, expect);
         let step = 0.5 * rig_spacing(&on);
-        let cell0 = centre.map(|c| ((c - p.reach_m()) / p.cell_m).floor() as i32);
-        let mut candidates = Vec::new();
-        for j in 0..p.side() as i32 {
-            for i in 0..p.side() as i32 {
-                let cell = [cell0[0] + i, cell0[1] + j];
-                let m = cell.map(|c| (c as f32 + 0.5) * p.cell_m);
-                if ((m[0] - centre[0]).powi(2) + (m[1] - centre[1]).powi(2)).sqrt() < p.reach_m() {
-                    candidates.push(cell);
-                }
-            }
-        }
-        let mut points = Vec::new();
-        for cell in &candidates {
-            for k in 0..CELL_VERTICES {
-                let v = [
-                    cell[0] as f32 * p.cell_m + (k % side) as f32 * q,
-                    cell[1] as f32 * p.cell_m + (k / side) as f32 * q,
-                ];
-                points.extend([[v[0] + step, v[1]], [v[0] - step, v[1]], [v[0], v[1] + step], [v[0], v[1] - step], v]);
-            }
-        }
+        let candidates = candidate_cells(&p, centre);
+        let points = slope_points(&p, &candidates, step);
         let h = heights(ctx, &on, &points);
-        let [cos_start, _] = p.cos_range();
-        let (mut steep_cells, mut borderline) = (BTreeSet::new(), 0);
-        let mut on_field: BTreeMap<[u32; 2], f32> = BTreeMap::new();
-        for (ci, cell) in candidates.iter().enumerate() {
-            let mut steep = false;
-            for k in 0..CELL_VERTICES as usize {
-                let s = &h[(ci * CELL_VERTICES as usize + k) * 5..][..5];
-                let n = glam::Vec3::new(-(s[0] - s[1]), -(s[2] - s[3]), 2.0 * step).normalize();
-                borderline += usize::from((n.z - cos_start).abs() < 1e-4);
-                if n.z < cos_start {
-                    steep = true;
-                } else {
-                    let v = points[(ci * CELL_VERTICES as usize + k) * 5 + 4];
-                    on_field.insert(v.map(f32::to_bits), s[4]);
-                }
-            }
-            if steep {
-                steep_cells.insert(*cell);
-            }
-        }
+        let Twin { steep_cells, borderline, on_field } = twin(&p, &candidates, &points, &h, step);
         let listed: BTreeSet<[i32; 2]> = cells.keys().copied().collect();
         println!(
             "{} cells tested, {} meshed ({} triangles), the twin says {} ({borderline} vertices at the threshold)",
@@ -128,65 +85,144 @@ fn meshes_only_on_steep_cells_watertight_and_shaded_as_cliffs() {
         assert!(borderline == 0 && listed == steep_cells, "GPU {} cells, twin {}", listed.len(), steep_cells.len());
         assert!(listed.len() > 40 && listed.len() < candidates.len() / 2, "{} of {}", listed.len(), candidates.len());
 
-        // Watertight among themselves: a shared edge's vertices are the same bits.
-        let mut shared = 0;
-        for (cell, patch) in &cells {
-            if let Some(east) = cells.get(&[cell[0] + 1, cell[1]]) {
-                for r in 0..side as usize {
-                    assert_eq!(
-                        patch[r * side as usize + side as usize - 1],
-                        east[r * side as usize],
-                        "crack east of {cell:?}"
-                    );
-                    shared += 1;
-                }
-            }
-        }
-        // And to the height field: every vertex under the threshold slope
-        // (the open rim among them) stands on it, unpushed.
-        let (mut rim, mut worst) = (0, 0.0f32);
-        for patch in cells.values() {
-            for v in patch.iter() {
-                if let Some(z) = on_field.get(&[v[0].to_bits(), v[1].to_bits()]) {
-                    worst = worst.max((v[2] - z).abs());
-                    rim += 1;
-                }
-            }
-        }
-        println!("{shared} shared edge vertices identical; {rim} vertices under the threshold, worst gap {worst:.6} m");
-        // f32 at 300 m: the same bilinear height, a few ulps apart at most.
-        assert!(rim > 100 && worst <= 1e-4, "{rim} {worst}");
-
-        // Shaded by the cliff flavours: every pixel the meshes cover whose
-        // (pushed) normal is past the shading's cliff start is classified
-        // cliff; the others lean back towards level on a bulge's top.
-        let gb = on.renderer.gbuffer.as_ref().unwrap().capture(ctx).unwrap();
-        let cliff = (FLAVOUR_NEAR_CLIFF | FLAVOUR_FAR_CLIFF) as u8;
-        let [cliff_start, _] = on.renderer.shade.slope_normal_z();
-        let (mut meshed, mut as_cliff, mut steep) = (0, 0, 0);
-        for i in 0..a.depth.len() {
-            if b.depth[i] > a.depth[i] * 1.0001 {
-                meshed += 1;
-                let code = gb.geometry_normals[i];
-                let n = vista::reference::octahedral::oct_decode8([u32::from(code[0]), u32::from(code[1])]);
-                let classified = gb.classification[i] & cliff != 0;
-                as_cliff += usize::from(classified);
-                // The code is the normal in 8 bits: z within 1e-2 of what the shader classified by.
-                if n[2] < f64::from(cliff_start) - 1e-2 {
-                    assert!(
-                        classified,
-                        "pixel {i}: normal {n:?} is a cliff's, classification {}",
-                        gb.classification[i]
-                    );
-                    steep += 1;
-                }
-            }
-        }
-        println!(
-            "{meshed} pixels in front of the height field, {as_cliff} classified cliff ({steep} past the cliff start)"
-        );
-        assert!(meshed > 200 && steep * 10 >= meshed * 8, "{steep} of {meshed}");
+        check_watertight(&cells, &on_field, side);
+        check_shaded_as_cliffs(ctx, &on, &a, &b);
     });
+}
+
+/// Each listed cell by its first vertex (its south-west corner, on the grid).
+fn listed_cells<'v>(vertices: &'v [[f32; 4]], p: &CliffMeshParams) -> BTreeMap<[i32; 2], &'v [[f32; 4]]> {
+    let mut cells: BTreeMap<[i32; 2], &[[f32; 4]]> = BTreeMap::new();
+    for patch in vertices.chunks_exact(CELL_VERTICES as usize) {
+        let key = [0, 1].map(|i| (patch[0][i] / p.cell_m).round() as i32);
+        assert!(cells.insert(key, patch).is_none(), "cell {key:?} listed twice");
+    }
+    cells
+}
+
+/// The cells whose middle is within the reach of the build's centre.
+fn candidate_cells(p: &CliffMeshParams, centre: [f32; 2]) -> Vec<[i32; 2]> {
+    let cell0 = centre.map(|c| ((c - p.reach_m()) / p.cell_m).floor() as i32);
+    let mut candidates = Vec::new();
+    for j in 0..p.side() as i32 {
+        for i in 0..p.side() as i32 {
+            let cell = [cell0[0] + i, cell0[1] + j];
+            let m = cell.map(|c| (c as f32 + 0.5) * p.cell_m);
+            if ((m[0] - centre[0]).powi(2) + (m[1] - centre[1]).powi(2)).sqrt() < p.reach_m() {
+                candidates.push(cell);
+            }
+        }
+    }
+    candidates
+}
+
+/// Per vertex of every candidate: its four central-difference neighbours
+/// `step` away, then the vertex itself.
+fn slope_points(p: &CliffMeshParams, candidates: &[[i32; 2]], step: f32) -> Vec<[f32; 2]> {
+    let q = p.cell_m / CLIFF_CELL_QUADS as f32;
+    let side = CLIFF_CELL_QUADS + 1;
+    let mut points = Vec::new();
+    for cell in candidates {
+        for k in 0..CELL_VERTICES {
+            let v =
+                [cell[0] as f32 * p.cell_m + (k % side) as f32 * q, cell[1] as f32 * p.cell_m + (k / side) as f32 * q];
+            points.extend([[v[0] + step, v[1]], [v[0] - step, v[1]], [v[0], v[1] + step], [v[0], v[1] - step], v]);
+        }
+    }
+    points
+}
+
+/// What the CPU twin of the rule says.
+struct Twin {
+    steep_cells: BTreeSet<[i32; 2]>,
+    /// Vertices whose slope is at the threshold (within 1e-4).
+    borderline: usize,
+    /// Heights of the vertices under the threshold slope, by their bits.
+    on_field: BTreeMap<[u32; 2], f32>,
+}
+
+fn twin(p: &CliffMeshParams, candidates: &[[i32; 2]], points: &[[f32; 2]], h: &[f32], step: f32) -> Twin {
+    let [cos_start, _] = p.cos_range();
+    let (mut steep_cells, mut borderline) = (BTreeSet::new(), 0);
+    let mut on_field: BTreeMap<[u32; 2], f32> = BTreeMap::new();
+    for (ci, cell) in candidates.iter().enumerate() {
+        let mut steep = false;
+        for k in 0..CELL_VERTICES as usize {
+            let s = &h[(ci * CELL_VERTICES as usize + k) * 5..][..5];
+            let n = glam::Vec3::new(-(s[0] - s[1]), -(s[2] - s[3]), 2.0 * step).normalize();
+            borderline += usize::from((n.z - cos_start).abs() < 1e-4);
+            if n.z < cos_start {
+                steep = true;
+            } else {
+                let v = points[(ci * CELL_VERTICES as usize + k) * 5 + 4];
+                on_field.insert(v.map(f32::to_bits), s[4]);
+            }
+        }
+        if steep {
+            steep_cells.insert(*cell);
+        }
+    }
+    Twin { steep_cells, borderline, on_field }
+}
+
+/// Watertight among themselves (a shared edge's vertices are the same
+/// bits) and to the height field.
+fn check_watertight(cells: &BTreeMap<[i32; 2], &[[f32; 4]]>, on_field: &BTreeMap<[u32; 2], f32>, side: u32) {
+    let mut shared = 0;
+    for (cell, patch) in cells {
+        if let Some(east) = cells.get(&[cell[0] + 1, cell[1]]) {
+            for r in 0..side as usize {
+                assert_eq!(
+                    patch[r * side as usize + side as usize - 1],
+                    east[r * side as usize],
+                    "crack east of {cell:?}"
+                );
+                shared += 1;
+            }
+        }
+    }
+    // And to the height field: every vertex under the threshold slope
+    // (the open rim among them) stands on it, unpushed.
+    let (mut rim, mut worst) = (0, 0.0f32);
+    for patch in cells.values() {
+        for v in patch.iter() {
+            if let Some(z) = on_field.get(&[v[0].to_bits(), v[1].to_bits()]) {
+                worst = worst.max((v[2] - z).abs());
+                rim += 1;
+            }
+        }
+    }
+    println!("{shared} shared edge vertices identical; {rim} vertices under the threshold, worst gap {worst:.6} m");
+    // f32 at 300 m: the same bilinear height, a few ulps apart at most.
+    assert!(rim > 100 && worst <= 1e-4, "{rim} {worst}");
+}
+
+/// Shaded by the cliff flavours: every pixel the meshes cover whose
+/// (pushed) normal is past the shading's cliff start is classified
+/// cliff; the others lean back towards level on a bulge's top.
+fn check_shaded_as_cliffs(ctx: &Context, on: &Rig, a: &Capture, b: &Capture) {
+    let gb = on.renderer.gbuffer.as_ref().unwrap().capture(ctx).unwrap();
+    let cliff = (FLAVOUR_NEAR_CLIFF | FLAVOUR_FAR_CLIFF) as u8;
+    let [cliff_start, _] = on.renderer.shade.slope_normal_z();
+    let (mut meshed, mut as_cliff, mut steep) = (0, 0, 0);
+    for i in 0..a.depth.len() {
+        if b.depth[i] > a.depth[i] * 1.0001 {
+            meshed += 1;
+            let code = gb.geometry_normals[i];
+            let n = vista::reference::octahedral::oct_decode8([u32::from(code[0]), u32::from(code[1])]);
+            let classified = gb.classification[i] & cliff != 0;
+            as_cliff += usize::from(classified);
+            // The code is the normal in 8 bits: z within 1e-2 of what the shader classified by.
+            if n[2] < f64::from(cliff_start) - 1e-2 {
+                assert!(classified, "pixel {i}: normal {n:?} is a cliff's, classification {}", gb.classification[i]);
+                steep += 1;
+            }
+        }
+    }
+    println!(
+        "{meshed} pixels in front of the height field, {as_cliff} classified cliff ({steep} past the cliff start)"
+    );
+    assert!(meshed > 200 && steep * 10 >= meshed * 8, "{steep} of {meshed}");
 }
 
 fn rig_spacing(rig: &Rig) -> f32 {
@@ -202,7 +238,7 @@ fn off_nothing_is_built_and_the_image_is_the_one_without_it() {
         assert!(!d.on && d.reason.contains("cliffs is off"), "{}", d.reason);
         let mut no_cliffs = rig(ctx, effects(false).with(Effect::Cliffs, false));
         for r in [&none, &refused] {
-            assert!(r.renderer.near.cliff_meshes.is_none());
+            assert!(r.renderer.effect::<vista::effects::cliff_meshes::CliffMeshes>().is_none());
             assert!(!r.renderer.pipelines().iter().any(|p| p.contains("cliff_mesh")), "{:?}", r.renderer.pipelines());
         }
         let _ = none.shot(ctx, &low(), CullStages::default());

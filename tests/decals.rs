@@ -198,7 +198,7 @@ fn tile_reaches(layout: &VtLayout, key: PageKey, q: &Decal, grow: f64) -> bool {
 
 /// Each resident page's tile bytes (albedo then detail).
 fn tiles(ctx: &Context, rig: &Rig) -> BTreeMap<PageKey, Vec<u8>> {
-    let vt = rig.renderer.virtual_texture.as_ref().unwrap();
+    let vt = rig.renderer.effect::<vista::effects::virtual_texture::VirtualTexture>().unwrap();
     let width = vt.layout().cache_texels()[0] as usize;
     let per_row = vt.layout().cache_tiles[0];
     let images = vt.cache_images().map(|img| ctx.read_image(img, 0, 0, 4).unwrap());
@@ -236,11 +236,12 @@ fn editing_a_decal_drops_exactly_the_pages_it_touches() {
         let mut rig = rig(ctx, set);
         rig.shot(ctx, &low(), CullStages::ALL);
         let before = tiles(ctx, &rig);
-        rig.renderer.virtual_texture.as_mut().unwrap().state.history = Some(Vec::new());
+        rig.renderer.effect_mut::<vista::effects::virtual_texture::VirtualTexture>().unwrap().state.history =
+            Some(Vec::new());
         // Moved 7 m and turned: the road stays as it was.
         let new = quad([524.0, 268.0], [18.0, 12.0], 60.0);
         let dropped = rig.renderer.set_decals(ctx, vec![road, new.clone()]).unwrap();
-        let vt = rig.renderer.virtual_texture.as_ref().unwrap();
+        let vt = rig.renderer.effect::<vista::effects::virtual_texture::VirtualTexture>().unwrap();
         let invalidated: BTreeSet<PageKey> = vt
             .state
             .history

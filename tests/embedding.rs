@@ -4,10 +4,14 @@
 mod common;
 
 use common::gpu_test;
+use common::terrain::{view, Surface, MAGENTA, MAGENTA_RGBA};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-use vista::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, RawHandles};
+use vista::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, RawHandles, Recorder};
 use vista::passes::prefix_sum::PrefixSum;
+use vista::passes::terrain_geometry::{COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT};
+use vista::render::{RenderTargets, RendererOptions, TerrainRenderer};
+use vista::world::WorldDesc;
 
 /// A context around `engine`'s handles, as an engine would make one.
 fn wrap(engine: &Context) -> Context {
@@ -91,12 +95,6 @@ fn from_raw_wraps_an_engines_device_without_owning_it() {
 /// never calls vkQueueSubmit on the engine's queue.
 #[test]
 fn terrain_renderer_records_into_the_engines_command_buffer() {
-    use common::terrain::{view, Surface, MAGENTA, MAGENTA_RGBA};
-    use vista::gpu::{Image, ImageDesc, Recorder};
-    use vista::passes::terrain_geometry::{COLOR_FORMAT, DEPTH_FORMAT, DEPTH_LAYOUT};
-    use vista::render::{RenderTargets, RendererOptions, TerrainRenderer};
-    use vista::world::WorldDesc;
-
     gpu_test(|engine| {
         let (submit, engine_submits) = counting_submitter(engine);
         let wrapped = wrap_with(engine, Some(submit));
@@ -113,42 +111,9 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
             let source = std::sync::Arc::new(Surface::Tilted { z0: 10.0, gx: 0.05, gy: 0.02 });
             let mut renderer =
                 TerrainRenderer::new(&wrapped, &world, source, Vec::new(), &RendererOptions::default()).unwrap();
-            let image = |name, format, usage| {
-                Image::new(&wrapped, &ImageDesc { name, format, extent: size, mip_levels: 1, array_layers: 1, usage })
-                    .unwrap()
-            };
-            let color = image(
-                "engine_color",
-                COLOR_FORMAT,
-                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-            );
-            let depth = image(
-                "engine_depth",
-                DEPTH_FORMAT,
-                // Sampled: occlusion culling (on by default) reads it.
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                    | vk::ImageUsageFlags::TRANSFER_SRC
-                    | vk::ImageUsageFlags::SAMPLED,
-            );
+            let (color, depth) = engine_targets(&wrapped, size);
             let v = view([256.0, 30.0, 200.0], 0.0, -30.0, size, 1.0);
-            // The engine's own pool, command buffer and fence.
-            // SAFETY: plain object creation on the engine's live device.
-            let (pool, cmd, fence) = unsafe {
-                let pool = device
-                    .create_command_pool(
-                        &vk::CommandPoolCreateInfo::default()
-                            .queue_family_index(engine.graphics_queue().family)
-                            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
-                        None,
-                    )
-                    .unwrap();
-                let cmd = device
-                    .allocate_command_buffers(
-                        &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
-                    )
-                    .unwrap()[0];
-                (pool, cmd, device.create_fence(&vk::FenceCreateInfo::default(), None).unwrap())
-            };
+            let (pool, cmd, fence) = engine_command_objects(engine);
             for frame in 0..400 {
                 // SAFETY: the previous submission's fence was waited on, so
                 // the command buffer is idle and may be re-recorded.
@@ -163,39 +128,14 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
                     rec.discard_to(&depth, DEPTH_LAYOUT);
                 }
                 renderer.record(&mut rec, &v, &RenderTargets::color(&color, &depth, MAGENTA)).unwrap();
-                // SAFETY: ends the recording begun above; submits to the
-                // engine's queue and waits, so nothing is in flight after.
-                unsafe {
-                    device.end_command_buffer(cmd).unwrap();
-                    let cmds = [cmd];
-                    device
-                        .queue_submit(
-                            engine.graphics_queue().raw,
-                            &[vk::SubmitInfo::default().command_buffers(&cmds)],
-                            fence,
-                        )
-                        .unwrap();
-                    let n = wrapped.frame_submitted();
-                    device.wait_for_fences(&[fence], true, u64::MAX).unwrap();
-                    device.reset_fences(&[fence]).unwrap();
-                    wrapped.frame_completed(n);
-                }
+                // SAFETY: `cmd` is the recording begun above; the fence is unsignalled.
+                unsafe { end_submit_and_wait(engine, &wrapped, cmd, fence) };
                 if frame > 2 && renderer.terrain.settled() {
                     break;
                 }
                 std::thread::sleep(std::time::Duration::from_millis(5));
             }
-            assert!(renderer.terrain.settled(), "streaming never settled");
-            assert!(renderer.latest_timings().is_some_and(|t| t.passes.iter().any(|p| p.name == "terrain_geometry")));
-            let rgba = wrapped.read_image(&color, 0, 0, 4).unwrap();
-            let made = wrapped.submissions();
-            assert_eq!(made.direct, 0, "vista submitted to the engine's queue itself");
-            assert!(made.through_engine > 0, "vista made and read back without a submission?");
-            assert_eq!(made.through_engine, engine_submits.load(Ordering::Acquire));
-            let terrain_px = rgba.chunks(4).filter(|p| *p != MAGENTA_RGBA).count();
-            // Looking 30 degrees down from 190 m over the tilted plane: the
-            // lower half of the image at least is ground.
-            assert!(terrain_px > 64 * 32, "only {terrain_px} terrain pixels");
+            check_terrain_through_the_engine(&wrapped, &renderer, &color, &engine_submits);
             // SAFETY: idle (waited above); these are the engine's objects.
             unsafe {
                 device.destroy_fence(fence, None);
@@ -205,4 +145,86 @@ fn terrain_renderer_records_into_the_engines_command_buffer() {
         wrapped.wait_idle().unwrap();
         assert_eq!(wrapped.live_objects().total(), 0);
     });
+}
+
+/// The engine's colour target and depth, made on the wrapped context.
+fn engine_targets(wrapped: &Context, size: [u32; 2]) -> (Image, Image) {
+    let image = |name, format, usage| {
+        Image::new(wrapped, &ImageDesc { name, format, extent: size, mip_levels: 1, array_layers: 1, usage }).unwrap()
+    };
+    let color =
+        image("engine_color", COLOR_FORMAT, vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC);
+    let depth = image(
+        "engine_depth",
+        DEPTH_FORMAT,
+        // Sampled: occlusion culling (on by default) reads it.
+        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::SAMPLED,
+    );
+    (color, depth)
+}
+
+/// The engine's own pool, command buffer and fence.
+fn engine_command_objects(engine: &Context) -> (vk::CommandPool, vk::CommandBuffer, vk::Fence) {
+    let device = engine.device();
+    // SAFETY: plain object creation on the engine's live device.
+    unsafe {
+        let pool = device
+            .create_command_pool(
+                &vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(engine.graphics_queue().family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )
+            .unwrap();
+        let cmd = device
+            .allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
+            )
+            .unwrap()[0];
+        (pool, cmd, device.create_fence(&vk::FenceCreateInfo::default(), None).unwrap())
+    }
+}
+
+/// Ends the recording, submits it to the engine's queue and waits, so
+/// nothing is in flight after; tells vista the frame is done.
+///
+/// # Safety
+/// `cmd` is recording, `fence` unsignalled; both the engine's.
+unsafe fn end_submit_and_wait(engine: &Context, wrapped: &Context, cmd: vk::CommandBuffer, fence: vk::Fence) {
+    let device = engine.device();
+    // SAFETY: as the caller promises.
+    unsafe {
+        device.end_command_buffer(cmd).unwrap();
+        let cmds = [cmd];
+        device
+            .queue_submit(engine.graphics_queue().raw, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence)
+            .unwrap();
+        let n = wrapped.frame_submitted();
+        device.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+        device.reset_fences(&[fence]).unwrap();
+        wrapped.frame_completed(n);
+    }
+}
+
+/// Settled terrain in the engine's colour target, every vista submission
+/// through the engine's function.
+fn check_terrain_through_the_engine(
+    wrapped: &Context,
+    renderer: &TerrainRenderer,
+    color: &Image,
+    engine_submits: &AtomicU64,
+) {
+    assert!(renderer.terrain.settled(), "streaming never settled");
+    assert!(renderer.latest_timings().is_some_and(|t| t.passes.iter().any(|p| p.name == "terrain_geometry")));
+    let rgba = wrapped.read_image(color, 0, 0, 4).unwrap();
+    let made = wrapped.submissions();
+    assert_eq!(made.direct, 0, "vista submitted to the engine's queue itself");
+    assert!(made.through_engine > 0, "vista made and read back without a submission?");
+    assert_eq!(made.through_engine, engine_submits.load(Ordering::Acquire));
+    let terrain_px = rgba.chunks(4).filter(|p| *p != MAGENTA_RGBA).count();
+    // Looking 30 degrees down from 190 m over the tilted plane: the
+    // lower half of the image at least is ground.
+    assert!(terrain_px > 64 * 32, "only {terrain_px} terrain pixels");
 }

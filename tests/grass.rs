@@ -55,7 +55,7 @@ fn camera(ctx: &Context, rig: &Rig) -> [f32; 3] {
 }
 
 fn tufts(ctx: &Context, rig: &Rig) -> BTreeMap<[i32; 2], GrassInstanceGpu> {
-    let grass = rig.renderer.near.grass.as_ref().expect("grass is built");
+    let grass = rig.renderer.effect::<vista::effects::grass::gpu::Grass>().expect("grass is built");
     grass.read_instances(ctx).unwrap().into_iter().map(|t| (t.cell, t)).collect()
 }
 
@@ -96,51 +96,17 @@ fn near_hole_edge(rig: &Rig, p: [f32; 2]) -> bool {
 fn gpu_placement_equals_the_cpu_twin_and_stays_put() {
     gpu_test(|ctx| {
         let mut rig = rig(ctx, effects(true));
-        rig.renderer.near.grass.as_mut().unwrap().no_culling = true;
+        rig.renderer.effect_mut::<vista::effects::grass::gpu::Grass>().unwrap().no_culling = true;
         rig.shot(ctx, &low(0.0, 0.0), CullStages::default());
         let gpu = tufts(ctx, &rig);
         let cam = camera(ctx, &rig);
-        let params = rig.renderer.near.grass.as_ref().unwrap().params.clone();
+        let params = rig.renderer.effect::<vista::effects::grass::gpu::Grass>().unwrap().params.clone();
 
-        // Every candidate cell's ground, through the validated query include.
-        let all = place_cpu(&params, [cam[0], cam[1]], false, |_| Some(Ground { material: 0, hole: false }));
-        let points: Vec<[f32; 2]> = all.iter().map(|t| t.xy).collect();
-        let answers = query(ctx, &rig, &points);
-        let ground: BTreeMap<[u32; 2], Ground> = points
-            .iter()
-            .zip(&answers)
-            .filter_map(|(p, a)| {
-                let (material, _) = (*a)?;
-                Some((p.map(f32::to_bits), Ground { material, hole: in_hole(*p, 0.0) }))
-            })
-            .collect();
+        let ground = candidate_ground(ctx, &rig, &params, cam);
         let cpu: Vec<TuftCpu> =
             place_cpu(&params, [cam[0], cam[1]], true, |p| ground.get(&p.map(f32::to_bits)).copied());
         let without_holes = place_cpu(&params, [cam[0], cam[1]], false, |p| ground.get(&p.map(f32::to_bits)).copied());
-
-        let (mut compared, mut skipped) = (0, 0);
-        for t in &cpu {
-            if t.borderline || near_hole_edge(&rig, t.xy) {
-                skipped += 1;
-                continue;
-            }
-            let g =
-                gpu.get(&t.cell).unwrap_or_else(|| panic!("cell {:?} at {:?}: the GPU placed nothing", t.cell, t.xy));
-            assert_eq!([g.position[0], g.position[1]].map(f32::to_bits), t.xy.map(f32::to_bits), "cell {:?}", t.cell);
-            assert_eq!(g.packed & 0xFF, t.material, "material of cell {:?}", t.cell);
-            assert_eq!((g.packed >> 8) & 0xFF, t.rotation, "rotation of cell {:?}", t.cell);
-            assert_eq!(g.packed >> 16, t.lean, "lean of cell {:?}", t.cell);
-            compared += 1;
-        }
-        let cpu_cells: std::collections::BTreeSet<[i32; 2]> = cpu.iter().map(|t| t.cell).collect();
-        for (cell, g) in &gpu {
-            let p = [g.position[0], g.position[1]];
-            let edge = near_hole_edge(&rig, p) || cpu.iter().any(|t| t.cell == *cell && t.borderline);
-            assert!(
-                cpu_cells.contains(cell) || edge || without_holes.iter().any(|t| t.cell == *cell && t.borderline),
-                "the GPU placed cell {cell:?} at {p:?}, the twin did not"
-            );
-        }
+        let (compared, skipped) = compare_with_the_twin(&rig, &gpu, &cpu, &without_holes);
         // Each rule mattered: a meadow of tufts, some removed by the hole,
         // and candidate cells on the cone's rock, which grows nothing.
         let in_the_hole = without_holes.iter().filter(|t| in_hole(t.xy, -1.0)).count();
@@ -150,30 +116,86 @@ fn gpu_placement_equals_the_cpu_twin_and_stays_put() {
              {on_rock} candidate cells on rock"
         );
         assert!(compared > 1500 && in_the_hole > 20 && on_rock > 50, "{compared}, {in_the_hole}, {on_rock}");
-
-        // Moving less than a cell: every tuft in range both times is where it was.
-        let before = gpu;
-        let step = (0.2, 0.13);
-        rig.again(ctx, &low(step.0, step.1), CullStages::default());
-        let after = tufts(ctx, &rig);
-        let cam2 = camera(ctx, &rig);
-        assert_ne!(cam, cam2);
-        let r = f64::from(params.radius_m) - 1e-3;
-        let (mut kept, mut left) = (0, 0);
-        for (cell, b) in &before {
-            let d2 = f64::from(b.position[0] - cam2[0]).hypot(f64::from(b.position[1] - cam2[1]));
-            if d2 >= r {
-                left += 1;
-                continue;
-            }
-            let a = after.get(cell).unwrap_or_else(|| panic!("cell {cell:?} still in range lost its tuft"));
-            assert_eq!(a.position[..3], b.position[..3], "cell {cell:?} moved");
-            assert_eq!(a.packed, b.packed);
-            kept += 1;
-        }
-        println!("moving {step:?} m: {kept} tufts kept in place, {left} left the radius");
-        assert!(kept > 1500 && left > 0);
+        tufts_stay_put(ctx, &mut rig, gpu, cam, &params);
     });
+}
+
+/// Every candidate cell's ground, through the validated query include.
+fn candidate_ground(ctx: &Context, rig: &Rig, params: &GrassParams, cam: [f32; 3]) -> BTreeMap<[u32; 2], Ground> {
+    let all = place_cpu(params, [cam[0], cam[1]], false, |_| Some(Ground { material: 0, hole: false }));
+    let points: Vec<[f32; 2]> = all.iter().map(|t| t.xy).collect();
+    let answers = query(ctx, rig, &points);
+    points
+        .iter()
+        .zip(&answers)
+        .filter_map(|(p, a)| {
+            let (material, _) = (*a)?;
+            Some((p.map(f32::to_bits), Ground { material, hole: in_hole(*p, 0.0) }))
+        })
+        .collect()
+}
+
+/// The GPU's tufts are the twin's (but at the radius or the hole's edge,
+/// where either may place one); (compared, skipped).
+fn compare_with_the_twin(
+    rig: &Rig,
+    gpu: &BTreeMap<[i32; 2], GrassInstanceGpu>,
+    cpu: &[TuftCpu],
+    without_holes: &[TuftCpu],
+) -> (usize, usize) {
+    let (mut compared, mut skipped) = (0, 0);
+    for t in cpu {
+        if t.borderline || near_hole_edge(rig, t.xy) {
+            skipped += 1;
+            continue;
+        }
+        let g = gpu.get(&t.cell).unwrap_or_else(|| panic!("cell {:?} at {:?}: the GPU placed nothing", t.cell, t.xy));
+        assert_eq!([g.position[0], g.position[1]].map(f32::to_bits), t.xy.map(f32::to_bits), "cell {:?}", t.cell);
+        assert_eq!(g.packed & 0xFF, t.material, "material of cell {:?}", t.cell);
+        assert_eq!((g.packed >> 8) & 0xFF, t.rotation, "rotation of cell {:?}", t.cell);
+        assert_eq!(g.packed >> 16, t.lean, "lean of cell {:?}", t.cell);
+        compared += 1;
+    }
+    let cpu_cells: std::collections::BTreeSet<[i32; 2]> = cpu.iter().map(|t| t.cell).collect();
+    for (cell, g) in gpu {
+        let p = [g.position[0], g.position[1]];
+        let edge = near_hole_edge(rig, p) || cpu.iter().any(|t| t.cell == *cell && t.borderline);
+        assert!(
+            cpu_cells.contains(cell) || edge || without_holes.iter().any(|t| t.cell == *cell && t.borderline),
+            "the GPU placed cell {cell:?} at {p:?}, the twin did not"
+        );
+    }
+    (compared, skipped)
+}
+
+/// Moving less than a cell: every tuft in range both times is where it was.
+fn tufts_stay_put(
+    ctx: &Context,
+    rig: &mut Rig,
+    before: BTreeMap<[i32; 2], GrassInstanceGpu>,
+    cam: [f32; 3],
+    params: &GrassParams,
+) {
+    let step = (0.2, 0.13);
+    rig.again(ctx, &low(step.0, step.1), CullStages::default());
+    let after = tufts(ctx, rig);
+    let cam2 = camera(ctx, rig);
+    assert_ne!(cam, cam2);
+    let r = f64::from(params.radius_m) - 1e-3;
+    let (mut kept, mut left) = (0, 0);
+    for (cell, b) in &before {
+        let d2 = f64::from(b.position[0] - cam2[0]).hypot(f64::from(b.position[1] - cam2[1]));
+        if d2 >= r {
+            left += 1;
+            continue;
+        }
+        let a = after.get(cell).unwrap_or_else(|| panic!("cell {cell:?} still in range lost its tuft"));
+        assert_eq!(a.position[..3], b.position[..3], "cell {cell:?} moved");
+        assert_eq!(a.packed, b.packed);
+        kept += 1;
+    }
+    println!("moving {step:?} m: {kept} tufts kept in place, {left} left the radius");
+    assert!(kept > 1500 && left > 0);
 }
 
 /// Metres per R16 height step of the small world.
@@ -228,7 +250,7 @@ fn tufts_stand_on_the_terrain_and_only_where_grass_grows() {
         // Every tuft's material grows grass; none stands in the hole.
         let points: Vec<[f32; 2]> = gpu.iter().map(|t| [t.position[0], t.position[1]]).collect();
         let answers = query(ctx, &rig, &points);
-        let rules = rig.renderer.near.grass.as_ref().unwrap().params.rules;
+        let rules = rig.renderer.effect::<vista::effects::grass::gpu::Grass>().unwrap().params.rules;
         let mut by_material = [0usize; 5];
         for (p, a) in points.iter().zip(&answers) {
             let (m, _) = a.expect("a tuft where no terrain is found");
@@ -259,7 +281,7 @@ fn off_nothing_is_built_and_the_image_is_the_one_without_it() {
         fx.set(Effect::Splat, true);
         let mut on = rig(ctx, fx);
         for r in [&plain, &refused] {
-            assert!(r.renderer.near.grass.is_none());
+            assert!(r.renderer.effect::<vista::effects::grass::gpu::Grass>().is_none());
             assert!(!r.renderer.pipelines().iter().any(|p| p.contains("grass")), "{:?}", r.renderer.pipelines());
             assert!(!r.renderer.memory().iter().any(|(_, _, e)| e.contains(&Effect::Grass)));
         }
@@ -303,7 +325,7 @@ fn no_grass_grows_under_an_opaque_decal() {
         let options = RendererOptions { effects: fx, decals, ..RendererOptions::default() };
         let mut rig = Rig::with_options(ctx, world(), GROUND, holes, SIZE, false, options);
         assert!(rig.renderer.effect_on(Effect::Decals));
-        rig.renderer.near.grass.as_mut().unwrap().no_culling = true;
+        rig.renderer.effect_mut::<vista::effects::grass::gpu::Grass>().unwrap().no_culling = true;
         rig.shot(ctx, &low(0.0, 0.0), CullStages::default());
         let inside = |t: &GrassInstanceGpu, margin: f64| {
             let d = [0, 1].map(|i| (f64::from(t.position[i]) - center[i]).abs() - size[i] / 2.0);
@@ -317,7 +339,7 @@ fn no_grass_grows_under_an_opaque_decal() {
         assert!(under == 0 && around > 50, "{under} under, {around} around");
         // The pigment map's texel at the decal's centre is its colour
         // (stored as the square root of linear albedo).
-        let grass = rig.renderer.near.grass.as_ref().unwrap();
+        let grass = rig.renderer.effect::<vista::effects::grass::gpu::Grass>().unwrap();
         let (texel, cam) = (grass.pigment_texel_m(), camera(ctx, &rig));
         let origin = grass.pigment_origin([cam[0], cam[1]]);
         // Independently: the map covers the grass around the camera.

@@ -63,10 +63,42 @@ fn the_drawn_surface_passes_through_every_post() {
     let source: Arc<dyn HeightSource> = Arc::new(Png16Source::open(&path, extent, range).unwrap());
     // The map's own values, as a 16-bit step in metres: what a post is.
     let step = f64::from(range[1] - range[0]) / 65535.0;
-    let post = |i: u32, j: u32| f64::from(range[0]) + f64::from(px[((h - 1 - j) * w + i) as usize]) * step;
-    // The two triangles through the posts of quad (i, j): SW-NE split where
-    // i + j is even, NW-SE elsewhere (the diamond pattern).
-    let post_triangles = |i: u32, j: u32| {
+    let posts = Posts { px, w, h, range, step };
+    gpu_test(|ctx| {
+        let (worst, checked) = distance_to_posts(ctx, world, &source, &posts);
+        assert!(checked > 40_000, "{checked} pixels checked");
+        // Within the 16-bit step (6 mm here) and the depth buffer's
+        // precision from 330 m (D32 reversed-Z: under 0.1 mm).
+        assert!(worst <= step, "drawn surface {worst:.5} m from the triangles through the posts (step {step:.5})");
+        // The control: the same map with vertices half a pixel off its posts
+        // (the grid from the world's corner) draws a resampling of it.
+        let (off, _) = distance_to_posts(ctx, WorldDesc { grid_origin_m: [0.0, 0.0], ..world }, &source, &posts);
+        println!("{checked} pixels: drawn surface within {worst:.6} m of the triangles through the posts; {off:.3} m off them without posts");
+        assert!(off > 100.0 * step, "half a pixel off the posts, the surface is only {off} m away: a weak test");
+    });
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
+}
+
+/// The PNG's pixels as posts: heights at 2 m spacing.
+struct Posts {
+    px: Vec<u16>,
+    w: u32,
+    h: u32,
+    range: [f32; 2],
+    /// A 16-bit step in metres.
+    step: f64,
+}
+
+impl Posts {
+    fn post(&self, i: u32, j: u32) -> f64 {
+        let (px, range, w, h, step) = (&self.px, self.range, self.w, self.h, self.step);
+        f64::from(range[0]) + f64::from(px[((h - 1 - j) * w + i) as usize]) * step
+    }
+
+    /// The two triangles through the posts of quad (i, j): SW-NE split where
+    /// i + j is even, NW-SE elsewhere (the diamond pattern).
+    fn triangles(&self, i: u32, j: u32) -> [Tri; 2] {
+        let post = |i, j| self.post(i, j);
         let (h00, h10, h01, h11) = (post(i, j), post(i + 1, j), post(i, j + 1), post(i + 1, j + 1));
         if (i + j).is_multiple_of(2) {
             [
@@ -79,71 +111,72 @@ fn the_drawn_surface_passes_through_every_post() {
                 Tri([1.0, 0.0, h10], [1.0, 1.0, h11], [0.0, 1.0, h01]),
             ]
         }
-    };
-    // The largest distance (m) of the drawn surface of `world` to the
-    // triangles through the posts, and the pixels measured.
-    let measure = |ctx: &vista::gpu::Context, world: WorldDesc| {
-        // LOD 0 everywhere in view and no refinement: the drawn surface is
-        // the triangles between the vertices, nothing else.
-        let lod = LodOptions { refine_levels: 0, ..LodOptions::default() };
-        let options = RendererOptions { lod, ..RendererOptions::default() };
-        let size = [192, 192];
-        let mut rig = Rig::with_source(ctx, world, Arc::clone(&source), vec![], size, false, options);
-        let (mut checked, mut worst) = (0usize, 0f64);
-        for centre in [[200.0, 160.0], [90.0, 250.0], [330.0, 60.0]] {
-            let v = view([centre[0], centre[1], 330.0], 0.0, -90.0, size, 0.01);
-            let c = rig.shot(ctx, &v, CullStages::ALL);
-            let stats = collect(ctx, &rig.renderer, &v).unwrap();
-            assert!(stats.nodes_per_lod[1..].iter().all(|&n| n == 0), "LOD 0 only: {:?}", stats.nodes_per_lod);
-            let forward = v.camera.basis()[0];
-            for y in 0..size[1] {
-                for x in 0..size[0] {
-                    let d = c.depth[(y * size[0] + x) as usize];
-                    if d <= 0.0 {
-                        continue;
-                    }
-                    let ray = v.ray([f64::from(x) + 0.5, f64::from(y) + 0.5]);
-                    let lin = f64::from(vista::scene::view::linear_depth(d, v.near_m));
-                    let p = glam::DVec3::from(v.camera.position_m) + ray * (lin / ray.dot(forward));
-                    // Post (i, j) is pixel column i, row h - 1 - j, at ((i + .5) 2, (j + .5) 2).
-                    let (u, t) = (p.x / 2.0 - 0.5, p.y / 2.0 - 0.5);
-                    if u < 1.0 || t < 1.0 || u >= f64::from(w - 2) || t >= f64::from(h - 2) {
-                        continue;
-                    }
-                    // The rasteriser snaps projected vertices to a fraction
-                    // of a pixel (a pixel is 2 m on the ground here), so a
-                    // pixel at a triangle's edge may take the plane of its
-                    // neighbour: the nearest of the triangles within 4 cm
-                    // of p (0.02 in quad units).
-                    let near = (-1..=1)
-                        .flat_map(|dj| (-1..=1).map(move |di| (di, dj)))
-                        .flat_map(|(di, dj)| {
-                            let (i, j) = ((u.floor() as i64 + di) as u32, (t.floor() as i64 + dj) as u32);
-                            let (fu, fv) = (u - f64::from(i), t - f64::from(j));
-                            post_triangles(i, j).into_iter().filter_map(move |tri| tri.at(fu, fv, 0.02))
-                        })
-                        .map(|z| (p.z - z).abs())
-                        .fold(f64::INFINITY, f64::min);
-                    worst = worst.max(near);
-                    checked += 1;
+    }
+
+    /// Distance (m) of `p` to the nearest triangle through the posts; none
+    /// at the map's border.
+    fn distance(&self, p: glam::DVec3) -> Option<f64> {
+        let (w, h) = (self.w, self.h);
+        // Post (i, j) is pixel column i, row h - 1 - j, at ((i + .5) 2, (j + .5) 2).
+        let (u, t) = (p.x / 2.0 - 0.5, p.y / 2.0 - 0.5);
+        if u < 1.0 || t < 1.0 || u >= f64::from(w - 2) || t >= f64::from(h - 2) {
+            return None;
+        }
+        // The rasteriser snaps projected vertices to a fraction
+        // of a pixel (a pixel is 2 m on the ground here), so a
+        // pixel at a triangle's edge may take the plane of its
+        // neighbour: the nearest of the triangles within 4 cm
+        // of p (0.02 in quad units).
+        let near = (-1..=1)
+            .flat_map(|dj| (-1..=1).map(move |di| (di, dj)))
+            .flat_map(|(di, dj)| {
+                let (i, j) = ((u.floor() as i64 + di) as u32, (t.floor() as i64 + dj) as u32);
+                let (fu, fv) = (u - f64::from(i), t - f64::from(j));
+                self.triangles(i, j).into_iter().filter_map(move |tri| tri.at(fu, fv, 0.02))
+            })
+            .map(|z| (p.z - z).abs())
+            .fold(f64::INFINITY, f64::min);
+        Some(near)
+    }
+}
+
+/// The largest distance (m) of the drawn surface of `world` to the
+/// triangles through the posts, and the pixels measured.
+fn distance_to_posts(
+    ctx: &vista::gpu::Context,
+    world: WorldDesc,
+    source: &Arc<dyn HeightSource>,
+    posts: &Posts,
+) -> (f64, usize) {
+    // LOD 0 everywhere in view and no refinement: the drawn surface is
+    // the triangles between the vertices, nothing else.
+    let lod = LodOptions { refine_levels: 0, ..LodOptions::default() };
+    let options = RendererOptions { lod, ..RendererOptions::default() };
+    let size = [192, 192];
+    let mut rig = Rig::with_source(ctx, world, Arc::clone(source), vec![], size, false, options);
+    let (mut checked, mut worst) = (0usize, 0f64);
+    for centre in [[200.0, 160.0], [90.0, 250.0], [330.0, 60.0]] {
+        let v = view([centre[0], centre[1], 330.0], 0.0, -90.0, size, 0.01);
+        let c = rig.shot(ctx, &v, CullStages::ALL);
+        let stats = collect(ctx, &rig.renderer, &v).unwrap();
+        assert!(stats.nodes_per_lod[1..].iter().all(|&n| n == 0), "LOD 0 only: {:?}", stats.nodes_per_lod);
+        let forward = v.camera.basis()[0];
+        for y in 0..size[1] {
+            for x in 0..size[0] {
+                let d = c.depth[(y * size[0] + x) as usize];
+                if d <= 0.0 {
+                    continue;
                 }
+                let ray = v.ray([f64::from(x) + 0.5, f64::from(y) + 0.5]);
+                let lin = f64::from(vista::scene::view::linear_depth(d, v.near_m));
+                let p = glam::DVec3::from(v.camera.position_m) + ray * (lin / ray.dot(forward));
+                let Some(near) = posts.distance(p) else { continue };
+                worst = worst.max(near);
+                checked += 1;
             }
         }
-        (worst, checked)
-    };
-    gpu_test(|ctx| {
-        let (worst, checked) = measure(ctx, world);
-        assert!(checked > 40_000, "{checked} pixels checked");
-        // Within the 16-bit step (6 mm here) and the depth buffer's
-        // precision from 330 m (D32 reversed-Z: under 0.1 mm).
-        assert!(worst <= step, "drawn surface {worst:.5} m from the triangles through the posts (step {step:.5})");
-        // The control: the same map with vertices half a pixel off its posts
-        // (the grid from the world's corner) draws a resampling of it.
-        let (off, _) = measure(ctx, WorldDesc { grid_origin_m: [0.0, 0.0], ..world });
-        println!("{checked} pixels: drawn surface within {worst:.6} m of the triangles through the posts; {off:.3} m off them without posts");
-        assert!(off > 100.0 * step, "half a pixel off the posts, the surface is only {off} m away: a weak test");
-    });
-    let _ = std::fs::remove_dir_all(path.parent().unwrap());
+    }
+    (worst, checked)
 }
 
 /// A triangle over the unit quad: (u, v, height) corners.

@@ -198,66 +198,8 @@ fn gpu_box_test_makes_the_cpu_twins_choices() {
         let img = upload_pyramid(ctx, &p);
         // The renderer's camera-relative projection, looking north (+y).
         let vp: Mat4 = view([0.0, 0.0, 0.0], 0.0, 0.0, depth_size, 1.0).view_proj().as_mat4();
-        // Random boxes ahead (sizes from sub-pixel to most of the screen),
-        // and boxes crossing the near plane (must be visible).
-        let mut boxes = Vec::new();
-        for i in 0..4000 {
-            let c = Vec3::new(
-                (rng.unit() as f32 - 0.5) * 120.0,
-                if i % 10 == 0 { 0.3 } else { 2.0 + rng.unit() as f32 * 150.0 },
-                (rng.unit() as f32 - 0.5) * 80.0,
-            );
-            let h =
-                Vec3::new(rng.unit() as f32, rng.unit() as f32, rng.unit() as f32) * (0.05 + 20.0 * rng.unit() as f32);
-            boxes.push((c - h, c + h));
-        }
-        let mut data: Vec<f32> = vp.to_cols_array().to_vec();
-        data.extend(bytemuck::cast_slice::<u32, f32>(&[depth_size[0], depth_size[1], boxes.len() as u32, 0]));
-        for (lo, hi) in &boxes {
-            data.extend([lo.x, lo.y, lo.z, 0.0, hi.x, hi.y, hi.z, 0.0]);
-        }
-        let probes = host_buffer(ctx, "probes", bytemuck::cast_slice(&data), vk::BufferUsageFlags::STORAGE_BUFFER);
-        let results = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "probe_results",
-                size: boxes.len() as u64 * 8,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
-                location: MemoryLocation::GpuToCpu,
-            },
-        )
-        .unwrap();
-        let sampler = Sampler::new(
-            ctx,
-            &SamplerDesc {
-                name: "probe_nearest",
-                filter: vk::Filter::NEAREST,
-                address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
-            },
-        )
-        .unwrap();
-        let pipeline = Pipeline::compute(
-            ctx,
-            &ComputePipelineDesc { name: "occlusion_probe", shader: &probe_sh::SHADER, specialization: &[] },
-        )
-        .unwrap();
-        ctx.submit_and_wait(|rec| {
-            rec.bind_pipeline(&pipeline);
-            rec.push_descriptors(
-                &pipeline,
-                &[
-                    (probe_sh::PROBES, Resource::Buffer(&probes)),
-                    (probe_sh::OUT_, Resource::Buffer(&results)),
-                    (probe_sh::NEAREST, Resource::Sampler(sampler.raw())),
-                    (probe_sh::HIZ, Resource::Image(&img, vk::ImageLayout::GENERAL)),
-                ],
-            );
-            rec.dispatch((boxes.len() as u32).div_ceil(probe_sh::WORKGROUP_SIZE[0]), 1, 1);
-            rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::HOST);
-            Ok(())
-        })
-        .unwrap();
-        let got: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(results.mapped().unwrap());
+        let boxes = random_boxes(&mut rng);
+        let got = probe_on_the_gpu(ctx, &img, vp, depth_size, &boxes);
         let (mut near_plane, mut occluded, mut boundary, mut max_level) = (0, 0, 0, 0);
         for (i, ((lo, hi), g)) in boxes.iter().zip(&got).enumerate() {
             let t = box_visible_cpu(*lo, *hi, vp, depth_size, &p);
@@ -277,4 +219,77 @@ fn gpu_box_test_makes_the_cpu_twins_choices() {
         assert!(occluded > 500 && boundary < 40, "{occluded} occluded, {boundary} at the threshold");
         assert!(max_level >= 5, "boxes reached level {max_level} only");
     });
+}
+
+/// Random boxes ahead (sizes from sub-pixel to most of the screen),
+/// and boxes crossing the near plane (must be visible).
+fn random_boxes(rng: &mut Rng) -> Vec<(Vec3, Vec3)> {
+    let mut boxes = Vec::new();
+    for i in 0..4000 {
+        let c = Vec3::new(
+            (rng.unit() as f32 - 0.5) * 120.0,
+            if i % 10 == 0 { 0.3 } else { 2.0 + rng.unit() as f32 * 150.0 },
+            (rng.unit() as f32 - 0.5) * 80.0,
+        );
+        let h = Vec3::new(rng.unit() as f32, rng.unit() as f32, rng.unit() as f32) * (0.05 + 20.0 * rng.unit() as f32);
+        boxes.push((c - h, c + h));
+    }
+    boxes
+}
+
+/// The probe shader's (visible, level) of each box against the pyramid `img`.
+fn probe_on_the_gpu(
+    ctx: &Context,
+    img: &Image,
+    vp: Mat4,
+    depth_size: [u32; 2],
+    boxes: &[(Vec3, Vec3)],
+) -> Vec<[u32; 2]> {
+    let mut data: Vec<f32> = vp.to_cols_array().to_vec();
+    data.extend(bytemuck::cast_slice::<u32, f32>(&[depth_size[0], depth_size[1], boxes.len() as u32, 0]));
+    for (lo, hi) in boxes {
+        data.extend([lo.x, lo.y, lo.z, 0.0, hi.x, hi.y, hi.z, 0.0]);
+    }
+    let probes = host_buffer(ctx, "probes", bytemuck::cast_slice(&data), vk::BufferUsageFlags::STORAGE_BUFFER);
+    let results = Buffer::new(
+        ctx,
+        &BufferDesc {
+            name: "probe_results",
+            size: boxes.len() as u64 * 8,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::GpuToCpu,
+        },
+    )
+    .unwrap();
+    let sampler = Sampler::new(
+        ctx,
+        &SamplerDesc {
+            name: "probe_nearest",
+            filter: vk::Filter::NEAREST,
+            address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+        },
+    )
+    .unwrap();
+    let pipeline = Pipeline::compute(
+        ctx,
+        &ComputePipelineDesc { name: "occlusion_probe", shader: &probe_sh::SHADER, specialization: &[] },
+    )
+    .unwrap();
+    ctx.submit_and_wait(|rec| {
+        rec.bind_pipeline(&pipeline);
+        rec.push_descriptors(
+            &pipeline,
+            &[
+                (probe_sh::PROBES, Resource::Buffer(&probes)),
+                (probe_sh::OUT_, Resource::Buffer(&results)),
+                (probe_sh::NEAREST, Resource::Sampler(sampler.raw())),
+                (probe_sh::HIZ, Resource::Image(img, vk::ImageLayout::GENERAL)),
+            ],
+        );
+        rec.dispatch((boxes.len() as u32).div_ceil(probe_sh::WORKGROUP_SIZE[0]), 1, 1);
+        rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::HOST);
+        Ok(())
+    })
+    .unwrap();
+    bytemuck::pod_collect_to_vec(results.mapped().unwrap())
 }

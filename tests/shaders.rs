@@ -8,7 +8,19 @@ mod shader_compiler;
 
 use std::mem::{offset_of, size_of};
 use std::path::Path;
+use vista::passes::cull_patches::{CullPush, PatchListHeader};
+use vista::passes::debug_view::DebugViewPush;
+use vista::passes::hiz_build::HizPush;
+use vista::passes::prefix_sum::PrefixSumPush;
+use vista::passes::quadtree_update::QuadtreeUpdatePush;
+use vista::passes::sector_data::SectorDataPush;
+use vista::passes::select_patches::{SelectHeader, SelectPush};
+use vista::passes::terrain_geometry::TerrainDrawPush;
+use vista::passes::terrain_query::{TerrainQueryPush, VistaTerrain};
+use vista::passes::traverse::{LevelArgs, TraverseHeader, TraversePush};
+use vista::render::TerrainViewGpu;
 use vista::shaders::{self, layouts, structs};
+use vista::terrain::quadtree::QuadtreeUpdate;
 
 fn shader_dir() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders_glsl")
@@ -82,19 +94,13 @@ fn check_layout(what: &str, rust: (usize, Vec<(&str, usize, usize)>), glsl: &[(&
 
 #[test]
 fn rust_twins_match_reflected_layouts() {
-    use vista::passes::cull_patches::{CullPush, PatchListHeader};
-    use vista::passes::debug_view::DebugViewPush;
-    use vista::passes::hiz_build::HizPush;
-    use vista::passes::prefix_sum::PrefixSumPush;
-    use vista::passes::quadtree_update::QuadtreeUpdatePush;
-    use vista::passes::sector_data::SectorDataPush;
-    use vista::passes::select_patches::{SelectHeader, SelectPush};
-    use vista::passes::terrain_geometry::TerrainDrawPush;
-    use vista::passes::terrain_query::{TerrainQueryPush, VistaTerrain};
-    use vista::passes::traverse::{LevelArgs, TraverseHeader, TraversePush};
-    use vista::render::TerrainViewGpu;
-    use vista::terrain::quadtree::QuadtreeUpdate;
+    selection_twins_match();
+    culling_and_drawing_twins_match();
+    push_constant_blocks_are_the_pipelines();
+}
 
+/// The twins of the quadtree, traversal and terrain data passes.
+fn selection_twins_match() {
     check_layout("PrefixSumPush", fields!(PrefixSumPush: count), layouts::PREFIX_SUM_PUSH, structs::PREFIX_SUM_PUSH);
     check_layout(
         "QuadtreeUpdate",
@@ -141,6 +147,10 @@ fn rust_twins_match_reflected_layouts() {
         layouts::TERRAIN_QUERY_PUSH,
         structs::TERRAIN_QUERY_PUSH,
     );
+}
+
+/// The twins of culling, drawing, the view and the materials.
+fn culling_and_drawing_twins_match() {
     check_layout(
         "CullPush",
         fields!(CullPush: stages, capacity, depth_w, depth_h),
@@ -198,7 +208,10 @@ fn rust_twins_match_reflected_layouts() {
         layouts::TERRAIN_MATERIAL,
         structs::TERRAIN_MATERIAL,
     );
-    // Push-constant blocks are exactly what the pipelines were built with.
+}
+
+/// Push-constant blocks are exactly what the pipelines were built with.
+fn push_constant_blocks_are_the_pipelines() {
     assert_eq!(size_of::<TraversePush>() as u32, shaders::traverse::PUSH_CONSTANT_SIZE);
     assert_eq!(shaders::traverse::PUSH_CONSTANT_SIZE, shaders::traverse_level::PUSH_CONSTANT_SIZE);
     assert_eq!(size_of::<CullPush>() as u32, shaders::cull_patches::PUSH_CONSTANT_SIZE);
@@ -235,7 +248,7 @@ fn shared_constants_have_one_source() {
     assert_eq!(parsed.iter().map(|c| (c.name.clone(), c.value)).collect::<Vec<_>>(), exported);
     let (shaders, headers) = files();
     for path in shaders.iter().chain(&headers).filter(|p| !p.ends_with("constants.glsl")) {
-        let src = std::fs::read_to_string(&path).unwrap();
+        let src = std::fs::read_to_string(path).unwrap();
         for (name, _) in shaders::consts::ALL {
             for decl in [format!("const uint {name} "), format!("#define {name} ")] {
                 assert!(!src.contains(&decl), "{}: redeclares {name}; include constants.glsl", path.display());

@@ -75,7 +75,7 @@ fn diff(a: LiveObjects, b: LiveObjects) -> [i64; 4] {
 /// The GPU's (threshold, distance) texels of `node`.
 fn read_layer(ctx: &Context, rig: &Rig, node: NodeId) -> Vec<[f32; 2]> {
     let slot = rig.renderer.terrain.tree.shadow.slot_of(node).expect("resident");
-    let atlas = &rig.renderer.sun_shadows.as_ref().expect("built").atlas;
+    let atlas = &rig.renderer.effect::<vista::effects::shadows::frame::Shadows>().expect("built").pass.atlas;
     let bytes = ctx.read_image(atlas, 0, slot, 8).unwrap();
     bytemuck::cast_slice::<u8, [f32; 2]>(&bytes).to_vec()
 }
@@ -194,7 +194,7 @@ fn a_moving_sun_is_caught_up_within_the_budget_and_a_static_one_is_idle() {
             redone += n;
         }
         assert_eq!(redone, u64::from(resident), "every resident node redone once");
-        assert_eq!(rig.renderer.shadow_schedule.stale(), 0);
+        assert_eq!(rig.renderer.effect::<vista::effects::shadows::frame::Shadows>().unwrap().schedule.stale(), 0);
         rig.again(ctx, &v, CullStages::ALL);
         assert_eq!(outcome(&rig), Some(Outcome::Skipped(Skip::ShadowsCurrent)));
         // And what they hold is the new sun's shadow.

@@ -314,13 +314,7 @@ fn sector_data_include_samples_the_same_height_as_the_cpu() {
 #[test]
 fn sector_data_reaches_every_lod_of_a_10_lod_world_and_reports_uncovered_points() {
     gpu_test(|ctx| {
-        let w = WorldDesc {
-            extent_m: [50_000.0, 30_000.0],
-            height_range_m: [-50.0, 950.0],
-            spacing_m: 0.5,
-            lod_count: 10,
-            ..WorldDesc::default()
-        };
+        let w = ten_lod_world();
         assert_eq!(w.lod_count, vista::shaders::consts::MAX_NODE_LODS);
         let root_m = w.node_size_m(w.root_lod());
         assert_eq!(w.roots(), [NodeId::new(9, 0, 0), NodeId::new(9, 1, 0)]);
@@ -328,45 +322,10 @@ fn sector_data_reaches_every_lod_of_a_10_lod_world_and_reports_uncovered_points(
         tree.shadow.set_reuse_delay(0);
         let update = QuadtreeUpdatePass::new(ctx, false).unwrap();
         let mut rng = Rng(1010);
-        let mut resident = vec![NodeId::new(9, 0, 0)];
-        // One node per LOD at the origin (sampling needs no whole families).
-        resident.extend((0..9u8).map(|lod| NodeId::new(lod, 0, 0)));
-        for lod in 1..7u8 {
-            let cells = w.nodes_at(lod).into_iter().filter(|n| w.bounds_m(*n)[0] < root_m).collect::<Vec<_>>();
-            let n = cells[rng.index(cells.len())];
-            if !resident.contains(&n) {
-                resident.push(n);
-            }
-        }
-        // Smooth heights (a few R16 steps per sample), so f32 rounding of
-        // the sample position moves the result by far less than a step.
-        let mut heights = std::collections::HashMap::new();
-        for (i, id) in resident.iter().enumerate() {
-            let mut node = fake_node(*id, 0);
-            let base = (i as u32 * 997) % 30_000;
-            for (k, h) in node.heights.iter_mut().enumerate() {
-                let (x, y) = ((k % vista::world::ATLAS_SIDE) as u32, (k / vista::world::ATLAS_SIDE) as u32);
-                *h = (base + x * 97 + y * 61) as u16;
-            }
-            heights.insert(*id, node.heights.clone());
-            tree.add(node, 0);
-        }
-        while tree.waiting() > 0 || tree.has_work() {
-            ctx.submit_and_wait(|rec| update.record(rec, &mut tree, None).map(drop)).unwrap();
-        }
+        let resident = resident_of_every_lod(&w, root_m, &mut rng);
+        let heights = upload_smooth_nodes(ctx, &mut tree, &update, &resident);
         let sectors = SectorData::new(ctx, &w).unwrap();
-        // Points over the whole world and beyond it, and densely where the
-        // fine LODs are.
-        let mut points: Vec<[f32; 2]> = Vec::new();
-        for _ in 0..2000 {
-            let u = [rng.unit(), rng.unit()];
-            points.push([(u[0] * 60_000.0 - 5000.0) as f32, (u[1] * 40_000.0 - 5000.0) as f32]);
-        }
-        for span in [300.0, 5000.0, 30_000.0] {
-            for _ in 0..500 {
-                points.push([(rng.unit() * span) as f32, (rng.unit() * span) as f32]);
-            }
-        }
+        let points = points_everywhere(&mut rng);
         let mut query = TerrainQuery::new(ctx, points.len() as u32).unwrap();
         ctx.submit_and_wait(|rec| {
             sectors.record(rec, &tree);
@@ -403,4 +362,71 @@ fn sector_data_reaches_every_lod_of_a_10_lod_world_and_reports_uncovered_points(
         assert!(finest_used.iter().all(|n| *n > 0), "every LOD answers some point: {finest_used:?}");
         assert!(answers.iter().filter(|a| a.is_none()).count() > 500, "points outside or uncovered");
     });
+}
+
+fn ten_lod_world() -> WorldDesc {
+    WorldDesc {
+        extent_m: [50_000.0, 30_000.0],
+        height_range_m: [-50.0, 950.0],
+        spacing_m: 0.5,
+        lod_count: 10,
+        ..WorldDesc::default()
+    }
+}
+
+/// Root (0, 0), one node per LOD at the origin (sampling needs no whole
+/// families) and one more at random per LOD 1..7 under that root.
+fn resident_of_every_lod(w: &WorldDesc, root_m: f64, rng: &mut Rng) -> Vec<NodeId> {
+    let mut resident = vec![NodeId::new(9, 0, 0)];
+    resident.extend((0..9u8).map(|lod| NodeId::new(lod, 0, 0)));
+    for lod in 1..7u8 {
+        let cells = w.nodes_at(lod).into_iter().filter(|n| w.bounds_m(*n)[0] < root_m).collect::<Vec<_>>();
+        let n = cells[rng.index(cells.len())];
+        if !resident.contains(&n) {
+            resident.push(n);
+        }
+    }
+    resident
+}
+
+/// Adds `resident` to the tree and waits for the uploads; their heights.
+fn upload_smooth_nodes(
+    ctx: &Context,
+    tree: &mut GpuQuadtree,
+    update: &QuadtreeUpdatePass,
+    resident: &[NodeId],
+) -> std::collections::HashMap<NodeId, Vec<u16>> {
+    // Smooth heights (a few R16 steps per sample), so f32 rounding of
+    // the sample position moves the result by far less than a step.
+    let mut heights = std::collections::HashMap::new();
+    for (i, id) in resident.iter().enumerate() {
+        let mut node = fake_node(*id, 0);
+        let base = (i as u32 * 997) % 30_000;
+        for (k, h) in node.heights.iter_mut().enumerate() {
+            let (x, y) = ((k % vista::world::ATLAS_SIDE) as u32, (k / vista::world::ATLAS_SIDE) as u32);
+            *h = (base + x * 97 + y * 61) as u16;
+        }
+        heights.insert(*id, node.heights.clone());
+        tree.add(node, 0);
+    }
+    while tree.waiting() > 0 || tree.has_work() {
+        ctx.submit_and_wait(|rec| update.record(rec, tree, None).map(drop)).unwrap();
+    }
+    heights
+}
+
+/// Points over the whole world and beyond it, and densely where the
+/// fine LODs are.
+fn points_everywhere(rng: &mut Rng) -> Vec<[f32; 2]> {
+    let mut points: Vec<[f32; 2]> = Vec::new();
+    for _ in 0..2000 {
+        let u = [rng.unit(), rng.unit()];
+        points.push([(u[0] * 60_000.0 - 5000.0) as f32, (u[1] * 40_000.0 - 5000.0) as f32]);
+    }
+    for span in [300.0, 5000.0, 30_000.0] {
+        for _ in 0..500 {
+            points.push([(rng.unit() * span) as f32, (rng.unit() * span) as f32]);
+        }
+    }
+    points
 }

@@ -63,7 +63,7 @@ fn page_requests_equal_the_cpu_twin() {
         rig.shot(ctx, &v, CullStages::ALL);
         let cap = rig.again(ctx, &v, CullStages::ALL);
         let r = &rig.renderer;
-        let vt = r.virtual_texture.as_ref().expect("built");
+        let vt = r.effect::<vista::effects::virtual_texture::VirtualTexture>().expect("built");
         let g = r.gbuffer.as_ref().unwrap().capture(ctx).unwrap();
         let view_bytes = ctx.read_buffer(r.view_buffer()).unwrap();
         let view_gpu: TerrainViewGpu =
@@ -187,7 +187,7 @@ fn the_indirection_points_every_point_at_the_texel_rendered_for_it_at_every_leve
         for (i, v) in [low(), close(2.0), close(1.0), close(0.4)].iter().enumerate() {
             let cap = rig.shot(ctx, v, CullStages::ALL);
             let r = &rig.renderer;
-            let vt = r.virtual_texture.as_ref().unwrap();
+            let vt = r.effect::<vista::effects::virtual_texture::VirtualTexture>().unwrap();
             assert!(vt.settled(), "every page the view asks for is resident");
             let view_bytes = ctx.read_buffer(r.view_buffer()).unwrap();
             let view_gpu: TerrainViewGpu =
@@ -259,7 +259,7 @@ fn a_fly_through_keeps_the_page_budget_and_the_way_back_renders_only_what_was_ev
         let mut rig = rig(ctx, fx);
         let start = low();
         rig.shot(ctx, &start, CullStages::ALL);
-        let vt = rig.renderer.virtual_texture.as_mut().unwrap();
+        let vt = rig.renderer.effect_mut::<vista::effects::virtual_texture::VirtualTexture>().unwrap();
         assert_eq!(vt.layout().tile_count(), 100);
         let at_start: Vec<_> = vt.state.cache().pages().collect();
         vt.state.history = Some(Vec::new());
@@ -269,12 +269,14 @@ fn a_fly_through_keeps_the_page_budget_and_the_way_back_renders_only_what_was_ev
             let [x, y] = [500.0 + 25.0 * f64::from(i) * 0.26, 200.0 + 25.0 * f64::from(i) * 0.97];
             let v = view([x, y, Surface::Hills.height(x, y) + 4.0], 15.0, -12.0, SIZE, 1.0);
             rig.again(ctx, &v, CullStages::ALL);
-            most = most.max(rig.renderer.virtual_texture.as_ref().unwrap().counters().rendered);
+            most = most.max(
+                rig.renderer.effect::<vista::effects::virtual_texture::VirtualTexture>().unwrap().counters().rendered,
+            );
         }
-        let vt = rig.renderer.virtual_texture.as_mut().unwrap();
+        let vt = rig.renderer.effect_mut::<vista::effects::virtual_texture::VirtualTexture>().unwrap();
         let away = vt.state.history.replace(Vec::new()).unwrap();
         let cap = rig.shot(ctx, &start, CullStages::ALL);
-        let vt = rig.renderer.virtual_texture.as_ref().unwrap();
+        let vt = rig.renderer.effect::<vista::effects::virtual_texture::VirtualTexture>().unwrap();
         let back = vt.state.history.clone().unwrap();
         let c = vt.counters();
         use vista::effects::virtual_texture::state::PageEvent;

@@ -6,10 +6,10 @@
 //! pass (per mode) and its marker, then a blit to the swapchain.
 
 use crate::passes::{BoxPush, LightPush, Marker, Passes};
+use crate::setup::{self, vk_err, FrameObjects, Messenger};
 use crate::targets::{allocate, barrier, rest_layout, transition, Mode, Target, Targets, EXTENT, SIZE, TERRAIN_BIT};
 use ash::vk;
-use std::ffi::c_void;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex};
 use vista::gpu::Context;
 use vista::world::{HeightSource, WorldDesc};
@@ -30,7 +30,7 @@ pub struct Engine {
     pub device: ash::Device,
     pub family: u32,
     queue: Arc<Mutex<vk::Queue>>,
-    messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT, Box<AtomicU64>)>,
+    messenger: Option<Messenger>,
     surface_fn: ash::khr::surface::Instance,
     surface: vk::SurfaceKHR,
     swapchain_fn: ash::khr::swapchain::Device,
@@ -50,126 +50,27 @@ pub struct Engine {
     passes: Passes,
 }
 
-/// Counts the validation layer's messages (and prints them).
-unsafe extern "system" fn on_message(
-    _severity: vk::DebugUtilsMessageSeverityFlagsEXT,
-    _kind: vk::DebugUtilsMessageTypeFlagsEXT,
-    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
-    count: *mut c_void,
-) -> vk::Bool32 {
-    // SAFETY: the layer passes valid data; `count` is the engine's counter,
-    // alive until the messenger is destroyed.
-    unsafe {
-        (*(count as *const AtomicU64)).fetch_add(1, Ordering::AcqRel);
-        eprintln!("validation: {:?}", (*data).message_as_c_str());
-    }
-    vk::FALSE
-}
-
 impl Engine {
     pub fn new(window: &Window, validation: bool, mode: Mode) -> Result<Engine, String> {
-        let e = |what: &str| {
-            let what = what.to_string();
-            move |r: vk::Result| format!("{what}: {r}")
-        };
+        let e = vk_err;
         // SAFETY: this block is the engine: plain Vulkan object creation in
-        // order, each create info pointing at locals that outlive the call.
+        // order (setup.rs), each from the live objects made before it.
         unsafe {
             let entry = ash::Entry::load().map_err(|x| format!("Vulkan loader: {x}"))?;
             let display = window.display_handle().map_err(|x| x.to_string())?.as_raw();
-            let mut exts =
-                ash_window::enumerate_required_extensions(display).map_err(e("surface extensions"))?.to_vec();
-            let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
-            if validation {
-                exts.push(ash::ext::debug_utils::NAME.as_ptr());
-            }
-            let app = vk::ApplicationInfo::default().application_name(c"embed").api_version(vk::API_VERSION_1_3);
-            let mut info = vk::InstanceCreateInfo::default().application_info(&app).enabled_extension_names(&exts);
-            if validation {
-                info = info.enabled_layer_names(&layers);
-            }
-            let instance = entry.create_instance(&info, None).map_err(e("vkCreateInstance"))?;
-            let messenger = if validation {
-                let du = ash::ext::debug_utils::Instance::new(&entry, &instance);
-                let count = Box::new(AtomicU64::new(0));
-                let mi = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                    .message_severity(
-                        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-                    )
-                    .message_type(
-                        vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-                    )
-                    .pfn_user_callback(Some(on_message))
-                    .user_data(&*count as *const AtomicU64 as *mut c_void);
-                let m = du.create_debug_utils_messenger(&mi, None).map_err(e("vkCreateDebugUtilsMessengerEXT"))?;
-                Some((du, m, count))
-            } else {
-                None
-            };
+            let instance = setup::instance(&entry, display, validation)?;
+            let messenger = setup::messenger(&entry, &instance, validation)?;
             let surface_fn = ash::khr::surface::Instance::new(&entry, &instance);
             let raw_window = window.window_handle().map_err(|x| x.to_string())?.as_raw();
             let surface =
                 ash_window::create_surface(&entry, &instance, display, raw_window, None).map_err(e("surface"))?;
-            let physical = instance.enumerate_physical_devices().map_err(e("devices"))?[0];
-            let family = instance
-                .get_physical_device_queue_family_properties(physical)
-                .iter()
-                .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
-                .ok_or("no graphics queue")? as u32;
-            if !surface_fn.get_physical_device_surface_support(physical, family, surface).map_err(e("support"))? {
-                return Err("the graphics queue cannot present".into());
-            }
-            // vista's extensions and features, and the swapchain for ourselves.
-            let mut dexts: Vec<_> = vista::gpu::REQUIRED_DEVICE_EXTENSIONS.iter().map(|x| x.as_ptr()).collect();
-            dexts.push(ash::khr::swapchain::NAME.as_ptr());
-            let mut feats = vista::gpu::required_features();
-            let prio = [1.0];
-            let qi = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&prio)];
-            let di = vk::DeviceCreateInfo::default()
-                .queue_create_infos(&qi)
-                .enabled_extension_names(&dexts)
-                .enabled_features(&feats.core)
-                .push_next(&mut feats.v12)
-                .push_next(&mut feats.v13);
-            let device = instance.create_device(physical, &di, None).map_err(e("vkCreateDevice"))?;
+            let (physical, family) = setup::physical_and_family(&instance, &surface_fn, surface)?;
+            let device = setup::device(&instance, physical, family)?;
             let queue = device.get_device_queue(family, 0);
             let swapchain_fn = ash::khr::swapchain::Device::new(&instance, &device);
-            let formats = surface_fn.get_physical_device_surface_formats(physical, surface).map_err(e("formats"))?;
-            let bgra = formats.iter().any(|f| f.format == vk::Format::B8G8R8A8_UNORM);
-            let format = if bgra { vk::Format::B8G8R8A8_UNORM } else { vk::Format::R8G8B8A8_UNORM };
-            let caps = surface_fn.get_physical_device_surface_capabilities(physical, surface).map_err(e("caps"))?;
-            let sci = vk::SwapchainCreateInfoKHR::default()
-                .surface(surface)
-                .min_image_count(caps.min_image_count.max(2))
-                .image_format(format)
-                .image_color_space(vk::ColorSpaceKHR::SRGB_NONLINEAR)
-                .image_extent(EXTENT)
-                .image_array_layers(1)
-                .image_usage(vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC)
-                .pre_transform(caps.current_transform)
-                .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
-                .present_mode(vk::PresentModeKHR::FIFO)
-                .clipped(true);
-            let swapchain = swapchain_fn.create_swapchain(&sci, None).map_err(e("vkCreateSwapchainKHR"))?;
-            let images = swapchain_fn.get_swapchain_images(swapchain).map_err(e("swapchain images"))?;
-            let pool = device
-                .create_command_pool(
-                    &vk::CommandPoolCreateInfo::default()
-                        .queue_family_index(family)
-                        .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
-                    None,
-                )
-                .map_err(e("pool"))?;
-            let cmds = device
-                .allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(FRAMES as u32),
-                )
-                .map_err(e("command buffers"))?;
-            let signalled = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
-            let sem = || device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None);
-            let fences = (0..FRAMES).map(|_| device.create_fence(&signalled, None)).collect::<Result<_, _>>();
-            let acquired = (0..FRAMES).map(|_| sem()).collect::<Result<_, _>>().map_err(e("semaphores"))?;
-            let rendered = images.iter().map(|_| sem()).collect::<Result<_, _>>().map_err(e("semaphores"))?;
+            let (swapchain, images, bgra) = setup::swapchain(&surface_fn, &swapchain_fn, physical, surface)?;
+            let FrameObjects { pool, cmds, fences, acquired, rendered } =
+                setup::frame_objects(&device, family, FRAMES, images.len())?;
             let mem = instance.get_physical_device_memory_properties(physical);
             let targets = Targets::new(&device, &mem, mode)?;
             let passes = Passes::new(&device, mode, &targets)?;
@@ -189,7 +90,7 @@ impl Engine {
                 bgra,
                 pool,
                 cmds,
-                fences: fences.map_err(e("fences"))?,
+                fences,
                 acquired,
                 rendered,
                 frame_of: vec![0; FRAMES],

@@ -23,6 +23,7 @@
 
 mod engine;
 mod passes;
+mod setup;
 mod targets;
 
 use engine::Engine;
@@ -140,21 +141,7 @@ fn culled(ctx: &Context, engine: &Engine, renderer: &mut TerrainRenderer) -> u32
 /// The render thread: everything vista runs here, between the engine's
 /// own commands, on the engine's queue.
 fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), String> {
-    let handles = RawHandles {
-        entry: engine.entry.clone(),
-        instance: engine.instance.clone(),
-        physical_device: engine.physical,
-        device: engine.device.clone(),
-        graphics_queue_family: engine.family,
-        graphics_queue: engine.queue(),
-        compute_queue_family: engine.family,
-        compute_queue: engine.queue(),
-        debug_utils: false,
-        submit: Some(engine.submitter()),
-    };
-    // SAFETY: the engine's handles, made together, outlive the context
-    // (dropped before `engine` below); the device enables what vista needs.
-    let ctx = unsafe { Context::from_raw(handles) }.map_err(|e| e.to_string())?;
+    let ctx = vista_context(&engine)?;
     let (desc, source) = world();
     let options = RendererOptions { depth: DEPTH, output: output(engine.mode), ..RendererOptions::default() };
     let mut renderer =
@@ -200,19 +187,7 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
         }
         engine.end_frame(&ctx, slot, image, shot.as_ref().and_then(Option::as_ref))?;
         frame += 1;
-        measuring = match measuring {
-            Some(m) if m == MEASURE - 1 => Some(culled(&ctx, &engine, &mut renderer)).map(|open| {
-                measured = Some((open, 0));
-                MEASURE
-            }),
-            Some(m) if m == 2 * MEASURE - 1 => {
-                let walled = culled(&ctx, &engine, &mut renderer);
-                measured = measured.map(|(open, _)| (open, walled));
-                None
-            }
-            Some(m) => Some(m + 1),
-            None => None,
-        };
+        measuring = measure_step(measuring, &mut measured, &ctx, &engine, &mut renderer);
     }
     engine.wait_idle();
     if let (Some(Some(buffer)), Some(file)) = (shot, &args.screenshot) {
@@ -221,6 +196,54 @@ fn render(mut engine: Engine, args: &Args, done: &AtomicBool) -> Result<(), Stri
     }
     report(&ctx, &engine, measured)?;
     println!("{frame} frames presented in {:.1} s", started.elapsed().as_secs_f64());
+    close(ctx, engine, wrapped, renderer)
+}
+
+/// The context vista runs on: the engine's handles and submit function.
+fn vista_context(engine: &Engine) -> Result<Context, String> {
+    let handles = RawHandles {
+        entry: engine.entry.clone(),
+        instance: engine.instance.clone(),
+        physical_device: engine.physical,
+        device: engine.device.clone(),
+        graphics_queue_family: engine.family,
+        graphics_queue: engine.queue(),
+        compute_queue_family: engine.family,
+        compute_queue: engine.queue(),
+        debug_utils: false,
+        submit: Some(engine.submitter()),
+    };
+    // SAFETY: the engine's handles, made together, outlive the context
+    // (dropped before `engine` in `render`); the device enables what vista needs.
+    unsafe { Context::from_raw(handles) }.map_err(|e| e.to_string())
+}
+
+/// One frame of the measurement: after each block's last frame, the
+/// patches the depth pyramid culled.
+fn measure_step(
+    measuring: Option<u32>,
+    measured: &mut Option<(u32, u32)>,
+    ctx: &Context,
+    engine: &Engine,
+    renderer: &mut TerrainRenderer,
+) -> Option<u32> {
+    match measuring {
+        Some(m) if m == MEASURE - 1 => Some(culled(ctx, engine, renderer)).map(|open| {
+            *measured = Some((open, 0));
+            MEASURE
+        }),
+        Some(m) if m == 2 * MEASURE - 1 => {
+            let walled = culled(ctx, engine, renderer);
+            *measured = measured.map(|(open, _)| (open, walled));
+            None
+        }
+        Some(m) => Some(m + 1),
+        None => None,
+    }
+}
+
+/// vista's objects go first and none may be left; then the engine's.
+fn close(ctx: Context, engine: Engine, wrapped: Wrapped, renderer: TerrainRenderer) -> Result<(), String> {
     drop((wrapped, renderer));
     // Objects vista retired wait for frames the engine reported done.
     ctx.frame_completed(ctx.frames_submitted());

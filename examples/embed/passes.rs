@@ -323,103 +323,12 @@ impl Passes {
     /// # Safety
     /// `d` is the engine's device; `targets` outlive the passes.
     pub unsafe fn new(d: &ash::Device, mode: Mode, targets: &Targets) -> Result<Passes, String> {
-        let e = |x: vk::Result| x.to_string();
         unsafe {
-            // Exactly what the mode's full-screen pass reads (a binding left
-            // unwritten is not something every driver tolerates).
-            let inputs = if mode == Mode::Lit { 0 } else { 3 };
-            let bindings: Vec<_> = (0..inputs)
-                .map(|i| {
-                    vk::DescriptorSetLayoutBinding::default()
-                        .binding(i)
-                        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                        .descriptor_count(1)
-                        .stage_flags(vk::ShaderStageFlags::FRAGMENT)
-                })
-                .collect();
-            let set_layout = d
-                .create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
-                .map_err(e)?;
-            let sizes =
-                [vk::DescriptorPoolSize { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, descriptor_count: 3 }];
-            let pool = d
-                .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
-                .map_err(e)?;
-            let layouts = [set_layout];
-            let set = d
-                .allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts),
-                )
-                .map_err(e)?[0];
-            let sampler = d.create_sampler(&vk::SamplerCreateInfo::default(), None).map_err(e)?;
-            let ranges = [
-                vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::FRAGMENT).size(64),
-                vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::VERTEX).offset(64).size(64),
-            ];
-            let layout = d
-                .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts).push_constant_ranges(&ranges),
-                    None,
-                )
-                .map_err(e)?;
-            let marker_range = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::VERTEX).size(32)];
-            let marker_layout = d
-                .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&marker_range),
-                    None,
-                )
-                .map_err(e)?;
-            let (vert, ldr) = (BOX_VERT, [COLOR_FORMAT]);
-            let building = match mode {
-                Mode::Lit | Mode::Hdr => {
-                    let formats = if mode == Mode::Lit { [COLOR_FORMAT] } else { [HDR_FORMAT] };
-                    let spec = Some(u32::from(mode == Mode::Hdr));
-                    let frag = box_colour_frag();
-                    let desc = Desc {
-                        vertex: vert,
-                        fragment: &frag,
-                        formats: &formats,
-                        depth: Depth::Write,
-                        layout,
-                        spec,
-                        cull: vk::CullModeFlags::NONE,
-                    };
-                    pipeline(d, &desc)?
-                }
-                Mode::Gbuffer => {
-                    let formats = gbuffer_layout().formats();
-                    let desc = Desc {
-                        vertex: vert,
-                        fragment: BOX_GBUFFER_FRAG,
-                        formats: &formats,
-                        depth: Depth::Write,
-                        layout,
-                        spec: None,
-                        cull: vk::CullModeFlags::NONE,
-                    };
-                    pipeline(d, &desc)?
-                }
-            };
-            let resolve_frag = match mode {
-                Mode::Lit => None,
-                Mode::Hdr => Some(tonemap_frag()),
-                Mode::Gbuffer => Some(light_frag()),
-            };
-            let resolve = match resolve_frag {
-                Some(f) => Some(pipeline(
-                    d,
-                    &Desc {
-                        vertex: FULLSCREEN_VERT,
-                        fragment: &f,
-                        formats: &ldr,
-                        depth: Depth::None,
-                        layout,
-                        spec: None,
-                        cull: vk::CullModeFlags::NONE,
-                    },
-                )?),
-                None => None,
-            };
+            let (set_layout, pool, set, sampler) = descriptors(d, mode)?;
+            let (layout, marker_layout) = pipeline_layouts(d, set_layout)?;
+            let building = building_pipeline(d, mode, layout)?;
+            let resolve = resolve_pipeline(d, mode, layout)?;
+            let ldr = [COLOR_FORMAT];
             let marker = pipeline(
                 d,
                 &Desc {
@@ -530,5 +439,155 @@ impl Passes {
             d.destroy_descriptor_pool(self.pool, None);
             d.destroy_descriptor_set_layout(self.set_layout, None);
         }
+    }
+}
+
+/// The one descriptor set of the full-screen pass, its layout and pool,
+/// and the sampler it reads with.
+///
+/// # Safety
+/// `d` is the engine's device.
+unsafe fn descriptors(
+    d: &ash::Device,
+    mode: Mode,
+) -> Result<(vk::DescriptorSetLayout, vk::DescriptorPool, vk::DescriptorSet, vk::Sampler), String> {
+    let e = |x: vk::Result| x.to_string();
+    // SAFETY: as the caller promises; the create infos are locals.
+    unsafe {
+        // Exactly what the mode's full-screen pass reads (a binding left
+        // unwritten is not something every driver tolerates).
+        let inputs = if mode == Mode::Lit { 0 } else { 3 };
+        let bindings: Vec<_> = (0..inputs)
+            .map(|i| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i)
+                    .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::FRAGMENT)
+            })
+            .collect();
+        let set_layout = d
+            .create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
+            .map_err(e)?;
+        let sizes = [vk::DescriptorPoolSize { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, descriptor_count: 3 }];
+        let pool = d
+            .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
+            .map_err(e)?;
+        let layouts = [set_layout];
+        let set = d
+            .allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts),
+            )
+            .map_err(e)?[0];
+        let sampler = d.create_sampler(&vk::SamplerCreateInfo::default(), None).map_err(e)?;
+        Ok((set_layout, pool, set, sampler))
+    }
+}
+
+/// The passes' layout (`LightPush`, then `BoxPush`) and the marker's.
+///
+/// # Safety
+/// `d` is the engine's device; `set_layout` is its.
+unsafe fn pipeline_layouts(
+    d: &ash::Device,
+    set_layout: vk::DescriptorSetLayout,
+) -> Result<(vk::PipelineLayout, vk::PipelineLayout), String> {
+    let e = |x: vk::Result| x.to_string();
+    let layouts = [set_layout];
+    // SAFETY: as the caller promises; the create infos are locals.
+    unsafe {
+        let ranges = [
+            vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::FRAGMENT).size(64),
+            vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::VERTEX).offset(64).size(64),
+        ];
+        let layout = d
+            .create_pipeline_layout(
+                &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts).push_constant_ranges(&ranges),
+                None,
+            )
+            .map_err(e)?;
+        let marker_range = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::VERTEX).size(32)];
+        let marker_layout = d
+            .create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&marker_range), None)
+            .map_err(e)?;
+        Ok((layout, marker_layout))
+    }
+}
+
+/// The building's pipeline, into the mode's colour target or G-buffer.
+///
+/// # Safety
+/// `d` is the engine's device; `layout` is `pipeline_layouts`'s first.
+unsafe fn building_pipeline(d: &ash::Device, mode: Mode, layout: vk::PipelineLayout) -> Result<vk::Pipeline, String> {
+    let vert = BOX_VERT;
+    // SAFETY: as the caller promises.
+    unsafe {
+        let building = match mode {
+            Mode::Lit | Mode::Hdr => {
+                let formats = if mode == Mode::Lit { [COLOR_FORMAT] } else { [HDR_FORMAT] };
+                let spec = Some(u32::from(mode == Mode::Hdr));
+                let frag = box_colour_frag();
+                let desc = Desc {
+                    vertex: vert,
+                    fragment: &frag,
+                    formats: &formats,
+                    depth: Depth::Write,
+                    layout,
+                    spec,
+                    cull: vk::CullModeFlags::NONE,
+                };
+                pipeline(d, &desc)?
+            }
+            Mode::Gbuffer => {
+                let formats = gbuffer_layout().formats();
+                let desc = Desc {
+                    vertex: vert,
+                    fragment: BOX_GBUFFER_FRAG,
+                    formats: &formats,
+                    depth: Depth::Write,
+                    layout,
+                    spec: None,
+                    cull: vk::CullModeFlags::NONE,
+                };
+                pipeline(d, &desc)?
+            }
+        };
+        Ok(building)
+    }
+}
+
+/// The full-screen lighting (gbuffer) or tonemap (hdr); none for `lit`.
+///
+/// # Safety
+/// `d` is the engine's device; `layout` is `pipeline_layouts`'s first.
+unsafe fn resolve_pipeline(
+    d: &ash::Device,
+    mode: Mode,
+    layout: vk::PipelineLayout,
+) -> Result<Option<vk::Pipeline>, String> {
+    let ldr = [COLOR_FORMAT];
+    // SAFETY: as the caller promises.
+    unsafe {
+        let resolve_frag = match mode {
+            Mode::Lit => None,
+            Mode::Hdr => Some(tonemap_frag()),
+            Mode::Gbuffer => Some(light_frag()),
+        };
+        let resolve = match resolve_frag {
+            Some(f) => Some(pipeline(
+                d,
+                &Desc {
+                    vertex: FULLSCREEN_VERT,
+                    fragment: &f,
+                    formats: &ldr,
+                    depth: Depth::None,
+                    layout,
+                    spec: None,
+                    cull: vk::CullModeFlags::NONE,
+                },
+            )?),
+            None => None,
+        };
+        Ok(resolve)
     }
 }

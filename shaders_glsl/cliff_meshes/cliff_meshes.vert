@@ -18,7 +18,7 @@ void main() {
     const uint SIDE = CLIFF_CELL_QUADS + 1u;
     vec4 p = vertices.v[uint(gl_InstanceIndex) * SIDE * SIDE + uint(gl_VertexIndex)].p;
     uint code = floatBitsToUint(p.w);
-    normal = oct_decode8(uvec2(code & 0xFFu, (code >> 8u) & 0xFFu));
+    normal = oct_decode_packed(code);
     rel_pos = p.xyz - view.v.camera_world.xyz;
     gl_Position = view.v.view_proj * vec4(rel_pos, 1.0);
 }

@@ -46,4 +46,10 @@ vec3 oct_decode8(uvec2 code) {
     return oct_decode(vec2(code) / OCT_CODE_MAX);
 }
 
+// Two 8-bit codes packed in a word's low 16 bits (x low), as the cliff
+// meshes' and the probes' vertices and grass's ground normal carry them.
+vec3 oct_decode_packed(uint code) {
+    return oct_decode8(uvec2(code & 0xFFu, (code >> 8u) & 0xFFu));
+}
+
 #endif

@@ -56,6 +56,6 @@ void main() {
     colour = p.rgb * p.rgb * rules.r[material].tint.rgb;
     along = t;
     // Lit as the ground it stands on, the tips turned a little to their facing.
-    vec3 ground = oct_decode8(uvec2(code & 0xFFu, (code >> 8u) & 0xFFu));
+    vec3 ground = oct_decode_packed(code);
     normal = ground + vec3(facing * (0.5 * t), 0.0);
 }

@@ -228,23 +228,8 @@ pub fn bench_accuracy(
     // the shadow rows have their own.
     let mut fx = effects.clone().with(Effect::Shadows, false);
     fx.lighting.clay_albedo = Some(CLAY_ALBEDO);
-    let shadows_skipped = (!effects.is_on(Effect::Shadows))
-        .then(|| "the scene does not ask for effect shadows".to_string())
-        .or_else(|| (!effects.is_on(Effect::Lighting)).then(|| "the scene's lighting is off".to_string()))
-        .or_else(|| cfg.shadows.is_none().then(|| "not asked for".to_string()));
-    let vt_skipped = (!effects.is_on(Effect::VirtualTexture))
-        .then(|| "the scene does not ask for effect virtual_texture".to_string())
-        .or_else(|| (!effects.is_on(Effect::Splat)).then(|| "the scene's splat is off".to_string()))
-        .or_else(|| cfg.virtual_texture.is_none().then(|| "not asked for".to_string()));
-    let shading_skipped = (!(fx.is_on(Effect::Splat) || fx.is_on(Effect::Cliffs)))
-        .then(|| "the scene has neither splat nor cliffs: every shading setting draws the same".to_string())
-        .or_else(|| (!cfg.shading).then(|| "not asked for".to_string()));
-    let terrain = TerrainOptions {
-        cache_dir: Some(cfg.cache_dir.clone()),
-        slots: cfg.slots,
-        errors: cfg.errors.clone(),
-        ..TerrainOptions::default()
-    };
+    let [shadows_skipped, vt_skipped, shading_skipped] = skipped(effects, &fx, cfg);
+    let terrain = terrain_options(cfg);
     let options =
         |shading| RendererOptions { terrain: terrain.clone(), effects: fx.clone(), shading, ..Default::default() };
     // The geometry sweep draws without the detail normals of splat and
@@ -274,35 +259,13 @@ pub fn bench_accuracy(
             target_error_px: target,
             near_m: DEFAULT_NEAR_M,
         };
-        let t = Instant::now();
-        let reference = caster.image(&view(1.0), &fx.lighting, CLAY_ALBEDO, SKY);
-        let rays = f64::from(cfg.size[0]) * f64::from(cfg.size[1]);
-        out.references.push(ReferenceInfo {
-            view: name.clone(),
-            camera: *camera,
-            seconds: t.elapsed().as_secs_f64(),
-            samples_per_ray: reference.samples as f64 / rays,
-            terrain_fraction: reference.depth_m.iter().filter(|&&d| d > 0.0).count() as f64 / rays,
-        });
+        let (reference, info) = reference_image(&caster, &view(1.0), &fx, name, camera);
+        out.references.push(info);
         let mut r = TerrainRenderer::new(ctx, world, source.clone(), Vec::new(), &geometry)?;
         for &target in &cfg.targets_px {
-            let v = view(target);
-            let settled = run.settle(&mut r, &v)?;
-            r.stages = CullStages::ALL;
-            let (on, on_img) = run.point(&mut r, &v, &reference, name, "culling on", "all stages", settled)?;
-            r.stages = CullStages::NONE;
-            let (mut off_pt, off_img) = run.point(&mut r, &v, &reference, name, "culling off", "no stage", settled)?;
-            r.stages = CullStages::ALL;
-            off_pt.differs_from_culled_px = Some(differing_pixels(&on_img, &off_img));
-            if cfg.keep_images && target == cfg.shading_target_px {
-                out.images.push(ViewImages {
-                    view: name.clone(),
-                    size: cfg.size,
-                    reference: reference.rgba.clone(),
-                    frame: on_img.rgba.clone(),
-                });
-            }
-            out.points.extend([on, off_pt]);
+            let (points, images) = run.culling_rows(&mut r, &view(target), &reference, name)?;
+            out.points.extend(points);
+            out.images.extend(images.filter(|_| cfg.keep_images && target == cfg.shading_target_px));
         }
         if out.shading_skipped.is_none() {
             out.points.extend(run.shading_rows(&options, &view(cfg.shading_target_px), &reference, name)?);
@@ -325,7 +288,80 @@ pub fn bench_accuracy(
     Ok(out)
 }
 
+/// The terrain of every frame: the bench's cache, slots and errors.
+fn terrain_options(cfg: &AccuracyBenchConfig) -> TerrainOptions {
+    TerrainOptions {
+        cache_dir: Some(cfg.cache_dir.clone()),
+        slots: cfg.slots,
+        errors: cfg.errors.clone(),
+        ..TerrainOptions::default()
+    }
+}
+
+/// The reference image of a view, and how long it took and how it went.
+fn reference_image(
+    caster: &RayCaster,
+    view: &View,
+    fx: &Effects,
+    name: &str,
+    camera: &Camera,
+) -> (ReferenceImage, ReferenceInfo) {
+    let t = Instant::now();
+    let reference = caster.image(view, &fx.lighting, CLAY_ALBEDO, SKY);
+    let rays = f64::from(view.size[0]) * f64::from(view.size[1]);
+    let info = ReferenceInfo {
+        view: name.to_string(),
+        camera: *camera,
+        seconds: t.elapsed().as_secs_f64(),
+        samples_per_ray: reference.samples as f64 / rays,
+        terrain_fraction: reference.depth_m.iter().filter(|&&d| d > 0.0).count() as f64 / rays,
+    };
+    (reference, info)
+}
+
+/// Why the shadow, virtual-texture and shading rows are left out (None:
+/// measured).
+fn skipped(effects: &Effects, fx: &Effects, cfg: &AccuracyBenchConfig) -> [Option<String>; 3] {
+    let shadows = (!effects.is_on(Effect::Shadows))
+        .then(|| "the scene does not ask for effect shadows".to_string())
+        .or_else(|| (!effects.is_on(Effect::Lighting)).then(|| "the scene's lighting is off".to_string()))
+        .or_else(|| cfg.shadows.is_none().then(|| "not asked for".to_string()));
+    let vt = (!effects.is_on(Effect::VirtualTexture))
+        .then(|| "the scene does not ask for effect virtual_texture".to_string())
+        .or_else(|| (!effects.is_on(Effect::Splat)).then(|| "the scene's splat is off".to_string()))
+        .or_else(|| cfg.virtual_texture.is_none().then(|| "not asked for".to_string()));
+    let shading = (!(fx.is_on(Effect::Splat) || fx.is_on(Effect::Cliffs)))
+        .then(|| "the scene has neither splat nor cliffs: every shading setting draws the same".to_string())
+        .or_else(|| (!cfg.shading).then(|| "not asked for".to_string()));
+    [shadows, vt, shading]
+}
+
 impl Run<'_> {
+    /// One target's rows with every culling stage and with none, and the
+    /// view's images (culled frame and reference).
+    fn culling_rows(
+        &mut self,
+        r: &mut TerrainRenderer,
+        v: &View,
+        reference: &ReferenceImage,
+        name: &str,
+    ) -> Result<([AccuracyPoint; 2], Option<ViewImages>)> {
+        let settled = self.settle(r, v)?;
+        r.stages = CullStages::ALL;
+        let (on, on_img) = self.point(r, v, reference, name, "culling on", "all stages", settled)?;
+        r.stages = CullStages::NONE;
+        let (mut off_pt, off_img) = self.point(r, v, reference, name, "culling off", "no stage", settled)?;
+        r.stages = CullStages::ALL;
+        off_pt.differs_from_culled_px = Some(differing_pixels(&on_img, &off_img));
+        let images = ViewImages {
+            view: name.to_string(),
+            size: self.cfg.size,
+            reference: reference.rgba.clone(),
+            frame: on_img.rgba.clone(),
+        };
+        Ok(([on, off_pt], Some(images)))
+    }
+
     pub(super) fn settle(&mut self, r: &mut TerrainRenderer, view: &View) -> Result<bool> {
         let s = self.off.settle(self.ctx, r, view, self.cfg.settle_timeout)?;
         if !s.settled {

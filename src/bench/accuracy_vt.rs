@@ -98,7 +98,7 @@ pub(super) fn vt_rows(
             let s = flip_stats(map.iter().zip(&capture.depth).filter(|(_, &d)| d > 0.0).map(|(e, _)| *e));
             (f64::from(s.mean), f64::from(s.p99))
         };
-        let vt = r.virtual_texture.as_ref();
+        let vt = r.effect::<crate::effects::virtual_texture::VirtualTexture>();
         let c = vt.map(|v| v.counters()).unwrap_or_default();
         rows.push(VtPoint {
             view: name.to_string(),

@@ -69,6 +69,34 @@ fn resident_set(world: &WorldDesc, camera: [f64; 3], n: u32) -> Vec<NodeId> {
     set
 }
 
+/// A GPU quadtree holding `ids`, baked (with their errors) and uploaded.
+fn resident_tree(
+    ctx: &Context,
+    world: &WorldDesc,
+    source: &dyn HeightSource,
+    errors: &ErrorTree,
+    update: &QuadtreeUpdatePass,
+    ids: &[NodeId],
+    slots: u32,
+) -> Result<GpuQuadtree> {
+    let nodes = ids
+        .par_iter()
+        .map(|id| {
+            let mut node = bake_node(source, world, &[], *id);
+            errors.attach(&mut node)?;
+            Ok(node)
+        })
+        .collect::<std::result::Result<Vec<_>, crate::world::WorldError>>()?;
+    let mut tree = GpuQuadtree::new(ctx, world, slots, 1, AtlasSet::CORE, PayloadFormat::Bc)?;
+    for n in nodes {
+        tree.add(n, 0);
+    }
+    while tree.waiting() > 0 {
+        ctx.submit_and_wait(|rec| update.record(rec, &mut tree, None).map(drop))?;
+    }
+    Ok(tree)
+}
+
 pub fn bench_traverse(
     ctx: &Context,
     world: &WorldDesc,
@@ -87,21 +115,7 @@ pub fn bench_traverse(
     for &requested in &cfg.resident_sets {
         let ids = resident_set(world, cfg.camera_m, requested);
         log::info!("baking {} nodes for the {requested}-node resident set", ids.len());
-        let nodes = ids
-            .par_iter()
-            .map(|id| {
-                let mut node = bake_node(source.as_ref(), world, &[], *id);
-                errors.attach(&mut node)?;
-                Ok(node)
-            })
-            .collect::<std::result::Result<Vec<_>, crate::world::WorldError>>()?;
-        let mut tree = GpuQuadtree::new(ctx, world, max, 1, AtlasSet::CORE, PayloadFormat::Bc)?;
-        for n in nodes {
-            tree.add(n, 0);
-        }
-        while tree.waiting() > 0 {
-            ctx.submit_and_wait(|rec| update.record(rec, &mut tree, None).map(drop))?;
-        }
+        let tree = resident_tree(ctx, world, &*source, &errors, &update, &ids, max)?;
         let resident = tree.shadow.resident_count();
         for &target in &cfg.targets_px {
             let params = TraverseParams {

@@ -3,6 +3,7 @@
 //! (`registry.rs`); the scene parser and the decisions read effects only
 //! through it.
 
+use super::frame_effect::{BuildInputs, FrameEffect};
 use super::requested::Effects;
 use crate::error::Result;
 use crate::scene::effect::Effect;
@@ -61,6 +62,13 @@ pub trait EffectKind: Sync {
     fn verdict(&self, fx: &Effects, content: &WorldContent, force: bool) -> Verdict {
         let _ = (fx, content, force);
         Verdict::On
+    }
+
+    /// Its built side when it is on (None: nothing to build, or built
+    /// by another kind of its folder).
+    fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+        let _ = b;
+        Ok(None)
     }
 
     /// Effects that must end up on for it to run, and why.

@@ -23,6 +23,7 @@ pub mod atmosphere;
 pub mod cliff_meshes;
 mod core;
 mod decide;
+pub mod frame_effect;
 pub mod grass;
 pub mod kind;
 pub mod materials;
@@ -34,6 +35,7 @@ pub mod virtual_texture;
 
 pub use crate::scene::effect::{Effect, EffectDecision, FrameSwitches, MaterialsMode};
 pub use decide::decide;
+pub use frame_effect::{FrameEffect, FramePoint};
 pub use kind::{EffectKind, Verdict, WorldContent};
 pub use requested::Effects;
 

@@ -15,8 +15,8 @@ static KINDS: [&dyn EffectKind; Effect::ALL.len()] = [
     &super::core::Lighting,
     &super::core::Queries,
     &super::virtual_texture::kind::DecalsKind,
-    &super::grass::kind::GrassKind,
     &super::assets::kind::AssetsKind,
+    &super::grass::kind::GrassKind,
     &super::shadows::kind::ShadowsKind,
     &super::atmosphere::kind::AtmosphereKind,
 ];

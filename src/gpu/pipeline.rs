@@ -235,43 +235,8 @@ impl Pipeline {
             .line_width(1.0);
         let multisample =
             vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let has_depth = desc.depth_format.is_some();
-        let stencil_op = desc.stencil.map(|st| {
-            let pass = if st.write_mask != 0 { vk::StencilOp::REPLACE } else { vk::StencilOp::KEEP };
-            vk::StencilOpState::default()
-                .fail_op(vk::StencilOp::KEEP)
-                .pass_op(pass)
-                .depth_fail_op(vk::StencilOp::KEEP)
-                .compare_op(st.compare)
-                .compare_mask(st.compare_mask)
-                .write_mask(st.write_mask)
-                .reference(st.reference)
-        });
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(has_depth && desc.depth_compare != vk::CompareOp::ALWAYS)
-            .depth_write_enable(has_depth && desc.depth_write)
-            .depth_compare_op(desc.depth_compare)
-            .stencil_test_enable(stencil_op.is_some())
-            .front(stencil_op.unwrap_or_default())
-            .back(stencil_op.unwrap_or_default());
-        let attachments: Vec<_> = desc
-            .color_formats
-            .iter()
-            .map(|_| {
-                let a =
-                    vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
-                if !desc.blend {
-                    return a;
-                }
-                a.blend_enable(true)
-                    .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
-                    .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                    .color_blend_op(vk::BlendOp::ADD)
-                    .src_alpha_blend_factor(vk::BlendFactor::ZERO)
-                    .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                    .alpha_blend_op(vk::BlendOp::ADD)
-            })
-            .collect();
+        let depth = depth_stencil(desc);
+        let attachments = blend_attachments(desc);
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
@@ -344,4 +309,46 @@ impl Drop for Pipeline {
     fn drop(&mut self) {
         self.shared.retire(Garbage::Pipeline(self.raw, self.layout, self.set_layout));
     }
+}
+
+/// Depth test and write, and the stencil test, of a graphics pipeline.
+fn depth_stencil(desc: &GraphicsPipelineDesc) -> vk::PipelineDepthStencilStateCreateInfo<'static> {
+    let has_depth = desc.depth_format.is_some();
+    let stencil_op = desc.stencil.map(|st| {
+        let pass = if st.write_mask != 0 { vk::StencilOp::REPLACE } else { vk::StencilOp::KEEP };
+        vk::StencilOpState::default()
+            .fail_op(vk::StencilOp::KEEP)
+            .pass_op(pass)
+            .depth_fail_op(vk::StencilOp::KEEP)
+            .compare_op(st.compare)
+            .compare_mask(st.compare_mask)
+            .write_mask(st.write_mask)
+            .reference(st.reference)
+    });
+    vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(has_depth && desc.depth_compare != vk::CompareOp::ALWAYS)
+        .depth_write_enable(has_depth && desc.depth_write)
+        .depth_compare_op(desc.depth_compare)
+        .stencil_test_enable(stencil_op.is_some())
+        .front(stencil_op.unwrap_or_default())
+        .back(stencil_op.unwrap_or_default())
+}
+
+/// One colour blend state per attachment: written whole, alpha-blended
+/// when the pipeline blends.
+fn blend_attachments(desc: &GraphicsPipelineDesc) -> Vec<vk::PipelineColorBlendAttachmentState> {
+    let attachment = |_| {
+        let a = vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
+        if !desc.blend {
+            return a;
+        }
+        a.blend_enable(true)
+            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ZERO)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+            .alpha_blend_op(vk::BlendOp::ADD)
+    };
+    desc.color_formats.iter().map(attachment).collect()
 }

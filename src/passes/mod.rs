@@ -1,6 +1,7 @@
 //! One pass per file; the pass, its shader and its timer label share a name.
 
 pub mod classify_tiles;
+pub mod counters;
 pub mod cull_occluded;
 pub mod cull_patches;
 pub mod debug_view;

@@ -193,6 +193,25 @@ impl<'a> RayCaster<'a> {
     }
 }
 
+/// The stretch of the ray o + t d (t >= 0) inside the box the surface can
+/// be in (None: it misses the box).
+fn clip_to_box(b: &HeightBounds, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+    let (mut t0, mut t1) = (0f64, f64::INFINITY);
+    for (o, d, lo, hi) in [(o.x, d.x, 0.0, b.extent_m[0]), (o.y, d.y, 0.0, b.extent_m[1]), (o.z, d.z, b.bottom, b.top)]
+    {
+        if d.abs() < 1e-300 {
+            if o < lo || o > hi {
+                return None;
+            }
+            continue;
+        }
+        let (a, c) = ((lo - o) / d, (hi - o) / d);
+        t0 = t0.max(a.min(c));
+        t1 = t1.min(a.max(c));
+    }
+    (t0 <= t1).then_some((t0, t1))
+}
+
 fn trace(
     source: &dyn HeightSource,
     b: &HeightBounds,
@@ -206,23 +225,7 @@ fn trace(
         samples += 1;
         f64::from(source.sample(p.x, p.y))
     };
-    // Clip to the box the surface can be in.
-    let (mut t0, mut t1) = (0f64, f64::INFINITY);
-    for (o, d, lo, hi) in [(o.x, d.x, 0.0, b.extent_m[0]), (o.y, d.y, 0.0, b.extent_m[1]), (o.z, d.z, b.bottom, b.top)]
-    {
-        if d.abs() < 1e-300 {
-            if o < lo || o > hi {
-                return Trace { t: None, samples: 0 };
-            }
-            continue;
-        }
-        let (a, c) = ((lo - o) / d, (hi - o) / d);
-        t0 = t0.max(a.min(c));
-        t1 = t1.min(a.max(c));
-    }
-    if t0 > t1 {
-        return Trace { t: None, samples: 0 };
-    }
+    let Some((t0, t1)) = clip_to_box(b, o, d) else { return Trace { t: None, samples: 0 } };
     let dxy = d.x.hypot(d.y);
     let mut t = t0;
     let mut above: Option<f64> = None;

@@ -10,8 +10,8 @@
 use crate::effects::virtual_texture::vt_feedback::VtFeedbackPush;
 use crate::scene::view::TerrainViewGpu;
 use crate::shaders::consts::{
-    FLAVOUR_VIRTUAL_TEXTURE, OCT_CODE_LAST, VT_FEEDBACK_STRIDE, VT_NONE, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT,
-    VT_STATE_HEADER, VT_SUB_K_SHIFT, VT_TILE_TEXELS,
+    FLAVOUR_VIRTUAL_TEXTURE, VT_FEEDBACK_STRIDE, VT_NONE, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT, VT_STATE_HEADER,
+    VT_SUB_K_SHIFT, VT_TILE_TEXELS,
 };
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::collections::BTreeSet;
@@ -46,14 +46,9 @@ pub struct TwinRequests {
     pub boundary_samples: u32,
 }
 
+/// The octahedral normal code as `oct_decode8` (octahedral.glsl) reads it.
 fn oct_decode8(c: [u8; 2]) -> Vec3 {
-    let e = Vec2::new(f32::from(c[0]), f32::from(c[1])) / OCT_CODE_LAST as f32;
-    let f = e * 2.0 - 1.0;
-    let mut n = Vec3::new(f.x, f.y, 1.0 - f.x.abs() - f.y.abs());
-    let t = (-n.z).max(0.0);
-    n.x += if n.x >= 0.0 { -t } else { t };
-    n.y += if n.y >= 0.0 { -t } else { t };
-    n.normalize()
+    Vec3::from(super::octahedral::oct_decode8(c.map(u32::from)).map(|x| x as f32))
 }
 
 struct Camera {

@@ -5,7 +5,6 @@
 //! the headless frame loop of the tools and tests.
 
 mod frame_passes;
-pub mod near_geometry;
 pub mod offscreen;
 pub mod renderer;
 pub mod report;

@@ -15,6 +15,7 @@ use crate::passes::gbuffer_tiles::variant_label;
 use crate::render::renderer::TerrainRenderer;
 use crate::render::telemetry::FrameCounters;
 use crate::render::telemetry::TRIANGLES_PER_PATCH;
+pub use crate::scene::graph::PassWork;
 use crate::scene::graph::{FramePass, Outcome};
 use crate::shaders::quadtree_update as update_sh;
 use serde::Serialize;
@@ -32,29 +33,6 @@ pub enum PassState {
 }
 
 /// What a pass did; a field is absent where it does not apply.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct PassWork {
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub dispatch_groups: Option<u64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub instances: Option<u64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub triangles: Option<u64>,
-    /// Quadtree texel/description writes (quadtree_update).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub writes: Option<u64>,
-    /// Patches tested (cull_patches; cull_occluded: against the pyramid,
-    /// those phase 1 did not draw).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub patches_tested: Option<u64>,
-    /// Nodes whose sun shadow texture was made (sun_shadows).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub shadow_nodes: Option<u64>,
-    /// Virtual-texture pages rendered (vt_pages).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub pages: Option<u64>,
-}
-
 #[derive(Debug, Clone, Serialize)]
 pub struct PassReport {
     pub name: &'static str,
@@ -212,24 +190,7 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
             work: PassWork::default(),
         };
         if pass == FramePass::GbufferTiles && log.outcome(pass).is_some() {
-            // One entry per variant draw, each timed on its own.
-            for bits in r.gbuffer_tiles.variants() {
-                let name = variant_label(bits);
-                let tiles = counters.tiles.get(bits as usize).copied().unwrap_or(0);
-                passes.push(PassReport {
-                    name,
-                    state: if tiles > 0 { PassState::Ran } else { PassState::Idle },
-                    recorded: true,
-                    reason: if tiles > 0 {
-                        String::new()
-                    } else {
-                        "recorded with nothing to do: no tile needs this variant (0 instances)".into()
-                    },
-                    gpu_ms: timings.and_then(|t| t.passes.iter().find(|p| p.name == name)).map(|p| p.gpu_ms),
-                    work: PassWork { instances: Some(u64::from(tiles)), ..PassWork::default() },
-                    ..report.clone()
-                });
-            }
+            passes.extend(tile_variants(r, &counters, timings, &report));
             continue;
         }
         match log.outcome(pass) {
@@ -268,6 +229,33 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
         passes,
         memory,
     })
+}
+
+/// One entry per variant draw of the tile shading, each timed on its own.
+fn tile_variants(
+    r: &TerrainRenderer,
+    counters: &FrameCounters,
+    timings: Option<&FrameTimings>,
+    base: &PassReport,
+) -> Vec<PassReport> {
+    let report = |bits: u32| {
+        let name = variant_label(bits);
+        let tiles = counters.tiles.get(bits as usize).copied().unwrap_or(0);
+        PassReport {
+            name,
+            state: if tiles > 0 { PassState::Ran } else { PassState::Idle },
+            recorded: true,
+            reason: if tiles > 0 {
+                String::new()
+            } else {
+                "recorded with nothing to do: no tile needs this variant (0 instances)".into()
+            },
+            gpu_ms: timings.and_then(|t| t.passes.iter().find(|p| p.name == name)).map(|p| p.gpu_ms),
+            work: PassWork { instances: Some(u64::from(tiles)), ..PassWork::default() },
+            ..base.clone()
+        }
+    };
+    r.gbuffer_tiles.variants().into_iter().map(report).collect()
 }
 
 /// A recorded pass's work, and why it was idle if it had none.
@@ -329,76 +317,12 @@ fn work_of(
         }
         // Reported per variant by the caller.
         FramePass::GbufferTiles => (PassWork::default(), None),
-        FramePass::SunShadows => {
-            let jobs = cpu_work.unwrap_or(0);
-            let side = r.sun_shadows.as_ref().map_or(0, |s| u64::from(s.params.resolution));
-            let [wx, wy, _] = crate::shaders::sun_shadows::WORKGROUP_SIZE;
-            let per_node = side.div_ceil(u64::from(wx)) * side.div_ceil(u64::from(wy));
-            (PassWork { shadow_nodes: Some(jobs), ..groups(jobs * per_node) }, None)
-        }
-        FramePass::VtUpdate => (PassWork { writes: cpu_work, ..groups(1) }, None),
-        FramePass::VtPages => {
-            let pages = cpu_work.unwrap_or(0);
-            let [wx, wy, _] = crate::shaders::vt_pages::WORKGROUP_SIZE;
-            let side = u64::from(crate::effects::virtual_texture::layout::PADDED_TILE);
-            let per_page = side.div_ceil(u64::from(wx)) * side.div_ceil(u64::from(wy));
-            (PassWork { pages: Some(pages), ..groups(pages * per_page) }, None)
-        }
-        FramePass::VtFeedback => {
-            let [wx, wy, _] = crate::shaders::vt_feedback::WORKGROUP_SIZE;
-            let stride = crate::shaders::consts::VT_FEEDBACK_STRIDE;
-            let size = r.gbuffer.as_ref().map_or([0, 0], |g| g.size());
-            let cells = size.map(|s| s.div_ceil(stride));
-            (groups(u64::from(cells[0].div_ceil(wx)) * u64::from(cells[1].div_ceil(wy))), None)
-        }
-        FramePass::GrassPigment => {
-            let [wx, wy, _] = crate::shaders::grass_pigment::WORKGROUP_SIZE;
-            let side = crate::shaders::consts::GRASS_PIGMENT_TEXELS;
-            (groups(u64::from(side.div_ceil(wx)) * u64::from(side.div_ceil(wy))), None)
-        }
-        FramePass::GrassPlace => {
-            let [wx, wy, _] = crate::shaders::grass_place::WORKGROUP_SIZE;
-            let side = r.near.grass.as_ref().map_or(0, |g| g.params.side());
-            let in_range = c.grass.map_or(0, |g| u64::from(g.in_range));
-            let work = PassWork { ..groups(u64::from(side.div_ceil(wx) * side.div_ceil(wy))) };
-            (work, (in_range == 0).then_some("no cell of the square lies within the radius"))
-        }
-        FramePass::GrassDraw => {
-            let drawn = c.grass.map_or(0, |g| g.drawn);
-            let per_tuft =
-                u64::from(crate::shaders::consts::GRASS_BLADES * crate::shaders::consts::GRASS_BLADE_VERTICES / 3);
-            let work = PassWork {
-                instances: Some(u64::from(drawn)),
-                triangles: Some(u64::from(drawn) * per_tuft),
-                ..PassWork::default()
-            };
-            (work, (drawn == 0).then_some("no tuft placed and visible (0 instances)"))
-        }
-        FramePass::CliffMeshBuild => {
-            let side = r.near.cliff_meshes.as_ref().map_or(0, |c| c.params.side());
-            (groups(u64::from((side * side).div_ceil(crate::shaders::cliff_mesh_build::WORKGROUP_SIZE[0]))), None)
-        }
-        // Its instances are counted on the GPU (vista render's cliff meshes: line).
-        FramePass::CliffMeshes => (PassWork::default(), None),
-        FramePass::DecalMeshes => {
-            let m = r.near.decal_meshes.as_ref();
-            let work = PassWork {
-                instances: m.map(|m| u64::from(m.meshes)),
-                triangles: m.map(|m| m.triangles),
-                ..PassWork::default()
-            };
-            (work, None)
-        }
-        FramePass::AssetDraw => {
-            let a = r.near.assets.as_ref().map(|(_, a)| a);
-            let instances = a.map_or(0, |a| a.draws.iter().map(|(_, _, n)| u64::from(*n)).sum());
-            let work = PassWork {
-                instances: Some(instances),
-                triangles: Some(a.map_or(0, |a| a.triangles())),
-                ..PassWork::default()
-            };
-            (work, None)
-        }
         FramePass::LightingResolve | FramePass::DebugView => (PassWork::default(), None),
+        // The effects' passes: their folders know their work.
+        _ => {
+            let size = r.gbuffer.as_ref().map_or([0, 0], |g| g.size());
+            let of_effect = r.built_effects().iter().find_map(|e| e.work(pass, cpu_work, c, size));
+            of_effect.unwrap_or_default()
+        }
     }
 }

@@ -6,85 +6,54 @@
 //! counters come back frames-in-flight + 1 frames late at most, as data,
 //! and nothing in the frame path waits for the GPU.
 
-use crate::effects::grass::gpu::GrassHeaderGpu;
-use crate::effects::grass::GrassCounters;
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
 use crate::passes::classify_tiles::{ARGS_BYTES, HEAD_BYTES};
+pub use crate::passes::counters::{FrameCounters, TraverseCounters, TRIANGLES_PER_PATCH};
 use crate::passes::cull_patches::{CullCounters, PatchListHeader};
-use crate::passes::select_patches::SelectHeader;
 use crate::passes::traverse::TraverseHeader;
+use crate::scene::effect::Effect;
 use crate::shaders::structs;
-use serde::Serialize;
-
-/// The traversal's counters of one frame.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
-pub struct TraverseCounters {
-    pub nodes: u32,
-    /// Nodes kept coarser because a list was full.
-    pub overflow: u32,
-    /// Valid roots not resident yet.
-    pub missing_roots: u32,
-    /// Final nodes per LOD, LOD 0 first.
-    pub nodes_per_lod: Vec<u32>,
-}
-
-/// Triangles of one patch instance (8x8 quads, 2 each).
-pub const TRIANGLES_PER_PATCH: u64 = (crate::world::PATCH_QUADS * crate::world::PATCH_QUADS * 2) as u64;
-
-/// Every GPU counter of one frame.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct FrameCounters {
-    /// The renderer's frame number (as `FrameTimings::frame`).
-    pub frame: u64,
-    pub traverse: TraverseCounters,
-    /// Per-patch LOD selection: patches coarsened, refined below LOD 0,
-    /// seam conflicts.
-    pub select: SelectHeader,
-    pub cull: CullCounters,
-    /// Instances of each draw: phase 1 solid, phase 1 with holes, phase 2
-    /// solid, phase 2 with holes (0 where the list does not exist).
-    pub instances: [u32; 4],
-    /// Triangles submitted by every draw.
-    pub triangles: u64,
-    /// Tiles listed per shader variant (index = flavour bits).
-    pub tiles: Vec<u32>,
-    /// Control-map tiles whose tri-planar background samples at most 1, 2
-    /// and 3 planes (the tightened blend).
-    pub plane_tiles: [u32; 3],
-    /// Effect `grass`: cells in range, tufts placed, culled, drawn.
-    pub grass: Option<GrassCounters>,
-}
 
 /// Which lists a renderer has: phase 1's hole list, phase 2's lists.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct CounterLayout {
     pub holes: bool,
     pub occlusion: bool,
     pub lod_count: u32,
     pub list_capacity: u32,
     pub triangles_per_patch: u64,
-    /// Effect `grass` is built.
-    pub grass: bool,
+    /// The built effects' counters and their bytes, in registry order.
+    pub effects: Vec<(Effect, u64)>,
 }
 
 const TRAVERSE_BYTES: u64 = std::mem::size_of::<TraverseHeader>() as u64;
 const HEADER_BYTES: u64 = structs::PATCH_LIST_HEADER as u64;
 const SELECT_BYTES: u64 = structs::SELECT_HEADER as u64;
-/// Readback bytes: the traversal header, then 4 list headers (phase 1
-/// solid, holes; phase 2 solid, holes), absent ones left zero, the tile
-/// lists' head (draw arguments and plane counters) and the selection
-/// counters, and grass's header (zero without the effect).
-const SLOT_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + HEAD_BYTES + SELECT_BYTES + GRASS_BYTES;
+/// Readback bytes of the core: the traversal header, then 4 list headers
+/// (phase 1 solid, holes; phase 2 solid, holes), absent ones left zero,
+/// the tile lists' head (draw arguments and plane counters) and the
+/// selection counters; each effect's counters follow.
+const CORE_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + HEAD_BYTES + SELECT_BYTES;
 /// Where the tile lists' draw arguments start in a slot.
 const TILES_AT: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES;
 /// Where the selection counters start.
 const SELECT_AT: u64 = TILES_AT + HEAD_BYTES;
-const GRASS_BYTES: u64 = GrassHeaderGpu::BYTES;
-/// Where grass's header starts.
-const GRASS_AT: u64 = SELECT_AT + SELECT_BYTES;
 
 impl CounterLayout {
+    /// Bytes of one slot.
+    fn slot_bytes(&self) -> u64 {
+        CORE_BYTES + self.effects.iter().map(|(_, n)| n).sum::<u64>()
+    }
+
+    /// Where each effect's counters start in a slot, and their bytes.
+    fn effect_ranges(&self) -> impl Iterator<Item = (Effect, u64, u64)> + '_ {
+        self.effects.iter().scan(CORE_BYTES, |at, &(e, n)| {
+            *at += n;
+            Some((e, *at - n, n))
+        })
+    }
+
     /// Parses a slot's bytes (also used on a waiting readback in tests).
     pub fn parse(&self, frame: u64, bytes: &[u8]) -> FrameCounters {
         let t: TraverseHeader = bytemuck::pod_read_unaligned(&bytes[..TRAVERSE_BYTES as usize]);
@@ -100,11 +69,8 @@ impl CounterLayout {
         let tiles = bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(args).iter().map(|a| a[1]).collect();
         let planes: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[(TILES_AT + ARGS_BYTES) as usize..][..16]);
         let select = bytemuck::pod_read_unaligned(&bytes[SELECT_AT as usize..(SELECT_AT + SELECT_BYTES) as usize]);
-        let grass = self.grass.then(|| {
-            let h: GrassHeaderGpu =
-                bytemuck::pod_read_unaligned(&bytes[GRASS_AT as usize..(GRASS_AT + GRASS_BYTES) as usize]);
-            h.counters()
-        });
+        let effects =
+            self.effect_ranges().map(|(e, at, n)| (e, bytes[at as usize..(at + n) as usize].to_vec())).collect();
         FrameCounters {
             select,
             tiles,
@@ -119,7 +85,7 @@ impl CounterLayout {
             },
             triangles: u64::from(cull.drawn) * self.triangles_per_patch,
             cull,
-            grass,
+            effects,
         }
     }
 }
@@ -133,8 +99,8 @@ pub struct CounterSources<'a> {
     pub tiles: Option<&'a Buffer>,
     /// `select_patches`' levels buffer (its counters come first).
     pub select: &'a Buffer,
-    /// Effect `grass`'s header.
-    pub grass: Option<&'a Buffer>,
+    /// Each effect's counters, in the layout's order.
+    pub effects: Vec<&'a Buffer>,
 }
 
 struct Slot {
@@ -161,7 +127,7 @@ impl Telemetry {
                 ctx,
                 &BufferDesc {
                     name: &format!("gpu_counters[{i}]"),
-                    size: SLOT_BYTES,
+                    size: layout.slot_bytes(),
                     usage: vk::BufferUsageFlags::TRANSFER_DST,
                     location: MemoryLocation::GpuToCpu,
                 },
@@ -221,8 +187,8 @@ impl Telemetry {
             rec.copy_buffer_region(tiles, 0, &slot.buffer, TILES_AT, HEAD_BYTES);
         }
         rec.copy_buffer_region(src.select, 0, &slot.buffer, SELECT_AT, SELECT_BYTES);
-        if let Some(grass) = src.grass {
-            rec.copy_buffer_region(grass, 0, &slot.buffer, GRASS_AT, GRASS_BYTES);
+        for (buffer, (_, at, n)) in src.effects.iter().zip(self.layout.effect_ranges()) {
+            rec.copy_buffer_region(buffer, 0, &slot.buffer, at, n);
         }
         rec.transfer_to_host_barrier();
     }

@@ -4,7 +4,8 @@
 
 use serde::Serialize;
 
-/// Every effect a scene can name, in report order.
+/// Every effect a scene can name, in report order (which is also the
+/// order their built parts record at each point of the frame).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
@@ -39,14 +40,14 @@ pub enum Effect {
     /// into the virtual texture's pages by `vt_pages`' DECALS variant
     /// (needs `virtual_texture`).
     Decals,
-    /// GPU grass (render/grass): `grass_pigment`, `grass_place` and the
-    /// one indirect draw `grass_draw` into the G-buffer (needs `splat`'s
-    /// material ids, in splat mode).
-    Grass,
     /// The example assets grounded in the terrain (render/assets.rs): the
     /// `asset_draw` pass of a scene's `[[assets]]`, blended into the
     /// terrain by terrain_blend.glsl.
     Assets,
+    /// GPU grass (render/grass): `grass_pigment`, `grass_place` and the
+    /// one indirect draw `grass_draw` into the G-buffer (needs `splat`'s
+    /// material ids, in splat mode).
+    Grass,
     /// Terrain sun shadows from the height field: the `sun_shadows` pass and
     /// its per-node shadow atlas, sampled by `lighting_resolve` (needs
     /// `lighting`).
@@ -68,8 +69,8 @@ impl Effect {
         Effect::Lighting,
         Effect::Queries,
         Effect::Decals,
-        Effect::Grass,
         Effect::Assets,
+        Effect::Grass,
         Effect::Shadows,
         Effect::Atmosphere,
     ];

@@ -223,6 +223,31 @@ impl Skip {
     }
 }
 
+/// What a recorded pass did, as far as the CPU and the frame's counters
+/// know (the pass report's columns).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct PassWork {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dispatch_groups: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub instances: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub triangles: Option<u64>,
+    /// Quadtree texel/description writes (quadtree_update).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub writes: Option<u64>,
+    /// Patches tested (cull_patches; cull_occluded: against the pyramid,
+    /// those phase 1 did not draw).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub patches_tested: Option<u64>,
+    /// Nodes whose sun shadow texture was made (sun_shadows).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shadow_nodes: Option<u64>,
+    /// Virtual-texture pages rendered (vt_pages).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pages: Option<u64>,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PassNode {
     pub pass: FramePass,

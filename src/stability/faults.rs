@@ -57,17 +57,7 @@ pub fn run(options: &ContextOptions, form: Form) -> Result<CaseReport> {
         ctx.wait_idle()?;
         ctx.faults().counts()[0] - base
     };
-    let indices: Vec<u64> = match form {
-        Form::Full => (0..total).collect(),
-        // Every start-up allocation up to 8, then a spread, and the last.
-        Form::Quick => {
-            let mut v: Vec<u64> = (0..total).step_by((total as usize / 16).max(1)).collect();
-            v.extend([at_start.saturating_sub(1), at_start, total - 1]);
-            v.sort_unstable();
-            v.dedup();
-            v
-        }
-    };
+    let indices = fault_indices(form, total, at_start);
     let (mut panics, mut leaks, mut messages, mut errors, mut survived) = (0usize, 0i64, 0usize, 0usize, 0usize);
     for &k in &indices {
         let o = attempt(options, &|ctx| ctx.faults().fail_allocation_in(k), &|ctx| script(ctx, &mut || ()))?;
@@ -100,31 +90,7 @@ pub fn run(options: &ContextOptions, form: Form) -> Result<CaseReport> {
     // A lost device: the frame that submits (or waits) must fail.
     let mut late = 0u32;
     for (what, which) in [("submit", 1usize), ("fence wait", 2)] {
-        let o = attempt(options, &|_| (), &|ctx| {
-            let mut rig = Rig::new(ctx, [64, 48], 60, RendererOptions::default(), Vec::new())?;
-            let view = rig.view(rig.camera(500.0, 500.0, 30.0, 0.0, -30.0));
-            rig.off.frame(ctx, &mut rig.renderer, &view)?;
-            let armed = ctx.faults().counts()[which];
-            if which == 1 {
-                ctx.faults().lose_device_at_submit_in(0);
-            } else {
-                ctx.faults().lose_device_at_wait_in(0);
-            }
-            for frame in 0..8u32 {
-                let before = ctx.faults().counts()[which];
-                let result = rig.off.frame(ctx, &mut rig.renderer, &view);
-                let hit_here = before <= armed && ctx.faults().counts()[which] > armed;
-                match result {
-                    Err(Error::DeviceLost) if hit_here => return Ok(()),
-                    Err(e) => return Err(e),
-                    Ok(()) if ctx.faults().counts()[which] > armed => {
-                        return Err(Error::BadInput(format!("frame {frame} met the lost device and returned Ok")))
-                    }
-                    Ok(()) => {}
-                }
-            }
-            Err(Error::BadInput("the injected fault was never met".into()))
-        })?;
+        let o = attempt(options, &|_| (), &|ctx| lose_device(ctx, which))?;
         let ok = matches!(o.result, Ok(Ok(())));
         late += u32::from(!ok);
         panics += usize::from(o.result.is_err());
@@ -143,4 +109,47 @@ pub fn run(options: &ContextOptions, form: Form) -> Result<CaseReport> {
     r.worst = format!("{panics}, {leaks}, {messages}; {late} late");
     r.pass = panics == 0 && leaks == 0 && messages == 0 && late == 0;
     Ok(r)
+}
+
+/// The allocations to fail, in turn: every one, or (quick) every start-up
+/// allocation up to 8, then a spread, and the last.
+fn fault_indices(form: Form, total: u64, at_start: u64) -> Vec<u64> {
+    match form {
+        Form::Full => (0..total).collect(),
+        Form::Quick => {
+            let mut v: Vec<u64> = (0..total).step_by((total as usize / 16).max(1)).collect();
+            v.extend([at_start.saturating_sub(1), at_start, total - 1]);
+            v.sort_unstable();
+            v.dedup();
+            v
+        }
+    }
+}
+
+/// Renders frames with the device lost at the next submit (`which` 1) or
+/// fence wait (2): Ok when the frame that met it returned DeviceLost.
+fn lose_device(ctx: &Context, which: usize) -> Result<()> {
+    let mut rig = Rig::new(ctx, [64, 48], 60, RendererOptions::default(), Vec::new())?;
+    let view = rig.view(rig.camera(500.0, 500.0, 30.0, 0.0, -30.0));
+    rig.off.frame(ctx, &mut rig.renderer, &view)?;
+    let armed = ctx.faults().counts()[which];
+    if which == 1 {
+        ctx.faults().lose_device_at_submit_in(0);
+    } else {
+        ctx.faults().lose_device_at_wait_in(0);
+    }
+    for frame in 0..8u32 {
+        let before = ctx.faults().counts()[which];
+        let result = rig.off.frame(ctx, &mut rig.renderer, &view);
+        let hit_here = before <= armed && ctx.faults().counts()[which] > armed;
+        match result {
+            Err(Error::DeviceLost) if hit_here => return Ok(()),
+            Err(e) => return Err(e),
+            Ok(()) if ctx.faults().counts()[which] > armed => {
+                return Err(Error::BadInput(format!("frame {frame} met the lost device and returned Ok")))
+            }
+            Ok(()) => {}
+        }
+    }
+    Err(Error::BadInput("the injected fault was never met".into()))
 }

@@ -210,117 +210,15 @@ impl GpuQuadtree {
         let mut shadow = QuadtreeShadow::new(world, crate::world::slot_capacity(slots));
         // A freed slot waits until the frames that drew its last node are done.
         shadow.set_reuse_delay(frames_in_flight.max(1) as u64);
-        let node_textures = PerFrame::new(|i| {
-            Image::new(
-                ctx,
-                &ImageDesc {
-                    name: &copy_name("quadtree_nodes", i),
-                    format: vk::Format::R16_UINT,
-                    extent,
-                    mip_levels: world.lod_count,
-                    array_layers: 1,
-                    usage: vk::ImageUsageFlags::STORAGE
-                        | vk::ImageUsageFlags::SAMPLED
-                        | vk::ImageUsageFlags::TRANSFER_DST
-                        | vk::ImageUsageFlags::TRANSFER_SRC,
-                },
-            )
-            .map_err(|e| node_texture_error(ctx, world, extent, Some(e)))
-        })?;
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let node_textures = node_textures(ctx, world, extent)?;
         let layers = shadow.slot_capacity() + FIRST_SLOT;
-        let node_descs = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "quadtree_node_descs",
-                size: u64::from(layers) * 8,
-                usage: storage | vk::BufferUsageFlags::TRANSFER_SRC,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
-        let node_errors = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "quadtree_node_errors",
-                size: u64::from(layers) * 4,
-                usage: storage | vk::BufferUsageFlags::TRANSFER_SRC,
-                location: MemoryLocation::GpuOnly,
-            },
-        )?;
-        let mut atlases = Vec::new();
-        for (i, a) in ATLASES.iter().enumerate() {
-            if !set.contains(i) {
-                atlases.push(None);
-                continue;
-            }
-            atlases.push(Some(Image::new(
-                ctx,
-                &ImageDesc {
-                    name: a.name,
-                    format: atlas_format(i, format).0,
-                    extent: [a.side, a.side],
-                    mip_levels: 1,
-                    array_layers: layers,
-                    usage: vk::ImageUsageFlags::SAMPLED
-                        | vk::ImageUsageFlags::TRANSFER_DST
-                        | vk::ImageUsageFlags::TRANSFER_SRC,
-                },
-            )?));
-        }
+        let [node_descs, node_errors] = slot_buffers(ctx, layers)?;
+        let atlases = atlases(ctx, set, format, layers)?;
         // Worst case per frame: every slot freed and refilled (texel, desc, error each).
         let update_capacity = 6 * layers;
-        let mut ring = Vec::new();
-        // Two at least: a frame also applies the last frame's list to its
-        // node texture copy.
-        for i in 0..frames_in_flight.max(2) {
-            let host = |name: &str, size| {
-                Buffer::new(
-                    ctx,
-                    &BufferDesc {
-                        name,
-                        size,
-                        usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
-                        location: MemoryLocation::CpuToGpu,
-                    },
-                )
-            };
-            ring.push(RingSlot {
-                updates: host(&format!("quadtree_updates[{i}]"), u64::from(update_capacity) * 16)?,
-                payloads: host(
-                    &format!("node_payload_uploads[{i}]"),
-                    node_upload_bytes(set, format) * MAX_UPLOADS_PER_FRAME as u64,
-                )?,
-            });
-        }
-        // Initial contents: every texel empty or invalid, descriptions zero.
-        let texels: Vec<u8> = shadow.mips.iter().flat_map(|m| bytemuck::cast_slice::<u16, u8>(m).to_vec()).collect();
-        let mut staging = Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: "quadtree_init",
-                size: texels.len() as u64,
-                usage: vk::BufferUsageFlags::TRANSFER_SRC,
-                location: MemoryLocation::CpuToGpu,
-            },
-        )?;
-        staging.mapped_mut().expect("mapped").copy_from_slice(&texels);
-        ctx.submit_and_wait(|rec| {
-            for a in atlases.iter().flatten() {
-                rec.discard_to(a, ATLAS_LAYOUT);
-            }
-            for node_texture in node_textures.all() {
-                rec.discard_to(node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
-                let mut offset = 0;
-                for (lod, m) in shadow.mips.iter().enumerate() {
-                    rec.copy_buffer_to_image(&staging, offset, node_texture, lod as u32, 0);
-                    offset += (m.len() * 2) as u64;
-                }
-                rec.transition(node_texture, vk::ImageLayout::GENERAL);
-            }
-            rec.fill_buffer(&node_descs, 0);
-            rec.fill_buffer(&node_errors, 0);
-            Ok(())
-        })?;
+        let ring = upload_ring(ctx, frames_in_flight, update_capacity, node_upload_bytes(set, format))?;
+        let parts = Initial { node_textures: &node_textures, atlases: &atlases, slots: [&node_descs, &node_errors] };
+        initialise(ctx, &shadow, parts)?;
         let written = vec![(0, 0); ring.len()];
         Ok(GpuQuadtree {
             shadow,
@@ -542,6 +440,131 @@ impl GpuQuadtree {
 /// say what was asked for (a world this size), not which GPU resource.
 /// `e` is the allocation's error, None for a texture wider than the device
 /// allows.
+/// The node texture, one copy per frame parity (`frame::per_frame`).
+fn node_textures(ctx: &Context, world: &WorldDesc, extent: [u32; 2]) -> Result<PerFrame<Image>> {
+    PerFrame::new(|i| {
+        Image::new(
+            ctx,
+            &ImageDesc {
+                name: &copy_name("quadtree_nodes", i),
+                format: vk::Format::R16_UINT,
+                extent,
+                mip_levels: world.lod_count,
+                array_layers: 1,
+                usage: vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_DST
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
+            },
+        )
+        .map_err(|e| node_texture_error(ctx, world, extent, Some(e)))
+    })
+}
+
+/// Per slot: the node descriptions (8 bytes) and errors (4 bytes).
+fn slot_buffers(ctx: &Context, layers: u32) -> Result<[Buffer; 2]> {
+    let usage =
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
+    let buffer = |name, bytes: u64| {
+        Buffer::new(
+            ctx,
+            &BufferDesc { name, size: u64::from(layers) * bytes, usage, location: MemoryLocation::GpuOnly },
+        )
+    };
+    Ok([buffer("quadtree_node_descs", 8)?, buffer("quadtree_node_errors", 4)?])
+}
+
+/// The payload atlases of `set`, one layer per slot (None: not kept).
+fn atlases(ctx: &Context, set: AtlasSet, format: PayloadFormat, layers: u32) -> Result<Vec<Option<Image>>> {
+    let mut atlases = Vec::new();
+    for (i, a) in ATLASES.iter().enumerate() {
+        if !set.contains(i) {
+            atlases.push(None);
+            continue;
+        }
+        atlases.push(Some(Image::new(
+            ctx,
+            &ImageDesc {
+                name: a.name,
+                format: atlas_format(i, format).0,
+                extent: [a.side, a.side],
+                mip_levels: 1,
+                array_layers: layers,
+                usage: vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_DST
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
+            },
+        )?));
+    }
+    Ok(atlases)
+}
+
+/// The upload ring: per slot the update list and the payloads.
+fn upload_ring(ctx: &Context, frames_in_flight: usize, updates: u32, per_node: u64) -> Result<Vec<RingSlot>> {
+    let host = |name: &str, size| {
+        Buffer::new(
+            ctx,
+            &BufferDesc {
+                name,
+                size,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::CpuToGpu,
+            },
+        )
+    };
+    // Two at least: a frame also applies the last frame's list to its
+    // node texture copy.
+    (0..frames_in_flight.max(2))
+        .map(|i| {
+            Ok(RingSlot {
+                updates: host(&format!("quadtree_updates[{i}]"), u64::from(updates) * 16)?,
+                payloads: host(&format!("node_payload_uploads[{i}]"), per_node * MAX_UPLOADS_PER_FRAME as u64)?,
+            })
+        })
+        .collect()
+}
+
+/// What starts empty on the GPU.
+struct Initial<'a> {
+    node_textures: &'a PerFrame<Image>,
+    atlases: &'a [Option<Image>],
+    /// The descriptions and errors.
+    slots: [&'a Buffer; 2],
+}
+
+/// Initial contents: every texel empty or invalid, descriptions zero.
+fn initialise(ctx: &Context, shadow: &QuadtreeShadow, parts: Initial) -> Result<()> {
+    let texels: Vec<u8> = shadow.mips.iter().flat_map(|m| bytemuck::cast_slice::<u16, u8>(m).to_vec()).collect();
+    let mut staging = Buffer::new(
+        ctx,
+        &BufferDesc {
+            name: "quadtree_init",
+            size: texels.len() as u64,
+            usage: vk::BufferUsageFlags::TRANSFER_SRC,
+            location: MemoryLocation::CpuToGpu,
+        },
+    )?;
+    staging.mapped_mut().expect("mapped").copy_from_slice(&texels);
+    ctx.submit_and_wait(|rec| {
+        for a in parts.atlases.iter().flatten() {
+            rec.discard_to(a, ATLAS_LAYOUT);
+        }
+        for node_texture in parts.node_textures.all() {
+            rec.discard_to(node_texture, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+            let mut offset = 0;
+            for (lod, m) in shadow.mips.iter().enumerate() {
+                rec.copy_buffer_to_image(&staging, offset, node_texture, lod as u32, 0);
+                offset += (m.len() * 2) as u64;
+            }
+            rec.transition(node_texture, vk::ImageLayout::GENERAL);
+        }
+        for b in parts.slots {
+            rec.fill_buffer(b, 0);
+        }
+        Ok(())
+    })
+}
+
 fn node_texture_error(ctx: &Context, world: &WorldDesc, extent: [u32; 2], e: Option<Error>) -> Error {
     let [w, h] = extent;
     // R16 texels over the mip chain, each mip half the one above.

@@ -21,6 +21,8 @@ use super::texels::{pack_normal, texel_index, PayloadFormat, TexelKind, ATLAS_BO
 /// one grid point on either side for central differences.
 struct Grid {
     sub: usize,
+    /// Samples a row (and rows).
+    width: usize,
     values: Vec<f32>,
 }
 
@@ -78,24 +80,9 @@ pub fn bake_node_with(
     assert!(world.is_valid(id), "bake_node on invalid node {id}");
     let b = world.bounds_m(id);
     let step = world.node_spacing_m(id.lod);
-    let [ex, ey] = world.extent_m;
 
-    let sub = if id.lod == 0 { 1 } else { 2 };
-    let width = sub * (ATLAS_SIDE - 1) + 3;
-    // Grid point (i, j) is grid line (origin + i - first, origin + j - first)
-    // of the world's grid of step / sub metres (WorldDesc::grid_pos).
-    let first = (sub * ATLAS_BORDER + 1) as i64;
-    let gstep = step / sub as f64;
-    let per_node = i64::from(NODE_QUADS) * sub as i64;
-    let origin = [i64::from(id.x) * per_node - first, i64::from(id.y) * per_node - first];
-    let mut g = Grid { sub, values: vec![0f32; width * width] };
-    // Sampling dominates the bake; rows in parallel cut a single node's
-    // latency for the streaming loader too.
-    let xs: Vec<f64> = (0..width).map(|i| world.grid_pos(0, origin[0] + i as i64, gstep).clamp(0.0, ex)).collect();
-    g.values.par_chunks_exact_mut(width).enumerate().for_each(|(j, row)| {
-        let y = world.grid_pos(1, origin[1] + j as i64, gstep).clamp(0.0, ey);
-        source.sample_row(&xs, y, row);
-    });
+    let (g, gstep) = sample_grid(source, world, id);
+    let width = g.width;
     let f = &g.values;
     // Sample (i, j), i and j from -2 on, counted from 0 here.
     let texel_height = |t: usize, u: usize| f[g.at(u) * width + g.at(t)];
@@ -106,39 +93,8 @@ pub fn bake_node_with(
     let heights: Vec<u16> =
         (0..ATLAS_TEXELS).map(|k| world.encode_height(texel_height(k % ATLAS_SIDE, k / ATLAS_SIDE))).collect();
 
-    let hole_here = holes_near(holes, b, step);
-    let mut normals = Vec::with_capacity(ATLAS_TEXELS);
-    let mut albedo = Vec::with_capacity(ATLAS_TEXELS);
-    let mut materials = Vec::with_capacity(ATLAS_TEXELS);
-    let mut words = Vec::with_capacity(ATLAS_TEXELS);
-    for u in 0..ATLAS_SIDE {
-        for t in 0..ATLAS_SIDE {
-            // Texel (t, u) is sample (t - 2, u - 2).
-            let (fi, fj) = (g.at(t), g.at(u));
-            let dx = (f[fj * width + fi + 1] - f[fj * width + fi - 1]) as f64 / (2.0 * gstep);
-            let dy = (f[(fj + 1) * width + fi] - f[(fj - 1) * width + fi]) as f64 / (2.0 * gstep);
-            let len = (dx * dx + dy * dy + 1.0).sqrt();
-            let nrm = [-dx / len, -dy / len, 1.0 / len];
-            let slope_deg = (nrm[2].clamp(-1.0, 1.0).acos() as f32).to_degrees();
-            let mat = settings.materials.material(slope_deg, f[fj * width + fi]);
-            let s = [t as i64 - ATLAS_BORDER as i64, u as i64 - ATLAS_BORDER as i64];
-            let n0 = [i64::from(id.x), i64::from(id.y)].map(|c| c * i64::from(NODE_QUADS));
-            let pos = [world.grid_pos(0, n0[0] + s[0], step), world.grid_pos(1, n0[1] + s[1], step)];
-            let solid = !outside_extent(pos, world.extent_m, step)
-                && !hole_here.iter().any(|h| h.contains(pos[0], pos[1]))
-                && !source.is_hole(pos[0], pos[1]);
-            let altitude = f[fj * width + fi];
-            let word = settings.control.as_ref().map(|c| c.word(pos[0], pos[1], slope_deg, altitude));
-            let (rgb, smooth) = match (&settings.control, word) {
-                (Some(c), Some(w)) => c.looks.look(w, slope01(nrm[2])),
-                _ => material_look(mat, slope_deg),
-            };
-            normals.push(pack_normal(nrm, NO_OCCLUSION, smooth));
-            albedo.push([rgb[0], rgb[1], rgb[2], if solid { 255 } else { 0 }]);
-            materials.push(mat);
-            words.push(word.unwrap_or(0));
-        }
-    }
+    let place = Placement { world, holes: holes_near(holes, b, step), id, step, gstep };
+    let Texels { normals, albedo, materials, words } = texels(source, settings, &g, &place);
     let at_splat = |k: usize| texel_index(2 * (k % SPLAT_RES) as isize, 2 * (k / SPLAT_RES) as isize);
     let splat = (0..SPLAT_RES * SPLAT_RES).map(|k| materials[at_splat(k)] as u8).collect();
     let control = match settings.control {
@@ -147,39 +103,8 @@ pub fn bake_node_with(
     };
 
     let decoded: Vec<f32> = samples.iter().map(|&v| world.decode_height(v)).collect();
-    let mut patch_min_max = Vec::new();
-    let mut patch_cones = Vec::new();
-    let mut patch_holes = Vec::new();
-    for py in 0..PATCHES_PER_NODE_SIDE {
-        for px in 0..PATCHES_PER_NODE_SIDE {
-            let (mut mn, mut mx, mut holes_seen) = (u16::MAX, 0u16, 0usize);
-            for j in 0..PATCH_SAMPLES {
-                for i in 0..PATCH_SAMPLES {
-                    let (si, sj) = ((px * PATCH_QUADS) as usize + i, (py * PATCH_QUADS) as usize + j);
-                    let k = sj * n + si;
-                    mn = mn.min(samples[k]);
-                    mx = mx.max(samples[k]);
-                    holes_seen += usize::from(albedo[texel_index(si as isize, sj as isize)][3] == 0);
-                }
-            }
-            patch_min_max.push([mn, mx]);
-            patch_holes.push(match holes_seen {
-                0 => PATCH_HOLE_NONE,
-                n if n == PATCH_SAMPLES * PATCH_SAMPLES => PATCH_HOLE_ALL,
-                _ => PATCH_HOLE_SOME,
-            });
-        }
-    }
-    // One cone per block of patches holds every triangle any of them draws.
-    let b = crate::shaders::consts::CONE_BLOCK_PATCHES;
-    for by in 0..CONE_BLOCKS_PER_NODE_SIDE {
-        for bx in 0..CONE_BLOCKS_PER_NODE_SIDE {
-            let tri: Vec<[f64; 3]> = (0..b * b)
-                .flat_map(|k| patch_triangle_normals(&decoded, step, bx * b + k % b, by * b + k / b))
-                .collect();
-            patch_cones.push(fit_cone(&tri).to_gpu());
-        }
-    }
+    let (patch_min_max, patch_holes) = patch_bounds(&samples, &albedo);
+    let patch_cones = patch_cones(&decoded, step);
     let min_height = samples.iter().copied().min().unwrap_or(0);
     let max_height = samples.iter().copied().max().unwrap_or(0);
     BakedNode {
@@ -200,6 +125,131 @@ pub fn bake_node_with(
         patch_errors: vec![[f32::INFINITY; 2]; PATCHES_PER_NODE],
         repr_error_m: f32::INFINITY,
     }
+}
+
+/// The node's samples on a grid of `sub` points per LOD step (2 above LOD
+/// 0: the normals see the finer slope), with the border the atlases and
+/// the central differences need; and the grid's step (m).
+fn sample_grid(source: &dyn HeightSource, world: &WorldDesc, id: NodeId) -> (Grid, f64) {
+    let step = world.node_spacing_m(id.lod);
+    let [ex, ey] = world.extent_m;
+    let sub = if id.lod == 0 { 1 } else { 2 };
+    let width = sub * (ATLAS_SIDE - 1) + 3;
+    // Grid point (i, j) is grid line (origin + i - first, origin + j - first)
+    // of the world's grid of step / sub metres (WorldDesc::grid_pos).
+    let first = (sub * ATLAS_BORDER + 1) as i64;
+    let gstep = step / sub as f64;
+    let per_node = i64::from(NODE_QUADS) * sub as i64;
+    let origin = [i64::from(id.x) * per_node - first, i64::from(id.y) * per_node - first];
+    let mut g = Grid { sub, width, values: vec![0f32; width * width] };
+    // Sampling dominates the bake; rows in parallel cut a single node's
+    // latency for the streaming loader too.
+    let xs: Vec<f64> = (0..width).map(|i| world.grid_pos(0, origin[0] + i as i64, gstep).clamp(0.0, ex)).collect();
+    g.values.par_chunks_exact_mut(width).enumerate().for_each(|(j, row)| {
+        let y = world.grid_pos(1, origin[1] + j as i64, gstep).clamp(0.0, ey);
+        source.sample_row(&xs, y, row);
+    });
+    (g, gstep)
+}
+
+/// Where a node's texels lie: its world, the holes near it, its id, its
+/// LOD step and its sample grid's step (m).
+struct Placement<'a> {
+    world: &'a WorldDesc,
+    holes: Vec<&'a Hole>,
+    id: NodeId,
+    step: f64,
+    gstep: f64,
+}
+
+/// Per atlas texel: the packed normal, the albedo (alpha 0: a hole), the
+/// material and the control word.
+struct Texels {
+    normals: Vec<[u8; 4]>,
+    albedo: Vec<[u8; 4]>,
+    materials: Vec<Material>,
+    words: Vec<u16>,
+}
+
+fn texels(source: &dyn HeightSource, settings: &BakeSettings, g: &Grid, p: &Placement) -> Texels {
+    let (f, width, world, gstep) = (&g.values, g.width, p.world, p.gstep);
+    let mut out = Texels {
+        normals: Vec::with_capacity(ATLAS_TEXELS),
+        albedo: Vec::with_capacity(ATLAS_TEXELS),
+        materials: Vec::with_capacity(ATLAS_TEXELS),
+        words: Vec::with_capacity(ATLAS_TEXELS),
+    };
+    for u in 0..ATLAS_SIDE {
+        for t in 0..ATLAS_SIDE {
+            // Texel (t, u) is sample (t - 2, u - 2).
+            let (fi, fj) = (g.at(t), g.at(u));
+            let dx = (f[fj * width + fi + 1] - f[fj * width + fi - 1]) as f64 / (2.0 * gstep);
+            let dy = (f[(fj + 1) * width + fi] - f[(fj - 1) * width + fi]) as f64 / (2.0 * gstep);
+            let len = (dx * dx + dy * dy + 1.0).sqrt();
+            let nrm = [-dx / len, -dy / len, 1.0 / len];
+            let slope_deg = (nrm[2].clamp(-1.0, 1.0).acos() as f32).to_degrees();
+            let mat = settings.materials.material(slope_deg, f[fj * width + fi]);
+            let s = [t as i64 - ATLAS_BORDER as i64, u as i64 - ATLAS_BORDER as i64];
+            let n0 = [i64::from(p.id.x), i64::from(p.id.y)].map(|c| c * i64::from(NODE_QUADS));
+            let pos = [world.grid_pos(0, n0[0] + s[0], p.step), world.grid_pos(1, n0[1] + s[1], p.step)];
+            let solid = !outside_extent(pos, world.extent_m, p.step)
+                && !p.holes.iter().any(|h| h.contains(pos[0], pos[1]))
+                && !source.is_hole(pos[0], pos[1]);
+            let altitude = f[fj * width + fi];
+            let word = settings.control.as_ref().map(|c| c.word(pos[0], pos[1], slope_deg, altitude));
+            let (rgb, smooth) = match (&settings.control, word) {
+                (Some(c), Some(w)) => c.looks.look(w, slope01(nrm[2])),
+                _ => material_look(mat, slope_deg),
+            };
+            out.normals.push(pack_normal(nrm, NO_OCCLUSION, smooth));
+            out.albedo.push([rgb[0], rgb[1], rgb[2], if solid { 255 } else { 0 }]);
+            out.materials.push(mat);
+            out.words.push(word.unwrap_or(0));
+        }
+    }
+    out
+}
+
+/// Per patch: the min and max encoded height and whether it has holes.
+fn patch_bounds(samples: &[u16], albedo: &[[u8; 4]]) -> (Vec<[u16; 2]>, Vec<u8>) {
+    let n = NODE_SAMPLES;
+    let (mut min_max, mut holes) = (Vec::new(), Vec::new());
+    for py in 0..PATCHES_PER_NODE_SIDE {
+        for px in 0..PATCHES_PER_NODE_SIDE {
+            let (mut mn, mut mx, mut holes_seen) = (u16::MAX, 0u16, 0usize);
+            for j in 0..PATCH_SAMPLES {
+                for i in 0..PATCH_SAMPLES {
+                    let (si, sj) = ((px * PATCH_QUADS) as usize + i, (py * PATCH_QUADS) as usize + j);
+                    let k = sj * n + si;
+                    mn = mn.min(samples[k]);
+                    mx = mx.max(samples[k]);
+                    holes_seen += usize::from(albedo[texel_index(si as isize, sj as isize)][3] == 0);
+                }
+            }
+            min_max.push([mn, mx]);
+            holes.push(match holes_seen {
+                0 => PATCH_HOLE_NONE,
+                n if n == PATCH_SAMPLES * PATCH_SAMPLES => PATCH_HOLE_ALL,
+                _ => PATCH_HOLE_SOME,
+            });
+        }
+    }
+    (min_max, holes)
+}
+
+/// One cone per block of patches holds every triangle any of them draws.
+fn patch_cones(decoded: &[f32], step: f64) -> Vec<[f32; 4]> {
+    let b = crate::shaders::consts::CONE_BLOCK_PATCHES;
+    let mut cones = Vec::new();
+    for by in 0..CONE_BLOCKS_PER_NODE_SIDE {
+        for bx in 0..CONE_BLOCKS_PER_NODE_SIDE {
+            let tri: Vec<[f64; 3]> = (0..b * b)
+                .flat_map(|k| patch_triangle_normals(decoded, step, bx * b + k % b, by * b + k / b))
+                .collect();
+            cones.push(fit_cone(&tri).to_gpu());
+        }
+    }
+    cones
 }
 
 /// A sample position outside the world's extent (beyond rounding of the

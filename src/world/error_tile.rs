@@ -36,14 +36,7 @@ const CR: [[f64; 4]; 5] = {
     let mut w = [[0.0; 4]; 5];
     let mut i = 0;
     while i < 5 {
-        let t = i as f64 / 4.0;
-        let (t2, t3) = (t * t, t * t * t);
-        w[i] = [
-            0.5 * (-t3 + 2.0 * t2 - t),
-            0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
-            0.5 * (-3.0 * t3 + 4.0 * t2 + t),
-            0.5 * (t3 - t2),
-        ];
+        w[i] = super::source::catmull_rom(i as f64 / 4.0);
         i += 1;
     }
     w

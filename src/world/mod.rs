@@ -23,6 +23,7 @@ mod material_rules;
 mod memory;
 mod payload;
 mod plan;
+mod plan_display;
 mod png16;
 mod procedural;
 mod progress;

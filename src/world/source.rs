@@ -187,7 +187,7 @@ impl GridSource {
 }
 
 /// Catmull-Rom weights for the 4 taps around fractional position `t`.
-pub(super) fn catmull_rom(t: f64) -> [f64; 4] {
+pub(super) const fn catmull_rom(t: f64) -> [f64; 4] {
     let t2 = t * t;
     let t3 = t2 * t;
     [0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0), 0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2)]

@@ -9,12 +9,13 @@ use anyhow::{Context as _, Result};
 use clap::Args;
 use serde::Serialize;
 use vista::world::{
-    bake_shard, bake_world, uncompressed_file_bytes, Limits, MemoryReport, NodeCache, PayloadFormat, PayloadSize,
-    Progress, ShardManifest, ShardPlan, WorldDesc, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES,
+    bake_shard, bake_world, uncompressed_file_bytes, BakeStats, Limits, MemoryReport, NodeCache, PayloadFormat,
+    PayloadSize, Progress, ShardManifest, ShardPlan, ShardSplit, WorldDesc, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES,
 };
 
 use crate::bake_shard::ShardArg;
 use crate::world_args::{parse_f64, parse_list, LoadedWorld, WorldArgs};
+use crate::world_spec::WorldSpec;
 
 /// Resident slots the bake's memory report assumes (the streamer's default
 /// budget order of magnitude).
@@ -197,25 +198,15 @@ impl MemoryJson {
     }
 }
 
+/// A bake's shard split and index, if it leaves a manifest.
+type ShardChoice = Option<(ShardSplit, Option<u32>)>;
+
 pub fn bake(args: BakeArgs) -> Result<()> {
     let spec = args.world.resolve()?;
     if let Some(dir) = &args.verify {
         return crate::bake_shard::run_verify(&spec.open()?, dir);
     }
-    if let Some(r) = args.region {
-        let [ex, ey] = spec.desc.extent_m;
-        if r[2] <= 0.0 || r[3] <= 0.0 || r[0] >= ex || r[1] >= ey {
-            let message = format!(
-                "--region {},{},{},{} does not overlap the world (0..{ex} x 0..{ey} m)",
-                r[0], r[1], r[2], r[3]
-            );
-            return Err(crate::InputError(message).into());
-        }
-    }
-    if matches!(args.shard, Some(ShardArg::All { .. })) && !args.dry_run {
-        let message = "--shard all/N prints every shard's plan: only with --dry-run".to_string();
-        return Err(crate::InputError(message).into());
-    }
+    check_bake_args(&args, &spec)?;
     // A whole-world bake is shard 0 of 1: it too leaves a manifest.
     let shard = match (args.shard, args.region) {
         (Some(s), _) => Some((crate::bake_shard::split(&spec.desc, s.count())?, s.index()?)),
@@ -231,28 +222,7 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         crate::out_path::check_out_file(json, "--json")?;
     }
     if args.dry_run {
-        // The plan even of a refused world: what it would cost is the point.
-        let mut out = format!("world:    {}\n", spec.label());
-        if let Err(e) = spec.check(&plan, &limits) {
-            write!(out, "{plan}")?;
-            emit(&out)?;
-            write_plan_json(args.json.as_deref(), &spec.label(), &plan, Some(&e))?;
-            return Err(e);
-        }
-        let w = spec.open_for_timing()?;
-        plan.measure_bake(&*w.source, &w.holes, &w.bake, PLAN_SAMPLES);
-        let mut out = String::new();
-        writeln!(out, "{}", world_line(&w))?;
-        write!(out, "{plan}")?;
-        if let Some((split, index)) = &shard {
-            crate::bake_shard::write_plans(&mut out, split, *index, &plan)?;
-            if let Some(i) = index {
-                check_shard_disk(&split.shard_plan(*i, &plan), cap)?;
-            }
-        }
-        writeln!(out, "dry run: nothing baked")?;
-        emit(&out)?;
-        return write_plan_json(args.json.as_deref(), &w.label, &plan, None);
+        return dry_run(&args, spec, &mut plan, &limits, &shard, cap);
     }
     spec.check(&plan, &limits)?;
     if let (Some((split, Some(i))), Some(_)) = (&shard, args.shard) {
@@ -268,36 +238,128 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         (false, None) => crate::progress::auto(),
     };
     if !progress.is_hidden() {
-        // Timed as the dry run times it, so both say the same.
-        plan.measure_bake(&*w.source, &w.holes, &w.bake, PLAN_SAMPLES);
-        let what = match (&shard, args.shard) {
-            (Some((split, Some(i))), Some(_)) => {
-                let s = split.shard_plan(*i, &plan);
-                format!("shard {i} of {}: {} nodes, about {}", s.count, s.nodes(), minutes(s.seconds()))
-            }
-            _ => plan.summary(),
-        };
-        eprintln!("baking {what} (`vista bake --dry-run` prints the plan)");
+        announce_bake(&w, &mut plan, &shard, &args);
     }
-    let (stats, manifest) = match &shard {
+    let baked = run_bake(&w, &shard, args.region, &dir, progress)?;
+    let memory = MemoryReport::for_format(REPORT_SLOTS, w.bake.format);
+    let report = bake_report(&args, &w, &plan, &shard, dir, baked, &memory);
+    // The JSON first: a closed stdout (`| head`) must not lose the file.
+    if let Some(path) = &args.json {
+        write_json(path, &report)?;
+    }
+    let mut out = String::new();
+    print_bake(&mut out, &w, &report)?;
+    write!(out, "\nmemory for {REPORT_SLOTS} resident nodes:\n{memory}")?;
+    if let Some(path) = &args.json {
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    emit(&out)
+}
+
+/// Option combinations clap cannot refuse by itself.
+fn check_bake_args(args: &BakeArgs, spec: &WorldSpec) -> Result<()> {
+    if let Some(r) = args.region {
+        let [ex, ey] = spec.desc.extent_m;
+        if r[2] <= 0.0 || r[3] <= 0.0 || r[0] >= ex || r[1] >= ey {
+            let message = format!(
+                "--region {},{},{},{} does not overlap the world (0..{ex} x 0..{ey} m)",
+                r[0], r[1], r[2], r[3]
+            );
+            return Err(crate::InputError(message).into());
+        }
+    }
+    if matches!(args.shard, Some(ShardArg::All { .. })) && !args.dry_run {
+        let message = "--shard all/N prints every shard's plan: only with --dry-run".to_string();
+        return Err(crate::InputError(message).into());
+    }
+    Ok(())
+}
+
+/// `bake --dry-run`: prints the plan (and writes its JSON) without baking.
+fn dry_run(
+    args: &BakeArgs,
+    spec: WorldSpec,
+    plan: &mut WorldPlan,
+    limits: &Limits,
+    shard: &ShardChoice,
+    cap: Option<u64>,
+) -> Result<()> {
+    // The plan even of a refused world: what it would cost is the point.
+    let mut out = format!("world:    {}\n", spec.label());
+    if let Err(e) = spec.check(plan, limits) {
+        write!(out, "{plan}")?;
+        emit(&out)?;
+        write_plan_json(args.json.as_deref(), &spec.label(), plan, Some(&e))?;
+        return Err(e);
+    }
+    let w = spec.open_for_timing()?;
+    plan.measure_bake(&*w.source, &w.holes, &w.bake, PLAN_SAMPLES);
+    let mut out = String::new();
+    writeln!(out, "{}", world_line(&w))?;
+    write!(out, "{plan}")?;
+    if let Some((split, index)) = shard {
+        crate::bake_shard::write_plans(&mut out, split, *index, plan)?;
+        if let Some(i) = index {
+            check_shard_disk(&split.shard_plan(*i, plan), cap)?;
+        }
+    }
+    writeln!(out, "dry run: nothing baked")?;
+    emit(&out)?;
+    write_plan_json(args.json.as_deref(), &w.label, plan, None)
+}
+
+/// The `baking ...` line on stderr before a bake with progress.
+fn announce_bake(w: &LoadedWorld, plan: &mut WorldPlan, shard: &ShardChoice, args: &BakeArgs) {
+    // Timed as the dry run times it, so both say the same.
+    plan.measure_bake(&*w.source, &w.holes, &w.bake, PLAN_SAMPLES);
+    let what = match (shard, args.shard) {
+        (Some((split, Some(i))), Some(_)) => {
+            let s = split.shard_plan(*i, plan);
+            format!("shard {i} of {}: {} nodes, about {}", s.count, s.nodes(), minutes(s.seconds()))
+        }
+        _ => plan.summary(),
+    };
+    eprintln!("baking {what} (`vista bake --dry-run` prints the plan)");
+}
+
+/// Bakes a shard (writing its manifest) or a region.
+fn run_bake(
+    w: &LoadedWorld,
+    shard: &ShardChoice,
+    region: Option<[f64; 4]>,
+    dir: &Path,
+    progress: Progress,
+) -> Result<(BakeStats, Option<PathBuf>)> {
+    Ok(match shard {
         Some((split, Some(i))) => {
-            let stats = bake_shard(w.source.clone(), &w.desc, &w.holes, &w.bake, split, *i, &dir, progress)
+            let stats = bake_shard(w.source.clone(), &w.desc, &w.holes, &w.bake, split, *i, dir, progress)
                 .with_context(|| format!("baking into {}", dir.display()))?;
-            let cache = NodeCache::with_settings(&dir, w.desc, w.source.clone(), w.holes.clone(), w.bake.clone())?;
-            let path = ShardManifest::new(&cache, split, *i, &stats).write(&dir)?;
+            let cache = NodeCache::with_settings(dir, w.desc, w.source.clone(), w.holes.clone(), w.bake.clone())?;
+            let path = ShardManifest::new(&cache, split, *i, &stats).write(dir)?;
             (stats, Some(path))
         }
         _ => {
-            let stats = bake_world(w.source.clone(), &w.desc, &w.holes, &w.bake, args.region, &dir, progress)
+            let stats = bake_world(w.source.clone(), &w.desc, &w.holes, &w.bake, region, dir, progress)
                 .with_context(|| format!("baking into {}", dir.display()))?;
             (stats, None)
         }
-    };
+    })
+}
+
+/// The figures of a finished bake, as printed and written as JSON.
+fn bake_report(
+    args: &BakeArgs,
+    w: &LoadedWorld,
+    plan: &WorldPlan,
+    shard: &ShardChoice,
+    dir: PathBuf,
+    (stats, manifest): (BakeStats, Option<PathBuf>),
+    memory: &MemoryReport,
+) -> BakeReport {
     let nodes = stats.baked + stats.cached;
     let per_node = |v: f64| if nodes == 0 { 0.0 } else { v / nodes as f64 };
     let full_world_nodes = plan.world_nodes as usize;
-    let memory = MemoryReport::for_format(REPORT_SLOTS, w.bake.format);
-    let report = BakeReport {
+    BakeReport {
         source: w.label.clone(),
         world: w.desc,
         out: dir,
@@ -313,7 +375,7 @@ pub fn bake(args: BakeArgs) -> Result<()> {
         compression_ratio: (nodes as u64 * uncompressed_file_bytes(w.bake.format)) as f64
             / (stats.bytes_on_disk.max(1) as f64),
         full_world_nodes,
-        shard: match (&shard, args.shard) {
+        shard: match (shard, args.shard) {
             (Some((split, Some(i))), Some(_)) => Some([*i, split.count()]),
             _ => None,
         },
@@ -335,19 +397,8 @@ pub fn bake(args: BakeArgs) -> Result<()> {
             seconds: stats.errors.seconds,
             quads: stats.error_quads,
         },
-        memory: MemoryJson::new(&memory),
-    };
-    // The JSON first: a closed stdout (`| head`) must not lose the file.
-    if let Some(path) = &args.json {
-        write_json(path, &report)?;
+        memory: MemoryJson::new(memory),
     }
-    let mut out = String::new();
-    print_bake(&mut out, &w, &report)?;
-    write!(out, "\nmemory for {REPORT_SLOTS} resident nodes:\n{memory}")?;
-    if let Some(path) = &args.json {
-        writeln!(out, "wrote {}", path.display())?;
-    }
-    emit(&out)
 }
 
 /// A shard over `--max-disk` (unless --yes), naming the options.

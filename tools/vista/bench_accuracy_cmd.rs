@@ -30,25 +30,8 @@ pub struct AccuracyArgs<'a> {
 }
 
 pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()> {
-    let AccuracyArgs { targets, views, plot, images, slots, .. } = *a;
-    let max_side = vista::shaders::consts::SUN_SHADOW_MAX_SIDE;
-    if a.shadows.resolutions.is_empty() || a.shadows.resolutions.iter().any(|r| !(2..=max_side).contains(r)) {
-        bail!("--shadow-resolutions must be texels per node side, 2..={max_side}");
-    }
-    if a.shadows.steps.is_empty() || a.shadows.steps.iter().any(|s| !(1..=1024).contains(s)) {
-        bail!("--shadow-steps must be whole numbers 1..=1024");
-    }
-    if targets.is_empty() || targets.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
-        bail!("--targets must be positive numbers of pixels");
-    }
-    if let Some(p) = plot {
-        check_plot_path(p)?;
-    }
-    if let Some(dir) = images {
-        if !dir.is_dir() {
-            bail!("--images {}: not an existing folder", dir.display());
-        }
-    }
+    let AccuracyArgs { targets, views, images, slots, .. } = *a;
+    check_accuracy_args(a)?;
     let world = args.world.load()?;
     crate::world_args::check_slots(slots, &world.desc)?;
     world.require_unplaced("vista bench accuracy")?;
@@ -87,10 +70,46 @@ pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()>
     let _ = std::fs::remove_dir_all(&cache);
     let b = result?;
     print_table(&b, &world.label, ctx, &cfg, start.elapsed().as_secs_f64());
-    if let Some(path) = args.json {
+    write_outputs(ctx, args.json, a, &world.label, &cfg, &b)
+}
+
+/// Checked before the (long) run: the sweeps' values and the output paths.
+fn check_accuracy_args(a: &AccuracyArgs) -> Result<()> {
+    let AccuracyArgs { targets, plot, images, .. } = *a;
+    let max_side = vista::shaders::consts::SUN_SHADOW_MAX_SIDE;
+    if a.shadows.resolutions.is_empty() || a.shadows.resolutions.iter().any(|r| !(2..=max_side).contains(r)) {
+        bail!("--shadow-resolutions must be texels per node side, 2..={max_side}");
+    }
+    if a.shadows.steps.is_empty() || a.shadows.steps.iter().any(|s| !(1..=1024).contains(s)) {
+        bail!("--shadow-steps must be whole numbers 1..=1024");
+    }
+    if targets.is_empty() || targets.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+        bail!("--targets must be positive numbers of pixels");
+    }
+    if let Some(p) = plot {
+        check_plot_path(p)?;
+    }
+    if let Some(dir) = images {
+        if !dir.is_dir() {
+            bail!("--images {}: not an existing folder", dir.display());
+        }
+    }
+    Ok(())
+}
+
+/// `--json`, `--images` and `--plot`, after the table.
+fn write_outputs(
+    ctx: &Context,
+    json: Option<&Path>,
+    a: &AccuracyArgs,
+    label: &str,
+    cfg: &AccuracyBenchConfig,
+    b: &AccuracyBench,
+) -> Result<()> {
+    if let Some(path) = json {
         let json = serde_json::json!({
             "device": ctx.info().name,
-            "world": world.label,
+            "world": label,
             "size": cfg.size,
             "fov_y_deg": cfg.fov_y_deg,
             "clay_albedo": CLAY_ALBEDO,
@@ -102,12 +121,12 @@ pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()>
         });
         write_json(path, &json)?;
     }
-    if let Some(dir) = images {
-        write_images(dir, &b)?;
+    if let Some(dir) = a.images {
+        write_images(dir, b)?;
     }
-    if let Some(path) = plot {
-        let title = format!("{} on {}, {}x{}", world.label, ctx.info().name, cfg.size[0], cfg.size[1]);
-        crate::accuracy_plot::pareto_plot(&b, &title, path)?;
+    if let Some(path) = a.plot {
+        let title = format!("{} on {}, {}x{}", label, ctx.info().name, cfg.size[0], cfg.size[1]);
+        crate::accuracy_plot::pareto_plot(b, &title, path)?;
         println!("wrote {}", path.display());
     }
     Ok(())
@@ -168,29 +187,19 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
             100.0 * r.terrain_fraction
         );
     }
-    println!(
-        "{:<12} {:<32} {:>6} {:>6} {:>9} {:>10} {:>6} {:>13} {:>7} {:>5} {:>5} {:>8} {:>7} {:>13} {:>13} {:>13} {:>6} {:>6} {:>5} {:>8}",
-        "view",
-        "setting",
-        "target",
-        "bound",
-        "GPU ms",
-        "triangles",
-        "tri/px",
-        "floor tri/ptc",
-        "patches",
-        "nodes",
-        "want+",
-        "d p99",
-        "silh px",
-        "geo max/p99",
-        "lod max/p99",
-        "repr max/p99",
-        "PSNR",
-        "FLIP",
-        "held",
-        "extra"
-    );
+    print_points(b);
+    print_legend(cfg);
+    if let Some(why) = &b.shading_skipped {
+        println!("shading rows skipped: {why}");
+    }
+    print_shadows(b);
+    print_virtual_texture(b);
+    println!("({seconds:.0} s in all)");
+}
+
+/// One row per (view, setting) point, under its header.
+fn print_points(b: &AccuracyBench) {
+    print_points_header();
     for p in &b.points {
         let e = &p.error;
         let setting = if p.family == "shading" { p.setting.clone() } else { p.family.clone() };
@@ -230,6 +239,36 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
             if p.settled { "" } else { " (not settled)" }
         );
     }
+}
+
+fn print_points_header() {
+    println!(
+        "{:<12} {:<32} {:>6} {:>6} {:>9} {:>10} {:>6} {:>13} {:>7} {:>5} {:>5} {:>8} {:>7} {:>13} {:>13} {:>13} {:>6} {:>6} {:>5} {:>8}",
+        "view",
+        "setting",
+        "target",
+        "bound",
+        "GPU ms",
+        "triangles",
+        "tri/px",
+        "floor tri/ptc",
+        "patches",
+        "nodes",
+        "want+",
+        "d p99",
+        "silh px",
+        "geo max/p99",
+        "lod max/p99",
+        "repr max/p99",
+        "PSNR",
+        "FLIP",
+        "held",
+        "extra"
+    );
+}
+
+/// What the columns mean.
+fn print_legend(cfg: &AccuracyBenchConfig) {
     println!(
         "bound: the largest projected selection error of any drawn patch (px: 99 % of each patch within it, all of it \
          within twice it; above the target when the slot budget could not meet it); tri/px: triangles drawn per screen pixel; \
@@ -245,12 +284,6 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
          textured image vs every flavour + blended cliffs",
         cfg.raycast.colour_samples
     );
-    if let Some(why) = &b.shading_skipped {
-        println!("shading rows skipped: {why}");
-    }
-    print_shadows(b);
-    print_virtual_texture(b);
-    println!("({seconds:.0} s in all)");
 }
 
 fn print_shadows(b: &AccuracyBench) {

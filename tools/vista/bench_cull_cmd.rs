@@ -3,7 +3,7 @@
 use crate::bench_cmd::{write_json, ViewBench};
 use anyhow::Result;
 use std::time::Duration;
-use vista::bench::{bench_cull, cull_views, CullBenchConfig};
+use vista::bench::{bench_cull, cull_views, CullBenchConfig, CullBenchRow};
 use vista::gpu::Context;
 use vista::render::{RendererOptions, TerrainRenderer};
 use vista::terrain::TerrainOptions;
@@ -29,6 +29,21 @@ pub fn cull(ctx: &Context, b: &ViewBench) -> Result<()> {
         target_error_px,
         frames
     );
+    print_stages(&rows);
+    print_occlusion(&rows);
+    print_pass_medians(&rows);
+    if let Some(path) = b.json {
+        let doc = serde_json::json!({
+            "device": ctx.info().name, "world": world.label, "size": size,
+            "target_error_px": target_error_px, "frames": frames, "rows": rows,
+        });
+        write_json(path, &doc)?;
+    }
+    Ok(())
+}
+
+/// Patches left after each culling stage, and what the cone test costs and saves.
+fn print_stages(rows: &[CullBenchRow]) {
     println!(
         "{:<13} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>10} {:>9} {:>9} {:>11} {:>11} {:>9}",
         "view",
@@ -45,7 +60,7 @@ pub fn cull(ctx: &Context, b: &ViewBench) -> Result<()> {
         "cone saves",
         "g off/on"
     );
-    for r in &rows {
+    for r in rows {
         let c = &r.all.counters;
         println!(
             "{:<13} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>10.2e} {:>9.3} {:>9.4} {:>8.3} ms {:>8.3} ms {:>9.2}",
@@ -64,12 +79,16 @@ pub fn cull(ctx: &Context, b: &ViewBench) -> Result<()> {
             r.geometry_off_vs_on
         );
     }
+}
+
+/// Two-phase occlusion culling's figures, for the views that measured it.
+fn print_occlusion(rows: &[CullBenchRow]) {
     if rows.iter().any(|r| r.no_occlusion.is_some()) {
         println!(
             "{:<13} {:>8} {:>8} {:>8} {:>12} {:>14} {:>12} {:>10}",
             "occlusion", "phase 1", "tested", "phase 2", "culled", "cost (hiz+p2)", "geom saves", "net"
         );
-        for r in &rows {
+        for r in rows {
             let (Some(cost), Some(saves)) = (r.occlusion_cost_ms, r.occlusion_saves_ms) else { continue };
             let c = &r.all.counters;
             println!(
@@ -85,18 +104,13 @@ pub fn cull(ctx: &Context, b: &ViewBench) -> Result<()> {
             );
         }
     }
+}
+
+fn print_pass_medians(rows: &[CullBenchRow]) {
     println!("per-pass medians (ms), all stages / no cone / culling off:");
-    for r in &rows {
+    for r in rows {
         let t =
             |x: &vista::bench::cull::CullTiming| format!("{:.3}+{:.3}+{:.2}", x.traverse_ms, x.cull_ms, x.geometry_ms);
         println!("  {:<13} traverse+cull+geometry  {}  /  {}  /  {}", r.view, t(&r.all), t(&r.no_cone), t(&r.none));
     }
-    if let Some(path) = b.json {
-        let doc = serde_json::json!({
-            "device": ctx.info().name, "world": world.label, "size": size,
-            "target_error_px": target_error_px, "frames": frames, "rows": rows,
-        });
-        write_json(path, &doc)?;
-    }
-    Ok(())
 }

@@ -5,7 +5,7 @@
 use crate::bench_cmd::{write_json, ViewBench};
 use anyhow::Result;
 use std::time::Duration;
-use vista::bench::{bench_shade, shade_views, ShadeBenchConfig};
+use vista::bench::{bench_shade, shade_views, ShadeBench, ShadeBenchConfig};
 use vista::gpu::Context;
 use vista::render::Effect;
 use vista::scene::shading::Shading;
@@ -51,6 +51,22 @@ pub fn shade(ctx: &Context, args: &ViewBench) -> Result<()> {
         cfg.rounds,
         frames
     );
+    print_views_and_rows(&b);
+    print_tiles_and_stochastic_error(&b);
+    floors(&b.rows);
+    if let Some(path) = args.json {
+        let json = serde_json::json!({
+            "device": ctx.info().name, "world": world.label, "size": size, "target_error_px": target_error_px,
+            "frames_per_renderer": cfg.rounds * frames, "views": b.views, "rows": b.rows,
+            "stochastic_error": b.stochastic_error,
+        });
+        write_json(path, &json)?;
+    }
+    Ok(())
+}
+
+/// The views, then one row per (view, shading, cliffs) renderer.
+fn print_views_and_rows(b: &ShadeBench) {
     for v in &b.views {
         println!(
             "view {:<14} camera {} (x,y,z,yaw,pitch); CPU estimate: {:.0}% terrain, {:.0}% of it cliff",
@@ -80,6 +96,10 @@ pub fn shade(ctx: &Context, args: &ViewBench) -> Result<()> {
         );
     }
     println!("shading ms = classify + draws (tiled), draws only (one shader: it needs no classification); classify = its share of shading");
+}
+
+/// Tiled shading's tiles per variant, and what stochastic cliffs cost in FLIP.
+fn print_tiles_and_stochastic_error(b: &ShadeBench) {
     println!("tiles per variant (tiled, stochastic cliffs), with each draw's median ms:");
     for r in b.rows.iter().filter(|r| r.shading == Shading::Tiled && r.stochastic_cliffs) {
         let v: Vec<String> = r
@@ -102,16 +122,6 @@ pub fn shade(ctx: &Context, args: &ViewBench) -> Result<()> {
             e.cliff_pixels.p99
         );
     }
-    floors(&b.rows);
-    if let Some(path) = args.json {
-        let json = serde_json::json!({
-            "device": ctx.info().name, "world": world.label, "size": size, "target_error_px": target_error_px,
-            "frames_per_renderer": cfg.rounds * frames, "views": b.views, "rows": b.rows,
-            "stochastic_error": b.stochastic_error,
-        });
-        write_json(path, &json)?;
-    }
-    Ok(())
 }
 
 /// Says whether the measured figures meet the floors (a benchmark

@@ -10,6 +10,7 @@ mod bench_cull_cmd;
 mod bench_effects_cmd;
 mod bench_shade_cmd;
 mod golden_cmd;
+mod heightmap_files;
 mod numbers;
 mod out_path;
 mod progress;
@@ -22,6 +23,7 @@ mod stability_cmd;
 #[cfg(feature = "view")]
 mod view;
 mod world_args;
+mod world_spec;
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Parser, Subcommand};

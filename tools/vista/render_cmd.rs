@@ -12,7 +12,7 @@ use vista::effects::virtual_texture::state::VtCounters;
 use vista::frame::FrameTimings;
 use vista::gpu::{Context, QueueMode};
 use vista::passes::cull_patches::CullStages;
-use vista::render::offscreen::{Offscreen, OffscreenDesc};
+use vista::render::offscreen::{Offscreen, OffscreenDesc, Settle};
 use vista::render::{overview_camera, Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
 use vista::targets::{GbufferLayout, Output};
 use vista::terrain::TerrainOptions;
@@ -311,7 +311,7 @@ fn fly(
                 timings.push(t.clone());
             }
         }
-        pages.extend(renderer.virtual_texture.as_ref().map(|v| v.counters()));
+        pages.extend(renderer.effect::<vista::effects::virtual_texture::VirtualTexture>().map(|v| v.counters()));
     }
     Ok((timings, pages, last))
 }
@@ -382,25 +382,7 @@ fn note_camera_place(view: &View, world: &LoadedWorld) {
 }
 
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
-    let errors = world.errors(ctx, args.cache.as_deref())?;
-    let mut options = args.viewpoint.renderer_options(world, args.cache.as_deref(), errors);
-    options.output = args.output.clone();
-    let d = &world.desc;
-    let mut renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
-        .map_err(crate::world_args::plan_error_is_input)?;
-    let mode = match args.queues {
-        QueuesArg::Auto => QueueMode::auto(ctx.info()),
-        QueuesArg::Mode(m) => m,
-    };
-    // An engine's G-buffer starts cleared to 0 (no surface).
-    let clear = if args.output.lights() { SKY_CLEAR } else { [0.0; 4] };
-    let desc = OffscreenDesc {
-        frames_in_flight: options.terrain.frames_in_flight,
-        mode,
-        output: args.output.clone(),
-        ..OffscreenDesc::new(view.size, clear)
-    };
-    let mut off = Offscreen::with_desc(ctx, &desc)?;
+    let (mut renderer, mut off) = renderer_and_target(ctx, world, view, args)?;
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
     let first = renderer.frames_recorded() + 1;
     // A bar on a terminal, a line every 5 s otherwise (long runs only).
@@ -429,58 +411,12 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let warmup = if args.frames as usize > WARMUP_FRAMES { WARMUP_FRAMES } else { 0 };
     let warmup_timed = frames.iter().take_while(|f| f.frame < first + warmup as u64).count();
     let timed = &frames[warmup_timed..];
-    let c = &view.camera;
-    println!(
-        "device: {}  ({} frames rendered: {warmup} warm-up, {} timed; {}x{})",
-        ctx.info().name,
-        args.frames,
-        timed.len(),
-        view.size[0],
-        view.size[1]
-    );
-    println!(
-        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m ({:.1} m above the height source), yaw {:.1}, pitch {:.1}, \
-         fov {:.1}, target error {} px{}",
-        world.label,
-        c.position_m[0],
-        c.position_m[1],
-        c.position_m[2],
-        c.position_m[2]
-            - f64::from(world.source.sample(c.position_m[0] - world.origin_m[0], c.position_m[1] - world.origin_m[1])),
-        c.yaw_deg,
-        c.pitch_deg,
-        view.fov_y_deg,
-        view.target_error_px,
-        if args.fly.is_some() { " (where the fly-through ended)" } else { "" }
-    );
-    let st = renderer.terrain.stats();
-    println!(
-        "stream: {} resident of {} slots, {} loading, {} waiting upload, {} failed loads ({} retried, {} nodes given up); {} after {} frames, {:.2} s (lazy bake)",
-        st.resident,
-        args.viewpoint.slots,
-        st.loading,
-        st.waiting_upload,
-        st.failed,
-        st.retried,
-        st.gave_up,
-        if settle.settled { "settled" } else { "NOT settled (--settle-seconds ran out)" },
-        settle.frames,
-        settle.seconds
-    );
-    if let Some(ran) = renderer.queue_mode() {
-        println!("queues: {}", ran.describe(ctx.info()));
-        println!("async overlap: {}", crate::render_print::describe_overlap(ran, timed));
-    }
-    println!("output: {}", crate::render_print::describe_output(&args.output, &renderer));
+    print_device_and_world(ctx, world, view, args, timed.len(), warmup);
+    print_stream_and_queues(ctx, &renderer, args, &settle, timed);
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
-    let built = CullStages {
-        frustum: args.viewpoint.cull.frustum,
-        cone: args.viewpoint.cull.cone && renderer.cull.build.cone,
-        hole: args.viewpoint.cull.hole && renderer.cull.build.holes,
-        occlusion: args.viewpoint.cull.occlusion && renderer.cull.build.occlusion,
-    };
+    let built = built_stages(args, &renderer);
     if let Some(m) = args.fly {
-        let budget = renderer.virtual_texture.as_ref().map(|v| v.state.budget);
+        let budget = renderer.effect::<vista::effects::virtual_texture::VirtualTexture>().map(|v| v.state.budget);
         crate::render_print::print_fly(m, args.frames, &pages, budget);
     }
     crate::render_print::print_stats(&stats, built, built.occlusion);
@@ -503,4 +439,107 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     }
     print!("{}", renderer.terrain.memory_report());
     Ok(())
+}
+
+/// The renderer as the options build it, and the offscreen target it draws into.
+fn renderer_and_target(
+    ctx: &Context,
+    world: &LoadedWorld,
+    view: &View,
+    args: &RenderArgs,
+) -> Result<(TerrainRenderer, Offscreen)> {
+    let errors = world.errors(ctx, args.cache.as_deref())?;
+    let mut options = args.viewpoint.renderer_options(world, args.cache.as_deref(), errors);
+    options.output = args.output.clone();
+    let d = &world.desc;
+    let renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
+        .map_err(crate::world_args::plan_error_is_input)?;
+    let mode = match args.queues {
+        QueuesArg::Auto => QueueMode::auto(ctx.info()),
+        QueuesArg::Mode(m) => m,
+    };
+    // An engine's G-buffer starts cleared to 0 (no surface).
+    let clear = if args.output.lights() { SKY_CLEAR } else { [0.0; 4] };
+    let desc = OffscreenDesc {
+        frames_in_flight: options.terrain.frames_in_flight,
+        mode,
+        output: args.output.clone(),
+        ..OffscreenDesc::new(view.size, clear)
+    };
+    let off = Offscreen::with_desc(ctx, &desc)?;
+    Ok((renderer, off))
+}
+
+/// The `device:` and `world:` lines.
+fn print_device_and_world(
+    ctx: &Context,
+    world: &LoadedWorld,
+    view: &View,
+    args: &RenderArgs,
+    timed: usize,
+    warmup: usize,
+) {
+    let c = &view.camera;
+    println!(
+        "device: {}  ({} frames rendered: {warmup} warm-up, {} timed; {}x{})",
+        ctx.info().name,
+        args.frames,
+        timed,
+        view.size[0],
+        view.size[1]
+    );
+    println!(
+        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m ({:.1} m above the height source), yaw {:.1}, pitch {:.1}, \
+         fov {:.1}, target error {} px{}",
+        world.label,
+        c.position_m[0],
+        c.position_m[1],
+        c.position_m[2],
+        c.position_m[2]
+            - f64::from(world.source.sample(c.position_m[0] - world.origin_m[0], c.position_m[1] - world.origin_m[1])),
+        c.yaw_deg,
+        c.pitch_deg,
+        view.fov_y_deg,
+        view.target_error_px,
+        if args.fly.is_some() { " (where the fly-through ended)" } else { "" }
+    );
+}
+
+/// The `stream:`, `queues:`, `async overlap:` and `output:` lines.
+fn print_stream_and_queues(
+    ctx: &Context,
+    renderer: &TerrainRenderer,
+    args: &RenderArgs,
+    settle: &Settle,
+    timed: &[FrameTimings],
+) {
+    let st = renderer.terrain.stats();
+    println!(
+        "stream: {} resident of {} slots, {} loading, {} waiting upload, {} failed loads ({} retried, {} nodes given up); {} after {} frames, {:.2} s (lazy bake)",
+        st.resident,
+        args.viewpoint.slots,
+        st.loading,
+        st.waiting_upload,
+        st.failed,
+        st.retried,
+        st.gave_up,
+        if settle.settled { "settled" } else { "NOT settled (--settle-seconds ran out)" },
+        settle.frames,
+        settle.seconds
+    );
+    if let Some(ran) = renderer.queue_mode() {
+        println!("queues: {}", ran.describe(ctx.info()));
+        println!("async overlap: {}", crate::render_print::describe_overlap(ran, timed));
+    }
+    println!("output: {}", crate::render_print::describe_output(&args.output, renderer));
+}
+
+/// The culling stages asked for that the renderer built.
+fn built_stages(args: &RenderArgs, renderer: &TerrainRenderer) -> CullStages {
+    CullStages {
+        frustum: args.viewpoint.cull.frustum,
+        cone: args.viewpoint.cull.cone && renderer.cull.build.cone,
+        hole: args.viewpoint.cull.hole && renderer.cull.build.holes,
+        occlusion: args.viewpoint.cull.occlusion && renderer.cull.build.occlusion,
+    }
 }

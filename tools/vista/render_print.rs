@@ -84,57 +84,9 @@ pub fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
         s.missing_roots
     );
     println!("         ('wanted finer': the camera asks for more detail there but the children are not resident yet)");
-    if let Some(v) = &s.virtual_texture {
-        let c = &v.counters;
-        let mib = |b: u64| b as f64 / f64::from(1u32 << 20);
-        println!(
-            "virtual texture: {} sub-textures ({} squeezed by a full indirection); frame {} (read back) sampled {} \
-             pages, {} resident (hit rate {:.1} %); this frame rendered {} and evicted {} ({} and {} in all), \
-             {} of {} tiles resident, {} pages waiting; indirection {:.1} MiB, page status {:.1} MiB, cache {:.1} MiB",
-            c.sub_textures,
-            c.squeezed,
-            c.harvested_frame,
-            c.requested,
-            c.hits,
-            100.0 * v.hit_rate,
-            c.rendered,
-            c.evicted,
-            c.rendered_total,
-            c.evicted_total,
-            c.resident,
-            v.cache_tiles,
-            c.waiting,
-            mib(v.indirection_bytes),
-            mib(v.status_bytes),
-            mib(v.cache_bytes)
-        );
-        if v.decals > 0 {
-            println!(
-                "decals: {} drawn into the pages; this frame's pages blended {} (a page's decals each once); \
-                 {} pages dropped by decal edits, {} decals left out of pages touched by too many",
-                v.decals, c.decal_blends, c.decal_pages_invalidated, c.decals_left_out
-            );
-        }
-    }
-    if let Some(g) = &s.grass {
-        let c = &g.counters;
-        println!(
-            "grass: {} cells in range, {} tufts placed, {} culled by the frustum, {} by the depth pyramid, {} drawn \
-             ({} triangles); {:.2} MiB",
-            c.in_range,
-            c.placed,
-            c.culled_frustum,
-            c.culled_hiz,
-            c.drawn,
-            g.triangles,
-            g.memory_bytes as f64 / f64::from(1u32 << 20)
-        );
-    }
-    if let Some(c) = &s.cliff_meshes {
-        println!(
-            "cliff meshes: {} cells within the radius, {} steep ones meshed ({} triangles), {} past the capacity",
-            c.tested, c.cells, c.triangles, c.overflow
-        );
+    // Each effect's lines, as its folder words them.
+    for line in &s.effect_lines {
+        println!("{line}");
     }
     if let Some([one, two, three]) = s.plane_tiles {
         println!(

@@ -1,5 +1,6 @@
 //! Effect `assets` as a scene names it.
 
+use crate::effects::frame_effect::{BuildInputs, FrameEffect};
 use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::requested::Effects;
 use crate::error::Result;
@@ -9,6 +10,10 @@ use std::path::Path;
 
 pub struct AssetsKind;
 impl EffectKind for AssetsKind {
+    fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+        super::frame::build(b)
+    }
+
     fn effect(&self) -> Effect {
         Effect::Assets
     }

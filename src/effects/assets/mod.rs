@@ -17,6 +17,7 @@
 //! ```
 
 pub mod asset_draw;
+pub mod frame;
 pub mod kind;
 
 use crate::error::{Error, Result};

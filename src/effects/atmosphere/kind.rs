@@ -1,6 +1,7 @@
 //! Effect `atmosphere` as a scene names it.
 
 use crate::effects::core::needs_lit_image;
+use crate::effects::frame_effect::{BuildInputs, FrameEffect};
 use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::requested::Effects;
 use crate::error::Result;
@@ -10,6 +11,10 @@ use std::path::Path;
 
 pub struct AtmosphereKind;
 impl EffectKind for AtmosphereKind {
+    fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+        super::frame::build(b)
+    }
+
     fn effect(&self) -> Effect {
         Effect::Atmosphere
     }

@@ -13,6 +13,7 @@
 //! the sun. `atmosphere.glsl` evaluates it on the GPU,
 //! `reference::atmosphere` in f64.
 
+pub mod frame;
 pub mod kind;
 
 /// Parameters of the `atmosphere` effect (scene keys of the same names).

@@ -1,5 +1,6 @@
 //! Effect `cliff_meshes` as a scene names it.
 
+use crate::effects::frame_effect::{BuildInputs, FrameEffect};
 use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::requested::Effects;
 use crate::error::Result;
@@ -8,6 +9,10 @@ use std::path::Path;
 
 pub struct CliffMeshesKind;
 impl EffectKind for CliffMeshesKind {
+    fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+        super::frame::build(b)
+    }
+
     fn effect(&self) -> Effect {
         Effect::CliffMeshes
     }

@@ -15,6 +15,7 @@
 //! ```
 
 pub mod cliff_mesh_build;
+pub mod frame;
 pub mod kind;
 // The pass file keeps its shader's and timer label's name.
 #[allow(clippy::module_inception)]
@@ -171,6 +172,8 @@ pub struct CliffMeshes {
     indices: Buffer,
     /// The centre last built around.
     built_at: Option<[f32; 2]>,
+    /// This frame's build (None: the last one holds).
+    pub(super) planned: Option<CliffBuildPush>,
 }
 
 impl CliffMeshes {
@@ -200,6 +203,7 @@ impl CliffMeshes {
             vertices: buffer("cliff_mesh_vertices", vertex_bytes, readable)?,
             indices,
             built_at: None,
+            planned: None,
         })
     }
 

@@ -111,6 +111,8 @@ pub struct Grass {
     /// Effect `decals`: the decal list grass last planned with (a change
     /// redoes the pigment), and the indices of those touching its squares.
     decals: Option<(Vec<Decal>, Buffer)>,
+    /// This frame's plan (`FrameEffect::plan`).
+    pub(super) frame: Option<GrassFrame>,
     /// Tests only (feature `test-hooks`): no frustum or Hi-Z culling
     /// (every placed tuft drawn).
     #[cfg(feature = "test-hooks")]
@@ -164,6 +166,7 @@ impl Grass {
             } else {
                 None
             },
+            frame: None,
             #[cfg(feature = "test-hooks")]
             no_culling: false,
         })

@@ -1,5 +1,6 @@
 //! Effect `grass` as a scene names it: its parameters and when it can grow.
 
+use crate::effects::frame_effect::{BuildInputs, FrameEffect};
 use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::materials::kinds::CONTROL_MAP_MODE;
 use crate::effects::requested::Effects;
@@ -9,6 +10,10 @@ use std::path::Path;
 
 pub struct GrassKind;
 impl EffectKind for GrassKind {
+    fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+        super::frame::build(b)
+    }
+
     fn effect(&self) -> Effect {
         Effect::Grass
     }

@@ -22,6 +22,7 @@ pub mod grass_pigment;
 pub mod grass_place;
 pub mod kind;
 
+pub mod frame;
 pub mod gpu;
 
 use crate::error::{Error, Result};

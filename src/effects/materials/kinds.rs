@@ -2,6 +2,7 @@
 //! materials, splat map or control map) and `cliffs` (their tri-planar
 //! cliff flavours).
 
+use crate::effects::frame_effect::{BuildInputs, FrameEffect};
 use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::requested::Effects;
 use crate::error::Result;
@@ -14,6 +15,10 @@ pub(crate) const CONTROL_MAP_MODE: &str = "([materials] mode = \"control_map\")"
 
 pub struct Splat;
 impl EffectKind for Splat {
+    fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+        super::frame::build(b)
+    }
+
     fn effect(&self) -> Effect {
         Effect::Splat
     }

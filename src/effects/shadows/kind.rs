@@ -2,6 +2,7 @@
 
 use super::sun_shadows::MAX_UPDATE_BUDGET;
 use crate::effects::core::needs_lit_image;
+use crate::effects::frame_effect::{BuildInputs, FrameEffect};
 use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::requested::Effects;
 use crate::error::Result;
@@ -11,6 +12,10 @@ use std::path::Path;
 
 pub struct ShadowsKind;
 impl EffectKind for ShadowsKind {
+    fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+        super::frame::build(b)
+    }
+
     fn effect(&self) -> Effect {
         Effect::Shadows
     }

@@ -17,6 +17,7 @@
 //! that moves costs nothing; a clipmap would re-march its rings as the
 //! camera moves and resolve distant terrain no better than a node does.
 
+pub mod frame;
 pub mod kind;
 pub mod sun_shadows;
 

@@ -1,6 +1,7 @@
 //! Effects `virtual_texture` and `decals` (drawn into its pages) as a
 //! scene names them.
 
+use crate::effects::frame_effect::{BuildInputs, FrameEffect};
 use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::materials::kinds::CONTROL_MAP_MODE;
 use crate::effects::requested::Effects;
@@ -11,6 +12,10 @@ use std::path::Path;
 
 pub struct VirtualTextureKind;
 impl EffectKind for VirtualTextureKind {
+    fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+        super::frame::build(b)
+    }
+
     fn effect(&self) -> Effect {
         Effect::VirtualTexture
     }

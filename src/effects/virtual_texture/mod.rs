@@ -20,6 +20,7 @@
 //! keep them.
 
 pub mod decal_meshes;
+pub mod frame;
 pub mod kind;
 pub mod vt_feedback;
 pub mod vt_pages;
@@ -32,6 +33,7 @@ pub mod decal_mesh;
 pub mod decals;
 pub mod layout;
 pub mod state;
+pub mod stats;
 
 use crate::effects::virtual_texture::vt_feedback::{FeedbackTargets, VtFeedback, VtFeedbackPush};
 use crate::effects::virtual_texture::vt_pages::{PageTargets, VtPages};
@@ -177,6 +179,10 @@ pub struct VirtualTexture {
     pub(crate) last_push: Option<VtFeedbackPush>,
     initialized: bool,
     decals: Option<Decals>,
+    /// Effect `decals` with a displacement decal: their meshes' pass.
+    pub decal_meshes: Option<decal_meshes::DecalMeshPass>,
+    /// This frame's plan (`FrameEffect::plan`).
+    frame: Option<VtFrame>,
 }
 
 fn buffer(
@@ -257,6 +263,8 @@ impl VirtualTexture {
             last_push: None,
             initialized: false,
             decals,
+            decal_meshes: None,
+            frame: None,
         })
     }
 

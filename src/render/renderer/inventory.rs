@@ -26,13 +26,7 @@ impl TerrainRenderer {
         }
         out.push(self.classify.pipeline_label().to_string());
         out.extend(self.gbuffer_tiles.pipeline_labels());
-        if let Some(s) = &self.sun_shadows {
-            out.push(s.pipeline_label().to_string());
-        }
-        if let Some(v) = &self.virtual_texture {
-            out.extend(v.pipeline_labels().map(str::to_string));
-        }
-        out.extend(self.near.pipeline_labels());
+        out.extend(self.built.iter().flat_map(|e| e.pipelines()));
         out.extend(self.resolve.iter().flat_map(LightingResolve::pipeline_labels));
         out.extend(self.debug_pass.as_ref().map(|p| p.pipeline_label().to_string()));
         out
@@ -90,21 +84,7 @@ impl TerrainRenderer {
         if let Some(l) = &self.classify.lists {
             out.push((l.buffer.name.clone(), l.buffer.memory_bytes(), Vec::new()));
         }
-        for (name, bytes) in self.sun_shadows.iter().flat_map(|s| s.memory()) {
-            out.push((name, bytes, vec![Effect::Shadows]));
-        }
-        if let Some(m) = &self.materials {
-            let users: Vec<Effect> =
-                [Effect::Splat, Effect::Cliffs].into_iter().filter(|e| self.effect_on(*e)).collect();
-            out.push(("material_table + detail textures".into(), m.memory_bytes(), users));
-        }
-        for (name, bytes) in self.virtual_texture.iter().flat_map(|v| v.memory()) {
-            out.push((name, bytes, vec![Effect::VirtualTexture]));
-        }
-        for (name, bytes) in self.virtual_texture.iter().flat_map(|v| v.decal_memory()) {
-            out.push((name, bytes, vec![Effect::Decals]));
-        }
-        out.extend(self.near.memory());
+        out.extend(self.built.iter().flat_map(|e| e.memory()));
         out
     }
 }

@@ -57,18 +57,23 @@ fn files_under(dir: &Path) -> Vec<PathBuf> {
 #[test]
 fn sixty_bad_inputs_each_get_one_line_and_exit_2() {
     let inputs = temp_dir("inputs");
-    let lods = scene(&inputs, "lods.toml", "[world]\nlods = \"x\"\n");
-    let extent = scene(&inputs, "extent.toml", "[world]\nextent = \"big\"\n");
-    let key = scene(&inputs, "key.toml", "[world]\nlodz = 3\n");
-    let circle = scene(&inputs, "circle.toml", "[[holes]]\ncircle = [1, 2]\n");
-    let rules = scene(&inputs, "rules.toml", "[material_rules]\nsnow_line_m = \"high\"\n");
-    let effect = scene(&inputs, "effect.toml", "[effects]\nholes = 5\n");
-    let syntax = scene(&inputs, "syntax.toml", "[world\nlods = 3\n");
-    let cargo = concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.toml");
-    let mb_range = ["--extent", "60000", "--height-range", "454", "4810", "--spacing", "8"];
-    let s = |v: &[&str]| v.iter().map(|a| a.to_string()).collect::<Vec<String>>();
-    let with_mb = |v: &[&str]| [s(v), s(&mb_range)].concat();
-    let cases: Vec<Vec<String>> = vec![
+    let cases: Vec<Vec<String>> = [render_option_cases(), render_world_cases(&inputs), other_command_cases()].concat();
+    assert!(cases.len() >= 60);
+    let mut failures = Vec::new();
+    for (i, args) in cases.iter().enumerate() {
+        failures.extend(refusal_failure(i, args));
+    }
+    assert!(failures.is_empty(), "{} of {} cases:\n{}", failures.len(), cases.len(), failures.join("\n"));
+    let _ = std::fs::remove_dir_all(&inputs);
+}
+
+fn s(v: &[&str]) -> Vec<String> {
+    v.iter().map(|a| a.to_string()).collect::<Vec<String>>()
+}
+
+/// `render` options each out of range or unreadable, on the default world.
+fn render_option_cases() -> Vec<Vec<String>> {
+    vec![
         s(&["render", "--frames", "abc"]),
         s(&["render", "--frames", "-1"]),
         s(&["render", "--frames", "0"]),
@@ -105,6 +110,22 @@ fn sixty_bad_inputs_each_get_one_line_and_exit_2() {
         s(&["render", "--origin", "1"]),
         s(&["render", "--hole-circle", "1,2"]),
         s(&["render", "--hole-circle", "1,2,-3"]),
+    ]
+}
+
+/// Bad height maps, scene files and degenerate worlds and views.
+fn render_world_cases(inputs: &Path) -> Vec<Vec<String>> {
+    let lods = scene(inputs, "lods.toml", "[world]\nlods = \"x\"\n");
+    let extent = scene(inputs, "extent.toml", "[world]\nextent = \"big\"\n");
+    let key = scene(inputs, "key.toml", "[world]\nlodz = 3\n");
+    let circle = scene(inputs, "circle.toml", "[[holes]]\ncircle = [1, 2]\n");
+    let rules = scene(inputs, "rules.toml", "[material_rules]\nsnow_line_m = \"high\"\n");
+    let effect = scene(inputs, "effect.toml", "[effects]\nholes = 5\n");
+    let syntax = scene(inputs, "syntax.toml", "[world\nlods = 3\n");
+    let cargo = concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.toml");
+    let mb_range = ["--extent", "60000", "--height-range", "454", "4810", "--spacing", "8"];
+    let with_mb = |v: &[&str]| [s(v), s(&mb_range)].concat();
+    vec![
         s(&["render", "--heightmap", "/no/such.png", "--extent", "100", "--height-range", "0", "1"]),
         s(&["render", "--heightmap", cargo, "--extent", "100", "--height-range", "0", "1"]),
         s(&["render", "--heightmap", MONTBLANC, "--extent", "60000"]),
@@ -131,6 +152,12 @@ fn sixty_bad_inputs_each_get_one_line_and_exit_2() {
         s(&["render", "--camera", "1e300,0,0"]),
         s(&["render", "--fov", "1e-9"]),
         s(&["render", "--fov", "179.95"]),
+    ]
+}
+
+/// Every other command's bad input.
+fn other_command_cases() -> Vec<Vec<String>> {
+    vec![
         s(&["bake"]),
         s(&["bake", "--out", "nodes", "--region", "1,2,3"]),
         s(&["bake", "--out", "nodes", "--region", "5,5,1,1"]),
@@ -155,31 +182,31 @@ fn sixty_bad_inputs_each_get_one_line_and_exit_2() {
         s(&["stability", "--json", "/nonexistent/table.json"]),
         s(&["nonsense-command"]),
         s(&["--device"]),
-    ];
-    assert!(cases.len() >= 60);
-    let mut failures = Vec::new();
-    for (i, args) in cases.iter().enumerate() {
-        // Each in an empty folder, relative outputs landing there.
-        let cwd = temp_dir(&format!("case{i}"));
-        let out = vista_cmd::vista_cmd().args(args).current_dir(&cwd).output().expect("run vista");
-        let err = String::from_utf8_lossy(&out.stderr);
-        let lines = err.trim_end().lines().count();
-        let mut jargon: Vec<&str> = JARGON.iter().copied().filter(|j| err.contains(j)).collect();
-        // A negative number taken for an option by clap.
-        if err.split("unexpected argument '-").skip(1).any(|rest| rest.starts_with(|c: char| c.is_ascii_digit())) {
-            jargon.push("unexpected argument '-N'");
-        }
-        let written = files_under(&cwd);
-        if out.status.code() != Some(2) || lines != 1 || !jargon.is_empty() || !written.is_empty() {
-            failures.push(format!(
+    ]
+}
+
+/// Runs one case in an empty folder; what was wrong with its refusal, if anything.
+fn refusal_failure(i: usize, args: &[String]) -> Option<String> {
+    // Each in an empty folder, relative outputs landing there.
+    let cwd = temp_dir(&format!("case{i}"));
+    let out = vista_cmd::vista_cmd().args(args).current_dir(&cwd).output().expect("run vista");
+    let err = String::from_utf8_lossy(&out.stderr);
+    let lines = err.trim_end().lines().count();
+    let mut jargon: Vec<&str> = JARGON.iter().copied().filter(|j| err.contains(j)).collect();
+    // A negative number taken for an option by clap.
+    if err.split("unexpected argument '-").skip(1).any(|rest| rest.starts_with(|c: char| c.is_ascii_digit())) {
+        jargon.push("unexpected argument '-N'");
+    }
+    let written = files_under(&cwd);
+    let failure =
+        (out.status.code() != Some(2) || lines != 1 || !jargon.is_empty() || !written.is_empty()).then(|| {
+            format!(
                 "{args:?}: exit {:?}, {lines} lines, jargon {jargon:?}, wrote {written:?}:\n{err}",
                 out.status.code()
-            ));
-        }
-        let _ = std::fs::remove_dir_all(&cwd);
-    }
-    assert!(failures.is_empty(), "{} of {} cases:\n{}", failures.len(), cases.len(), failures.join("\n"));
-    let _ = std::fs::remove_dir_all(&inputs);
+            )
+        });
+    let _ = std::fs::remove_dir_all(&cwd);
+    failure
 }
 
 #[test]

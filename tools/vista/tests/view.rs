@@ -60,6 +60,16 @@ fn png(path: &Path) -> (Vec<u8>, [u32; 2]) {
 #[test]
 fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() {
     let d = dir();
+    let flown = fly_the_scripted_flight(&d);
+    let (flown_rgba, size) = png(&flown);
+    assert_eq!(size, [256, 144]);
+    screenshot_is_the_rendered_picture(&d);
+    overlay_is_drawn(&flown_rgba, size);
+}
+
+/// Flies a path that minimises, resizes and loses the surface on the way;
+/// checks the run said so and exited cleanly; returns the screenshot.
+fn fly_the_scripted_flight(d: &Path) -> PathBuf {
     let path = d.join("flight.txt");
     // Minimised after the first leg (no frame while the window manager
     // has it minimised; restored, the swapchain comes back), resized
@@ -98,10 +108,11 @@ fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() 
     for size in ["200x100", "256x144"] {
         assert!(out.contains(&format!("resized: swapchain {size}")), "no resize to {size}:\n{out}");
     }
-    let (flown_rgba, size) = png(&flown);
-    assert_eq!(size, [256, 144]);
+    flown
+}
 
-    // The same camera without the overlay, and `vista render`'s picture of it.
+/// The same camera without the overlay, and `vista render`'s picture of it.
+fn screenshot_is_the_rendered_picture(d: &Path) {
     let shot = d.join("shot.png");
     on_xvfb(
         false,
@@ -134,7 +145,9 @@ fn a_scripted_flight_exits_cleanly_and_its_screenshot_is_the_rendered_picture() 
     // swapchain's BGRA UNORM image keeps every 8-bit value.
     let stats = flip_stats(flip_map(&want, &shot_rgba, want_size));
     assert!(stats.mean <= 0.005 && stats.p99 <= 0.05, "screenshot against vista render: {stats:?}");
+}
 
+fn overlay_is_drawn(flown_rgba: &[u8], size: [u32; 2]) {
     // The overlay (shown during the flight) is egui's dark window in the
     // top-left corner: grey pixels, darker than any sky or lit terrain.
     let grey = (4..24)

@@ -262,26 +262,8 @@ impl App {
         }
         let frames = self.args.frames;
         let scripted_frame = self.presented.min(frames.saturating_sub(1));
-        let Some(open) = self.state.as_mut() else { return Ok(()) };
-        match &self.path {
-            Some(p) => {
-                self.fly.camera = p.at(scripted_frame, frames);
-                let asked = p.size_at(scripted_frame, frames).filter(|_| self.settling_since.is_none());
-                if let Some([w, h]) = asked.filter(|_| self.resized_at != Some(scripted_frame)) {
-                    self.resized_at = Some(scripted_frame);
-                    let _ = open.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
-                }
-                let minimise = p.minimise_at(scripted_frame, frames) && self.minimised_at != Some(scripted_frame);
-                if minimise && self.minimising.is_none() {
-                    self.minimising = Some(ScriptedMinimise::new(scripted_frame, now));
-                    open.window.set_minimized(true);
-                }
-                if p.surface_lost_at(scripted_frame, frames) && self.surface_lost_at != Some(scripted_frame) {
-                    self.surface_lost_at = Some(scripted_frame);
-                    open.viewer.ctx.faults().lose_surface_at_acquire_in(0);
-                }
-            }
-            None => self.fly.update(dt.min(0.25)),
+        if !self.steer(now, dt, scripted_frame) {
+            return Ok(());
         }
         let scripted_scene = self.path.as_ref().and_then(|p| p.scene_at(scripted_frame, frames));
         let scripted_scene = scripted_scene.filter(|_| self.scene_at != Some(scripted_frame)).map(Path::to_path_buf);
@@ -299,20 +281,7 @@ impl App {
         // Minimised (X11 keeps the size, other systems report none): no
         // frame; the loader threads keep baking meanwhile.
         let minimised = self.view.size == [0, 0] || open.window.is_minimized() == Some(true);
-        if let Some(m) = self.minimising.as_mut() {
-            let step = m.step(minimised, now);
-            if step == Step::Ask {
-                open.window.set_minimized(true);
-            } else if step != Step::Hold {
-                let frame = m.frame;
-                self.minimising = None;
-                self.minimised_at = Some(frame);
-                match step {
-                    Step::Restore => open.window.set_minimized(false),
-                    _ => println!("minimise at frame {frame}: the window manager did not minimise the window"),
-                }
-            }
-        }
+        self.step_minimise(minimised, now);
         if minimised {
             self.skipped_minimised += 1;
             std::thread::sleep(minimise::SKIPPED_REDRAW_PAUSE);
@@ -335,6 +304,67 @@ impl App {
             }
             return Ok(());
         }
+        self.presented_one(el, now, final_frame, shot)
+    }
+
+    /// The camera from the scripted path (with its size, minimise and
+    /// lose-surface lines) or the keys; false without a window.
+    fn steer(&mut self, now: Instant, dt: f64, scripted_frame: u32) -> bool {
+        let frames = self.args.frames;
+        let Some(open) = self.state.as_mut() else { return false };
+        match &self.path {
+            Some(p) => {
+                self.fly.camera = p.at(scripted_frame, frames);
+                let asked = p.size_at(scripted_frame, frames).filter(|_| self.settling_since.is_none());
+                if let Some([w, h]) = asked.filter(|_| self.resized_at != Some(scripted_frame)) {
+                    self.resized_at = Some(scripted_frame);
+                    let _ = open.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
+                }
+                let minimise = p.minimise_at(scripted_frame, frames) && self.minimised_at != Some(scripted_frame);
+                if minimise && self.minimising.is_none() {
+                    self.minimising = Some(ScriptedMinimise::new(scripted_frame, now));
+                    open.window.set_minimized(true);
+                }
+                if p.surface_lost_at(scripted_frame, frames) && self.surface_lost_at != Some(scripted_frame) {
+                    self.surface_lost_at = Some(scripted_frame);
+                    open.viewer.ctx.faults().lose_surface_at_acquire_in(0);
+                }
+            }
+            None => self.fly.update(dt.min(0.25)),
+        }
+        true
+    }
+
+    /// A scripted `minimise` under way: asks again, restores, or gives up.
+    fn step_minimise(&mut self, minimised: bool, now: Instant) {
+        let Some(open) = self.state.as_mut() else { return };
+        if let Some(m) = self.minimising.as_mut() {
+            let step = m.step(minimised, now);
+            if step == Step::Ask {
+                open.window.set_minimized(true);
+            } else if step != Step::Hold {
+                let frame = m.frame;
+                self.minimising = None;
+                self.minimised_at = Some(frame);
+                match step {
+                    Step::Restore => open.window.set_minimized(false),
+                    _ => println!("minimise at frame {frame}: the window manager did not minimise the window"),
+                }
+            }
+        }
+    }
+
+    /// After a frame was presented: counts it, and on the last one writes
+    /// the screenshot and ends the run (or holds until streaming settled).
+    fn presented_one(
+        &mut self,
+        el: &ActiveEventLoop,
+        now: Instant,
+        final_frame: bool,
+        shot: Option<viewer::Readback>,
+    ) -> Result<()> {
+        let open = self.state.as_mut().expect("checked above");
+        let shoot = shot.is_some();
         self.started.get_or_insert(now);
         self.presented_all += 1;
         if self.skipped_minimised > 0 {

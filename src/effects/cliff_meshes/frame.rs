@@ -1,0 +1,93 @@
+//! Effect `cliff_meshes` in the frame: built again when the camera leaves
+//! its step or the terrain changes, drawn into the geometry pass after the
+//! terrain's draws.
+
+use super::CliffMeshes;
+use crate::effects::frame_effect::{
+    BuildInputs, EffectStats, FrameEffect, FramePoint, PlanInputs, RecordInputs, SharedPlan, Work,
+};
+use crate::error::Result;
+use crate::frame::{Frame, QueueKind};
+use crate::gpu::Context;
+use crate::passes::counters::FrameCounters;
+use crate::scene::effect::Effect;
+use crate::scene::graph::{FrameLog, FramePass, PassWork, Skip};
+use std::any::Any;
+
+/// Builds effect `cliff_meshes` when it is on.
+pub fn build(b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
+    if !b.on(Effect::CliffMeshes) {
+        return Ok(None);
+    }
+    Ok(Some(Box::new(CliffMeshes::new(b.ctx, b.effects.cliff_meshes, b.depth)?)))
+}
+
+impl FrameEffect for CliffMeshes {
+    fn effect(&self) -> Effect {
+        Effect::CliffMeshes
+    }
+
+    fn plan(&mut self, p: &PlanInputs, _: &SharedPlan) -> Result<()> {
+        self.planned = CliffMeshes::plan(self, p.camera_world, p.vista_terrain, p.terrain_changed);
+        Ok(())
+    }
+
+    fn record(&self, point: FramePoint, frame: &mut Frame<'_, '_>, log: &mut FrameLog, r: &RecordInputs) {
+        if point != FramePoint::AfterTerrainDraws {
+            return;
+        }
+        let sector = r.sector_data.buffer();
+        match &self.planned {
+            Some(push) => {
+                frame.pass(FramePass::CliffMeshBuild.name(), false, QueueKind::Graphics, |rec| {
+                    self.record_build(rec, push, sector, r.tree)
+                });
+                log.ran(FramePass::CliffMeshBuild, None);
+            }
+            None => log.skipped(FramePass::CliffMeshBuild, Skip::CliffMeshesCurrent),
+        }
+        frame.pass(FramePass::CliffMeshes.name(), false, QueueKind::Graphics, |rec| {
+            self.record_draw(rec, r.targets, r.gbuffer, r.view_buffer)
+        });
+        log.ran(FramePass::CliffMeshes, None);
+    }
+
+    fn pipelines(&self) -> Vec<String> {
+        self.pipeline_labels().to_vec()
+    }
+
+    fn memory(&self) -> Vec<(String, u64, Vec<Effect>)> {
+        CliffMeshes::memory(self).into_iter().map(|(n, b)| (n, b, vec![Effect::CliffMeshes])).collect()
+    }
+
+    fn work(&self, pass: FramePass, _: Option<u64>, _: &FrameCounters, _: [u32; 2]) -> Option<Work> {
+        match pass {
+            FramePass::CliffMeshBuild => {
+                let side = self.params.side();
+                let groups = (side * side).div_ceil(crate::shaders::cliff_mesh_build::WORKGROUP_SIZE[0]);
+                Some((PassWork { dispatch_groups: Some(u64::from(groups)), ..PassWork::default() }, None))
+            }
+            // Its instances are counted on the GPU (vista render's cliff meshes: line).
+            FramePass::CliffMeshes => Some((PassWork::default(), None)),
+            _ => None,
+        }
+    }
+
+    fn stats(&self, ctx: &Context, _: &FrameCounters) -> Result<Option<EffectStats>> {
+        let (c, _) = self.read(ctx)?;
+        let line = format!(
+            "cliff meshes: {} cells within the radius, {} steep ones meshed ({} triangles), {} past the capacity",
+            c.tested, c.cells, c.triangles, c.overflow
+        );
+        let value = serde_json::to_value(c).expect("plain counters");
+        Ok(Some(EffectStats { key: "cliff_meshes", value, lines: vec![line] }))
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}

@@ -1,0 +1,246 @@
+//! Building a renderer: the effect decisions first (nothing allocates for
+//! an effect that is off), then the terrain and the core passes, then
+//! each effect's built side through the registry.
+
+use super::{atlases_for, world_content, Occlusion, RendererOptions, TerrainRenderer};
+use crate::effects::frame_effect::{BuildInputs, FrameEffect};
+use crate::effects::registry::kinds;
+use crate::effects::{decide, Effect, EffectDecision, FrameSwitches, MaterialsMode};
+use crate::error::{Error, Result};
+use crate::frame::per_frame::{copy_name, PerFrame};
+use crate::frame::FrameExecutor;
+use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation};
+use crate::passes::classify_tiles::ClassifyTiles;
+use crate::passes::cull_occluded::CullOccluded;
+use crate::passes::cull_patches::{CullBuild, CullPatches};
+use crate::passes::gbuffer_tiles::{GbufferTiles, TileMaterials};
+use crate::passes::hiz_build::HizBuild;
+use crate::passes::lighting_resolve::{LightingResolve, ResolveTarget};
+use crate::passes::lod_map::LodMap;
+use crate::passes::quadtree_update::QuadtreeUpdatePass;
+use crate::passes::sector_data::SectorData;
+use crate::passes::select_patches::SelectPatches;
+use crate::passes::terrain_geometry::TerrainGeometry;
+use crate::passes::terrain_holes::TerrainHoles;
+use crate::passes::traverse::Traverse;
+use crate::render::telemetry::{CounterLayout, Telemetry, TRIANGLES_PER_PATCH};
+use crate::scene::graph::{FramePass, PassGraph};
+use crate::scene::shading::{ShadeRules, Shading};
+use crate::shaders::structs;
+use crate::terrain::gpu_quadtree::ATLAS_CONTROL;
+use crate::terrain::{Terrain, TerrainOptions};
+use crate::world::{HeightSource, Hole, WorldDesc};
+use std::sync::Arc;
+
+/// Checks what would fail alone (a world over its limits, bad targets)
+/// and decides every effect, before anything allocates.
+fn decisions(
+    ctx: &Context,
+    world: &WorldDesc,
+    source: &dyn HeightSource,
+    holes: &[Hole],
+    options: &RendererOptions,
+) -> Result<Vec<EffectDecision>> {
+    crate::terrain::check_plan(ctx, world, &options.terrain)?;
+    options.depth.check().map_err(Error::BadInput)?;
+    options.output.check().map_err(Error::BadInput)?;
+    let (decals, assets) = (options.decals.decals.len(), options.assets.len());
+    let mut content = world_content(world, holes, source.has_holes(), decals, assets);
+    content.engine_lights = !options.output.lights();
+    Ok(decide(&options.effects, &content, options.forced()))
+}
+
+/// The decisions' answer for one effect.
+fn is_on(decisions: &[EffectDecision], e: Effect) -> bool {
+    decisions.iter().any(|d| d.effect == e && d.on)
+}
+
+/// The terrain's options for these decisions: the atlases the effects
+/// that are on read, and the control words when a flavour reads them.
+fn terrain_options(
+    options: &RendererOptions,
+    world: &WorldDesc,
+    decisions: &[EffectDecision],
+) -> Result<TerrainOptions> {
+    let atlases = atlases_for(decisions, options.effects.materials);
+    let mut terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
+    if atlases.contains(ATLAS_CONTROL) && terrain_options.bake.control.is_none() {
+        // The control-map flavour reads control words: bake them (from
+        // the scene's map or the material rules) unless the caller did.
+        let rules = terrain_options.bake.materials;
+        terrain_options.bake.control = crate::effects::materials::control_bake(&options.effects, world, rules)?;
+    }
+    Ok(terrain_options)
+}
+
+/// The tile shading's rules and its pass, for the material effects on.
+fn tile_shading(
+    ctx: &Context,
+    o: &RendererOptions,
+    decisions: &[EffectDecision],
+) -> Result<(ShadeRules, GbufferTiles, usize)> {
+    let on = |e| is_on(decisions, e);
+    let fx = &o.effects;
+    let mut shade = fx.shade.allowing(fx.materials, on(Effect::Splat), on(Effect::Cliffs));
+    if on(Effect::VirtualTexture) {
+        shade = shade.with_virtual_texture();
+    }
+    let variants = o.shading.pipelines(&shade);
+    let every = o.shading == Shading::OneShaderEveryFlavour;
+    let tile_materials = match (on(Effect::Splat) || on(Effect::Cliffs), fx.materials) {
+        (false, _) => TileMaterials::None,
+        (true, MaterialsMode::Splat) if on(Effect::VirtualTexture) => TileMaterials::SplatVirtualTexture,
+        (true, MaterialsMode::Splat) => TileMaterials::Splat,
+        (true, MaterialsMode::ControlMap) => TileMaterials::ControlMap,
+    };
+    let layout = o.output.gbuffer();
+    let tiles = GbufferTiles::new(ctx, &variants, tile_materials, every, o.depth.format, layout)?;
+    Ok((shade, tiles, variants.len()))
+}
+
+fn view_buffers(ctx: &Context) -> Result<PerFrame<Buffer>> {
+    PerFrame::new(|i| {
+        Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: &copy_name("terrain_view", i),
+                size: structs::TERRAIN_VIEW as u64,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::GpuOnly,
+            },
+        )
+    })
+}
+
+/// The pass graph of these decisions and output.
+fn graph(decisions: &[EffectDecision], options: &RendererOptions) -> PassGraph {
+    let mut graph = PassGraph::new(decisions);
+    if options.output.gbuffer().is_some() {
+        graph.not_built(FramePass::LightingResolve, "output gbuffer: the engine lights the G-buffer".into());
+        graph.not_built(FramePass::DebugView, "output gbuffer: no colour target to draw a debug view over".into());
+    }
+    graph
+}
+
+impl Occlusion {
+    fn new(ctx: &Context, traverse: &Traverse, indices: u32, build: CullBuild, slots: u32) -> Result<Self> {
+        Ok(Occlusion { hiz: HizBuild::new(ctx)?, cull: CullOccluded::new(ctx, traverse, indices, build, slots)? })
+    }
+}
+
+/// The lighting resolve of outputs `lit` and `hdr` (None: the engine lights).
+fn resolve(ctx: &Context, o: &RendererOptions, decisions: &[EffectDecision]) -> Result<Option<LightingResolve>> {
+    let Some(target) = ResolveTarget::of(&o.output) else { return Ok(None) };
+    let on = |e| is_on(decisions, e);
+    let variants = (on(Effect::Lighting), on(Effect::Shadows), on(Effect::Atmosphere));
+    Ok(Some(LightingResolve::new(ctx, variants, o.depth.format, target)?))
+}
+
+/// Where the telemetry finds each counter: the lists built, and each
+/// built effect's counters.
+fn counter_layout(
+    world: &WorldDesc,
+    cull: &CullPatches,
+    build: CullBuild,
+    built: &[Box<dyn FrameEffect>],
+) -> CounterLayout {
+    CounterLayout {
+        holes: build.holes,
+        occlusion: build.occlusion,
+        lod_count: world.lod_count,
+        list_capacity: cull.lists().capacity,
+        triangles_per_patch: TRIANGLES_PER_PATCH,
+        effects: built.iter().filter_map(|e| e.counters().map(|(_, n)| (e.effect(), n))).collect(),
+    }
+}
+
+/// Every effect's built side, in registry order.
+fn build_effects(b: &mut BuildInputs) -> Result<Vec<Box<dyn FrameEffect>>> {
+    let mut built = Vec::new();
+    for kind in kinds() {
+        built.extend(kind.build(b)?);
+    }
+    Ok(built)
+}
+
+impl TerrainRenderer {
+    pub fn new(
+        ctx: &Context,
+        world: &WorldDesc,
+        source: Arc<dyn HeightSource>,
+        holes: Vec<Hole>,
+        options: &RendererOptions,
+    ) -> Result<Self> {
+        let decisions = decisions(ctx, world, source.as_ref(), &holes, options)?;
+        let on = |e: Effect| is_on(&decisions, e);
+        let terrain_options = terrain_options(options, world, &decisions)?;
+        let depth = options.depth;
+        let geometry = TerrainGeometry::new(ctx, depth)?;
+        let (shade, gbuffer_tiles, variants) = tile_shading(ctx, options, &decisions)?;
+        let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
+        let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
+        // Per-slot resources cover the reload slots too (gpu_quadtree::RELOAD_SLOTS).
+        let slot_capacity = terrain.tree.slot_capacity();
+        let build =
+            CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes), occlusion: on(Effect::Occlusion) };
+        let cull = CullPatches::new(ctx, &traverse, geometry.index_count(), build)?;
+        let occlusion = match build.occlusion {
+            true => Some(Occlusion::new(ctx, &traverse, geometry.index_count(), build, slot_capacity)?),
+            false => None,
+        };
+        let mut graph = graph(&decisions, options);
+        let built = build_effects(&mut BuildInputs {
+            ctx,
+            world,
+            effects: &options.effects,
+            decisions: &decisions,
+            depth,
+            layout: options.output.gbuffer(),
+            occlusion: build.occlusion,
+            frames_in_flight: options.terrain.frames_in_flight,
+            slot_capacity,
+            decals: &options.decals,
+            assets: &options.assets,
+            graph: &mut graph,
+        })?;
+        // gbuffer_tiles records one timed draw per variant.
+        let max_passes = graph.max_recorded() + variants as u32;
+        let counters = counter_layout(world, &cull, build, &built);
+        let resolve = resolve(ctx, options, &decisions)?;
+        Ok(TerrainRenderer {
+            update: QuadtreeUpdatePass::new(ctx, build.occlusion)?,
+            lod_map: LodMap::new(ctx, world)?,
+            sector_data: SectorData::new(ctx, world)?,
+            terrain,
+            select: SelectPatches::new(ctx, world, slot_capacity)?,
+            traverse,
+            cull,
+            occlusion,
+            geometry,
+            holes: if build.holes { Some(TerrainHoles::new(ctx, depth)?) } else { None },
+            classify: ClassifyTiles::new(ctx)?,
+            gbuffer_tiles,
+            resolve,
+            built,
+            gbuffer: None,
+            shade,
+            shading: options.shading,
+            lod: options.lod,
+            view_buffer: view_buffers(ctx)?,
+            telemetry: Telemetry::new(ctx, options.terrain.frames_in_flight, counters)?,
+            exec: Some(FrameExecutor::new(ctx, options.terrain.frames_in_flight, max_passes)?),
+            graph,
+            stages: options.stages,
+            switches: FrameSwitches::default(),
+            debug_view: None,
+            debug_pass: None,
+            effects: options.effects.clone(),
+            output: options.output.clone(),
+            origin_m: options.origin_m,
+            decisions,
+            mode: None,
+        })
+    }
+}
