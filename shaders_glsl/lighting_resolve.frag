@@ -5,7 +5,7 @@
 // itself): sun plus sky ambient on the G-buffer's albedo and normal
 // (variant LIGHTING, the `lighting` effect; without it, unlit albedo).
 // Writes linear HDR radiance and the display image: exposed and through the
-// scene's tonemapper (render/tonemap.rs; the unlit albedo view is clipped).
+// scene's tonemapper (scene/tonemap.rs; the unlit albedo view is clipped).
 // With SHADOWS (the `shadows` effect), the sun term is scaled by how much
 // of the sun the pixel sees: its height against the bilinear threshold of
 // the finest resident node's shadow texture (sun_shadow.glsl), at a
@@ -21,7 +21,7 @@
 #include "octahedral.glsl"
 #include "srgb.glsl"
 
-// Stephen Hill's fit of the ACES RRT + sRGB ODT (render/tonemap.rs): into
+// Stephen Hill's fit of the ACES RRT + sRGB ODT (scene/tonemap.rs): into
 // the RRT's input space (sRGB to AP1 with the RRT's saturation), a rational
 // fit per channel, back to linear sRGB. The published rows fill the
 // matrices' columns, so `v * m` (a row vector) is the published `m v`.

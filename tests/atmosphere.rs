@@ -1,7 +1,7 @@
 //! The `atmosphere` effect: on a flat world, every terrain pixel of the HDR
 //! image is the unhazed pixel times the model's transmittance over its
 //! distance plus the haze's in-scattering times the rest (the model of
-//! render/atmosphere.rs, evaluated in f64 by reference::atmosphere), and
+//! effects/atmosphere, evaluated in f64 by reference::atmosphere), and
 //! every background pixel is the model's sky; off, nothing is built and the
 //! image is the one without it.
 

@@ -1,4 +1,4 @@
-// The example asset pass (effect assets, render/assets.rs): mesh vertices
+// The example asset pass (effect assets, effects/assets): mesh vertices
 // and placed instances, read by index (no vertex input state).
 #ifndef VISTA_ASSET_GLSL
 #define VISTA_ASSET_GLSL

@@ -1,4 +1,4 @@
-// The atmosphere effect (render/atmosphere.rs): exponential height fog with
+// The atmosphere effect (effects/atmosphere): exponential height fog with
 // single scattering, in closed form along the view ray; the CPU twin is
 // src/reference/atmosphere.rs. `fog` is (sigma0, 1 / H, z_low, g); `haze`
 // holds a colour in xyz, `zenith` one in xyz and the clear air's optical

@@ -1,4 +1,4 @@
-// Procedural cliff meshes (effect cliff_meshes, render/cliff_meshes.rs):
+// Procedural cliff meshes (effect cliff_meshes, effects/cliff_meshes):
 // what cliff_mesh_build writes and cliff_meshes draws. A cell of the world
 // grid whose ground is steep gets a CLIFF_CELL_QUADS^2 patch of the
 // terrain pushed outwards along its normal by a world-anchored noise, by

@@ -145,13 +145,13 @@
 #define SPLAT_TEXELS 65u
 // The largest octahedral normal code (octahedral.glsl): 255 codes per axis.
 #define OCT_CODE_LAST 254u
-// Sun shadows (render/sun_shadows.rs): node shadow jobs one sun_shadows
+// Sun shadows (effects/shadows): node shadow jobs one sun_shadows
 // dispatch takes (the update budget plus a frame's uploads); the largest
 // shadow texture side per node.
 #define SUN_SHADOW_MAX_JOBS 80u
 #define SUN_SHADOW_MAX_SIDE 257u
 
-// Adaptive virtual texture (effect virtual_texture, render/virtual_texture):
+// Adaptive virtual texture (effect virtual_texture, effects/virtual_texture):
 // physical tiles of VT_TILE_TEXELS texels a side plus VT_TILE_BORDER on
 // each side; a region's sub-texture has levels 0..K (2^L pages a side at
 // level L), K at most VT_MAX_LEVEL.
@@ -183,7 +183,7 @@
 #define VT_MAX_WRITES 8192u
 
 // Decals in the virtual texture's pages (effect decals,
-// render/virtual_texture/decals.rs): at most DECAL_MAX decals with
+// effects/virtual_texture/decals.rs): at most DECAL_MAX decals with
 // DECAL_MAX_POINTS road points in all, DECAL_MAX_TEXTURES textures of
 // DECAL_TEXELS a side (one layer each, with mips), and DECAL_MAX_PER_PAGE
 // decals blended into one page.
@@ -199,7 +199,7 @@
 // A displacement decal's mesh: this many quads a side over its quad.
 #define DECAL_MESH_QUADS 64u
 
-// Grass (effect grass, render/grass.rs): one possible tuft per world cell
+// Grass (effect grass, effects/grass.rs): one possible tuft per world cell
 // in a square of at most GRASS_MAX_SIDE cells a side around the camera,
 // GRASS_BLADES blades of GRASS_BLADE_VERTICES vertices each (a triangle
 // list), coloured from a pigment map of GRASS_PIGMENT_TEXELS a side. The

@@ -1,7 +1,7 @@
 // Which shading flavours a terrain pixel needs, and how much of each: the
 // classification rule of terrain_geometry.frag and the blend weights of
 // gbuffer_tiles.frag, one function so both agree. Every threshold is a field
-// of the view (render/shading.rs), not a literal here.
+// of the view (scene/shading.rs), not a literal here.
 //
 //   c  = cliff share from the geometric normal's z (cliffs effect only)
 //   f  = far-atlas share from view depth (1 everywhere without splat)

@@ -1,4 +1,4 @@
-// The per-frame view every terrain pass reads (render/view.rs TerrainViewGpu).
+// The per-frame view every terrain pass reads (scene/view.rs TerrainViewGpu).
 // Positions on the GPU are relative to the camera: a vertex's LOD-0 sample
 // index (an exact integer) minus the camera's anchor sample, times the
 // spacing, minus the camera's offset inside that sample cell. Both sides of
@@ -23,7 +23,7 @@ struct TerrainView {
     uint lod_map_w;         // LOD map extent (sectors, padded)
     uint lod_map_h;
     uint pad;
-    // G-buffer tile shading (render/shading.rs).
+    // G-buffer tile shading (scene/shading.rs).
     mat4 inv_view_proj;     // clip -> camera-relative metres
     vec4 viewport;          // width, height, 1 / width, 1 / height (pixels)
     vec4 camera_world;      // xyz: camera position in world metres (lookups and texture tiling only); w: near plane (m)
@@ -37,9 +37,9 @@ struct TerrainView {
                             // z: refinement levels below LOD 0 allowed; w: 1 = no stitching (tests only)
     vec4 lod_right;         // xyz: the camera's right axis (world); w: tan of the frustum's half width
     vec4 lod_up;            // xyz: the camera's up axis (world); w: tan of the frustum's half height
-    // The display image (render/tonemap.rs).
+    // The display image (scene/tonemap.rs).
     vec4 image;             // x: exposure scale (2^EV); y: tonemapper (Tonemap::gpu_id: 0 clip, 1 ACES fitted); zw: unused
-    // The control-map flavour (render/shading.rs).
+    // The control-map flavour (scene/shading.rs).
     vec4 control;           // x: tri-planar tighten factor (a plane counts where abs(n) exceeds it); yzw: unused
 };
 

@@ -1,6 +1,6 @@
 // Grass (effect grass): what grass_place writes and grass_draw reads, and
 // the per-cell random numbers both the GPU and the CPU twin
-// (render/grass.rs, `place_cpu`) draw from the integer world cell, so a
+// (effects/grass.rs, `place_cpu`) draw from the integer world cell, so a
 // tuft never moves when the camera does.
 #ifndef VISTA_GRASS_GLSL
 #define VISTA_GRASS_GLSL

@@ -1,4 +1,4 @@
-// One entry of the 256-entry splat material table (render/materials.rs
+// One entry of the 256-entry splat material table (effects/materials
 // MaterialGpu): which layer of each detail texture array it samples, and
 // how its texture lies on the ground.
 #ifndef VISTA_MATERIALS_GLSL
@@ -11,7 +11,7 @@ struct TerrainMaterial {
     float sin_rot;
 };
 
-// One of the 32 control-map textures (render/materials.rs ControlGpu):
+// One of the 32 control-map textures (effects/materials ControlGpu):
 // its layers and tiling, and seed 004's per-texture parameters.
 struct ControlTexture {
     uint layers;        // albedo | normal << 8 | height << 16

@@ -6,7 +6,7 @@
 // data; lighting_resolve shades the ground under each pixel by it. The occluder's
 // distance sizes the penumbra: the sun is a disc, so the heights from where
 // its top edge to where its bottom edge is hidden span distance x the
-// disc's spread in slope (`penumbra`, render/sun_shadows.rs). The CPU twin
+// disc's spread in slope (`penumbra`, effects/shadows). The CPU twin
 // of both is src/reference/sun_shadow.rs.
 #ifndef VISTA_SUN_SHADOW_GLSL
 #define VISTA_SUN_SHADOW_GLSL

@@ -1,4 +1,4 @@
-// One decal as render/virtual_texture/decal_gpu.rs uploads it (DecalGpu),
+// One decal as effects/virtual_texture/decal_gpu.rs uploads it (DecalGpu),
 // shared by vt_pages (blended into pages), grass_pigment and grass_place
 // (grass takes a decal's colour and does not grow under it).
 #ifndef VISTA_DECAL_GLSL

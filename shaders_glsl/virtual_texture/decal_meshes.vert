@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Displacement decals (effect decals, render/virtual_texture/decal_mesh.rs):
+// Displacement decals (effect decals, effects/virtual_texture/decal_mesh.rs):
 // every displacement decal's grid mesh in one indexed draw, in the
 // geometry pass. A vertex stands on the terrain's height at its xy
 // (terrain_sample.glsl, so the mesh follows the resident LOD) raised by its

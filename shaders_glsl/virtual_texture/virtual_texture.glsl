@@ -1,4 +1,4 @@
-// Addressing of the adaptive virtual texture (render/virtual_texture): a
+// Addressing of the adaptive virtual texture (effects/virtual_texture): a
 // world point's region and sub-texture, the level a screen footprint asks
 // for, and the indirection texel of a page. The includer defines
 // VISTA_VT_WORD(i), word i of the state buffer (constants.glsl lays it out).

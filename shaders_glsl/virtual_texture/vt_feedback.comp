@@ -8,7 +8,7 @@
 // pass: each page's status word takes the frame's stamp by atomicExchange
 // and only the sample that changed it appends the page, so every page the
 // frame sampled is listed once, resident or not (the CPU's LRU needs
-// both). The list goes back to the CPU frames late (render/virtual_texture).
+// both). The list goes back to the CPU frames late (effects/virtual_texture).
 #extension GL_GOOGLE_include_directive : require
 #include "terrain_view.glsl"
 #include "octahedral.glsl"

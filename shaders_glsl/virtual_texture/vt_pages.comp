@@ -9,7 +9,7 @@
 // 8-bit gamma of 2: dark ground keeps its steps small); the detail image
 // holds the tangent (x 1/4, around 0.5), the dominant material and 1.
 // DECALS: then the decals touching the page (the job's list, in order) are
-// alpha-blended over the albedo and roughness (render/virtual_texture/decals.rs).
+// alpha-blended over the albedo and roughness (effects/virtual_texture/decals.rs).
 // variants: DECALS
 #extension GL_GOOGLE_include_directive : require
 #include "constants.glsl"

@@ -1,6 +1,6 @@
 #version 460
 // Applies the virtual texture's state writes of one frame (sub-texture
-// words, indirection texels; render/virtual_texture/state.rs), in order:
+// words, indirection texels; effects/virtual_texture/state.rs), in order:
 // a square cleared for a sub-texture and the pages then mapped into it
 // touch the same words, so the writes run one after another in a single
 // workgroup whose invocations share each write's range.

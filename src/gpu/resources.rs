@@ -179,6 +179,19 @@ fn allocate(
 }
 
 impl Buffer {
+    /// A GPU-only buffer holding `bytes` (a 4-byte placeholder when empty:
+    /// a binding needs a buffer), uploaded and waited for; `usage` gains
+    /// TRANSFER_DST.
+    pub fn with_data(ctx: &Context, name: &str, bytes: &[u8], usage: vk::BufferUsageFlags) -> Result<Buffer> {
+        let usage = usage | vk::BufferUsageFlags::TRANSFER_DST;
+        let size = bytes.len().max(4) as u64;
+        let b = Buffer::new(ctx, &BufferDesc { name, size, usage, location: MemoryLocation::GpuOnly })?;
+        if !bytes.is_empty() {
+            ctx.upload(&b, bytes)?;
+        }
+        Ok(b)
+    }
+
     pub fn new(ctx: &Context, desc: &BufferDesc) -> Result<Buffer> {
         if desc.size == 0 {
             return Err(Error::BadInput(format!("buffer {:?} has size 0", desc.name)));

@@ -71,6 +71,13 @@ pub struct VtBindings<'a> {
     pub detail: &'a Image,
 }
 
+/// The detail textures' sampler: trilinear, tiling (every pass that
+/// samples the materials makes one).
+pub fn detail_sampler(ctx: &Context, name: &str) -> Result<Sampler> {
+    let desc = SamplerDesc { name, filter: vk::Filter::LINEAR, address_mode: vk::SamplerAddressMode::REPEAT };
+    Sampler::mipmapped(ctx, &desc)
+}
+
 /// Which fragment shader a renderer's tile shading uses: the splat and
 /// cliff flavours (MATERIALS) or the control-map flavour (CONTROL_MAP), or
 /// neither (far atlas only).
@@ -188,14 +195,7 @@ impl GbufferTiles {
             layout: layout.cloned(),
             nearest: nearest_sampler(ctx, "gbuffer_tiles_nearest")?,
             linear: sampler("gbuffer_tiles_linear", vk::Filter::LINEAR, vk::SamplerAddressMode::CLAMP_TO_EDGE)?,
-            detail: Sampler::mipmapped(
-                ctx,
-                &SamplerDesc {
-                    name: "gbuffer_tiles_detail",
-                    filter: vk::Filter::LINEAR,
-                    address_mode: vk::SamplerAddressMode::REPEAT,
-                },
-            )?,
+            detail: detail_sampler(ctx, "gbuffer_tiles_detail")?,
         })
     }
 

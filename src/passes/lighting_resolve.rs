@@ -3,7 +3,7 @@
 //! is not built): sun plus sky ambient (variant LIGHTING, the `lighting`
 //! effect) or unlit albedo. Output `lit` writes the caller's display target
 //! (the lit image exposed and through the scene's tonemapper,
-//! `render/tonemap.rs`; unlit albedo clipped; sRGB-encoded by the shader
+//! `scene/tonemap.rs`; unlit albedo clipped; sRGB-encoded by the shader
 //! or, for an sRGB target, by the target) and the renderer's HDR image;
 //! output `hdr` (variant HDR_OUTPUT) writes the linear radiance alone into
 //! the engine's float target. One full-screen triangle whose shader-set
@@ -13,7 +13,7 @@
 //! keeps the clear colour. With the `shadows` effect (variant SHADOWS) the sun
 //! term is scaled by the pixel's share of the sun from `sun_shadows`; with
 //! `atmosphere` (variant ATMOSPHERE) the terrain is seen through the height
-//! fog of render/atmosphere.rs and, where the output has a sky, the
+//! fog of effects/atmosphere and, where the output has a sky, the
 //! background is its sky (no depth test then). It leaves the depth target
 //! in its frame layout.
 

@@ -19,7 +19,7 @@ pub enum Effect {
     Occlusion,
     /// Tri-planar cliff shading.
     Cliffs,
-    /// Procedural cliff meshes near the camera (render/cliff_meshes.rs):
+    /// Procedural cliff meshes near the camera (effects/cliff_meshes):
     /// `cliff_mesh_build` and the `cliff_meshes` draw into the geometry
     /// pass, shaded by the cliff flavours (needs `cliffs`).
     CliffMeshes,
@@ -40,11 +40,11 @@ pub enum Effect {
     /// into the virtual texture's pages by `vt_pages`' DECALS variant
     /// (needs `virtual_texture`).
     Decals,
-    /// The example assets grounded in the terrain (render/assets.rs): the
+    /// The example assets grounded in the terrain (effects/assets): the
     /// `asset_draw` pass of a scene's `[[assets]]`, blended into the
     /// terrain by terrain_blend.glsl.
     Assets,
-    /// GPU grass (render/grass): `grass_pigment`, `grass_place` and the
+    /// GPU grass (effects/grass): `grass_pigment`, `grass_place` and the
     /// one indirect draw `grass_draw` into the G-buffer (needs `splat`'s
     /// material ids, in splat mode).
     Grass,

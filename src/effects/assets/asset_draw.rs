@@ -1,4 +1,4 @@
-//! `asset_draw` (effect `assets`): the example assets (render/assets.rs)
+//! `asset_draw` (effect `assets`): the example assets (effects/assets)
 //! into the G-buffer after `gbuffer_tiles`, depth-tested and
 //! depth-writing, one indexed instanced draw per mesh kind; the vertex
 //! shader sets each on the terrain and blends its vertices near the ground
@@ -55,11 +55,6 @@ impl AssetDraw {
             filter: vk::Filter::LINEAR,
             address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
         };
-        let detail = SamplerDesc {
-            name: "asset_draw_detail",
-            filter: vk::Filter::LINEAR,
-            address_mode: vk::SamplerAddressMode::REPEAT,
-        };
         Ok(AssetDraw {
             pipeline: GbufferTiles::overlay_pipeline(
                 ctx,
@@ -73,7 +68,7 @@ impl AssetDraw {
                 layout,
             )?,
             materials,
-            detail: Sampler::mipmapped(ctx, &detail)?,
+            detail: crate::passes::gbuffer_tiles::detail_sampler(ctx, "asset_draw_detail")?,
             nearest: nearest_sampler(ctx, "asset_draw_nearest")?,
             linear: Sampler::new(ctx, &linear)?,
         })

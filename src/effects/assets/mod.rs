@@ -21,7 +21,7 @@ pub mod frame;
 pub mod kind;
 
 use crate::error::{Error, Result};
-use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation};
+use crate::gpu::{vk, Buffer, Context};
 use glam::Vec3;
 
 /// The meshes the example pass knows.
@@ -225,15 +225,7 @@ impl AssetResources {
         for (i, a) in assets.iter().enumerate() {
             a.check().map_err(|e| Error::BadInput(format!("asset {i} ({}): {e}", a.kind.name())))?;
         }
-        let buffer = |name: &str, bytes: &[u8], usage: vk::BufferUsageFlags| -> Result<Buffer> {
-            let usage = usage | vk::BufferUsageFlags::TRANSFER_DST;
-            let size = bytes.len().max(4) as u64;
-            let b = Buffer::new(ctx, &BufferDesc { name, size, usage, location: MemoryLocation::GpuOnly })?;
-            if !bytes.is_empty() {
-                ctx.upload(&b, bytes)?;
-            }
-            Ok(b)
-        };
+        let buffer = |name: &str, bytes: &[u8], usage| Buffer::with_data(ctx, name, bytes, usage);
         let (mut vertices, mut indices, mut instances, mut draws) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for kind in AssetKind::ALL {
             let mesh = match kind {

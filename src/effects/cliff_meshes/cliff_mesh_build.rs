@@ -1,6 +1,6 @@
 //! `cliff_mesh_build` (effect `cliff_meshes`): one thread per world-grid
 //! cell within the radius lists the steep ones and writes their patch of
-//! the height field pushed out along its normal (render/cliff_meshes.rs);
+//! the height field pushed out along its normal (effects/cliff_meshes);
 //! the header counts them for `cliff_meshes`' indirect draw.
 
 use crate::error::Result;

@@ -6,7 +6,7 @@
 
 use crate::effects::grass::grass_place::GrassDecals;
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, ComputePipelineDesc, Context, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
+use crate::gpu::{vk, Buffer, ComputePipelineDesc, Context, Image, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::gbuffer_tiles::MaterialBindings;
 use crate::passes::terrain_query::VistaTerrain;
@@ -42,16 +42,11 @@ impl GrassPigment {
     pub fn new(ctx: &Context, decals: bool) -> Result<Self> {
         let shader = sh::variant(if decals { sh::VARIANT_DECALS } else { 0 });
         let desc = ComputePipelineDesc { name: Self::NAME, shader, specialization: &[] };
-        let detail = SamplerDesc {
-            name: "grass_pigment_detail",
-            filter: vk::Filter::LINEAR,
-            address_mode: vk::SamplerAddressMode::REPEAT,
-        };
         Ok(GrassPigment {
             pipeline: Pipeline::compute(ctx, &desc)?,
             decals,
             nearest: nearest_sampler(ctx, "grass_pigment_nearest")?,
-            detail: Sampler::mipmapped(ctx, &detail)?,
+            detail: crate::passes::gbuffer_tiles::detail_sampler(ctx, "grass_pigment_detail")?,
         })
     }
 

@@ -1,5 +1,5 @@
 //! `sun_shadows`: makes the sun shadow texture of each node in this frame's
-//! job list (render/sun_shadows.rs decides which): per texel how far above
+//! job list (effects/shadows decides which): per texel how far above
 //! the ground there the sun's shadow reaches, and the occluder's distance,
 //! marched towards the sun through the finest resident heights
 //! (sun_shadows.comp). The atlas has one layer per

@@ -1,5 +1,5 @@
 //! `decal_meshes` (effect `decals`, with a displacement decal): every
-//! displacement decal's mesh (render/virtual_texture/decal_mesh.rs) in ONE
+//! displacement decal's mesh (effects/virtual_texture/decal_mesh.rs) in ONE
 //! indexed draw after the terrain draws, into the geometry pass's targets
 //! (classification, normal codes, depth and the terrain stencil bit), so
 //! the tile passes shade it as terrain: from the virtual texture pages the
@@ -7,7 +7,7 @@
 
 use crate::effects::virtual_texture::decal_mesh::DecalMeshes;
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler};
+use crate::gpu::{vk, Buffer, Context, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::terrain_geometry::{begin_geometry, geometry_pipeline, DepthOptions, RenderTargets};
 use crate::passes::terrain_query::VistaTerrain;
@@ -104,15 +104,7 @@ impl DecalMeshPass {
 
 /// The vertex and index buffers of `meshes` (4-byte placeholders when empty).
 fn upload(ctx: &Context, meshes: &DecalMeshes) -> Result<(Buffer, Buffer)> {
-    let buffer = |name, bytes: &[u8], usage: vk::BufferUsageFlags| -> Result<Buffer> {
-        let usage = usage | vk::BufferUsageFlags::TRANSFER_DST;
-        let size = bytes.len().max(4) as u64;
-        let b = Buffer::new(ctx, &BufferDesc { name, size, usage, location: MemoryLocation::GpuOnly })?;
-        if !bytes.is_empty() {
-            ctx.upload(&b, bytes)?;
-        }
-        Ok(b)
-    };
+    let buffer = |name, bytes: &[u8], usage| Buffer::with_data(ctx, name, bytes, usage);
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
     Ok((
         buffer("decal_mesh_vertices", bytemuck::cast_slice(&meshes.vertices), storage)?,

@@ -2,7 +2,7 @@
 //! texture the frame's terrain pixels sample, one sample per
 //! VT_FEEDBACK_STRIDE^2 block jittered over frames, each page once, without
 //! a clear pass (the shader says how). The list is copied into the
-//! renderer's readback ring right after (render/virtual_texture).
+//! renderer's readback ring right after (effects/virtual_texture).
 
 use crate::error::Result;
 use crate::gpu::{depth_layout, vk, Buffer, ComputePipelineDesc, Context, Pipeline, Recorder, Resource, Sampler};

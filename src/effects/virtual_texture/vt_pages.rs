@@ -7,7 +7,7 @@ use crate::effects::virtual_texture::decal_gpu::DecalResources;
 use crate::effects::virtual_texture::layout::PADDED_TILE;
 use crate::effects::virtual_texture::state::PageJob;
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, ComputePipelineDesc, Context, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
+use crate::gpu::{vk, Buffer, ComputePipelineDesc, Context, Image, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::gbuffer_tiles::MaterialBindings;
 use crate::passes::terrain_query::VistaTerrain;
@@ -42,16 +42,11 @@ impl VtPages {
         let spec = [(sh::SPEC_POSITION_CODE, u32::from(position_code))];
         let shader = sh::variant(if decals { sh::VARIANT_DECALS } else { 0 });
         let desc = ComputePipelineDesc { name: Self::NAME, shader, specialization: &spec };
-        let detail = SamplerDesc {
-            name: "vt_pages_detail",
-            filter: vk::Filter::LINEAR,
-            address_mode: vk::SamplerAddressMode::REPEAT,
-        };
         Ok(VtPages {
             pipeline: Pipeline::compute(ctx, &desc)?,
             decals,
             nearest: nearest_sampler(ctx, "vt_pages_nearest")?,
-            detail: Sampler::mipmapped(ctx, &detail)?,
+            detail: crate::passes::gbuffer_tiles::detail_sampler(ctx, "vt_pages_detail")?,
         })
     }
 
