@@ -27,7 +27,7 @@ fn each_debug_view_matches_its_cpu_twin_and_the_patch_info_names_the_patches_dra
         // frames old, frame::per_frame): one more frame and it knows every
         // node the settle brought.
         let plain = rig.again(ctx, &v, CullStages::ALL);
-        let outcome = |rig: &Rig| rig.renderer.last_frame_log().and_then(|l| l.outcome(FramePass::DebugView)).cloned();
+        let outcome = |rig: &Rig| rig.renderer.last_frame_log().and_then(|l| l.outcome(FramePass::DEBUG_VIEW)).cloned();
         assert_eq!(outcome(&rig), Some(Outcome::Skipped(Skip::NoDebugView)));
         let g = rig.renderer.gbuffer.as_ref().unwrap().capture(ctx).unwrap();
 

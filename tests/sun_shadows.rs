@@ -14,7 +14,7 @@ use vista::gpu::{Context, LiveObjects};
 use vista::passes::cull_patches::CullStages;
 use vista::reference::sun_shadow::{texel_position, March, NONE};
 use vista::render::{frame_report, Effect, Effects, PassState, RendererOptions, View};
-use vista::scene::graph::{FramePass, Outcome, Skip};
+use vista::scene::graph::{Outcome, Skip};
 use vista::world::{NodeId, WorldDesc};
 
 const SIZE: [u32; 2] = [128, 128];
@@ -174,7 +174,9 @@ fn a_moving_sun_is_caught_up_within_the_budget_and_a_static_one_is_idle() {
         rig.shot(ctx, &v, CullStages::ALL);
         let resident = rig.renderer.terrain.tree.shadow.resident_count();
         let budget = params().update_budget;
-        let outcome = |rig: &Rig| rig.renderer.last_frame_log().and_then(|l| l.outcome(FramePass::SunShadows)).cloned();
+        let outcome = |rig: &Rig| {
+            rig.renderer.last_frame_log().and_then(|l| l.outcome(vista::effects::shadows::frame::SUN_SHADOWS)).cloned()
+        };
         // Settled and static: the pass is skipped, and the report says idle.
         rig.again(ctx, &v, CullStages::ALL);
         assert_eq!(outcome(&rig), Some(Outcome::Skipped(Skip::ShadowsCurrent)));
@@ -248,7 +250,9 @@ fn switched_off_shadows_skip_their_pass_and_return_once_every_node_is_redone() {
         let mut rig = Rig::with_options(ctx, world(), CONE, vec![], SIZE, false, options(15.0, true));
         let v = over_cone();
         let lit = rig.shot(ctx, &v, CullStages::ALL);
-        let outcome = |rig: &Rig| rig.renderer.last_frame_log().and_then(|l| l.outcome(FramePass::SunShadows)).cloned();
+        let outcome = |rig: &Rig| {
+            rig.renderer.last_frame_log().and_then(|l| l.outcome(vista::effects::shadows::frame::SUN_SHADOWS)).cloned()
+        };
         let objects = ctx.live_objects();
         rig.renderer.switches.shadows = false;
         let off = rig.again(ctx, &v, CullStages::ALL);

@@ -14,6 +14,7 @@ use crate::passes::lighting_resolve::ResolveInputs;
 use crate::passes::sector_data::SectorData;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::scene::effect::{Effect, EffectDecision, FrameSwitches};
+pub use crate::scene::graph::FramePoint;
 use crate::scene::graph::{FrameLog, FramePass, PassGraph, PassWork};
 use crate::scene::shading::ShadeRules;
 use crate::scene::view::View;
@@ -23,24 +24,6 @@ use crate::terrain::gpu_quadtree::GpuQuadtree;
 use crate::terrain::Terrain;
 use crate::world::WorldDesc;
 use std::any::Any;
-
-/// The points of the frame where effects record, in frame order; at each,
-/// effects record in registry order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FramePoint {
-    /// After the terrain's draws (both occlusion phases): meshes drawn into
-    /// the geometry pass.
-    AfterTerrainDraws,
-    /// Before the tiles are classified: compute that reads the frame's
-    /// depth pyramid.
-    BeforeClassify,
-    /// After classification, before the tile shading: what it samples.
-    BeforeTiles,
-    /// After the tile shading: draws into the G-buffer on top of it.
-    AfterTiles,
-    /// Before the lighting resolve: what it samples.
-    BeforeResolve,
-}
 
 /// What an effect is built from.
 pub struct BuildInputs<'a> {

@@ -7,6 +7,7 @@ use super::frame_effect::{BuildInputs, FrameEffect};
 use super::requested::Effects;
 use crate::error::Result;
 use crate::scene::effect::Effect;
+use crate::scene::graph::EffectPass;
 use std::path::Path;
 
 /// What the world holds that effects need; `None` when it has the data,
@@ -62,6 +63,12 @@ pub trait EffectKind: Sync {
     fn verdict(&self, fx: &Effects, content: &WorldContent, force: bool) -> Verdict {
         let _ = (fx, content, force);
         Verdict::On
+    }
+
+    /// The passes it records, each at its point of the frame (the pass
+    /// graph's entries: a pass of an effect that is off is not built).
+    fn passes(&self) -> &'static [EffectPass] {
+        &[]
     }
 
     /// Its built side when it is on (None: nothing to build, or built

@@ -39,6 +39,26 @@ pub use frame_effect::{FrameEffect, FramePoint};
 pub use kind::{EffectKind, Verdict, WorldContent};
 pub use requested::Effects;
 
+/// The registry: every effect's kind, in `Effect::ALL` order. An effect is
+/// its folder, its `mod` line above, its line here and its line in
+/// `scene::effect`'s list.
+pub(crate) static KINDS: [&dyn EffectKind; Effect::ALL.len()] = [
+    &core::Holes,
+    &core::ConeCull,
+    &core::Occlusion,
+    &materials::kinds::Cliffs,
+    &cliff_meshes::kind::CliffMeshesKind,
+    &materials::kinds::Splat,
+    &virtual_texture::kind::VirtualTextureKind,
+    &core::Lighting,
+    &core::Queries,
+    &virtual_texture::kind::DecalsKind,
+    &assets::kind::AssetsKind,
+    &grass::kind::GrassKind,
+    &shadows::kind::ShadowsKind,
+    &atmosphere::kind::AtmosphereKind,
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;

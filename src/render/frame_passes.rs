@@ -124,14 +124,14 @@ impl FramePasses<'_> {
         visibility: Option<&Buffer>,
     ) {
         let (traverse, lod_map, select) = (self.traverse, self.lod_map, self.select);
-        pass(frame, log, FramePass::Traverse, |r| traverse.record(r, tree, params, TraverseMode::SingleDispatch));
-        pass(frame, log, FramePass::LodMap, |r| lod_map.record(r, traverse));
-        pass(frame, log, FramePass::SectorData, |r| self.sector_data.record(r, tree));
-        pass(frame, log, FramePass::SelectPatches, |r| {
+        pass(frame, log, FramePass::TRAVERSE, |r| traverse.record(r, tree, params, TraverseMode::SingleDispatch));
+        pass(frame, log, FramePass::LOD_MAP, |r| lod_map.record(r, traverse));
+        pass(frame, log, FramePass::SECTOR_DATA, |r| self.sector_data.record(r, tree));
+        pass(frame, log, FramePass::SELECT_PATCHES, |r| {
             select.record(r, traverse, tree, lod_map, self.view_buffer, bytemuck::bytes_of(view))
         });
         let cull = self.cull_frame();
-        pass(frame, log, FramePass::CullPatches, |r| {
+        pass(frame, log, FramePass::CULL_PATCHES, |r| {
             self.cull.record(r, traverse, tree, lod_map, select, self.view_buffer, cull, visibility)
         });
     }
@@ -141,11 +141,11 @@ impl FramePasses<'_> {
     pub fn record_draws(&self, frame: &mut Frame<'_, '_>, log: &mut FrameLog, t: &FrameTargets) {
         let (tree, targets, gb) = (t.tree, t.targets, t.gbuffer);
         let (geometry, view) = (self.geometry, self.view_buffer);
-        pass(frame, log, FramePass::TerrainGeometry, |r| {
+        pass(frame, log, FramePass::TERRAIN_GEOMETRY, |r| {
             geometry.record(r, targets, gb, view, &self.cull.lists().list, tree, true)
         });
-        if let Some(holes) = self.holes_drawn(log, FramePass::TerrainHoles) {
-            pass(frame, log, FramePass::TerrainHoles, |r| {
+        if let Some(holes) = self.holes_drawn(log, FramePass::TERRAIN_HOLES) {
+            pass(frame, log, FramePass::TERRAIN_HOLES, |r| {
                 holes.record(r, targets, gb, view, self.cull.lists(), geometry, tree, false)
             });
         }
@@ -159,8 +159,8 @@ impl FramePasses<'_> {
     fn record_phase_two(&self, frame: &mut Frame<'_, '_>, log: &mut FrameLog, t: &FrameTargets, o: &Occlusion) {
         let (tree, targets, gb) = (t.tree, t.targets, t.gbuffer);
         if !self.stages.occlusion {
-            let passes = [FramePass::HizBuild, FramePass::CullOccluded, FramePass::TerrainGeometryLate];
-            for p in passes.into_iter().chain(self.holes.map(|_| FramePass::TerrainHolesLate)) {
+            let passes = [FramePass::HIZ_BUILD, FramePass::CULL_OCCLUDED, FramePass::TERRAIN_GEOMETRY_LATE];
+            for p in passes.into_iter().chain(self.holes.map(|_| FramePass::TERRAIN_HOLES_LATE)) {
                 log.skipped(p, Skip::OcclusionOff);
             }
             frame.untimed(QueueKind::Graphics, |r| {
@@ -171,16 +171,16 @@ impl FramePasses<'_> {
         }
         let (traverse, lod_map, select, cull) = (self.traverse, self.lod_map, self.select, self.cull_frame());
         let (geometry, view) = (self.geometry, self.view_buffer);
-        pass(frame, log, FramePass::HizBuild, |r| o.hiz.record(r, targets.depth));
-        pass(frame, log, FramePass::CullOccluded, |r| {
+        pass(frame, log, FramePass::HIZ_BUILD, |r| o.hiz.record(r, targets.depth));
+        pass(frame, log, FramePass::CULL_OCCLUDED, |r| {
             o.cull.record(r, traverse, tree, lod_map, select, view, cull, &o.hiz, targets.depth)
         });
         let late = &o.cull.lists;
-        pass(frame, log, FramePass::TerrainGeometryLate, |r| {
+        pass(frame, log, FramePass::TERRAIN_GEOMETRY_LATE, |r| {
             geometry.record(r, targets, gb, view, &late.list, tree, false)
         });
-        if let Some(holes) = self.holes_drawn(log, FramePass::TerrainHolesLate) {
-            pass(frame, log, FramePass::TerrainHolesLate, |r| {
+        if let Some(holes) = self.holes_drawn(log, FramePass::TERRAIN_HOLES_LATE) {
+            pass(frame, log, FramePass::TERRAIN_HOLES_LATE, |r| {
                 holes.record(r, targets, gb, view, late, geometry, tree, true)
             });
         }
@@ -194,7 +194,7 @@ impl FramePasses<'_> {
         let before = self.inputs(t, base.as_ref());
         self.at(FramePoint::BeforeClassify, frame, log, &before);
         let classify = self.classify;
-        pass(frame, log, FramePass::ClassifyTiles, |r| classify.record(r, gb, self.force_flavours));
+        pass(frame, log, FramePass::CLASSIFY_TILES, |r| classify.record(r, gb, self.force_flavours));
         self.at(FramePoint::BeforeTiles, frame, log, &before);
         let shading = materials(self.effects, true);
         self.record_tiles(frame, log, t, shading.as_ref());
@@ -216,10 +216,10 @@ impl FramePasses<'_> {
         for e in self.effects {
             e.bind_resolve(&mut inputs);
         }
-        pass(frame, log, FramePass::LightingResolve, |r| resolve.record(r, targets, gb, self.view_buffer, &inputs));
+        pass(frame, log, FramePass::LIGHTING_RESOLVE, |r| resolve.record(r, targets, gb, self.view_buffer, &inputs));
         match self.debug {
-            Some((p, view)) => pass(frame, log, FramePass::DebugView, |r| p.record(r, targets, gb, view)),
-            None => log.skipped(FramePass::DebugView, Skip::NoDebugView),
+            Some((p, view)) => pass(frame, log, FramePass::DEBUG_VIEW, |r| p.record(r, targets, gb, view)),
+            None => log.skipped(FramePass::DEBUG_VIEW, Skip::NoDebugView),
         }
     }
 
@@ -242,6 +242,6 @@ impl FramePasses<'_> {
                 tiles.record_variant(r, bits, i == 0, targets, gb, self.view_buffer, lists, sector, terrain, tree, m)
             });
         }
-        log.ran(FramePass::GbufferTiles, None);
+        log.ran(FramePass::GBUFFER_TILES, None);
     }
 }

@@ -182,14 +182,14 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
             name: pass.name(),
             late: pass.late(),
             queue: ran_on,
-            effects: pass.effects().to_vec(),
+            effects: node.effects.clone(),
             state: PassState::NotBuilt,
             recorded: false,
             reason: node.why_not.clone().unwrap_or_default(),
             gpu_ms: None,
             work: PassWork::default(),
         };
-        if pass == FramePass::GbufferTiles && log.outcome(pass).is_some() {
+        if pass == FramePass::GBUFFER_TILES && log.outcome(pass).is_some() {
             passes.extend(tile_variants(r, &counters, timings, &report));
             continue;
         }
@@ -207,10 +207,10 @@ pub fn frame_report(ctx: &Context, r: &TerrainRenderer, timings: Option<&FrameTi
                 let (work, idle) = work_of(r, pass, *cpu_work, &counters);
                 report.state = if idle.is_some() { PassState::Idle } else { PassState::Ran };
                 report.reason = idle.map(|i| format!("recorded with nothing to do: {i}")).unwrap_or_default();
-                if let (FramePass::DebugView, Some(v)) = (pass, r.debug_view) {
+                if let (FramePass::DEBUG_VIEW, Some(v)) = (pass, r.debug_view) {
                     report.reason = format!("showing {}", v.name());
                 }
-                if pass == FramePass::LightingResolve && !log.switched_off.is_empty() {
+                if pass == FramePass::LIGHTING_RESOLVE && !log.switched_off.is_empty() {
                     let names: Vec<&str> = log.switched_off.iter().map(|e| e.name()).collect();
                     report.reason = format!("the variant without {} (switched off this frame)", names.join(" and "));
                 }
@@ -276,7 +276,7 @@ fn work_of(
     let [solid, holey, late_solid, late_holey] = c.instances;
     let no_nodes = (nodes == 0).then_some("the traversal listed no node (0 groups, indirect)");
     match pass {
-        FramePass::QuadtreeUpdate => {
+        FramePass::QUADTREE_UPDATE => {
             let writes = cpu_work.unwrap_or(0);
             let work = PassWork {
                 writes: Some(writes),
@@ -285,39 +285,39 @@ fn work_of(
             };
             (work, (writes == 0).then_some("payload copies only, no quadtree write"))
         }
-        FramePass::Traverse => (groups(1), None),
-        FramePass::LodMap => (groups(nodes), no_nodes),
-        FramePass::SectorData => (groups(r.sector_data.groups()), None),
+        FramePass::TRAVERSE => (groups(1), None),
+        FramePass::LOD_MAP => (groups(nodes), no_nodes),
+        FramePass::SECTOR_DATA => (groups(r.sector_data.groups()), None),
         // Two dispatches of one group per listed node.
-        FramePass::SelectPatches => (groups(2 * nodes), no_nodes),
-        FramePass::CullPatches => {
+        FramePass::SELECT_PATCHES => (groups(2 * nodes), no_nodes),
+        FramePass::CULL_PATCHES => {
             (PassWork { patches_tested: Some(u64::from(c.cull.patches_in)), ..groups(nodes) }, no_nodes)
         }
-        FramePass::TerrainGeometry => {
+        FramePass::TERRAIN_GEOMETRY => {
             (draw(solid), (solid == 0).then_some("no visible patch without holes (0 instances)"))
         }
-        FramePass::TerrainHoles => (draw(holey), (holey == 0).then_some("no visible patch has holes (0 instances)")),
-        FramePass::HizBuild => {
+        FramePass::TERRAIN_HOLES => (draw(holey), (holey == 0).then_some("no visible patch has holes (0 instances)")),
+        FramePass::HIZ_BUILD => {
             let levels = r.occlusion.as_ref().and_then(|o| o.hiz.pyramid()).map_or(0, |p| p.mip_levels);
             (groups(u64::from(levels)), None)
         }
-        FramePass::CullOccluded => {
+        FramePass::CULL_OCCLUDED => {
             let tested = u64::from(c.cull.occlusion_tested);
             (PassWork { patches_tested: Some(tested), ..groups(nodes) }, no_nodes)
         }
-        FramePass::TerrainGeometryLate => {
+        FramePass::TERRAIN_GEOMETRY_LATE => {
             (draw(late_solid), (late_solid == 0).then_some("the pyramid left no new patch visible (0 instances)"))
         }
-        FramePass::TerrainHolesLate => {
+        FramePass::TERRAIN_HOLES_LATE => {
             (draw(late_holey), (late_holey == 0).then_some("the pyramid left no new patch with holes (0 instances)"))
         }
-        FramePass::ClassifyTiles => {
+        FramePass::CLASSIFY_TILES => {
             let tiles = r.classify.lists.as_ref().map_or(0, |l| u64::from(l.push.capacity));
             (groups(tiles), None)
         }
         // Reported per variant by the caller.
-        FramePass::GbufferTiles => (PassWork::default(), None),
-        FramePass::LightingResolve | FramePass::DebugView => (PassWork::default(), None),
+        FramePass::GBUFFER_TILES => (PassWork::default(), None),
+        FramePass::LIGHTING_RESOLVE | FramePass::DEBUG_VIEW => (PassWork::default(), None),
         // The effects' passes: their folders know their work.
         _ => {
             let size = r.gbuffer.as_ref().map_or([0, 0], |g| g.size());

@@ -4,97 +4,81 @@
 
 use serde::Serialize;
 
-/// Every effect a scene can name, in report order (which is also the
-/// order their built parts record at each point of the frame).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Effect {
+/// Declares [`Effect`]: each effect's variant and scene-file key, once.
+macro_rules! effects {
+    ($($(#[$doc:meta])* $variant:ident = $name:literal,)*) => {
+        /// Every effect a scene can name, in report order (which is also
+        /// the order their built parts record at each point of the frame).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+        #[serde(rename_all = "snake_case")]
+        pub enum Effect {
+            $($(#[$doc])* $variant,)*
+        }
+
+        impl Effect {
+            pub const ALL: [Effect; [$($name),*].len()] = [$(Effect::$variant),*];
+
+            /// The scene-file key.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Effect::$variant => $name,)*
+                }
+            }
+        }
+    };
+}
+
+// One line an effect (and its doc): adding an effect adds its line here.
+effects! {
     /// Hole regions and the trimmed world edge: the hole stage of
     /// `cull_patches`, its hole list and the `terrain_holes` draw.
-    Holes,
+    Holes = "holes",
     /// Backface-cone stage of `cull_patches` and the per-patch cone atlas.
-    ConeCull,
+    ConeCull = "cone_cull",
     /// Two-phase Hi-Z occlusion culling: `hiz_build`, `cull_occluded`, the
     /// phase 2 draws, the visibility bits and the depth pyramid.
-    Occlusion,
+    Occlusion = "occlusion",
     /// Tri-planar cliff shading.
-    Cliffs,
+    Cliffs = "cliffs",
     /// Procedural cliff meshes near the camera (effects/cliff_meshes):
     /// `cliff_mesh_build` and the `cliff_meshes` draw into the geometry
     /// pass, shaded by the cliff flavours (needs `cliffs`).
-    CliffMeshes,
+    CliffMeshes = "cliff_meshes",
     /// Detail materials from the splat map.
-    Splat,
+    Splat = "splat",
     /// Adaptive virtual texturing (seed 001): the splat blend cached in
     /// pages (`vt_update`, `vt_pages`, `vt_feedback`) and the
     /// virtual-texture flavour of `gbuffer_tiles` in place of splat's
     /// (needs `splat`'s materials).
-    VirtualTexture,
+    VirtualTexture = "virtual_texture",
     /// Sun and sky lighting of the output (the normal atlas); off, the
     /// output is unlit albedo.
-    Lighting,
+    Lighting = "lighting",
     /// Sector data each frame, for `TerrainQuery` (height, normal and
     /// material at any point, on the GPU).
-    Queries,
+    Queries = "queries",
     /// Decals (`RendererOptions::decals`, a scene's `[[decals]]`) blended
     /// into the virtual texture's pages by `vt_pages`' DECALS variant
     /// (needs `virtual_texture`).
-    Decals,
+    Decals = "decals",
     /// The example assets grounded in the terrain (effects/assets): the
     /// `asset_draw` pass of a scene's `[[assets]]`, blended into the
     /// terrain by terrain_blend.glsl.
-    Assets,
+    Assets = "assets",
     /// GPU grass (effects/grass): `grass_pigment`, `grass_place` and the
     /// one indirect draw `grass_draw` into the G-buffer (needs `splat`'s
     /// material ids, in splat mode).
-    Grass,
+    Grass = "grass",
     /// Terrain sun shadows from the height field: the `sun_shadows` pass and
     /// its per-node shadow atlas, sampled by `lighting_resolve` (needs
     /// `lighting`).
-    Shadows,
+    Shadows = "shadows",
     /// Aerial perspective and sky: `lighting_resolve`'s ATMOSPHERE variant
     /// (needs `lighting`).
-    Atmosphere,
+    Atmosphere = "atmosphere",
 }
 
 impl Effect {
-    pub const ALL: [Effect; 14] = [
-        Effect::Holes,
-        Effect::ConeCull,
-        Effect::Occlusion,
-        Effect::Cliffs,
-        Effect::CliffMeshes,
-        Effect::Splat,
-        Effect::VirtualTexture,
-        Effect::Lighting,
-        Effect::Queries,
-        Effect::Decals,
-        Effect::Assets,
-        Effect::Grass,
-        Effect::Shadows,
-        Effect::Atmosphere,
-    ];
-
-    /// The scene-file key.
-    pub fn name(self) -> &'static str {
-        match self {
-            Effect::Holes => "holes",
-            Effect::ConeCull => "cone_cull",
-            Effect::Occlusion => "occlusion",
-            Effect::Cliffs => "cliffs",
-            Effect::CliffMeshes => "cliff_meshes",
-            Effect::Splat => "splat",
-            Effect::VirtualTexture => "virtual_texture",
-            Effect::Lighting => "lighting",
-            Effect::Queries => "queries",
-            Effect::Decals => "decals",
-            Effect::Grass => "grass",
-            Effect::Assets => "assets",
-            Effect::Shadows => "shadows",
-            Effect::Atmosphere => "atmosphere",
-        }
-    }
-
     pub fn from_name(name: &str) -> Option<Effect> {
         Effect::ALL.into_iter().find(|e| e.name() == name)
     }

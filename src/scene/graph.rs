@@ -19,158 +19,136 @@ use crate::scene::effect::{Effect, EffectDecision};
 use crate::shaders as sh;
 use serde::Serialize;
 
-/// Every pass of a frame, in order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum FramePass {
-    QuadtreeUpdate,
-    Traverse,
-    LodMap,
-    SectorData,
-    SelectPatches,
-    CullPatches,
-    TerrainGeometry,
-    TerrainHoles,
-    HizBuild,
-    CullOccluded,
-    /// Phase 2 of occlusion culling: the patches the pyramid left visible.
-    TerrainGeometryLate,
-    TerrainHolesLate,
-    /// Effect `cliff_meshes`: the meshes of the steep cells near the camera
-    /// (when the camera left their step or the terrain changed).
-    CliffMeshBuild,
-    /// Effect `cliff_meshes`: their draw into the geometry pass.
-    CliffMeshes,
-    /// Effect `decals`: the displacement decals' meshes (built only where
-    /// a decal displaces).
-    DecalMeshes,
-    /// Effect `grass`: the pigment map (when the camera left its step or
-    /// the terrain changed).
-    GrassPigment,
-    /// Effect `grass`: placement and culling of the tufts.
-    GrassPlace,
-    ClassifyTiles,
-    /// Effect `virtual_texture`: the indirection and sub-texture writes.
-    VtUpdate,
-    /// Effect `virtual_texture`: the pages missing, up to the budget.
-    VtPages,
-    /// Effect `virtual_texture`: the pages this frame samples.
-    VtFeedback,
-    /// One draw per variant built, each timed on its own.
-    GbufferTiles,
-    /// Effect `assets`: the example assets, blended into the terrain.
-    AssetDraw,
-    /// Effect `grass`: the one indirect draw of every tuft kept.
-    GrassDraw,
-    /// Effect `shadows`: the shadow textures of arrived and stale nodes.
-    SunShadows,
-    LightingResolve,
-    /// A debug view over the display image, when one is asked for.
-    DebugView,
+/// A pass of the frame: its name (pass, shader and timer label, from the
+/// shader bank) and whether it is occlusion's phase 2 of a drawing pass.
+/// The core passes are the constants here; an effect's are constants in
+/// its folder, declared to the graph by its kind ([`EffectPass`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+pub struct FramePass {
+    name: &'static str,
+    late: bool,
 }
 
 impl FramePass {
-    pub const ALL: [FramePass; 27] = [
-        FramePass::QuadtreeUpdate,
-        FramePass::Traverse,
-        FramePass::LodMap,
-        FramePass::SectorData,
-        FramePass::SelectPatches,
-        FramePass::CullPatches,
-        FramePass::TerrainGeometry,
-        FramePass::TerrainHoles,
-        FramePass::HizBuild,
-        FramePass::CullOccluded,
-        FramePass::TerrainGeometryLate,
-        FramePass::TerrainHolesLate,
-        FramePass::CliffMeshBuild,
-        FramePass::CliffMeshes,
-        FramePass::DecalMeshes,
-        FramePass::GrassPigment,
-        FramePass::GrassPlace,
-        FramePass::ClassifyTiles,
-        FramePass::VtUpdate,
-        FramePass::VtPages,
-        FramePass::VtFeedback,
-        FramePass::GbufferTiles,
-        FramePass::AssetDraw,
-        FramePass::GrassDraw,
-        FramePass::SunShadows,
-        FramePass::LightingResolve,
-        FramePass::DebugView,
-    ];
+    pub const QUADTREE_UPDATE: FramePass = FramePass::new(sh::quadtree_update::PASS);
+    pub const TRAVERSE: FramePass = FramePass::new(sh::traverse::PASS);
+    pub const LOD_MAP: FramePass = FramePass::new(sh::lod_map::PASS);
+    pub const SECTOR_DATA: FramePass = FramePass::new(sh::sector_data::PASS);
+    pub const SELECT_PATCHES: FramePass = FramePass::new(sh::select_patches::PASS);
+    pub const CULL_PATCHES: FramePass = FramePass::new(sh::cull_patches::PASS);
+    pub const TERRAIN_GEOMETRY: FramePass = FramePass::new(sh::terrain_geometry_vert::PASS);
+    pub const TERRAIN_HOLES: FramePass = FramePass::new(sh::terrain_holes_vert::PASS);
+    pub const HIZ_BUILD: FramePass = FramePass::new(sh::hiz_build::PASS);
+    pub const CULL_OCCLUDED: FramePass = FramePass::new(sh::cull_occluded::PASS);
+    /// Phase 2 of occlusion culling: the patches the pyramid left visible.
+    pub const TERRAIN_GEOMETRY_LATE: FramePass = FramePass::phase_two(sh::terrain_geometry_vert::PASS);
+    pub const TERRAIN_HOLES_LATE: FramePass = FramePass::phase_two(sh::terrain_holes_vert::PASS);
+    pub const CLASSIFY_TILES: FramePass = FramePass::new(sh::classify_tiles::PASS);
+    /// One draw per variant built, each timed on its own.
+    pub const GBUFFER_TILES: FramePass = FramePass::new(sh::gbuffer_tiles_vert::PASS);
+    pub const LIGHTING_RESOLVE: FramePass = FramePass::new(sh::lighting_resolve_vert::PASS);
+    /// A debug view over the display image, when one is asked for.
+    pub const DEBUG_VIEW: FramePass = FramePass::new(sh::debug_view_vert::PASS);
+
+    /// The pass of the shader bank's `name` (its `PASS`).
+    pub const fn new(name: &'static str) -> FramePass {
+        FramePass { name, late: false }
+    }
+
+    const fn phase_two(name: &'static str) -> FramePass {
+        FramePass { name, late: true }
+    }
 
     /// Pass, shader and timer label (from the shader bank).
     pub fn name(self) -> &'static str {
-        match self {
-            FramePass::QuadtreeUpdate => sh::quadtree_update::PASS,
-            FramePass::Traverse => sh::traverse::PASS,
-            FramePass::LodMap => sh::lod_map::PASS,
-            FramePass::SectorData => sh::sector_data::PASS,
-            FramePass::SelectPatches => sh::select_patches::PASS,
-            FramePass::CullPatches => sh::cull_patches::PASS,
-            FramePass::TerrainGeometry | FramePass::TerrainGeometryLate => sh::terrain_geometry_vert::PASS,
-            FramePass::TerrainHoles | FramePass::TerrainHolesLate => sh::terrain_holes_vert::PASS,
-            FramePass::HizBuild => sh::hiz_build::PASS,
-            FramePass::CullOccluded => sh::cull_occluded::PASS,
-            FramePass::ClassifyTiles => sh::classify_tiles::PASS,
-            FramePass::VtUpdate => sh::vt_update::PASS,
-            FramePass::VtPages => sh::vt_pages::PASS,
-            FramePass::VtFeedback => sh::vt_feedback::PASS,
-            FramePass::GbufferTiles => sh::gbuffer_tiles_vert::PASS,
-            FramePass::GrassPigment => sh::grass_pigment::PASS,
-            FramePass::GrassPlace => sh::grass_place::PASS,
-            FramePass::GrassDraw => sh::grass_draw_vert::PASS,
-            FramePass::AssetDraw => sh::asset_draw_vert::PASS,
-            FramePass::DecalMeshes => sh::decal_meshes_vert::PASS,
-            FramePass::CliffMeshBuild => sh::cliff_mesh_build::PASS,
-            FramePass::CliffMeshes => sh::cliff_meshes_vert::PASS,
-            FramePass::SunShadows => sh::sun_shadows::PASS,
-            FramePass::LightingResolve => sh::lighting_resolve_vert::PASS,
-            FramePass::DebugView => sh::debug_view_vert::PASS,
-        }
+        self.name
     }
 
     /// Phase 2 of a drawing pass.
     pub fn late(self) -> bool {
-        matches!(self, FramePass::TerrainGeometryLate | FramePass::TerrainHolesLate)
+        self.late
     }
 
     /// Timer and debug label: the name, marked in phase 2.
     pub fn label(self) -> String {
-        crate::frame::pass_label(self.name(), self.late())
+        crate::frame::pass_label(self.name, self.late)
     }
 
-    /// The queue the pass belongs to when compute is split off: phase 2
-    /// reads phase 1's depth, so the pyramid and its culling stay with the
-    /// graphics work.
+    /// The queue the pass belongs to when compute is split off: the LOD
+    /// phase; phase 2 reads phase 1's depth, so the pyramid and its culling
+    /// stay with the graphics work, as do the effects' passes.
     pub fn queue(self) -> QueueKind {
-        match self {
-            FramePass::QuadtreeUpdate
-            | FramePass::Traverse
-            | FramePass::LodMap
-            | FramePass::SectorData
-            | FramePass::SelectPatches
-            | FramePass::CullPatches => QueueKind::Compute,
-            _ => QueueKind::Graphics,
-        }
-    }
-
-    /// The effects the pass exists for, all needed (empty: every scene).
-    pub fn effects(self) -> &'static [Effect] {
-        match self {
-            FramePass::TerrainHoles => &[Effect::Holes],
-            FramePass::HizBuild | FramePass::CullOccluded | FramePass::TerrainGeometryLate => &[Effect::Occlusion],
-            FramePass::TerrainHolesLate => &[Effect::Holes, Effect::Occlusion],
-            FramePass::SunShadows => &[Effect::Shadows],
-            FramePass::GrassPigment | FramePass::GrassPlace | FramePass::GrassDraw => &[Effect::Grass],
-            FramePass::AssetDraw => &[Effect::Assets],
-            FramePass::DecalMeshes => &[Effect::Decals],
-            FramePass::CliffMeshBuild | FramePass::CliffMeshes => &[Effect::CliffMeshes],
-            FramePass::VtUpdate | FramePass::VtPages | FramePass::VtFeedback => &[Effect::VirtualTexture],
-            _ => &[],
+        let compute = [
+            FramePass::QUADTREE_UPDATE,
+            FramePass::TRAVERSE,
+            FramePass::LOD_MAP,
+            FramePass::SECTOR_DATA,
+            FramePass::SELECT_PATCHES,
+            FramePass::CULL_PATCHES,
+        ];
+        if compute.contains(&self) {
+            QueueKind::Compute
+        } else {
+            QueueKind::Graphics
         }
     }
 }
+
+/// The points of the frame where effects record, in frame order; at each,
+/// effects record in registry order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FramePoint {
+    /// After the terrain's draws (both occlusion phases): meshes drawn into
+    /// the geometry pass.
+    AfterTerrainDraws,
+    /// Before the tiles are classified: compute that reads the frame's
+    /// depth pyramid.
+    BeforeClassify,
+    /// After classification, before the tile shading: what it samples.
+    BeforeTiles,
+    /// After the tile shading: draws into the G-buffer on top of it.
+    AfterTiles,
+    /// Before the lighting resolve: what it samples.
+    BeforeResolve,
+}
+
+/// A pass an effect records at a point, and the effects it exists for
+/// (all needed).
+#[derive(Debug, Clone, Copy)]
+pub struct EffectPass {
+    pub point: FramePoint,
+    pub pass: FramePass,
+    pub effects: &'static [Effect],
+}
+
+/// The frame's core passes and the points between them, in order.
+enum Step {
+    Pass(FramePass, &'static [Effect]),
+    Point(FramePoint),
+}
+
+const FRAME: [Step; 20] = [
+    Step::Pass(FramePass::QUADTREE_UPDATE, &[]),
+    Step::Pass(FramePass::TRAVERSE, &[]),
+    Step::Pass(FramePass::LOD_MAP, &[]),
+    Step::Pass(FramePass::SECTOR_DATA, &[]),
+    Step::Pass(FramePass::SELECT_PATCHES, &[]),
+    Step::Pass(FramePass::CULL_PATCHES, &[]),
+    Step::Pass(FramePass::TERRAIN_GEOMETRY, &[]),
+    Step::Pass(FramePass::TERRAIN_HOLES, &[Effect::Holes]),
+    Step::Pass(FramePass::HIZ_BUILD, &[Effect::Occlusion]),
+    Step::Pass(FramePass::CULL_OCCLUDED, &[Effect::Occlusion]),
+    Step::Pass(FramePass::TERRAIN_GEOMETRY_LATE, &[Effect::Occlusion]),
+    Step::Pass(FramePass::TERRAIN_HOLES_LATE, &[Effect::Holes, Effect::Occlusion]),
+    Step::Point(FramePoint::AfterTerrainDraws),
+    Step::Point(FramePoint::BeforeClassify),
+    Step::Pass(FramePass::CLASSIFY_TILES, &[]),
+    Step::Point(FramePoint::BeforeTiles),
+    Step::Pass(FramePass::GBUFFER_TILES, &[]),
+    Step::Point(FramePoint::AfterTiles),
+    Step::Point(FramePoint::BeforeResolve),
+    Step::Pass(FramePass::LIGHTING_RESOLVE, &[]),
+];
 
 /// Why a built pass was not recorded this frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -251,6 +229,8 @@ pub struct PassWork {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PassNode {
     pub pass: FramePass,
+    /// The effects it exists for, all needed (empty: every scene).
+    pub effects: Vec<Effect>,
     pub built: bool,
     /// Why not built, when not.
     pub why_not: Option<String>,
@@ -289,28 +269,38 @@ impl FrameLog {
     }
 }
 
+/// A pass built unless an effect it needs is off (then why not).
+fn node(pass: FramePass, effects: &[Effect], decisions: &[EffectDecision]) -> PassNode {
+    let off = effects.iter().filter_map(|e| decisions.iter().find(|d| d.effect == *e)).find(|d| !d.on);
+    PassNode {
+        pass,
+        effects: effects.to_vec(),
+        built: off.is_none(),
+        why_not: off.map(|d| format!("effect {} is off: {}", d.effect.name(), d.reason)),
+    }
+}
+
 pub struct PassGraph {
     nodes: Vec<PassNode>,
     last: Option<FrameLog>,
 }
 
 impl PassGraph {
-    pub fn new(decisions: &[EffectDecision]) -> PassGraph {
-        let nodes = FramePass::ALL
-            .into_iter()
-            .map(|pass| {
-                let decision =
-                    pass.effects().iter().filter_map(|e| decisions.iter().find(|d| d.effect == *e)).find(|d| !d.on);
-                match decision {
-                    Some(d) if !d.on => PassNode {
-                        pass,
-                        built: false,
-                        why_not: Some(format!("effect {} is off: {}", d.effect.name(), d.reason)),
-                    },
-                    _ => PassNode { pass, built: true, why_not: None },
+    /// The graph of these decisions: the core passes, each effect's
+    /// (`effect_passes`, in registry order) at its point, and the debug
+    /// view last.
+    pub fn new(decisions: &[EffectDecision], effect_passes: &[EffectPass]) -> PassGraph {
+        let mut order: Vec<(FramePass, &[Effect])> = Vec::new();
+        for step in &FRAME {
+            match step {
+                Step::Pass(pass, effects) => order.push((*pass, effects)),
+                Step::Point(point) => {
+                    order.extend(effect_passes.iter().filter(|p| p.point == *point).map(|p| (p.pass, p.effects)));
                 }
-            })
-            .collect();
+            }
+        }
+        order.push((FramePass::DEBUG_VIEW, &[]));
+        let nodes = order.into_iter().map(|(pass, effects)| node(pass, effects, decisions)).collect();
         PassGraph { nodes, last: None }
     }
 

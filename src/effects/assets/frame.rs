@@ -11,6 +11,9 @@ use crate::scene::effect::{Effect, MaterialsMode};
 use crate::scene::graph::{FrameLog, FramePass, PassWork};
 use std::any::Any;
 
+/// Its pass: the assets, blended into the terrain.
+pub const ASSET_DRAW: FramePass = FramePass::new(crate::shaders::asset_draw_vert::PASS);
+
 /// The built effect: the pass and the meshes and instances it draws.
 pub struct Assets {
     pub draw: AssetDraw,
@@ -41,11 +44,11 @@ impl FrameEffect for Assets {
             return;
         }
         let m = r.materials.filter(|_| self.draw.materials());
-        frame.pass(FramePass::AssetDraw.name(), false, QueueKind::Graphics, |rec| {
+        frame.pass(ASSET_DRAW.name(), false, QueueKind::Graphics, |rec| {
             let (view, sector) = (r.view_buffer, r.sector_data.buffer());
             self.draw.record(rec, r.targets, r.gbuffer, view, &self.resources, r.terrain, sector, r.tree, m)
         });
-        log.ran(FramePass::AssetDraw, None);
+        log.ran(ASSET_DRAW, None);
     }
 
     fn pipelines(&self) -> Vec<String> {
@@ -57,7 +60,7 @@ impl FrameEffect for Assets {
     }
 
     fn work(&self, pass: FramePass, _: Option<u64>, _: &FrameCounters, _: [u32; 2]) -> Option<Work> {
-        if pass != FramePass::AssetDraw {
+        if pass != ASSET_DRAW {
             return None;
         }
         let a = &self.resources;

@@ -5,11 +5,16 @@ use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::requested::Effects;
 use crate::error::Result;
 use crate::scene::effect::Effect;
+use crate::scene::graph::{EffectPass, FramePoint};
 use crate::scene::params::number;
 use std::path::Path;
 
 pub struct AssetsKind;
 impl EffectKind for AssetsKind {
+    fn passes(&self) -> &'static [EffectPass] {
+        &[EffectPass { point: FramePoint::AfterTiles, pass: super::frame::ASSET_DRAW, effects: &[Effect::Assets] }]
+    }
+
     fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
         super::frame::build(b)
     }

@@ -14,6 +14,11 @@ use crate::scene::effect::Effect;
 use crate::scene::graph::{FrameLog, FramePass, PassWork, Skip};
 use std::any::Any;
 
+/// Its passes: built again when the camera left their step or the
+/// terrain changed; their draw into the geometry pass.
+pub const CLIFF_MESH_BUILD: FramePass = FramePass::new(crate::shaders::cliff_mesh_build::PASS);
+pub const CLIFF_MESHES: FramePass = FramePass::new(crate::shaders::cliff_meshes_vert::PASS);
+
 /// Builds effect `cliff_meshes` when it is on.
 pub fn build(b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
     if !b.on(Effect::CliffMeshes) {
@@ -39,17 +44,17 @@ impl FrameEffect for CliffMeshes {
         let sector = r.sector_data.buffer();
         match &self.planned {
             Some(push) => {
-                frame.pass(FramePass::CliffMeshBuild.name(), false, QueueKind::Graphics, |rec| {
+                frame.pass(CLIFF_MESH_BUILD.name(), false, QueueKind::Graphics, |rec| {
                     self.record_build(rec, push, sector, r.tree)
                 });
-                log.ran(FramePass::CliffMeshBuild, None);
+                log.ran(CLIFF_MESH_BUILD, None);
             }
-            None => log.skipped(FramePass::CliffMeshBuild, Skip::CliffMeshesCurrent),
+            None => log.skipped(CLIFF_MESH_BUILD, Skip::CliffMeshesCurrent),
         }
-        frame.pass(FramePass::CliffMeshes.name(), false, QueueKind::Graphics, |rec| {
+        frame.pass(CLIFF_MESHES.name(), false, QueueKind::Graphics, |rec| {
             self.record_draw(rec, r.targets, r.gbuffer, r.view_buffer)
         });
-        log.ran(FramePass::CliffMeshes, None);
+        log.ran(CLIFF_MESHES, None);
     }
 
     fn pipelines(&self) -> Vec<String> {
@@ -62,13 +67,13 @@ impl FrameEffect for CliffMeshes {
 
     fn work(&self, pass: FramePass, _: Option<u64>, _: &FrameCounters, _: [u32; 2]) -> Option<Work> {
         match pass {
-            FramePass::CliffMeshBuild => {
+            CLIFF_MESH_BUILD => {
                 let side = self.params.side();
                 let groups = (side * side).div_ceil(crate::shaders::cliff_mesh_build::WORKGROUP_SIZE[0]);
                 Some((PassWork { dispatch_groups: Some(u64::from(groups)), ..PassWork::default() }, None))
             }
             // Its instances are counted on the GPU (vista render's cliff meshes: line).
-            FramePass::CliffMeshes => Some((PassWork::default(), None)),
+            CLIFF_MESHES => Some((PassWork::default(), None)),
             _ => None,
         }
     }

@@ -5,10 +5,19 @@ use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::requested::Effects;
 use crate::error::Result;
 use crate::scene::effect::{Effect, MaterialsMode};
+use crate::scene::graph::{EffectPass, FramePoint};
 use std::path::Path;
 
 pub struct CliffMeshesKind;
 impl EffectKind for CliffMeshesKind {
+    fn passes(&self) -> &'static [EffectPass] {
+        const ON: &[Effect] = &[Effect::CliffMeshes];
+        &[
+            EffectPass { point: FramePoint::AfterTerrainDraws, pass: super::frame::CLIFF_MESH_BUILD, effects: ON },
+            EffectPass { point: FramePoint::AfterTerrainDraws, pass: super::frame::CLIFF_MESHES, effects: ON },
+        ]
+    }
+
     fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
         super::frame::build(b)
     }

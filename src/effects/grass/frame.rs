@@ -17,6 +17,13 @@ use crate::scene::graph::{FrameLog, FramePass, PassWork, Skip};
 use crate::shaders::consts::{GRASS_BLADES, GRASS_BLADE_VERTICES, GRASS_PIGMENT_TEXELS};
 use std::any::Any;
 
+/// Its passes: the pigment map (when the camera left its step or the
+/// terrain changed), the placement and culling of the tufts, and the one
+/// indirect draw of every tuft kept.
+pub const GRASS_PIGMENT: FramePass = FramePass::new(crate::shaders::grass_pigment::PASS);
+pub const GRASS_PLACE: FramePass = FramePass::new(crate::shaders::grass_place::PASS);
+pub const GRASS_DRAW: FramePass = FramePass::new(crate::shaders::grass_draw_vert::PASS);
+
 /// Triangles of one tuft.
 const TUFT_TRIANGLES: u64 = (GRASS_BLADES * GRASS_BLADE_VERTICES / 3) as u64;
 
@@ -46,13 +53,11 @@ impl Grass {
         let decals = r.find::<VirtualTexture>().and_then(VirtualTexture::decal_resources);
         if f.pigment_due {
             let m = r.materials.expect("grass needs splat's materials");
-            pass(frame, log, FramePass::GrassPigment, |rec| self.record_pigment(rec, f, sector, r.tree, m, decals));
+            pass(frame, log, GRASS_PIGMENT, |rec| self.record_pigment(rec, f, sector, r.tree, m, decals));
         } else {
-            log.skipped(FramePass::GrassPigment, Skip::PigmentCurrent);
+            log.skipped(GRASS_PIGMENT, Skip::PigmentCurrent);
         }
-        pass(frame, log, FramePass::GrassPlace, |rec| {
-            self.record_place(rec, f, r.view_buffer, r.hiz, sector, r.tree, decals)
-        });
+        pass(frame, log, GRASS_PLACE, |rec| self.record_place(rec, f, r.view_buffer, r.hiz, sector, r.tree, decals));
     }
 }
 
@@ -79,9 +84,7 @@ impl FrameEffect for Grass {
             FramePoint::BeforeClassify => self.record_placement(frame, log, r),
             FramePoint::AfterTiles => {
                 let f = self.frame.as_ref().expect("planned before recording");
-                pass(frame, log, FramePass::GrassDraw, |rec| {
-                    self.record_draw(rec, f, r.view_buffer, r.targets, r.gbuffer)
-                });
+                pass(frame, log, GRASS_DRAW, |rec| self.record_draw(rec, f, r.view_buffer, r.targets, r.gbuffer));
             }
             _ => {}
         }
@@ -99,18 +102,18 @@ impl FrameEffect for Grass {
         let groups = |g: u64| PassWork { dispatch_groups: Some(g), ..PassWork::default() };
         let counters = counters_of(c).unwrap_or_default();
         match pass {
-            FramePass::GrassPigment => {
+            GRASS_PIGMENT => {
                 let [wx, wy, _] = crate::shaders::grass_pigment::WORKGROUP_SIZE;
                 let side = GRASS_PIGMENT_TEXELS;
                 Some((groups(u64::from(side.div_ceil(wx)) * u64::from(side.div_ceil(wy))), None))
             }
-            FramePass::GrassPlace => {
+            GRASS_PLACE => {
                 let [wx, wy, _] = crate::shaders::grass_place::WORKGROUP_SIZE;
                 let side = self.params.side();
                 let work = groups(u64::from(side.div_ceil(wx) * side.div_ceil(wy)));
                 Some((work, (counters.in_range == 0).then_some("no cell of the square lies within the radius")))
             }
-            FramePass::GrassDraw => {
+            GRASS_DRAW => {
                 let drawn = counters.drawn;
                 let work = PassWork {
                     instances: Some(u64::from(drawn)),

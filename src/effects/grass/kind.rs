@@ -6,10 +6,20 @@ use crate::effects::materials::kinds::CONTROL_MAP_MODE;
 use crate::effects::requested::Effects;
 use crate::error::Result;
 use crate::scene::effect::{Effect, MaterialsMode};
+use crate::scene::graph::{EffectPass, FramePoint};
 use std::path::Path;
 
 pub struct GrassKind;
 impl EffectKind for GrassKind {
+    fn passes(&self) -> &'static [EffectPass] {
+        const ON: &[Effect] = &[Effect::Grass];
+        &[
+            EffectPass { point: FramePoint::BeforeClassify, pass: super::frame::GRASS_PIGMENT, effects: ON },
+            EffectPass { point: FramePoint::BeforeClassify, pass: super::frame::GRASS_PLACE, effects: ON },
+            EffectPass { point: FramePoint::AfterTiles, pass: super::frame::GRASS_DRAW, effects: ON },
+        ]
+    }
+
     fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
         super::frame::build(b)
     }

@@ -16,6 +16,9 @@ use crate::world::NodeId;
 use glam::DVec3;
 use std::any::Any;
 
+/// Its pass: the shadow textures of arrived and stale nodes.
+pub const SUN_SHADOWS: FramePass = FramePass::new(crate::shaders::sun_shadows::PASS);
+
 /// The built effect: the pass and its atlas, and which nodes it redoes when.
 pub struct Shadows {
     pub pass: SunShadows,
@@ -100,14 +103,14 @@ impl FrameEffect for Shadows {
             return;
         }
         if !self.on {
-            log.skipped(FramePass::SunShadows, Skip::ShadowsOff);
+            log.skipped(SUN_SHADOWS, Skip::ShadowsOff);
         } else if self.jobs.is_empty() {
-            log.skipped(FramePass::SunShadows, Skip::ShadowsCurrent);
+            log.skipped(SUN_SHADOWS, Skip::ShadowsCurrent);
         } else {
-            frame.pass(FramePass::SunShadows.name(), false, QueueKind::Graphics, |rec| {
+            frame.pass(SUN_SHADOWS.name(), false, QueueKind::Graphics, |rec| {
                 self.pass.record(rec, &self.jobs, self.sun, r.terrain, r.sector_data, r.tree)
             });
-            log.ran(FramePass::SunShadows, Some(self.jobs.len() as u64));
+            log.ran(SUN_SHADOWS, Some(self.jobs.len() as u64));
         }
     }
 
@@ -136,7 +139,7 @@ impl FrameEffect for Shadows {
     }
 
     fn work(&self, pass: FramePass, cpu_work: Option<u64>, _: &FrameCounters, _: [u32; 2]) -> Option<Work> {
-        if pass != FramePass::SunShadows {
+        if pass != SUN_SHADOWS {
             return None;
         }
         let jobs = cpu_work.unwrap_or(0);

@@ -7,11 +7,16 @@ use crate::effects::kind::{EffectKind, Verdict, WorldContent};
 use crate::effects::requested::Effects;
 use crate::error::Result;
 use crate::scene::effect::Effect;
+use crate::scene::graph::{EffectPass, FramePoint};
 use crate::scene::params::{number, whole};
 use std::path::Path;
 
 pub struct ShadowsKind;
 impl EffectKind for ShadowsKind {
+    fn passes(&self) -> &'static [EffectPass] {
+        &[EffectPass { point: FramePoint::BeforeResolve, pass: super::frame::SUN_SHADOWS, effects: &[Effect::Shadows] }]
+    }
+
     fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
         super::frame::build(b)
     }

@@ -19,6 +19,14 @@ use crate::scene::effect::Effect;
 use crate::scene::graph::{FrameLog, FramePass, PassWork, Skip};
 use std::any::Any;
 
+/// Its passes: the displacement decals' meshes (effect `decals`, built
+/// only where a decal displaces); the indirection and sub-texture writes,
+/// the pages missing (up to the budget), the pages this frame samples.
+pub const DECAL_MESHES: FramePass = FramePass::new(crate::shaders::decal_meshes_vert::PASS);
+pub const VT_UPDATE: FramePass = FramePass::new(crate::shaders::vt_update::PASS);
+pub const VT_PAGES: FramePass = FramePass::new(crate::shaders::vt_pages::PASS);
+pub const VT_FEEDBACK: FramePass = FramePass::new(crate::shaders::vt_feedback::PASS);
+
 /// Builds the virtual texture when it is on, with the decals' objects
 /// when `decals` is, and their meshes' pass when one displaces.
 pub fn build(b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
@@ -31,7 +39,7 @@ pub fn build(b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
     if let Some(set) = decals {
         let meshes = DecalMeshes::build(&set.decals, &set.textures);
         if meshes.meshes == 0 {
-            b.graph.not_built(FramePass::DecalMeshes, "no decal displaces the terrain (displace_m)".into());
+            b.graph.not_built(DECAL_MESHES, "no decal displaces the terrain (displace_m)".into());
         } else {
             vt.decal_meshes = Some(DecalMeshPass::new(b.ctx, &meshes, b.depth)?);
         }
@@ -54,11 +62,11 @@ impl VirtualTexture {
     fn record_decal_meshes(&self, frame: &mut Frame<'_, '_>, log: &mut FrameLog, r: &RecordInputs) {
         let Some(m) = &self.decal_meshes else { return };
         if m.is_empty() {
-            log.skipped(FramePass::DecalMeshes, Skip::NoDisplacement);
+            log.skipped(DECAL_MESHES, Skip::NoDisplacement);
             return;
         }
         let (view, sector) = (r.view_buffer, r.sector_data.buffer());
-        pass(frame, log, FramePass::DecalMeshes, None, |rec| {
+        pass(frame, log, DECAL_MESHES, None, |rec| {
             m.record(rec, r.targets, r.gbuffer, view, r.terrain, sector, r.tree)
         });
     }
@@ -70,20 +78,18 @@ impl VirtualTexture {
             frame.untimed(QueueKind::Graphics, |rec| self.record_init(rec));
         }
         if f.writes.is_empty() {
-            log.skipped(FramePass::VtUpdate, Skip::NoVtWrites);
+            log.skipped(VT_UPDATE, Skip::NoVtWrites);
         } else {
             let n = Some(f.writes.len() as u64);
-            pass(frame, log, FramePass::VtUpdate, n, |rec| self.record_update(rec, &f.writes));
+            pass(frame, log, VT_UPDATE, n, |rec| self.record_update(rec, &f.writes));
         }
         if f.jobs.is_empty() {
-            log.skipped(FramePass::VtPages, Skip::NoVtPages);
+            log.skipped(VT_PAGES, Skip::NoVtPages);
         } else {
             let (n, sector) = (Some(f.jobs.len() as u64), r.sector_data.buffer());
-            pass(frame, log, FramePass::VtPages, n, |rec| self.record_pages(rec, f, r.terrain, sector, r.tree, m));
+            pass(frame, log, VT_PAGES, n, |rec| self.record_pages(rec, f, r.terrain, sector, r.tree, m));
         }
-        pass(frame, log, FramePass::VtFeedback, None, |rec| {
-            self.record_feedback(rec, f, r.view_buffer, r.targets, r.gbuffer)
-        });
+        pass(frame, log, VT_FEEDBACK, None, |rec| self.record_feedback(rec, f, r.view_buffer, r.targets, r.gbuffer));
     }
 }
 
@@ -144,20 +150,20 @@ impl FrameEffect for VirtualTexture {
     fn work(&self, pass: FramePass, cpu_work: Option<u64>, _: &FrameCounters, size: [u32; 2]) -> Option<Work> {
         let groups = |g: u64| PassWork { dispatch_groups: Some(g), ..PassWork::default() };
         let work = match pass {
-            FramePass::VtUpdate => PassWork { writes: cpu_work, ..groups(1) },
-            FramePass::VtPages => {
+            VT_UPDATE => PassWork { writes: cpu_work, ..groups(1) },
+            VT_PAGES => {
                 let pages = cpu_work.unwrap_or(0);
                 let [wx, wy, _] = crate::shaders::vt_pages::WORKGROUP_SIZE;
                 let side = u64::from(super::layout::PADDED_TILE);
                 let per_page = side.div_ceil(u64::from(wx)) * side.div_ceil(u64::from(wy));
                 PassWork { pages: Some(pages), ..groups(pages * per_page) }
             }
-            FramePass::VtFeedback => {
+            VT_FEEDBACK => {
                 let [wx, wy, _] = crate::shaders::vt_feedback::WORKGROUP_SIZE;
                 let cells = size.map(|s| s.div_ceil(crate::shaders::consts::VT_FEEDBACK_STRIDE));
                 groups(u64::from(cells[0].div_ceil(wx)) * u64::from(cells[1].div_ceil(wy)))
             }
-            FramePass::DecalMeshes => {
+            DECAL_MESHES => {
                 let m = self.decal_meshes.as_ref();
                 let (instances, triangles) = (m.map(|m| u64::from(m.meshes)), m.map(|m| m.triangles));
                 PassWork { instances, triangles, ..PassWork::default() }

@@ -7,11 +7,26 @@ use crate::effects::materials::kinds::CONTROL_MAP_MODE;
 use crate::effects::requested::Effects;
 use crate::error::Result;
 use crate::scene::effect::{Effect, MaterialsMode};
+use crate::scene::graph::{EffectPass, FramePoint};
 use crate::scene::params::{bad, number, whole};
 use std::path::Path;
 
 pub struct VirtualTextureKind;
 impl EffectKind for VirtualTextureKind {
+    fn passes(&self) -> &'static [EffectPass] {
+        const ON: &[Effect] = &[Effect::VirtualTexture];
+        &[
+            EffectPass {
+                point: FramePoint::AfterTerrainDraws,
+                pass: super::frame::DECAL_MESHES,
+                effects: &[Effect::Decals],
+            },
+            EffectPass { point: FramePoint::BeforeTiles, pass: super::frame::VT_UPDATE, effects: ON },
+            EffectPass { point: FramePoint::BeforeTiles, pass: super::frame::VT_PAGES, effects: ON },
+            EffectPass { point: FramePoint::BeforeTiles, pass: super::frame::VT_FEEDBACK, effects: ON },
+        ]
+    }
+
     fn build(&self, b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
         super::frame::build(b)
     }

@@ -116,10 +116,11 @@ fn view_buffers(ctx: &Context) -> Result<PerFrame<Buffer>> {
 
 /// The pass graph of these decisions and output.
 fn graph(decisions: &[EffectDecision], options: &RendererOptions) -> PassGraph {
-    let mut graph = PassGraph::new(decisions);
+    let effect_passes: Vec<_> = kinds().iter().flat_map(|k| k.passes().iter().copied()).collect();
+    let mut graph = PassGraph::new(decisions, &effect_passes);
     if options.output.gbuffer().is_some() {
-        graph.not_built(FramePass::LightingResolve, "output gbuffer: the engine lights the G-buffer".into());
-        graph.not_built(FramePass::DebugView, "output gbuffer: no colour target to draw a debug view over".into());
+        graph.not_built(FramePass::LIGHTING_RESOLVE, "output gbuffer: the engine lights the G-buffer".into());
+        graph.not_built(FramePass::DEBUG_VIEW, "output gbuffer: no colour target to draw a debug view over".into());
     }
     graph
 }

@@ -207,9 +207,9 @@ fn record_quadtree_update(
     if tree.has_work() || tree.previous_updates().is_some() {
         let writes =
             frame.pass(QuadtreeUpdatePass::NAME, false, QueueKind::Compute, |r| update.record(r, tree, visibility))?;
-        log.ran(FramePass::QuadtreeUpdate, Some(u64::from(writes)));
+        log.ran(FramePass::QUADTREE_UPDATE, Some(u64::from(writes)));
     } else {
-        log.skipped(FramePass::QuadtreeUpdate, Skip::NothingToUpload);
+        log.skipped(FramePass::QUADTREE_UPDATE, Skip::NothingToUpload);
     }
     Ok(())
 }
