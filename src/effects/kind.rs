@@ -1,6 +1,6 @@
 //! The scene side of an effect: its name, its parameters and when it can
 //! run. One [`EffectKind`] per [`Effect`], listed in the registry
-//! (`registry.rs`); the scene parser and the decisions read effects only
+//! (`KINDS` in `effects/mod.rs`); the scene parser and the decisions read effects only
 //! through it.
 
 use super::frame_effect::{BuildInputs, FrameEffect};

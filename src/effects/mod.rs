@@ -3,7 +3,7 @@
 //! traits: [`EffectKind`] (the scene side: parameters, and whether it can
 //! run in this scene and world) and [`FrameEffect`] (the built side: its
 //! passes at named points of the frame, its counters and memory). The
-//! [`registry`] lists them; each effect is on or off with its parameters,
+//! registry (`KINDS`, below) lists them; each effect is on or off with its parameters,
 //! the renderer builds pipelines, resources and passes only for effects
 //! that are on, and a world lacking an effect's data switches it off with
 //! a reason instead of paying for an idle path. Scene files name them in
