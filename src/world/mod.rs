@@ -65,8 +65,8 @@ pub use material_rules::MaterialRules;
 pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
 pub use payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 pub use plan::{
-    slot_capacity, Limits, PlanError, TimeBasis, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES, DEFAULT_MAX_SECTORS_PER_SIDE,
-    DEFAULT_SLOTS, NODE_BAKE_THREAD_SECONDS, RELOAD_SLOTS,
+    bytes as human_bytes, slot_capacity, Limits, PlanError, TimeBasis, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES,
+    DEFAULT_MAX_SECTORS_PER_SIDE, DEFAULT_SLOTS, NODE_BAKE_THREAD_SECONDS, RELOAD_SLOTS,
 };
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;

@@ -432,8 +432,8 @@ fn region_cells(world: &WorldDesc, lod: u8, region: Option<[f64; 4]>) -> [u64; 4
     [x0, y0, x1.max(x0), y1.max(y0)].map(u64::from)
 }
 
-/// Human byte count in binary units.
-pub(super) fn bytes(b: f64) -> String {
+/// Human byte count in binary units (`vista plan`, `vista bake`).
+pub fn bytes(b: f64) -> String {
     const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
     let mut v = b;
     let mut u = 0;

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context as _, Result};
 use clap::Args;
 use serde::Serialize;
+use vista::world::human_bytes as bytes;
 use vista::world::{
     bake_shard, bake_world, uncompressed_file_bytes, BakeStats, Limits, MemoryReport, NodeCache, PayloadFormat,
     PayloadSize, Progress, ShardManifest, ShardPlan, ShardSplit, WorldDesc, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES,
@@ -518,22 +519,6 @@ fn print_bake(out: &mut String, w: &LoadedWorld, r: &BakeReport) -> Result<()> {
         )?;
     }
     Ok(())
-}
-
-/// Human byte count in binary units.
-pub(crate) fn bytes(b: f64) -> String {
-    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = b;
-    let mut u = 0;
-    while v >= 1024.0 && u + 1 < UNITS.len() {
-        v /= 1024.0;
-        u += 1;
-    }
-    if u == 0 {
-        format!("{v:.0} B")
-    } else {
-        format!("{v:.2} {}", UNITS[u])
-    }
 }
 
 fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {

@@ -144,7 +144,7 @@ pub fn write_plans(out: &mut String, split: &ShardSplit, index: Option<u32>, pla
             s.units,
             s.nodes(),
             s.nodes_per_lod[0],
-            crate::bake::bytes(s.disk_bytes as f64),
+            vista::world::human_bytes(s.disk_bytes as f64),
             roots,
             hours(s.seconds())
         )?;
