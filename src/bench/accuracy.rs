@@ -263,9 +263,10 @@ pub fn bench_accuracy(
         out.references.push(info);
         let mut r = TerrainRenderer::new(ctx, world, source.clone(), Vec::new(), &geometry)?;
         for &target in &cfg.targets_px {
-            let (points, images) = run.culling_rows(&mut r, &view(target), &reference, name)?;
+            let keep = cfg.keep_images && target == cfg.shading_target_px;
+            let (points, images) = run.culling_rows(&mut r, &view(target), &reference, name, keep)?;
             out.points.extend(points);
-            out.images.extend(images.filter(|_| cfg.keep_images && target == cfg.shading_target_px));
+            out.images.extend(images);
         }
         if out.shading_skipped.is_none() {
             out.points.extend(run.shading_rows(&options, &view(cfg.shading_target_px), &reference, name)?);
@@ -337,14 +338,15 @@ fn skipped(effects: &Effects, fx: &Effects, cfg: &AccuracyBenchConfig) -> [Optio
 }
 
 impl Run<'_> {
-    /// One target's rows with every culling stage and with none, and the
-    /// view's images (culled frame and reference).
+    /// One target's rows with every culling stage and with none, and (when
+    /// `keep`) the view's images (culled frame and reference).
     fn culling_rows(
         &mut self,
         r: &mut TerrainRenderer,
         v: &View,
         reference: &ReferenceImage,
         name: &str,
+        keep: bool,
     ) -> Result<([AccuracyPoint; 2], Option<ViewImages>)> {
         let settled = self.settle(r, v)?;
         r.stages = CullStages::ALL;
@@ -353,13 +355,13 @@ impl Run<'_> {
         let (mut off_pt, off_img) = self.point(r, v, reference, name, "culling off", "no stage", settled)?;
         r.stages = CullStages::ALL;
         off_pt.differs_from_culled_px = Some(differing_pixels(&on_img, &off_img));
-        let images = ViewImages {
+        let images = keep.then(|| ViewImages {
             view: name.to_string(),
             size: self.cfg.size,
             reference: reference.rgba.clone(),
             frame: on_img.rgba.clone(),
-        };
-        Ok(([on, off_pt], Some(images)))
+        });
+        Ok(([on, off_pt], images))
     }
 
     pub(super) fn settle(&mut self, r: &mut TerrainRenderer, view: &View) -> Result<bool> {

@@ -17,6 +17,7 @@ use crate::scene::graph::{FrameLog, FramePass, Skip};
 use crate::scene::shading::{ShadeRules, Shading};
 use crate::scene::view::{TerrainViewGpu, View};
 use crate::terrain::quadtree::texture_extent;
+use crate::terrain::selection::TraverseParams;
 
 /// What the frame knew when it began.
 struct Begun<'c> {
@@ -25,6 +26,8 @@ struct Begun<'c> {
     ctx_frame: u64,
     /// The resident terrain changes this frame.
     terrain_changed: bool,
+    /// What the traversal selects for (the streaming's too).
+    params: TraverseParams,
 }
 
 impl TerrainRenderer {
@@ -44,7 +47,8 @@ impl TerrainRenderer {
         self.prepare_frame(ctx, view, targets)?;
         let ctx_frame = ctx.frame_recording();
         self.telemetry.harvest(ctx);
-        self.terrain.stream(&view.traverse_params())?;
+        let params = view.traverse_params();
+        self.terrain.stream(&params)?;
         let switched_off = self.switched_off();
         // The frame borrows the executor while the rest of the renderer
         // records into it.
@@ -54,7 +58,7 @@ impl TerrainRenderer {
         let mut frame = exec.begin(cmds, mode);
         let mut log = self.graph.begin_frame(frame.number());
         log.switched_off = switched_off;
-        let begun = Begun { ctx, ctx_frame, terrain_changed };
+        let begun = Begun { ctx, ctx_frame, terrain_changed, params };
         let recorded = self.record_phases(&mut frame, &mut log, &begun, view, targets);
         drop(frame);
         self.exec = Some(exec);
@@ -100,7 +104,7 @@ impl TerrainRenderer {
             e.plan(&plan, &shared)?;
         }
         self.prepare_resolve(ctx, log)?;
-        self.record_passes(frame, log, view, targets, &gpu, &shade);
+        self.record_passes(frame, log, &begun.params, targets, &gpu, &shade);
         self.record_counters(frame, number, ctx_frame);
         Ok(())
     }
@@ -133,7 +137,7 @@ impl TerrainRenderer {
         &self,
         frame: &mut Frame<'_, '_>,
         log: &mut FrameLog,
-        view: &View,
+        params: &TraverseParams,
         targets: &RenderTargets,
         gpu: &TerrainViewGpu,
         shade: &ShadeRules,
@@ -161,7 +165,7 @@ impl TerrainRenderer {
         let gbuffer = self.gbuffer.as_ref().expect("made by prepare_frame");
         let t = FrameTargets { tree, world: &self.terrain.world, targets, gbuffer };
         let visibility = self.occlusion.as_ref().map(|o| o.cull.visibility());
-        passes.record_lod(frame, log, tree, &view.traverse_params(), gpu, visibility);
+        passes.record_lod(frame, log, tree, params, gpu, visibility);
         passes.record_draws(frame, log, &t);
         passes.record_shading(frame, log, &t);
     }
