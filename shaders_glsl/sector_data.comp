@@ -1,5 +1,5 @@
 #version 460
-// Sector data: for every sector, 10 bits per LOD = the atlas slot of the
+// Sector data: for every sector, SLOT_BITS per LOD = the atlas slot of the
 // resident node covering it at that LOD (0 = none), every LOD a world can
 // have: LOD k in word k / SECTOR_LODS_PER_WORD of the sector's
 // SECTOR_DATA_WORDS. Any shader can then sample the terrain at the finest

@@ -104,7 +104,14 @@ fn payloads_land_in_the_atlas_layer_of_their_slot() {
 fn budget_over_the_slot_limit_is_an_error() {
     gpu_test(|ctx| {
         assert!(matches!(
-            GpuQuadtree::new(ctx, &small_world(), 1024, 1, AtlasSet::ALL, PayloadFormat::Bc),
+            GpuQuadtree::new(
+                ctx,
+                &small_world(),
+                vista::terrain::quadtree::MAX_SLOTS + 1,
+                1,
+                AtlasSet::ALL,
+                PayloadFormat::Bc
+            ),
             Err(vista::Error::BadInput(_))
         ));
     });

@@ -257,7 +257,7 @@ fn shared_constants_have_one_source() {
     }
     // Values the host relies on, derived independently of the table.
     use shaders::consts as k;
-    assert_eq!(k::MAX_SLOTS, (1 << k::SLOT_BITS) - 1, "slots fill the 10-bit fields");
+    assert_eq!(k::MAX_SLOTS, (1 << k::SLOT_BITS) - 1, "slots fill their fields");
     const { assert!(k::SHARED_LIST_CAPACITY > k::MAX_SLOTS, "a shared list holds every resident node") };
     assert_eq!(k::NODE_EMPTY, u32::from(u16::MAX), "R16 node texture");
     assert_eq!(

@@ -10,14 +10,16 @@
 #define NODE_INVALID 0xFFFEu
 // Slot 0 is never allocated: sector data uses 0 for "no node".
 #define FIRST_SLOT 1u
-// Slots are 10-bit in sector data and node descriptions.
-#define SLOT_BITS 10u
-#define MAX_SLOTS 1023u
-// Node description word 1: slot | lod << 10 | bias (4 bits, signed) << 14 | holes << 18.
-#define DESC_LOD_SHIFT 10u
-#define DESC_BIAS_SHIFT 14u
+// Slots are 11-bit in sector data, node descriptions and patch records:
+// every slot is an atlas layer, and 2048 layers is what Vulkan guarantees
+// (maxImageArrayLayers; lavapipe and NVIDIA allow no more).
+#define SLOT_BITS 11u
+#define MAX_SLOTS 2047u
+// Node description word 1: slot | lod << 11 | bias (4 bits, signed) << 15 | holes << 19.
+#define DESC_LOD_SHIFT 11u
+#define DESC_BIAS_SHIFT 15u
 #define DESC_BIAS_BITS 4u
-#define DESC_HOLES_SHIFT 18u
+#define DESC_HOLES_SHIFT 19u
 // Node description word 0 and the node texture hold 16-bit values.
 #define HALF_BITS 16u
 // Packed node reference: lod (4 bits) << 28 | y (14 bits) << 14 | x (14 bits).
@@ -38,13 +40,13 @@
 #define MAX_CAMERAS 2u
 // Entries of each shared-memory list of traverse.comp: every entry is a
 // distinct resident node, so the slot budget (<= MAX_SLOTS) bounds it.
-#define SHARED_LIST_CAPACITY 1024u
+#define SHARED_LIST_CAPACITY 2048u
 // `current_lod` of traverse_level's finalize dispatch.
 #define LEVEL_FINALIZE 0xFFu
-// Sector data holds the slot of every LOD (up to MAX_NODE_LODS), 3 per
-// u32 word at 10 bits each: ceil(MAX_NODE_LODS / 3) words per sector.
-#define SECTOR_LODS_PER_WORD 3u
-#define SECTOR_DATA_WORDS 4u
+// Sector data holds the slot of every LOD (up to MAX_NODE_LODS), 2 per
+// u32 word at SLOT_BITS each: ceil(MAX_NODE_LODS / 2) words per sector.
+#define SECTOR_LODS_PER_WORD 2u
+#define SECTOR_DATA_WORDS 5u
 // quadtree_update targets beside a node-texture mip.
 #define UPDATE_TARGET_DESC 0xFFu
 #define UPDATE_TARGET_ERROR 0xFEu
@@ -61,10 +63,10 @@
 #define PATCH_HOLE_NONE 0u
 #define PATCH_HOLE_SOME 1u
 #define PATCH_HOLE_ALL 2u
-// Patch record word 1: slot | patch index (8 bits) << 10 | 4 LOD deltas (3 bits each) << 18.
-#define PATCH_INDEX_SHIFT 10u
+// Patch record word 1: slot | patch index (8 bits) << 11 | 4 LOD deltas (3 bits each) << 19.
+#define PATCH_INDEX_SHIFT 11u
 #define PATCH_INDEX_MASK 0xFFu
-#define PATCH_DELTA_SHIFT 18u
+#define PATCH_DELTA_SHIFT 19u
 #define PATCH_DELTA_BITS 3u
 // Largest stitched LOD delta. Above log2(PATCH_QUADS) = 3 an edge snaps to
 // vertices beyond the patch's corners (terrain_vertex.glsl), so such a

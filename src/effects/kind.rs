@@ -65,6 +65,14 @@ pub trait EffectKind: Sync {
         Verdict::On
     }
 
+    /// GPU bytes it keeps for every resident node slot (a layer of its
+    /// own atlas per slot): a GPU budget pays for them beside the node
+    /// payloads.
+    fn slot_bytes(&self, fx: &Effects) -> u64 {
+        let _ = fx;
+        0
+    }
+
     /// The passes it records, each at its point of the frame (the pass
     /// graph's entries: a pass of an effect that is off is not built).
     fn passes(&self) -> &'static [EffectPass] {

@@ -29,6 +29,8 @@ pub struct Limits {
     pub max_push_constants_bytes: u32,
     pub max_image_dimension_2d: u32,
     pub max_image_array_layers: u32,
+    /// Size of the largest device-local memory heap.
+    pub device_local_bytes: u64,
     pub timestamps_supported: bool,
     pub timestamp_period_ns: f32,
 }
@@ -110,6 +112,15 @@ pub(crate) fn query(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
         .ok_or_else(|| format!("{name}: no queue family with graphics and compute"))?;
     let compute = queue_families.iter().find(|f| f.compute && !f.graphics);
     let l = &p.limits;
+    // SAFETY: valid physical device of this instance.
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let device_local_bytes = memory
+        .memory_heaps_as_slice()
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
     Ok(DeviceInfo {
         device_type: format!("{:?}", p.device_type),
         driver_name: cstr(&v12.driver_name),
@@ -132,6 +143,7 @@ pub(crate) fn query(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
             max_push_constants_bytes: l.max_push_constants_size,
             max_image_dimension_2d: l.max_image_dimension2_d,
             max_image_array_layers: l.max_image_array_layers,
+            device_local_bytes,
             timestamps_supported: l.timestamp_compute_and_graphics == vk::TRUE && graphics.timestamp_valid_bits > 0,
             timestamp_period_ns: l.timestamp_period,
         },

@@ -1,5 +1,5 @@
 //! `sector_data`: per sector, the atlas slot of the resident node covering it
-//! at each LOD (10 bits each, 0 = none; every LOD a world can have), rebuilt
+//! at each LOD (SLOT_BITS each, 0 = none; every LOD a world can have), rebuilt
 //! from the node texture, so any shader can sample the terrain through
 //! terrain_sample.glsl.
 

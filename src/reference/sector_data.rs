@@ -9,8 +9,8 @@ use crate::world::{texel_index, WorldDesc, NODE_QUADS};
 /// One sector's words of sector data.
 pub type SectorWords = [u32; SECTOR_DATA_WORDS as usize];
 
-/// Sector data: per sector of the padded extent, 10 bits per LOD (LOD k in
-/// word k / 3) = the slot of the resident node covering it.
+/// Sector data: per sector of the padded extent, SLOT_BITS per LOD (LOD k in
+/// word k / SECTOR_LODS_PER_WORD) = the slot of the resident node covering it.
 pub fn sector_data_cpu(tree: &QuadtreeShadow, world: &WorldDesc) -> Vec<SectorWords> {
     let [w, h] = tree.extent();
     let lods = world.lod_count as u8;

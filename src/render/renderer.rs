@@ -251,6 +251,25 @@ pub fn memory_for(
     crate::terrain::mask_memory(report, atlases_for(&decisions, effects.materials))
 }
 
+/// GPU bytes one resident node slot costs a renderer of `effects` over this
+/// world: its payload atlases ([`memory_for`]) and the layer each effect
+/// keeps per slot. What a GPU budget in MiB is divided by.
+pub fn slot_bytes(
+    format: crate::world::PayloadFormat,
+    effects: &Effects,
+    world: &WorldDesc,
+    holes: &[Hole],
+    source_holes: bool,
+) -> u64 {
+    let decisions = decide(effects, &world_content(world, holes, source_holes, 0, 0), false);
+    let effect_layers: u64 = decisions
+        .iter()
+        .filter(|d| d.on)
+        .map(|d| crate::effects::registry::kind_of(d.effect).slot_bytes(effects))
+        .sum();
+    memory_for(1, format, effects, world, holes, source_holes).gpu_total() as u64 + effect_layers
+}
+
 /// `source_holes`: the height source has holes of its own (a DEM's no-data
 /// samples).
 fn world_content(world: &WorldDesc, holes: &[Hole], source_holes: bool, decals: usize, assets: usize) -> WorldContent {

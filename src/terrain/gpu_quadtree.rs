@@ -199,7 +199,7 @@ impl GpuQuadtree {
         format: PayloadFormat,
     ) -> Result<Self> {
         if !(1..=MAX_SLOTS).contains(&slots) {
-            return Err(Error::BadInput(format!("slot budget {slots} outside 1..={MAX_SLOTS} (slots are 10-bit)")));
+            return Err(Error::BadInput(format!("slot budget {slots} outside 1..={MAX_SLOTS} (slots are 11-bit)")));
         }
         let extent = texture_extent(world);
         // Before the CPU shadow, which is as large as the texture.

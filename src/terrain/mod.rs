@@ -28,7 +28,7 @@ use std::sync::Arc;
 
 #[derive(Debug, Clone)]
 pub struct TerrainOptions {
-    /// Resident node slots (Far Cry 5: ~500); at most 1023.
+    /// Resident node slots (Far Cry 5: ~500); at most 2047.
     pub slots: u32,
     pub frames_in_flight: usize,
     /// Threads loading (baking) nodes; 0 loads each requested node at once
@@ -95,6 +95,29 @@ impl Default for TerrainOptions {
     }
 }
 
+/// Most resident slots a device holds: every slot (and the reload spares
+/// beside them, and the reserved slot 0) is a layer of each node atlas,
+/// and the slot fields are `SLOT_BITS` wide.
+pub fn max_slots(device: &crate::gpu::Limits) -> u32 {
+    let layers = device.max_image_array_layers.saturating_sub(1 + crate::world::RELOAD_SLOTS);
+    quadtree::MAX_SLOTS.min(layers)
+}
+
+/// The GPU budget a renderer is given when its user names none: a quarter
+/// of the device's local memory, and no more than the most slots the
+/// device holds need (on any device with 2 GiB or more, the most slots).
+pub fn default_gpu_budget(device: &crate::gpu::Limits, slot_bytes: u64) -> u64 {
+    (device.device_local_bytes / 4).min(u64::from(max_slots(device)) * slot_bytes)
+}
+
+/// Resident slots a GPU budget of `budget_bytes` holds at `slot_bytes`
+/// each (see [`crate::render::slot_bytes`]), at most [`max_slots`].
+pub fn slots_for_budget(budget_bytes: u64, slot_bytes: u64, device: &crate::gpu::Limits) -> u32 {
+    assert!(slot_bytes > 0, "a slot costs something");
+    let fit = (budget_bytes / slot_bytes).min(u64::from(u32::MAX)) as u32;
+    fit.min(max_slots(device))
+}
+
 /// Refuses a world over `options.limits` or the device's limits, before
 /// the quadtree's shadow and texture (sized by the world) are allocated.
 pub fn check_plan(ctx: &Context, world: &WorldDesc, options: &TerrainOptions) -> Result<()> {
@@ -137,6 +160,8 @@ pub struct Terrain {
     pub tree: GpuQuadtree,
     stats: TerrainStats,
     ring_prefetch: bool,
+    /// The residency budget (`TerrainOptions::slots`).
+    slots: u32,
     paused: bool,
     /// A root given up: every later frame reports it.
     root_failure: Option<(NodeId, u32, String)>,
@@ -194,6 +219,7 @@ impl Terrain {
             tree,
             stats: TerrainStats::default(),
             ring_prefetch: options.ring_prefetch,
+            slots: options.slots,
             paused: false,
             root_failure: None,
         })
@@ -313,6 +339,11 @@ impl Terrain {
 
     /// Streaming counters; `waiting_upload` is what `quadtree_update` has
     /// not uploaded yet.
+    /// The residency budget: nodes that may be resident at once.
+    pub fn slots(&self) -> u32 {
+        self.slots
+    }
+
     pub fn stats(&self) -> TerrainStats {
         TerrainStats { waiting_upload: self.tree.waiting(), ..self.stats.clone() }
     }
@@ -407,4 +438,47 @@ pub fn mask_memory(mut report: MemoryReport, set: AtlasSet) -> MemoryReport {
         }
     }
     report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn device(layers: u32, local_mib: u64) -> crate::gpu::Limits {
+        crate::gpu::Limits {
+            max_compute_shared_memory_bytes: 32768,
+            max_compute_workgroup_invocations: 1024,
+            max_compute_workgroup_size: [1024; 3],
+            max_compute_workgroup_count: [65535; 3],
+            subgroup_size: 8,
+            max_push_constants_bytes: 128,
+            max_image_dimension_2d: 16384,
+            max_image_array_layers: layers,
+            device_local_bytes: local_mib << 20,
+            timestamps_supported: true,
+            timestamp_period_ns: 1.0,
+        }
+    }
+
+    #[test]
+    fn a_budget_buys_whole_slots_up_to_the_atlas_layers() {
+        // 2048 layers: slot 0 and 8 reload spares leave 2039 for the budget.
+        let d = device(2048, 8192);
+        assert_eq!(max_slots(&d), 2039);
+        assert_eq!(slots_for_budget(10 << 20, 64 << 10, &d), 160);
+        assert_eq!(slots_for_budget((10 << 20) - 1, 64 << 10, &d), 159);
+        assert_eq!(slots_for_budget(1 << 40, 64 << 10, &d), 2039);
+        // The slot fields cap a device with more layers.
+        assert_eq!(max_slots(&device(1 << 16, 8192)), quadtree::MAX_SLOTS);
+    }
+
+    #[test]
+    fn the_default_budget_is_a_quarter_of_local_memory_at_most_what_the_slots_need() {
+        let d = device(2048, 8192);
+        assert_eq!(default_gpu_budget(&d, 64 << 10), 2039 * (64 << 10));
+        // 256 MiB of local memory: 64 MiB, 1024 slots of 64 KiB.
+        let small = device(2048, 256);
+        assert_eq!(default_gpu_budget(&small, 64 << 10), 64 << 20);
+        assert_eq!(slots_for_budget(default_gpu_budget(&small, 64 << 10), 64 << 10, &small), 1024);
+    }
 }

@@ -14,7 +14,7 @@ pub const EMPTY: u16 = k::NODE_EMPTY as u16;
 pub const INVALID: u16 = k::NODE_INVALID as u16;
 /// Slot 0 is never allocated: sector data uses 0 for "no node".
 pub const FIRST_SLOT: u32 = k::FIRST_SLOT;
-/// Slots are 10-bit in sector data, so at most 1023 resident nodes.
+/// Slots are 11-bit in sector data, so at most 2047 resident nodes.
 pub const MAX_SLOTS: u32 = k::MAX_SLOTS;
 /// `QuadtreeUpdate::target` of a description write (else: the mip to write).
 pub const TARGET_DESC: u32 = k::UPDATE_TARGET_DESC;
@@ -73,8 +73,8 @@ impl NodeDesc {
         }
     }
 
-    /// word0 = min | max << 16; word1 = slot (10 bits) | lod (4) << 10 |
-    /// bias (4, two's complement) << 14 | flags << 18 (bit 18: has holes).
+    /// word0 = min | max << 16; word1 = slot (11 bits) | lod (4) << 11 |
+    /// bias (4, two's complement) << 15 | flags << 19 (bit 19: has holes).
     pub fn pack(&self, slot: u32) -> [u32; 2] {
         assert!(slot <= MAX_SLOTS && self.lod < 16 && (-8..=7).contains(&self.lod_bias));
         let bias = (self.lod_bias as u32) & 0xF;
@@ -319,10 +319,11 @@ mod tests {
         };
         let [w0, w1] = d.pack(1000);
         assert_eq!(w0, 0xABCD_1234);
-        assert_eq!(w1 & 0x3FF, 1000);
-        assert_eq!((w1 >> 10) & 0xF, 5);
-        assert_eq!((((w1 >> 14) & 0xF) as i8) << 4 >> 4, -2);
-        assert_eq!((w1 >> 18) & 1, 1);
+        // slot (11 bits) | lod << 11 | bias << 15 | holes << 19.
+        assert_eq!(w1 & 0x7FF, 1000);
+        assert_eq!((w1 >> 11) & 0xF, 5);
+        assert_eq!((((w1 >> 15) & 0xF) as i8) << 4 >> 4, -2);
+        assert_eq!((w1 >> 19) & 1, 1);
     }
 
     fn small_tree(slots: u32) -> (QuadtreeShadow, Vec<NodeId>) {

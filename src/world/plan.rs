@@ -37,11 +37,11 @@ pub const DEFAULT_SLOTS: u32 = 512;
 /// Slots the GPU keeps beyond the residency budget: a reloaded node (an
 /// edited source) moves to a fresh slot while frames in flight still read
 /// its old one, so a full budget does not stall the reload (fewer where
-/// the budget is near the 10-bit limit: [`slot_capacity`]).
+/// the budget is near the 11-bit limit: [`slot_capacity`]).
 pub const RELOAD_SLOTS: u32 = 8;
 
 /// Node slots the GPU resources hold for a residency budget of `slots`
-/// (a budget over the 10-bit limit is left as it is, for the plan to
+/// (a budget over the 11-bit limit is left as it is, for the plan to
 /// refuse).
 pub fn slot_capacity(slots: u32) -> u32 {
     let max = crate::shaders::consts::MAX_SLOTS;

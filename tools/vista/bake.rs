@@ -84,7 +84,7 @@ pub struct MemoryArgs {
     #[command(flatten)]
     pub world: WorldArgs,
     /// Resident node slots to account for: what `vista render --slots` takes
-    /// for this world (at most 1023: slots are 10-bit).
+    /// for this world (at most 2047: slots are 11-bit).
     #[arg(long, default_value_t = REPORT_SLOTS as u32, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub slots: u32,
     /// Also write the figures as JSON to this file (`cpu_bytes_per_node`,

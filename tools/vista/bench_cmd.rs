@@ -35,8 +35,8 @@ pub struct BenchArgs {
     /// Write the table as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// `bench traverse`: resident-set sizes (nodes; at most 1023: slots are
-    /// 10-bit) [default: 64,256,512,1000].
+    /// `bench traverse`: resident-set sizes (nodes; at most 2047: slots are
+    /// 11-bit) [default: 64,256,512,1000].
     #[arg(long, value_delimiter = ',', value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     sets: Option<Vec<u32>>,
     /// `bench traverse` and `bench accuracy`: target projected errors in
@@ -64,7 +64,7 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     shadow_steps: Option<Vec<u32>>,
     /// `bench accuracy`: resident node slots of the renderers (at most
-    /// 1023) [default: the renderer's default].
+    /// 2047) [default: the renderer's default].
     #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     slots: Option<u32>,
     /// Measured frames per row (after warm-up); the median is reported
@@ -227,8 +227,9 @@ fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {
     let frames = args.frames.unwrap_or(15);
     let targets = args.targets.clone().unwrap_or(vec![0.5, 1.0, 2.0, 4.0, 8.0]);
     let sets = args.sets.clone().unwrap_or(vec![64, 256, 512, 1000]);
-    if let Some(n) = sets.iter().find(|&&n| n == 0 || n > 1023) {
-        input_error(format!("--sets {n}: a resident set is 1 to 1023 nodes (slots are 10-bit)"))?;
+    let max = vista::terrain::quadtree::MAX_SLOTS;
+    if let Some(n) = sets.iter().find(|&&n| n == 0 || n > max) {
+        input_error(format!("--sets {n}: a resident set is 1 to {max} nodes (slots are atlas layers)"))?;
     }
     if let Some(t) = targets.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
         input_error(format!("--targets {t}: a target error is a positive number of pixels"))?;

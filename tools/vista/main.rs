@@ -9,6 +9,7 @@ mod bench_cmd;
 mod bench_cull_cmd;
 mod bench_effects_cmd;
 mod bench_shade_cmd;
+mod budget;
 mod golden_cmd;
 mod heightmap_files;
 mod numbers;
@@ -156,7 +157,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => {
             // A bad world or view fails before the (slow) Vulkan start.
             let world = args.world.load()?;
-            world_args::check_slots(args.viewpoint.slots, &world.desc)?;
+            budget::check(&args.viewpoint, &world)?;
             let view = render_cmd::view_of(&args, &world).map_err(|e| InputError(format!("{e:#}")))?;
             render_cmd::check_paths(&args)?;
             with_gpu(&options, |ctx| render_cmd::render(ctx, &world, &view, &args))

@@ -100,9 +100,16 @@ pub struct ViewpointArgs {
     /// Culling stages to run: any of frustum,cone,hole,occlusion, or none.
     #[arg(long, default_value = "frustum,cone,hole,occlusion", value_parser = parse_stages)]
     pub cull: CullStages,
-    /// Resident node slots (at most 1023: slots are 10-bit).
-    #[arg(long, default_value_t = 512, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
-    pub slots: u32,
+    /// GPU memory for resident nodes, MiB: their payload atlases and each
+    /// effect's layer per node. Sets how many nodes stay resident (the
+    /// `stream:` line prints it) [default: a quarter of the device's local
+    /// memory, at most what its most slots need].
+    #[arg(long, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
+    pub gpu_budget: Option<f64>,
+    /// Resident node slots instead of a budget (at most 2047: slots are
+    /// 11-bit).
+    #[arg(long, conflicts_with = "gpu_budget", value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
+    pub slots: Option<u32>,
 }
 
 impl ViewpointArgs {
@@ -117,16 +124,18 @@ impl ViewpointArgs {
         }
     }
 
-    /// The renderer these options and the world ask for.
+    /// The renderer these options and the world ask for on this device.
     pub fn renderer_options(
         &self,
+        ctx: &Context,
         world: &LoadedWorld,
         cache: Option<&Path>,
         errors: std::sync::Arc<vista::world::ErrorTree>,
-    ) -> RendererOptions {
-        RendererOptions {
+    ) -> Result<RendererOptions> {
+        let budget = crate::budget::NodeBudget::of(self, world, &ctx.info().limits)?;
+        Ok(RendererOptions {
             terrain: TerrainOptions {
-                slots: self.slots,
+                slots: budget.slots,
                 cache_dir: cache.map(Path::to_path_buf),
                 errors: Some(errors),
                 bake: world.bake.clone(),
@@ -139,7 +148,7 @@ impl ViewpointArgs {
             decals: world.decals.clone(),
             assets: world.assets.clone(),
             ..RendererOptions::default()
-        }
+        })
     }
 }
 
@@ -412,7 +421,8 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let warmup_timed = frames.iter().take_while(|f| f.frame < first + warmup as u64).count();
     let timed = &frames[warmup_timed..];
     print_device_and_world(ctx, world, view, args, timed.len(), warmup);
-    print_stream_and_queues(ctx, &renderer, args, &settle, timed);
+    let budget = crate::budget::NodeBudget::of(&args.viewpoint, world, &ctx.info().limits)?;
+    print_stream_and_queues(ctx, &renderer, args, (&settle, &budget), timed);
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
     let built = built_stages(args, &renderer);
     if let Some(m) = args.fly {
@@ -449,7 +459,7 @@ fn renderer_and_target(
     args: &RenderArgs,
 ) -> Result<(TerrainRenderer, Offscreen)> {
     let errors = world.errors(ctx, args.cache.as_deref())?;
-    let mut options = args.viewpoint.renderer_options(world, args.cache.as_deref(), errors);
+    let mut options = args.viewpoint.renderer_options(ctx, world, args.cache.as_deref(), errors)?;
     options.output = args.output.clone();
     let d = &world.desc;
     let renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
@@ -510,14 +520,15 @@ fn print_stream_and_queues(
     ctx: &Context,
     renderer: &TerrainRenderer,
     args: &RenderArgs,
-    settle: &Settle,
+    (settle, budget): (&Settle, &crate::budget::NodeBudget),
     timed: &[FrameTimings],
 ) {
     let st = renderer.terrain.stats();
     println!(
-        "stream: {} resident of {} slots, {} loading, {} waiting upload, {} failed loads ({} retried, {} nodes given up); {} after {} frames, {:.2} s (lazy bake)",
+        "stream: {} resident of {} slots ({}), {} loading, {} waiting upload, {} failed loads ({} retried, {} nodes given up); {} after {} frames, {:.2} s (lazy bake)",
         st.resident,
-        args.viewpoint.slots,
+        renderer.terrain.slots(),
+        budget.describe(),
         st.loading,
         st.waiting_upload,
         st.failed,

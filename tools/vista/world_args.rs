@@ -98,7 +98,7 @@ pub struct LoadedWorld {
 }
 
 /// Refuses a slot budget the renderer cannot use for `world`, in the
-/// option's terms and before any GPU work: slots are 10-bit (at most
+/// option's terms and before any GPU work: slots are 11-bit (at most
 /// `MAX_SLOTS`), and the roots, always resident, may hold at most a quarter
 /// of them (the plan's rule).
 pub fn check_slots(slots: u32, world: &WorldDesc) -> Result<()> {
@@ -108,7 +108,7 @@ pub fn check_slots(slots: u32, world: &WorldDesc) -> Result<()> {
     let min = (4 * roots).max(1);
     if !(min..=u64::from(max)).contains(&u64::from(slots)) {
         let why = if u64::from(slots) > u64::from(max) {
-            "slots are 10-bit".to_string()
+            format!("slots are {}-bit", vista::shaders::consts::SLOT_BITS)
         } else {
             format!("the world's {x} x {y} root nodes stay resident and may hold at most a quarter of them")
         };

@@ -25,6 +25,10 @@ impl EffectKind for ShadowsKind {
         Effect::Shadows
     }
 
+    fn slot_bytes(&self, fx: &Effects) -> u64 {
+        super::sun_shadows::layer_bytes(fx.shadows.resolution)
+    }
+
     fn parameters(&self) -> &'static [&'static str] {
         &["resolution", "steps", "update_budget", "softness_deg", "reach_m"]
     }

@@ -112,6 +112,11 @@ pub struct SunShadows {
     pub params: ShadowParams,
 }
 
+/// Bytes of one slot's layer of the shadow atlas (R32G32_SFLOAT).
+pub fn layer_bytes(resolution: u32) -> u64 {
+    u64::from(resolution).pow(2) * 8
+}
+
 impl SunShadows {
     pub const NAME: &'static str = sh::PASS;
 

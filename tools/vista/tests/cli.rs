@@ -315,15 +315,53 @@ fn vista_without_vulkan_fails_at_vulkan() {
 }
 
 #[test]
+fn gpu_budgets_that_cannot_hold_the_roots_are_refused_before_vulkan() {
+    // The default world keeps 64 KiB a node on the GPU (its payload table):
+    // 5 MiB hold 80 nodes, fewer than its 100 minimum.
+    for (budget, says) in [
+        ("0", "a budget is a positive number of MiB"),
+        ("nan", "a budget is a positive number of MiB"),
+        ("-3", "a budget is a positive number of MiB"),
+        ("5", "--gpu-budget 5 MiB holds 80 nodes of 64 KiB each: use 100 to 2047"),
+    ] {
+        let (code, stdout, err) =
+            vista_without_vulkan(&["render", "--gpu-budget", budget, "--size", "8x8", "--frames", "1"]);
+        assert_eq!(code, Some(2), "--gpu-budget {budget}: {err}");
+        assert!(stdout.is_empty(), "{stdout}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(says), "{says:?} missing from: {err}");
+    }
+    let (code, _, err) = vista_without_vulkan(&["render", "--gpu-budget", "64", "--slots", "200"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--slots") && err.contains("--gpu-budget"), "{err}");
+}
+
+#[test]
+fn a_gpu_budget_buys_its_size_over_a_node_s_bytes_in_slots() {
+    let (ok, out, err) = vista(&["--validation", "render", "--gpu-budget", "10", "--size", "64x48", "--frames", "1"]);
+    assert!(ok, "{err}");
+    // The payload table's total row: "total for N nodes  CPU B/node  GPU B/node ...".
+    let total = out.lines().find(|l| l.starts_with("total for")).unwrap_or_else(|| panic!("no payload total:\n{out}"));
+    let gpu_per_node: u64 = total.split_whitespace().nth(5).and_then(|v| v.parse().ok()).expect("GPU B/node");
+    let slots = (10 << 20) / gpu_per_node;
+    let stream = out.lines().find(|l| l.starts_with("stream:")).expect("stream line");
+    let expected = format!(
+        "of {slots} slots (GPU budget 10.0 MiB (--gpu-budget), {:.0} KiB a node)",
+        gpu_per_node as f64 / 1024.0
+    );
+    assert!(stream.contains(&expected), "{expected:?} missing from: {stream}");
+}
+
+#[test]
 fn slot_budgets_the_renderer_cannot_use_are_refused_before_vulkan() {
     // The default world: 5 x 5 roots of 2 048 m, which may hold at most a
-    // quarter of the slots: 100 to 1023 (slots are 10-bit).
-    for (slots, why) in [("0", "root nodes"), ("1", "root nodes"), ("99", "root nodes"), ("1024", "10-bit")] {
+    // quarter of the slots: 100 to 2047 (slots are 11-bit).
+    for (slots, why) in [("0", "root nodes"), ("1", "root nodes"), ("99", "root nodes"), ("2048", "11-bit")] {
         let (code, stdout, err) = vista_without_vulkan(&["render", "--slots", slots, "--size", "8x8", "--frames", "1"]);
         assert_eq!(code, Some(2), "--slots {slots}: {err}");
         assert!(stdout.is_empty(), "{stdout}");
         assert_eq!(err.trim().lines().count(), 1, "{err}");
-        for n in [&format!("--slots {slots}"), "use 100 to 1023", why] {
+        for n in [&format!("--slots {slots}"), "use 100 to 2047", why] {
             assert!(err.contains(n), "{n:?} missing from: {err}");
         }
     }

@@ -197,10 +197,10 @@ fn each_limit_is_refused_before_allocating() {
         .unwrap_or_else(|| panic!("no layer count in:\n{}", info.out));
     let slots = layers.to_string();
     let args = ["render", "--slots", &slots, "--size", "64x48", "--frames", "1"];
-    if layers > 1023 {
-        // Slots are 10-bit: refused before the device is asked (lavapipe
+    if layers > 2047 {
+        // Slots are 11-bit: refused before the device is asked (lavapipe
         // allows 2048 layers).
-        assert_refused(&args, &[&format!("--slots {layers}: use 100 to 1023"), "10-bit"]);
+        assert_refused(&args, &[&format!("--slots {layers}: use 100 to 2047"), "11-bit"]);
     } else {
         assert_refused(&args, &[&format!("{layers} resident slots need {} atlas layers", layers + 1), "--slots"]);
     }

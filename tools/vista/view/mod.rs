@@ -102,7 +102,7 @@ pub fn check(args: &ViewArgs) -> Result<(LoadedWorld, Option<FlightPath>)> {
     }
     let path = args.path.as_deref().map(FlightPath::load).transpose()?;
     let world = args.world.load()?;
-    crate::world_args::check_slots(args.viewpoint.slots, &world.desc)?;
+    crate::budget::check(&args.viewpoint, &world)?;
     Ok((world, path))
 }
 
@@ -219,7 +219,7 @@ impl App {
         let options = ContextOptions { display: Some(display), ..self.options.clone() };
         let ctx = Context::headless(&options).context("creating the Vulkan context")?;
         let errors = self.world.errors(&ctx, self.args.cache.as_deref())?;
-        let ropts = self.args.viewpoint.renderer_options(&self.world, self.args.cache.as_deref(), errors);
+        let ropts = self.args.viewpoint.renderer_options(&ctx, &self.world, self.args.cache.as_deref(), errors)?;
         let d = &self.world.desc;
         let renderer = TerrainRenderer::new(&ctx, d, self.world.source.clone(), self.world.holes.clone(), &ropts)
             .map_err(crate::world_args::plan_error_is_input)?;
@@ -403,7 +403,7 @@ impl App {
             camera: self.fly.camera.to_string(),
             speed_mps: self.fly.speed_mps,
             size: self.view.size,
-            slots: self.args.viewpoint.slots,
+            slots: open.viewer.renderer.terrain.slots(),
         };
         let shown = viewer::shown(&open.viewer, f);
         let (overlay, settings) = (&mut self.overlay, &mut self.settings);
