@@ -41,6 +41,11 @@ pub struct Floors {
     /// Choosing it per patch, as vista does (PATCH_QUADS x PATCH_QUADS
     /// quads of one level, drawn whole): what the patch size costs.
     pub patches: f64,
+    /// Not a floor: what the per-triangle rule (a restricted bintree with
+    /// saturated errors, [`super::accuracy_rule`]) is expected to draw,
+    /// counted the same way; None where the world's finest lattice is too
+    /// large to bound on the CPU here.
+    pub rule: Option<super::accuracy_rule::RuleFigure>,
 }
 
 /// A unit of one level's grid: level, cell, and for a triangle which half
@@ -86,9 +91,9 @@ impl Unit {
 
 /// A visible pixel: its ground footprint (m^2; `None` next to a depth
 /// edge), its hit, and its projected error (px) at each level.
-struct Seen {
-    area: Option<f64>,
-    p: DVec3,
+pub(super) struct Seen {
+    pub(super) area: Option<f64>,
+    pub(super) p: DVec3,
     errors: Vec<f64>,
 }
 
@@ -113,7 +118,21 @@ pub fn grid_floors(reference: &ReferenceImage, view: &View, world: &WorldDesc, s
     let limit = 2.0 * f64::from(view.target_error_px);
     let pixels = f64::from(w) * f64::from(h);
     let floor = |unit| need(&seen, world, &levels, unit, limit) / pixels;
-    Floors { triangles: floor(Unit::Triangle), patches: floor(Unit::Patch) }
+    let rule = super::accuracy_rule::rule_triangles(&seen, view, world, source)
+        .map(|r| super::accuracy_rule::RuleFigure { per_pixel: r.per_pixel / pixels, ..r });
+    Floors { triangles: floor(Unit::Triangle), patches: floor(Unit::Patch), rule }
+}
+
+/// Triangles a unit of `unit_m2` holding `points` visible points whose
+/// footprints add up to `seen_m2` stands for: once when it is larger than
+/// their footprints (attributed whole to the unit their centre is in, they
+/// would count it more than its visible area), else its seen share.
+pub(super) fn units_for(unit_m2: f64, points: u32, seen_m2: f64) -> f64 {
+    if unit_m2 * f64::from(points) >= seen_m2 {
+        1.0
+    } else {
+        seen_m2 / unit_m2
+    }
 }
 
 /// Triangles needed to draw `seen` in units whose visible points are all
@@ -151,12 +170,7 @@ fn need(seen: &[Seen], world: &WorldDesc, levels: &[i32], unit: Unit, limit: f64
         .iter()
         .map(|(&(level, ..), &(seen_m2, points))| {
             let side = world.spacing_m * 2f64.powi(level);
-            let unit_m2 = area * side * side;
-            // A unit larger than its points' footprints is counted once; the
-            // footprints, attributed whole to the unit their centre is in,
-            // would count it more than its visible area.
-            let units = if unit_m2 * f64::from(points) >= seen_m2 { 1.0 } else { seen_m2 / unit_m2 };
-            triangles * units
+            triangles * units_for(area * side * side, points, seen_m2)
         })
         .sum()
 }
@@ -291,6 +305,27 @@ mod tests {
         assert_eq!(floors.triangles * pixels, 8.0, "{floors:?}");
         const { assert!(PATCH_QUADS * 512 >= 4096, "the comment's patch size") };
         assert_eq!(floors.patches * pixels, f64::from(2 * PATCH_QUADS * PATCH_QUADS), "{floors:?}");
+    }
+
+    #[test]
+    fn the_rule_draws_more_the_finer_the_target_and_fewer_than_whole_patches() {
+        // 512 m of the rough hills at 1 m samples, 3 LODs: a finest lattice
+        // the rule is computed for.
+        let w = WorldDesc { extent_m: [512.0, 512.0], lod_count: 3, ..world() };
+        let cam = Camera { position_m: [256.0, -20.0, 160.0], yaw_deg: 5.0, pitch_deg: -30.0 };
+        let floors: Vec<Floors> = [8.0, 4.0, 2.0, 1.0]
+            .iter()
+            .map(|&t| {
+                let v = View { size: [256, 192], ..view(cam, t) };
+                grid_floors(&reference(&Hills, &w, &v), &v, &w, &Hills)
+            })
+            .collect();
+        let rule: Vec<f64> =
+            floors.iter().map(|f| f.rule.expect("a small world has the rule's figure").per_pixel).collect();
+        assert!(rule.windows(2).all(|r| r[1] >= r[0]), "{floors:?}");
+        // Measured: 0.036 to 0.34 tri/px; the fewest any choice of whole
+        // patches could draw is 0.49 at every target.
+        assert!(floors.iter().all(|f| f.rule.unwrap().per_pixel < f.patches), "{floors:?}");
     }
 
     #[test]

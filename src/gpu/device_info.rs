@@ -67,6 +67,14 @@ pub(crate) fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
     }
 }
 
+/// Size of `pd`'s largest device-local heap.
+fn device_local_bytes(instance: &ash::Instance, pd: vk::PhysicalDevice) -> u64 {
+    // SAFETY: valid physical device of this instance.
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let local = memory.memory_heaps_as_slice().iter().filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL));
+    local.map(|h| h.size).max().unwrap_or(0)
+}
+
 /// Queries everything about `pd`; `Err(reason)` names what is missing.
 pub(crate) fn query(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<DeviceInfo, String> {
     let mut v11 = vk::PhysicalDeviceVulkan11Properties::default();
@@ -112,15 +120,7 @@ pub(crate) fn query(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
         .ok_or_else(|| format!("{name}: no queue family with graphics and compute"))?;
     let compute = queue_families.iter().find(|f| f.compute && !f.graphics);
     let l = &p.limits;
-    // SAFETY: valid physical device of this instance.
-    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
-    let device_local_bytes = memory
-        .memory_heaps_as_slice()
-        .iter()
-        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
-        .map(|h| h.size)
-        .max()
-        .unwrap_or(0);
+    let device_local_bytes = device_local_bytes(instance, pd);
     Ok(DeviceInfo {
         device_type: format!("{:?}", p.device_type),
         driver_name: cstr(&v12.driver_name),

@@ -21,6 +21,15 @@ fn catmull_rom(t: f64) -> [f64; 4] {
     [0.5 * (-t3 + 2.0 * t2 - t), 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0), 0.5 * (-3.0 * t3 + 4.0 * t2 + t), 0.5 * (t3 - t2)]
 }
 
+/// LOD-0 sample (i, j) of `world` as the bake stores it: its position
+/// clamped to the extent, rounded to R16.
+pub fn stored_post(world: &WorldDesc, source: &dyn HeightSource, i: i64, j: i64) -> f64 {
+    let [x, y] = world.sample_pos(i, j);
+    let [ex, ey] = world.extent_m;
+    let v = source.sample(x.clamp(0.0, ex), y.clamp(0.0, ey));
+    f64::from(world.decode_height(world.encode_height(v)))
+}
+
 /// [`HeightSource`] of the finest surface of `world` sampled from `source`.
 pub struct FinestSurface<'a> {
     world: WorldDesc,
@@ -37,12 +46,7 @@ impl<'a> FinestSurface<'a> {
     /// LOD-0 sample (i, j) as the bake stores it (position clamped to the
     /// extent, rounded to R16), from `cache` or the source.
     fn sample_at(&self, cache: &mut HashMap<(i64, i64), f64>, i: i64, j: i64) -> f64 {
-        *cache.entry((i, j)).or_insert_with(|| {
-            let [x, y] = self.world.sample_pos(i, j);
-            let [ex, ey] = self.world.extent_m;
-            let v = self.source.sample(x.clamp(0.0, ex), y.clamp(0.0, ey));
-            f64::from(self.world.decode_height(self.world.encode_height(v)))
-        })
+        *cache.entry((i, j)).or_insert_with(|| stored_post(&self.world, self.source, i, j))
     }
 
     /// The Catmull-Rom surface at lattice point (u, v) of the finest
@@ -68,6 +72,12 @@ impl<'a> FinestSurface<'a> {
                 wy[b] * row
             })
             .sum()
+    }
+
+    /// The finest surface at lattice point (u, v) of the deepest refinement
+    /// (units of 2^-REFINE_LEVELS samples from the grid origin).
+    pub fn at_lattice(&self, u: i64, v: i64) -> f64 {
+        self.lattice(u, v)
     }
 
     /// Height at (x, y) of the diamond-split triangles of level `level`'s

@@ -2,6 +2,7 @@
 //! its inputs: tests and benches compare each pass against its twin here.
 
 pub mod atmosphere;
+pub mod bintree_cut;
 pub mod classify;
 pub mod finest;
 pub mod grass;

@@ -4,6 +4,8 @@
 
 mod bake;
 mod bake_run;
+pub mod bintree;
+pub mod bintree_dense;
 mod cache;
 mod cones;
 mod control_map;

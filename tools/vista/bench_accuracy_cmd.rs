@@ -215,7 +215,7 @@ fn print_points(b: &AccuracyBench) {
         };
         let pair = |a: f64, b: f64| format!("{a:.2}/{b:.2}");
         println!(
-            "{:<12} {:<32} {:>6} {:>6.2} {:>9.2} {:>10} {:>6.2} {:>13} {:>7} {:>5} {:>5} {:>8.1e} {:>7} {:>13} {:>13} {:>13} {:>6.1} {:>6.4} {:>5} {:>8}{}",
+            "{:<12} {:<32} {:>6} {:>6.2} {:>9.2} {:>10} {:>6.2} {:>13} {:>6} {:>7} {:>5} {:>5} {:>8.1e} {:>7} {:>13} {:>13} {:>13} {:>6.1} {:>6.4} {:>5} {:>8}{}",
             p.view,
             setting,
             p.target_error_px,
@@ -224,6 +224,7 @@ fn print_points(b: &AccuracyBench) {
             p.triangles_drawn,
             p.triangles_per_pixel,
             format!("{:.3}/{:.3}", p.floor.triangles, p.floor.patches),
+            p.floor.rule.map_or("-".to_string(), |r| format!("{:.3}{}", r.per_pixel, if r.below == 0 { "*" } else { "" })),
             p.patches_drawn,
             p.nodes_drawn_per_lod.iter().sum::<u32>(),
             p.wanted_finer,
@@ -243,7 +244,7 @@ fn print_points(b: &AccuracyBench) {
 
 fn print_points_header() {
     println!(
-        "{:<12} {:<32} {:>6} {:>6} {:>9} {:>10} {:>6} {:>13} {:>7} {:>5} {:>5} {:>8} {:>7} {:>13} {:>13} {:>13} {:>6} {:>6} {:>5} {:>8}",
+        "{:<12} {:<32} {:>6} {:>6} {:>9} {:>10} {:>6} {:>13} {:>6} {:>7} {:>5} {:>5} {:>8} {:>7} {:>13} {:>13} {:>13} {:>6} {:>6} {:>5} {:>8}",
         "view",
         "setting",
         "target",
@@ -252,6 +253,7 @@ fn print_points_header() {
         "triangles",
         "tri/px",
         "floor tri/ptc",
+        "rule",
         "patches",
         "nodes",
         "want+",
@@ -274,7 +276,10 @@ fn print_legend(cfg: &AccuracyBenchConfig) {
          within twice it; above the target when the slot budget could not meet it); tri/px: triangles drawn per screen pixel; \
          floor tri/ptc: the fewest triangles per screen pixel any LOD choice on vista's grids could draw for the \
          visible ground with every visible point within 2 x target, choosing per triangle / per whole patch (lower \
-         bounds: nothing hidden, outside the view or for seams counted); want+: drawn nodes the camera wants finer whose children \
+         bounds: nothing hidden, outside the view or for seams counted); rule: triangles per pixel the per-triangle \
+         rule (a restricted bintree with saturated errors) is expected to draw for the same visible ground, counted \
+         alike (*: not below the samples, the world's finest lattice being too large for the CPU here; -: too large \
+         either way); want+: drawn nodes the camera wants finer whose children \
          are not resident; d: relative depth error; silh: pixels terrain in one image only; geo: vertical error to \
          the source surface projected on screen (px), split into lod (drawn surface vs the finest surface vista can \
          draw: what the target bounds) and repr (finest surface vs the source: what no LOD choice removes); PSNR, \
