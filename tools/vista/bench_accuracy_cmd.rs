@@ -25,7 +25,8 @@ pub struct AccuracyArgs<'a> {
     pub views: Option<&'a [String]>,
     pub plot: Option<&'a Path>,
     pub images: Option<&'a Path>,
-    pub slots: u32,
+    /// None: what the default GPU budget buys (as `vista render`).
+    pub slots: Option<u32>,
     pub shadows: ShadowSweep,
 }
 
@@ -33,7 +34,10 @@ pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()>
     let AccuracyArgs { targets, views, images, slots, .. } = *a;
     check_accuracy_args(a)?;
     let world = args.world.load()?;
-    crate::world_args::check_slots(slots, &world.desc)?;
+    let slots = match slots {
+        Some(s) => crate::world_args::check_slots(s, &world.desc).map(|_| s)?,
+        None => crate::budget::default_slots(&world, &ctx.info().limits)?,
+    };
     world.require_unplaced("vista bench accuracy")?;
     let d = world.desc;
     let mut all = cull_views(&d, &*world.source);

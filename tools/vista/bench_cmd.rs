@@ -64,7 +64,7 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     shadow_steps: Option<Vec<u32>>,
     /// `bench accuracy`: resident node slots of the renderers (at most
-    /// 2047) [default: the renderer's default].
+    /// 2047) [default: what the default GPU budget buys, as `vista render`].
     #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     slots: Option<u32>,
     /// Measured frames per row (after warm-up); the median is reported
@@ -215,7 +215,7 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
                 views: args.views.as_deref(),
                 plot: args.plot.as_deref(),
                 images: args.images.as_deref(),
-                slots: args.slots.unwrap_or(vista::terrain::TerrainOptions::default().slots),
+                slots: args.slots,
                 shadows,
             };
             crate::bench_accuracy_cmd::accuracy(ctx, &bench, &a)

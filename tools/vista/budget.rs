@@ -60,6 +60,15 @@ pub fn check(args: &ViewpointArgs, world: &LoadedWorld) -> Result<()> {
     })
 }
 
+/// The slots the default budget buys a renderer of `world` on this device
+/// (what `vista bench accuracy` gives its renderers without `--slots`).
+pub fn default_slots(world: &LoadedWorld, device: &vista::gpu::Limits) -> Result<u32> {
+    let per = slot_bytes(world)?;
+    let slots = slots_for_budget(default_gpu_budget(device, per), per, device);
+    check_slots(slots, &world.desc)?;
+    Ok(slots)
+}
+
 impl NodeBudget {
     /// The slots `args` give a renderer of `world` on this device.
     pub fn of(args: &ViewpointArgs, world: &LoadedWorld, device: &vista::gpu::Limits) -> Result<Self> {
