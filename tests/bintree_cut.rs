@@ -214,3 +214,68 @@ fn bounds_filled_at_once_equal_those_walked_vertex_by_vertex() {
     }
     assert_eq!(checked, 257 * 257 - 4);
 }
+
+/// Largest screen jumps (px) of visible points that the rule's LOD changes
+/// cause along a slow flight (not the camera's move): at every frame's
+/// visible ground, the height the last frame's cut drew against this
+/// frame's, both seen from this frame's camera. p99 and max.
+fn popping(w: &WorldDesc, e: &mut VertexErrors, height: &dyn Fn(I64Vec2) -> f64, target: f32) -> (f64, f64) {
+    let mut jumps = Vec::new();
+    let mut last: Option<vista::world::TraverseCamera> = None;
+    for frame in 0..16 {
+        // 2 m a frame at 60 m above a 100 m base, across the rough hills.
+        let c = Camera { position_m: [60.0 + 2.0 * f64::from(frame), 20.0, 160.0], yaw_deg: 30.0, pitch_deg: -30.0 };
+        let v = View { size: [96, 72], ..view(c, target) };
+        let cam = v.traverse_camera();
+        if let Some(prev) = &last {
+            for py in 0..72 {
+                for px in 0..96 {
+                    // The ground this pixel sees: marched along its ray on the finest surface.
+                    let Some(p) = hit(&v, [f64::from(px) + 0.5, f64::from(py) + 0.5], height) else { continue };
+                    let xy = p.truncate();
+                    let target = f64::from(target);
+                    let (Some(z0), Some(z1)) = (
+                        vista::reference::bintree_cut::drawn_z(w, FINEST, e, prev, target, xy),
+                        vista::reference::bintree_cut::drawn_z(w, FINEST, e, &cam, target, xy),
+                    ) else {
+                        continue;
+                    };
+                    let (Some((a, _)), Some((b, _))) = (v.project([xy.x, xy.y, z0]), v.project([xy.x, xy.y, z1]))
+                    else {
+                        continue;
+                    };
+                    jumps.push((a[0] - b[0]).hypot(a[1] - b[1]));
+                }
+            }
+        }
+        last = Some(cam);
+    }
+    jumps.sort_by(f64::total_cmp);
+    (jumps[jumps.len() * 99 / 100], *jumps.last().unwrap())
+}
+
+/// The first point of the finest surface along pixel `px`'s ray (25 cm steps).
+fn hit(v: &View, px: [f64; 2], height: &dyn Fn(I64Vec2) -> f64) -> Option<glam::DVec3> {
+    let (o, d) = (glam::DVec3::from(v.camera.position_m), v.ray(px));
+    (1..2400).map(|k| o + d * (f64::from(k) * 0.25)).find(|p| {
+        let l = (p.truncate() * 4.0).round().as_i64vec2();
+        (0..=1024).contains(&l.x) && (0..=1024).contains(&l.y) && p.z <= height(l)
+    })
+}
+
+#[test]
+fn the_rule_s_popping_along_a_slow_flight_is_measured() {
+    let w = world();
+    let height = |v: I64Vec2| f64::from(rough(v) as f32);
+    let height = |v: I64Vec2| if height(v).is_nan() { 100.0 } else { height(v) };
+    let mut e = errors(&w, &height, Saturation::Nested);
+    for target in [1.0f32, 4.0] {
+        let (p99, max) = popping(&w, &mut e, &height, target);
+        eprintln!("popping at {target} px: p99 {p99:.3} px, max {max:.3} px");
+        // A vertex that splits this frame was within the target last
+        // frame, and the finer surface is within it now: a jump is at most
+        // about twice the target.
+        assert!(max <= 2.0 * f64::from(target) * 1.1, "{target} px: max jump {max}");
+        assert!(p99 <= f64::from(target), "{target} px: p99 jump {p99}");
+    }
+}

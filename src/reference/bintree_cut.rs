@@ -115,6 +115,36 @@ pub fn cut(world: &WorldDesc, below: u32, bounds: &mut dyn Bounds, cam: &Travers
     out
 }
 
+/// The height the rule's cut draws at world point `xy` (metres): the
+/// triangle of the cut holding it, interpolated; None outside the roots.
+pub fn drawn_z(
+    world: &WorldDesc,
+    below: u32,
+    bounds: &mut dyn Bounds,
+    cam: &TraverseCamera,
+    target_px: f64,
+    xy: DVec2,
+) -> Option<f64> {
+    let l = lattice(world, below);
+    let at = (xy - l.origin_m) / l.unit_m;
+    let roots = world.roots();
+    let mut t = roots.iter().flat_map(|r| root_triangles(world, below, r.x, r.y)).find(|t| weights(t, at).is_some())?;
+    while let Some(m) = t.split().filter(|m| active(bounds, cam, target_px, *m)) {
+        let [a, b] = t.halves(m);
+        t = if weights(&a, at).is_some() { a } else { b };
+    }
+    let w = weights(&t, at)?;
+    Some(t.corners().iter().zip(w).map(|(v, w)| w * bounds.point(*v).z).sum())
+}
+
+/// Barycentric weights of `p` (lattice units) in `t`; None outside it.
+fn weights(t: &Tri, p: DVec2) -> Option<[f64; 3]> {
+    let [a, b, c] = t.corners().map(|v| v.as_dvec2());
+    let area = (b - a).perp_dot(c - a);
+    let w = [(c - b).perp_dot(p - b) / area, (a - c).perp_dot(p - c) / area, (b - a).perp_dot(p - a) / area];
+    w.iter().all(|w| *w >= -1e-12).then_some(w)
+}
+
 /// Whether the rule splits `m`.
 pub fn active(bounds: &mut dyn Bounds, cam: &TraverseCamera, target_px: f64, m: I64Vec2) -> bool {
     let b = bounds.bound(m);
