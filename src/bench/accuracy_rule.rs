@@ -11,14 +11,14 @@
 //! will bake the bounds with the nodes instead).
 
 use super::accuracy_floor::{units_for, Seen};
-use crate::reference::bintree_cut::{active, lattice, root_triangles, Tri, FINEST};
+use crate::reference::bintree_cut::{lattice, triangle_at, Tri, FINEST};
 use crate::reference::finest::stored_post;
 use crate::reference::FinestSurface;
 use crate::scene::view::View;
 use crate::world::bintree::{Bounds, Saturation, VertexErrors};
 use crate::world::bintree_dense::DenseBounds;
 use crate::world::{HeightSource, WorldDesc};
-use glam::{DVec2, I64Vec2};
+use glam::I64Vec2;
 use serde::Serialize;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -109,29 +109,14 @@ impl Bounds for Shared<'_> {
 
 /// Triangles (not yet per pixel) the cut on `bounds` stands for.
 fn count(seen: &[Seen], view: &View, world: &WorldDesc, below: u32, bounds: &mut dyn Bounds) -> f64 {
-    let l = lattice(world, below);
     let cam = view.traverse_camera();
     let target = f64::from(view.target_error_px);
-    let roots: Vec<Tri> = world.roots().iter().flat_map(|r| root_triangles(world, below, r.x, r.y)).collect();
     let mut chosen: HashMap<Tri, (f64, u32)> = HashMap::new();
     for s in seen {
-        let at = (s.p.truncate() - l.origin_m) / l.unit_m;
-        let Some(mut t) = roots.iter().copied().find(|t| holds(t, at)) else { continue };
-        while let Some(m) = t.split().filter(|m| active(bounds, &cam, target, *m)) {
-            let [a, b] = t.halves(m);
-            t = if holds(&a, at) { a } else { b };
-        }
+        let Some(t) = triangle_at(world, below, bounds, &cam, target, s.p.truncate()) else { continue };
         let c = chosen.entry(t).or_insert((0.0, 0));
         *c = (c.0 + s.area.unwrap_or(0.0), c.1 + 1);
     }
-    let m2 = l.unit_m * l.unit_m;
+    let m2 = lattice(world, below).unit_m.powi(2);
     chosen.iter().map(|(t, &(seen_m2, points))| units_for(t.area2() as f64 * 0.5 * m2, points, seen_m2)).sum()
-}
-
-/// Whether `p` (lattice units) lies in `t` (its edges included).
-fn holds(t: &Tri, p: DVec2) -> bool {
-    let [a, b, c] = t.corners().map(|v| v.as_dvec2());
-    let w = |u: DVec2, v: DVec2| (v - u).perp_dot(p - u);
-    let (wa, wb, wc) = (w(b, c), w(c, a), w(a, b));
-    (wa >= 0.0 && wb >= 0.0 && wc >= 0.0) || (wa <= 0.0 && wb <= 0.0 && wc <= 0.0)
 }

@@ -115,16 +115,16 @@ pub fn cut(world: &WorldDesc, below: u32, bounds: &mut dyn Bounds, cam: &Travers
     out
 }
 
-/// The height the rule's cut draws at world point `xy` (metres): the
-/// triangle of the cut holding it, interpolated; None outside the roots.
-pub fn drawn_z(
+/// The triangle of the rule's cut holding world point `xy` (metres), or
+/// None outside the roots.
+pub fn triangle_at(
     world: &WorldDesc,
     below: u32,
     bounds: &mut dyn Bounds,
     cam: &TraverseCamera,
     target_px: f64,
     xy: DVec2,
-) -> Option<f64> {
+) -> Option<Tri> {
     let l = lattice(world, below);
     let at = (xy - l.origin_m) / l.unit_m;
     let roots = world.roots();
@@ -133,7 +133,22 @@ pub fn drawn_z(
         let [a, b] = t.halves(m);
         t = if weights(&a, at).is_some() { a } else { b };
     }
-    let w = weights(&t, at)?;
+    Some(t)
+}
+
+/// The height the rule's cut draws at world point `xy` (metres),
+/// interpolated in [`triangle_at`]'s triangle; None outside the roots.
+pub fn drawn_z(
+    world: &WorldDesc,
+    below: u32,
+    bounds: &mut dyn Bounds,
+    cam: &TraverseCamera,
+    target_px: f64,
+    xy: DVec2,
+) -> Option<f64> {
+    let t = triangle_at(world, below, bounds, cam, target_px, xy)?;
+    let l = lattice(world, below);
+    let w = weights(&t, (xy - l.origin_m) / l.unit_m)?;
     Some(t.corners().iter().zip(w).map(|(v, w)| w * bounds.point(*v).z).sum())
 }
 
