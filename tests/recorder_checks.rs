@@ -95,3 +95,31 @@ fn misuse_panics_before_reaching_vulkan() {
         .unwrap();
     });
 }
+
+/// A GPU write into a buffer the host reads stays "unpublished" until a
+/// barrier to the host stage; the frame executor asserts every pass ends
+/// with none (the virtual texture's readback once relied on telemetry's
+/// later barrier: its tests trip that assert without its own).
+#[test]
+fn writes_the_host_reads_are_tracked_until_a_host_barrier() {
+    gpu_test(|ctx| {
+        let buffer = |name, usage, location| Buffer::new(ctx, &BufferDesc { name, size: 64, usage, location }).unwrap();
+        let src = buffer("checks_src", vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::GpuOnly);
+        let readback = buffer("checks_readback", vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu);
+        ctx.submit_and_wait(|rec: &mut Recorder| {
+            assert!(rec.host_unpublished().is_empty());
+            rec.copy_buffer_region(&src, 0, &readback, 0, 64);
+            assert_eq!(rec.host_unpublished(), ["checks_readback"]);
+            // A barrier that stops short of the host does not publish it.
+            rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
+            assert_eq!(rec.host_unpublished(), ["checks_readback"]);
+            rec.transfer_to_host_barrier();
+            assert!(rec.host_unpublished().is_empty());
+            rec.copy_buffer_region(&src, 0, &readback, 0, 64);
+            rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::HOST);
+            assert!(rec.host_unpublished().is_empty());
+            Ok(())
+        })
+        .unwrap();
+    });
+}

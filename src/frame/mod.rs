@@ -224,6 +224,11 @@ impl<'r> Frame<'_, 'r> {
             rec.write_timestamp(pool, 2 * i);
         }
         let out = f(rec);
+        let unpublished = rec.host_unpublished();
+        assert!(
+            unpublished.is_empty(),
+            "pass {name} wrote {unpublished:?}, which the host reads, with no barrier to the host"
+        );
         if let Some(pool) = pool {
             rec.write_timestamp(pool, 2 * i + 1);
         }

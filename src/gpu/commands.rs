@@ -39,6 +39,9 @@ pub struct Recorder<'a> {
     scope: (u32, bool, [u32; 2]),
     /// What the commands touched, when asked (`log_accesses`).
     accesses: Option<Vec<Access>>,
+    /// Host-read buffers the GPU wrote since the last barrier to the host
+    /// stage (`host_unpublished`).
+    unpublished: Vec<String>,
     compute: Option<vk::Pipeline>,
     graphics: Option<vk::Pipeline>,
 }
@@ -78,9 +81,22 @@ impl<'a> Recorder<'a> {
             rendering: false,
             scope: (0, false, [0, 0]),
             accesses: None,
+            unpublished: Vec::new(),
             compute: None,
             graphics: None,
         }
+    }
+
+    /// Host-read buffers written since the last barrier to the host stage:
+    /// the host may see stale data in them even after the fence. The frame
+    /// executor asserts every pass leaves none (who writes one publishes it,
+    /// not whichever pass happens to come later).
+    pub fn host_unpublished(&self) -> &[String] {
+        &self.unpublished
+    }
+
+    pub(super) fn published_to_host(&mut self) {
+        self.unpublished.clear();
     }
 
     /// From now on, notes what each command touches (tests: what two
@@ -95,6 +111,9 @@ impl<'a> Recorder<'a> {
     }
 
     pub(super) fn note_buffer(&mut self, b: &Buffer, write: bool) {
+        if write && b.host_read && !self.unpublished.contains(&b.name) {
+            self.unpublished.push(b.name.clone());
+        }
         if let Some(log) = &mut self.accesses {
             log.push(Access::new(b.raw, &b.name, write, None));
         }
@@ -139,6 +158,9 @@ impl<'a> Recorder<'a> {
         let dep = vk::DependencyInfo::default().memory_barriers(&mb);
         // SAFETY: recording state by construction; outside rendering (checked).
         unsafe { self.d().cmd_pipeline_barrier2(self.cmd, &dep) };
+        if dst.contains(vk::PipelineStageFlags2::HOST) {
+            self.published_to_host();
+        }
     }
 
     /// Full barrier plus a transition of every subresource of `image` from

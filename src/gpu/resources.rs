@@ -152,6 +152,9 @@ pub struct Buffer {
     /// What the buffer was created for; the recorder checks it.
     pub usage: vk::BufferUsageFlags,
     pub name: String,
+    /// The host reads it (`GpuToCpu`): a GPU write must be followed by a
+    /// barrier to the host stage, which the recorder checks per pass.
+    pub host_read: bool,
     shared: Arc<Shared>,
 }
 
@@ -230,6 +233,7 @@ impl Buffer {
             size: desc.size,
             usage: desc.usage,
             name: desc.name.to_string(),
+            host_read: desc.location == MemoryLocation::GpuToCpu,
             shared: s.clone(),
         })
     }

@@ -88,6 +88,7 @@ impl Recorder<'_> {
         let dep = vk::DependencyInfo::default().memory_barriers(&mb);
         // SAFETY: recording state by construction; outside rendering (checked).
         unsafe { self.d().cmd_pipeline_barrier2(self.cmd, &dep) };
+        self.published_to_host();
     }
 
     /// Copies one mip of one layer of `img` (in TRANSFER_SRC_OPTIMAL), tightly packed.

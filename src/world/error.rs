@@ -41,6 +41,9 @@ pub enum WorldError {
     /// The world is over a limit of its plan; the message names the option.
     #[error(transparent)]
     Plan(#[from] super::plan::PlanError),
+    /// A shard bake's folder already holds a bake it must not mix with.
+    #[error("{0}")]
+    ForeignBake(String),
     #[error("loader worker failed while producing node {0}")]
     LoaderFailed(NodeId),
     /// A root is always resident; without it nothing draws where it lies.

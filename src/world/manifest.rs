@@ -162,7 +162,8 @@ pub fn verify(cache: &NodeCache, dir: &Path) -> Result<VerifyReport> {
     }
     report.shards = counts.iter().max_by_key(|(n, c)| (**c, **n)).map(|(n, _)| *n);
     for m in mine.iter().filter(|m| Some(m.shards) != report.shards) {
-        let why = format!("written for {} shards; this bake's other manifests are for {:?}", m.shards, report.shards);
+        let others = report.shards.map_or("none".to_string(), |n| n.to_string());
+        let why = format!("written for {} shards; this bake's other manifests are for {others}", m.shards);
         report.foreign.push(ForeignManifest { path: manifest_path(dir, m.shard, m.shards), why });
     }
     let split = match report.shards {
@@ -292,6 +293,7 @@ fn read_manifests(dir: &Path, world: &WorldDesc, keys: &[String; 4]) -> (Vec<Sha
     let mut paths: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .filter(|p| p.file_name().is_none_or(|n| n != super::bake_claim::CLAIM_FILE))
         .collect();
     paths.sort();
     for path in paths {

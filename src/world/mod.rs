@@ -3,6 +3,7 @@
 //! here; the GPU layer consumes [`BakedNode`]s and [`ResidencyChanges`].
 
 mod bake;
+mod bake_claim;
 mod bake_run;
 pub mod bintree;
 pub mod bintree_dense;
@@ -38,6 +39,7 @@ mod streaming;
 mod texels;
 
 pub use bake::{bake_node, bake_node_with, BakeSettings};
+pub use bake_claim::{claim_folder, CLAIM_FILE};
 pub use bake_run::{bake_shard, bake_world, nodes_in_region, BakeStats, NodeFile};
 pub use cache::{
     bake_region, default_cache_dir, estimated_file_bytes, uncompressed_file_bytes, CacheOutcome, MissReason, NodeCache,

@@ -44,7 +44,7 @@ pub struct BakeArgs {
     /// writing DIR/manifest/shard-I-of-N.json. `auto/N` reads the index from
     /// SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX; `all/N` (with --dry-run)
     /// prints every shard's plan.
-    #[arg(long, value_name = "I/N", value_parser = crate::bake_shard::parse_shard, conflicts_with = "region")]
+    #[arg(long, value_name = "I/N", value_parser = crate::bake_shard::parse_shard, conflicts_with = "region", allow_hyphen_values = true)]
     pub shard: Option<ShardArg>,
     /// Check the bake in DIR against the plan of this world (give the same
     /// world and options as the bake): every node present and valid, every
@@ -233,6 +233,9 @@ pub fn bake(args: BakeArgs) -> Result<()> {
     let dir = args.out.clone().context("--out DIR is needed to bake")?;
     crate::out_path::prepare_out_dir(&dir, "--out", "the node cache: lod{k}/{x}_{y}.vnode")?;
     let w = spec.open()?;
+    if let (Some((_, Some(i))), Some(s)) = (&shard, args.shard) {
+        claim_folder(&w, &dir, *i, s.count())?;
+    }
     let progress = match (args.no_progress, args.progress_every) {
         (true, _) => Progress::Hidden,
         (false, Some(s)) => Progress::Lines { every: std::time::Duration::from_secs_f64(s) },
@@ -321,6 +324,16 @@ fn announce_bake(w: &LoadedWorld, plan: &mut WorldPlan, shard: &ShardChoice, arg
         _ => plan.summary(),
     };
     eprintln!("baking {what} (`vista bake --dry-run` prints the plan)");
+}
+
+/// Refuses a folder that holds another bake than this shard's (its world,
+/// settings or shard count), before anything is written; else claims it.
+fn claim_folder(w: &LoadedWorld, dir: &Path, index: u32, count: u32) -> Result<()> {
+    let cache = NodeCache::with_settings(dir, w.desc, w.source.clone(), w.holes.clone(), w.bake.clone())?;
+    vista::world::claim_folder(&cache, dir, index, count).map_err(|e| match e {
+        vista::world::WorldError::ForeignBake(m) => crate::InputError(m).into(),
+        other => other.into(),
+    })
 }
 
 /// Bakes a shard (writing its manifest) or a region.

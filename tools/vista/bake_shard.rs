@@ -41,6 +41,9 @@ pub fn parse_shard(s: &str) -> Result<ShardArg, String> {
     match i.trim() {
         "auto" => Ok(ShardArg::Auto { count }),
         "all" => Ok(ShardArg::All { count }),
+        i if i.starts_with('-') => {
+            Err(format!("--shard {s:?}: the index must be 0 or more (0-based: 0 to {})", count - 1))
+        }
         i => {
             let index: u32 = i.parse().map_err(|_| bad())?;
             if index >= count {

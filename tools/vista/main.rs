@@ -93,11 +93,9 @@ fn main() {
         Ok(cli) => cli,
         Err(e) => exit_on_usage_error(e),
     };
-    // Tests walk every write-failure path: the Nth file written (from 0)
-    // fails as on a full disk.
-    if let Some(n) = std::env::var("VISTA_FAIL_WRITE").ok().and_then(|v| v.parse().ok()) {
-        vista::output::faults().fail_write_in(n);
-    }
+    // Tests walk every write-failure path: the Nth write, fsync or rename
+    // (from 0) fails (`VISTA_FAIL_WRITE`, `_SYNC`, `_RENAME`).
+    vista::output::arm_from_env(&|name| std::env::var(name).ok());
     let result = run(cli);
     write_peak_rss();
     if let Err(e) = result {

@@ -534,6 +534,11 @@ impl VirtualTexture {
         assert_eq!(push.size, gbuffer.size(), "the frame's size");
         self.feedback.record(rec, view, targets, gbuffer, &out, push);
         rec.copy_buffer_region(&self.requests, 0, &self.ring[f.slot].buffer, 0, REQUEST_BYTES);
+        // The host reads the slot frames later: its own barrier to the host
+        // stage (ALL_COMMANDS does not include the host), so the readback
+        // holds whatever the frame records after it. The second one orders
+        // the next frame's writes of `requests` after the copy's read.
+        rec.transfer_to_host_barrier();
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
     }
 }

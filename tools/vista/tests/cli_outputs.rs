@@ -17,12 +17,18 @@ struct Run {
 }
 
 fn vista(args: &[&str], fail_at: Option<u64>, cache: &Path) -> Run {
+    vista_failing(args, fail_at.map(|n| ("VISTA_FAIL_WRITE", n)), cache)
+}
+
+/// `vista ARGS` whose Nth operation of one kind fails (`VISTA_FAIL_WRITE`,
+/// `VISTA_FAIL_SYNC` or `VISTA_FAIL_RENAME`).
+fn vista_failing(args: &[&str], fail: Option<(&str, u64)>, cache: &Path) -> Run {
     let mut c = vista_cmd::vista_cmd();
     // This test's own error-tree cache, filled by the first (unfaulted) run,
     // so the faulted runs write only what they are asked to.
     c.env("VISTA_CACHE", cache).args(args).args(WORLD);
-    if let Some(n) = fail_at {
-        c.env("VISTA_FAIL_WRITE", n.to_string());
+    if let Some((var, n)) = fail {
+        c.env(var, n.to_string());
     }
     let out = c.output().expect("run vista");
     Run { code: out.status.code(), stderr: String::from_utf8_lossy(&out.stderr).into() }
@@ -61,10 +67,15 @@ fn temporaries(files: &BTreeMap<String, Vec<u8>>) -> Vec<&String> {
 /// The last stderr line is the error, naming a file under `dir` and the
 /// disk being full.
 fn assert_full_disk_error(run: &Run, dir: &Path, what: &str) {
+    assert_disk_error(run, dir, "No space left", what);
+}
+
+/// The last stderr line is the error, naming a file under `dir` and `says`.
+fn assert_disk_error(run: &Run, dir: &Path, says: &str, what: &str) {
     assert_eq!(run.code, Some(1), "{what}: {}", run.stderr);
     let last = run.stderr.trim_end().lines().last().unwrap_or("");
     assert!(
-        last.starts_with("error: ") && last.contains(&dir.display().to_string()) && last.contains("No space left"),
+        last.starts_with("error: ") && last.contains(&dir.display().to_string()) && last.contains(says),
         "{what}: {}",
         run.stderr
     );
@@ -99,6 +110,54 @@ fn a_render_writes_all_its_files_or_none() {
     assert_eq!(run.code, Some(0), "{}", run.stderr);
     let after = snapshot(&out);
     assert_eq!(after.keys().collect::<Vec<_>>(), before.keys().collect::<Vec<_>>());
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// A network disk or a quota that reports only at fsync, and a rename that
+/// fails, at every such operation of a render: the previous render's files
+/// stay all old (a commit that fails part-way puts back what it moved), no
+/// temporary remains, and the error names the file. Then a bake whose
+/// fsync fails names the node file and keeps every earlier one.
+#[test]
+fn fsync_and_rename_failures_keep_the_previous_set_whole_and_name_the_file() {
+    let root = temp_dir("fsync");
+    let cache = root.join("trees");
+    let out = root.join("out");
+    let args = ["--validation", "render", "--size", "64x48", "--frames", "1", "--out", out.to_str().unwrap()];
+    let first = vista(&args, None, &cache);
+    assert_eq!(first.code, Some(0), "{}", first.stderr);
+    let mut before = snapshot(&out);
+    let mut failed = Vec::new();
+    for (var, says) in [("VISTA_FAIL_SYNC", "Disk quota exceeded"), ("VISTA_FAIL_RENAME", "Input/output error")] {
+        let mut k = 0;
+        loop {
+            let run = vista_failing(&args, Some((var, k)), &cache);
+            if run.code == Some(0) {
+                // Timings differ between renders: the new set is the old one now.
+                before = snapshot(&out);
+                break;
+            }
+            assert_disk_error(&run, &out, says, &format!("{var}={k}"));
+            assert!(snapshot(&out) == before, "{var}={k}: the earlier render's files changed");
+            k += 1;
+            assert!(k < 64, "{var}: every run failed");
+        }
+        failed.push((var, k));
+    }
+    // 8 files and the folder are fsynced; 8 old files go aside, 8 new come in.
+    assert_eq!(failed, [("VISTA_FAIL_SYNC", 9), ("VISTA_FAIL_RENAME", 16)]);
+
+    let nodes = root.join("nodes");
+    let bake = ["bake", "--out", nodes.to_str().unwrap(), "--no-progress", "--region", "0,0,64,64"];
+    let ok = vista(&bake, None, &cache);
+    assert_eq!(ok.code, Some(0), "{}", ok.stderr);
+    let baked = snapshot(&nodes);
+    std::fs::remove_dir_all(&nodes).unwrap();
+    let run = vista_failing(&bake, Some(("VISTA_FAIL_SYNC", 2)), &cache);
+    assert_disk_error(&run, &nodes, "Disk quota exceeded", "bake, fsync 2");
+    let now = snapshot(&nodes);
+    assert!(temporaries(&now).is_empty(), "{:?}", temporaries(&now));
+    assert!(now.iter().all(|(name, bytes)| baked.get(name) == Some(bytes)), "a partial file was left");
     let _ = std::fs::remove_dir_all(&root);
 }
 

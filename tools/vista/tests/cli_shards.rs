@@ -234,3 +234,51 @@ fn the_deploy_recipes_plan_their_shards() {
     assert!(ok, "{args:?}: {err}");
     assert!(out.contains(&format!("shard 0 of {completions} (0-based)")), "{out}");
 }
+
+/// A folder holds one sharded bake: a shard of another shard count or of
+/// another world is refused before it writes anything (one line naming
+/// both), also when two start at once (the claim is a hard link, so one of
+/// them wins); a negative index gets the shard message, not the parser's.
+#[test]
+fn a_shard_refuses_a_folder_of_another_bake() {
+    let root = temp_dir("foreign");
+    let dir = root.join("bake");
+    let (ok, _, err) = run(shard_cmd(&dir, "0/2"));
+    assert!(ok, "{err}");
+    let before = products(&dir);
+    let refused = |mut c: Command, says: &[&str]| {
+        let out = c.output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        for s in says {
+            assert!(err.contains(s), "{s:?} missing: {err}");
+        }
+    };
+    refused(shard_cmd(&dir, "1/3"), &["holds a bake of 2 shards of this world", "this one is 3 shards"]);
+    let mut other = vista_cmd();
+    other.args(["bake", "--extent", "2048", "--spacing", "2", "--lods", "4", "--no-progress", "--out"]);
+    other.arg(&dir).args(["--shard", "1/2"]);
+    refused(other, &["2 shards of a 4096 x 4096 m world", "this one is 2 shards of a 2048 x 2048 m world"]);
+    assert!(products(&dir) == before, "a refused shard wrote into the folder");
+    refused(shard_cmd(&dir, "-1/2"), &["--shard \"-1/2\": the index must be 0 or more"]);
+
+    // Two bakes starting at once into a fresh folder: exactly one goes on.
+    let race = root.join("race");
+    let a = shard_cmd(&race, "0/2").stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let (b_ok, _, b_err) = run(shard_cmd(&race, "0/3"));
+    let a = a.wait_with_output().unwrap();
+    assert!(
+        a.status.success() != b_ok,
+        "one of the two must be refused:\n{}\n{b_err}",
+        String::from_utf8_lossy(&a.stderr)
+    );
+
+    // verify names the foreign shard count as a number, not Rust's Option.
+    let m = std::fs::read_to_string(dir.join("manifest/shard-0-of-2.json")).unwrap();
+    let m3 = m.replacen("\"shards\":2", "\"shards\":3", 1);
+    std::fs::write(dir.join("manifest/shard-0-of-3.json"), m3).unwrap();
+    let (_, out, _) = verify(&dir);
+    assert!(out.contains("written for") && !out.contains("Some("), "{out}");
+    let _ = std::fs::remove_dir_all(&root);
+}

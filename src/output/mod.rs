@@ -1,24 +1,29 @@
-//! Files vista writes appear whole or not at all. Each is written to a
-//! temporary file in its own folder and renamed over its final name once
-//! complete: a reader never sees half a file, a full disk leaves the previous
-//! contents in place, and a failure removes the temporary. A [`FileSet`]
-//! (a render's outputs) renames nothing until every member was written, and
-//! creates its folder only then.
+//! Files vista writes appear whole or not at all, and are on the disk when
+//! vista says they are. Each is written to a temporary file in its own
+//! folder, fsynced, and renamed over its final name; then the folder is
+//! fsynced, so the rename itself survives a power cut. A reader never sees
+//! half a file; a full disk, a quota or a network disk's late error (NFS,
+//! CephFS and EFS often report one only at `fsync`) leaves the previous
+//! contents in place, removes the temporary and names the file. A
+//! [`FileSet`] (a render's outputs) renames nothing until every member was
+//! written and fsynced, and puts the old files back if a rename fails.
 //!
-//! Write faults can be injected ([`faults`]) so every error path is walked on
-//! a disk that never fills: the output layer's twin of
-//! [`crate::gpu::fault::FaultInjector`].
+//! `close` is not checked (the standard library drops its result): the
+//! fsync before it is what reports a deferred write error, and a closed
+//! file with no dirty data has nothing left to fail.
 //!
-//! The data is not fsynced: the rename makes a file visible whole, and a
-//! full disk is reported by `write` itself on the file systems vista targets
-//! (ext4, xfs and tmpfs reserve blocks at write time); durability across a
-//! power cut is the caller's.
+//! Faults can be injected at each step ([`faults`]).
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-use std::sync::Mutex;
+
+mod faults;
+mod file_set;
+
+pub use faults::{arm_from_env, faults, Step, WriteFaults};
+pub use file_set::FileSet;
 
 /// A file could not be written; the message names it. The I/O error is
 /// part of the message, not a `source()`, so error chains say it once.
@@ -35,65 +40,6 @@ impl OutputError {
     }
 }
 
-const OFF: u64 = u64::MAX;
-
-/// Counts file writes; the armed one fails part-way with "no space left on
-/// device", after writing half of its first buffer (so there is a partial
-/// temporary to clean up).
-/// Armed for a folder, it counts only writes under that folder, so tests
-/// writing elsewhere in the same process are not hit.
-pub struct WriteFaults {
-    writes: AtomicU64,
-    fail_at: AtomicU64,
-    under: Mutex<Option<PathBuf>>,
-}
-
-static FAULTS: WriteFaults =
-    WriteFaults { writes: AtomicU64::new(0), fail_at: AtomicU64::new(OFF), under: Mutex::new(None) };
-
-/// The process's write-fault injector (disarmed unless armed).
-pub fn faults() -> &'static WriteFaults {
-    &FAULTS
-}
-
-impl WriteFaults {
-    /// Files written so far (each temporary counts once).
-    pub fn count(&self) -> u64 {
-        self.writes.load(Relaxed)
-    }
-
-    /// The file write `n` writes from now (0: the next) fails.
-    pub fn fail_write_in(&self, n: u64) {
-        *self.under.lock().unwrap_or_else(|p| p.into_inner()) = None;
-        self.fail_at.store(self.writes.load(Relaxed) + n, Relaxed);
-    }
-
-    /// The `n`th write from now under `dir` fails; writes elsewhere are
-    /// neither counted nor failed until it is disarmed.
-    pub fn fail_write_under_in(&self, dir: &Path, n: u64) {
-        *self.under.lock().unwrap_or_else(|p| p.into_inner()) = Some(dir.to_path_buf());
-        self.fail_at.store(self.writes.load(Relaxed) + n, Relaxed);
-    }
-
-    pub fn disarm(&self) {
-        self.fail_at.store(OFF, Relaxed);
-        *self.under.lock().unwrap_or_else(|p| p.into_inner()) = None;
-    }
-
-    fn hit(&self, path: &Path) -> bool {
-        if self.fail_at.load(Relaxed) == OFF {
-            self.writes.fetch_add(1, Relaxed);
-            return false;
-        }
-        let under = self.under.lock().unwrap_or_else(|p| p.into_inner());
-        if under.as_ref().is_some_and(|d| !path.starts_with(d)) {
-            return false;
-        }
-        let n = self.writes.fetch_add(1, Relaxed);
-        self.fail_at.compare_exchange(n, OFF, Relaxed, Relaxed).is_ok()
-    }
-}
-
 /// A writer that fails like a full disk when armed.
 pub struct OutputWriter {
     inner: BufWriter<File>,
@@ -105,7 +51,7 @@ impl Write for OutputWriter {
         if self.fail {
             self.inner.write_all(&buf[..buf.len() / 2])?;
             self.inner.flush()?;
-            return Err(io::Error::from_raw_os_error(28)); // ENOSPC
+            return Err(io::Error::from_raw_os_error(Step::Write.errno()));
         }
         self.inner.write(buf)
     }
@@ -133,24 +79,26 @@ fn temporary_for(path: &Path) -> PathBuf {
 
 const TEMP_MARK: &str = ".vista-tmp-";
 
-/// Whether a file name is one of vista's temporaries (for tests and clean-up).
+/// Whether a file name is one of vista's temporaries (for tests and
+/// clean-up), or an old file a crashed [`FileSet::commit`] left aside.
 pub fn is_temporary(name: &str) -> bool {
-    name.contains(TEMP_MARK)
+    name.contains(TEMP_MARK) || name.contains(".vista-old-")
 }
 
-/// Writes `path`'s temporary through `fill`; the temporary is removed on
-/// any failure. The folder must exist.
+/// Writes and fsyncs `path`'s temporary through `fill`; the temporary is
+/// removed on any failure. The folder must exist.
 fn write_temporary(
     path: &Path,
     fill: impl FnOnce(&mut OutputWriter) -> io::Result<()>,
 ) -> Result<PathBuf, OutputError> {
     let tmp = temporary_for(path);
     let result = File::create(&tmp).and_then(|file| {
-        let mut w = OutputWriter { inner: BufWriter::new(file), fail: FAULTS.hit(path) };
+        let mut w = OutputWriter { inner: BufWriter::new(file), fail: faults().hit(Step::Write, path) };
         fill(&mut w)?;
         w.flush()?;
-        w.inner.into_inner().map_err(|e| e.into_error())?;
-        Ok(())
+        let file = w.inner.into_inner().map_err(|e| e.into_error())?;
+        faults().check(Step::Sync, path)?;
+        file.sync_all()
     });
     match result {
         Ok(()) => Ok(tmp),
@@ -161,17 +109,58 @@ fn write_temporary(
     }
 }
 
+/// Renames `from` over `to`; `to` names the file in the error.
+fn rename_over(from: &Path, to: &Path) -> io::Result<()> {
+    faults().check(Step::Rename, to)?;
+    std::fs::rename(from, to)
+}
+
 fn rename(tmp: &Path, path: &Path) -> Result<(), OutputError> {
-    std::fs::rename(tmp, path).map_err(|e| {
+    rename_over(tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(tmp);
         OutputError::new(path, e)
     })
 }
 
+/// Fsyncs a folder, so the renames in it are durable. A file system that
+/// cannot fsync a folder (EINVAL: some FUSE and network mounts) makes each
+/// rename durable itself: nothing more can be asked of it.
+fn sync_dir(dir: &Path) -> Result<(), OutputError> {
+    let synced = faults().check(Step::Sync, dir).and_then(|()| File::open(dir)?.sync_all());
+    match synced {
+        Err(e) if e.raw_os_error() == Some(22) => Ok(()),
+        other => other.map_err(|e| OutputError::new(dir, e)),
+    }
+}
+
+/// The folder a file is in (`.` for a bare name).
+fn parent_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
 /// Writes `path` whole or not at all through `fill` (which may also seek).
 pub fn write_with(path: &Path, fill: impl FnOnce(&mut OutputWriter) -> io::Result<()>) -> Result<(), OutputError> {
     let tmp = write_temporary(path, fill)?;
-    rename(&tmp, path)
+    rename(&tmp, path)?;
+    sync_dir(parent_of(path))
+}
+
+/// Writes `bytes` to `path` whole only if no file is there: the claim of a
+/// folder that several processes may race for (a hard link fails when the
+/// name exists, atomically, where a check then a write would not). Returns
+/// false, writing nothing, when `path` exists.
+pub fn write_new(path: &Path, bytes: &[u8]) -> Result<bool, OutputError> {
+    let tmp = write_temporary(path, |w| w.write_all(bytes))?;
+    let linked = faults().check(Step::Rename, path).and_then(|()| std::fs::hard_link(&tmp, path));
+    let _ = std::fs::remove_file(&tmp);
+    match linked {
+        Ok(()) => sync_dir(parent_of(path)).map(|()| true),
+        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => Ok(false),
+        Err(e) => Err(OutputError::new(path, e)),
+    }
 }
 
 /// Writes `bytes` to `path` whole or not at all.
@@ -200,71 +189,6 @@ pub fn write_png(
     colour: image::ExtendedColorType,
 ) -> Result<(), OutputError> {
     write_with(path, |w| encode_png(w, data, size, colour))
-}
-
-/// Files that appear together: each is written to a temporary as it is
-/// added; [`FileSet::commit`] renames them all. Dropped uncommitted, the set
-/// removes its temporaries and the folder if it created it.
-pub struct FileSet {
-    dir: PathBuf,
-    created_dir: bool,
-    staged: Vec<(PathBuf, PathBuf)>,
-}
-
-impl FileSet {
-    /// A set of files in `dir`, which is created (with its parents) when the
-    /// first file is added.
-    pub fn new(dir: &Path) -> Self {
-        FileSet { dir: dir.to_path_buf(), created_dir: false, staged: Vec::new() }
-    }
-
-    /// Writes `name`'s temporary through `fill`.
-    pub fn add_with(
-        &mut self,
-        name: &str,
-        fill: impl FnOnce(&mut OutputWriter) -> io::Result<()>,
-    ) -> Result<(), OutputError> {
-        if !self.dir.is_dir() {
-            std::fs::create_dir_all(&self.dir).map_err(|e| OutputError::new(&self.dir, e))?;
-            self.created_dir = true;
-        }
-        let path = self.dir.join(name);
-        let tmp = write_temporary(&path, fill)?;
-        self.staged.push((tmp, path));
-        Ok(())
-    }
-
-    pub fn add(&mut self, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
-        self.add_with(name, |w| w.write_all(bytes))
-    }
-
-    /// Renames every temporary over its final name.
-    pub fn commit(mut self) -> Result<(), OutputError> {
-        let staged = std::mem::take(&mut self.staged);
-        self.created_dir = false;
-        let mut pending = staged.iter();
-        for (tmp, path) in pending.by_ref() {
-            if let Err(e) = rename(tmp, path) {
-                for (tmp, _) in pending {
-                    let _ = std::fs::remove_file(tmp);
-                }
-                return Err(e);
-            }
-        }
-        Ok(())
-    }
-}
-
-impl Drop for FileSet {
-    fn drop(&mut self) {
-        for (tmp, _) in &self.staged {
-            let _ = std::fs::remove_file(tmp);
-        }
-        if self.created_dir {
-            // Only if empty: the folder held nothing of the user's.
-            let _ = std::fs::remove_dir(&self.dir);
-        }
-    }
 }
 
 #[cfg(test)]
@@ -323,6 +247,23 @@ mod tests {
         assert_eq!(names(&out).iter().filter(|n| !is_temporary(n)).count(), 0, "nothing before commit");
         set.commit().unwrap();
         assert_eq!(names(&out), ["x.json", "y.png"]);
+
+        // A quota that only fsync reports, at each file and at the folder,
+        // and a rename failing at each member: the old set stays whole.
+        for (step, ops) in [(Step::Sync, 4), (Step::Rename, 5)] {
+            for k in 0..ops {
+                faults().fail_in(step, Some(&dir), k);
+                let mut set = FileSet::new(&out);
+                let r = set.add("x.json", b"new x").and_then(|()| set.add("z.exr", b"new z"));
+                let r = r.and_then(|()| set.add("y.png", b"new y")).and_then(|()| set.commit());
+                let e = r.expect_err(&format!("{step:?} {k}"));
+                assert_eq!(e.error.raw_os_error(), Some(step.errno()), "{step:?} {k}: {e}");
+                assert_eq!(names(&out), ["x.json", "y.png"], "{step:?} {k}");
+                assert_eq!(std::fs::read(out.join("x.json")).unwrap(), b"1", "{step:?} {k}");
+                assert_eq!(std::fs::read(out.join("y.png")).unwrap(), b"2", "{step:?} {k}");
+            }
+        }
+        faults().disarm();
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
