@@ -43,6 +43,24 @@ fn every_field_of_the_control_word_round_trips() {
     assert_eq!(ControlCode { threshold: 0, ..c }.threshold_value(0.9), 0.9, "code 0: the background's own");
 }
 
+/// A map of another shape than its area is refused in one line (its words
+/// would land stretched, far from where they were painted); one of the
+/// area's shape, or within 5 % of it, opens.
+#[test]
+fn a_control_map_of_another_shape_than_its_area_is_refused() {
+    let dir = temp_dir("shape");
+    let map = |w: u32, h: u32| {
+        let p = dir.join(format!("map{w}x{h}.png"));
+        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_pixel(w, h, image::Luma([7])).save(&p).unwrap();
+        p
+    };
+    let e = vista::world::ControlMap::open(&map(3, 5), [10240.0, 10240.0]).unwrap_err().to_string();
+    assert!(e.contains("3 x 5 texels over 10240 x 10240 m") && e.lines().count() == 1, "{e}");
+    assert!(vista::world::ControlMap::open(&map(64, 64), [10240.0, 10240.0]).is_ok());
+    assert!(vista::world::ControlMap::open(&map(64, 62), [10240.0, 10240.0]).is_ok());
+    assert!(vista::world::ControlMap::open(&map(64, 32), [2048.0, 1024.0]).is_ok());
+}
+
 fn temp_dir(tag: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("control-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();

@@ -79,3 +79,21 @@ fn the_embedding_example_lights_vistas_gbuffer_keeps_its_depth_and_vista_never_s
         assert!(stats.mean < 0.03 && stats.p99 < 0.1, "{name} against lit: {stats:?}");
     }
 }
+
+/// Without a display the example says so in one line (exit 2), as `vista
+/// view` does, instead of panicking with a backtrace.
+#[test]
+fn the_embedding_example_without_a_display_says_so_in_one_line() {
+    let exe = std::env::current_exe().unwrap();
+    let example = exe.parent().unwrap().parent().unwrap().join("examples").join("embed");
+    assert!(example.exists(), "{} was not built (cargo build --release --examples)", example.display());
+    let out = std::process::Command::new(&example)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .args(["--frames", "1"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.trim_end().lines().count() == 1 && err.contains("xvfb-run") && !err.contains("panicked"), "{err}");
+}

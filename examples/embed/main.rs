@@ -347,9 +347,19 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let event_loop = EventLoop::new().expect("an X display (DISPLAY)");
+    // No display is the user's to fix: one line, not a panic's backtrace.
+    let event_loop = match EventLoop::new() {
+        Ok(l) => l,
+        Err(e) => {
+            eprintln!("embed: cannot open a window ({e}); without a display, run it under `xvfb-run -a`");
+            std::process::exit(2);
+        }
+    };
     let mut app = App { args, window: None, thread: None, done: Arc::default(), result: Ok(()) };
-    event_loop.run_app(&mut app).expect("the event loop");
+    if let Err(e) = event_loop.run_app(&mut app) {
+        eprintln!("embed: the window's event loop failed: {e}");
+        std::process::exit(1);
+    }
     if let Err(e) = app.result {
         eprintln!("embed: {e}");
         std::process::exit(1);

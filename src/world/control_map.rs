@@ -136,6 +136,27 @@ pub fn nearest_threshold(value: f32) -> u8 {
     best.map_or(0, |i| i as u8 + 1)
 }
 
+/// Refuses a map whose texels the extent would stretch unevenly (a 3 x 5
+/// map over a square world): its words would land far from where they
+/// were painted. Up to 5 % is a rounding of the map's size, not a shape.
+fn check_shape(path: &Path, extent_m: [f64; 2]) -> Result<()> {
+    let (w, h) =
+        super::png16::Png16Source::header(path).map_err(|e| WorldError::InvalidDesc(format!("control map: {e}")))?;
+    let texel = [extent_m[0] / f64::from(w), extent_m[1] / f64::from(h)];
+    if (texel[0] / texel[1]).ln().abs() > 1.05f64.ln() {
+        return Err(WorldError::InvalidDesc(format!(
+            "control map {}: {w} x {h} texels over {} x {} m would stretch each to {:.1} x {:.1} m; give a map of \
+             the area's shape",
+            path.display(),
+            extent_m[0],
+            extent_m[1],
+            texel[0],
+            texel[1]
+        )));
+    }
+    Ok(())
+}
+
 /// A painted control map over the world's extent: a 16-bit grayscale PNG,
 /// row 0 north, looked up by the texel containing a point (codes are not
 /// interpolated).
@@ -148,6 +169,7 @@ impl ControlMap {
     /// Reads `path` (checked like a height map before it is decoded) to
     /// cover `extent_m`.
     pub fn open(path: &Path, extent_m: [f64; 2]) -> Result<ControlMap> {
+        check_shape(path, extent_m)?;
         let png = super::png16::Png16Source::open(path, extent_m, [0.0, 65535.0])
             .map_err(|e| WorldError::InvalidDesc(format!("control map: {e}")))?;
         Ok(ControlMap { grid: png.into_grid() })

@@ -26,6 +26,8 @@ pub enum WorldError {
     WrongPixelFormat { path: PathBuf, expected: &'static str, found: String },
     #[error("{}: image size {width}x{height} is zero or larger than {max}x{max}", path.display())]
     BadDimensions { path: PathBuf, width: u64, height: u64, max: u32 },
+    #[error("{}: every sample holds the no-data value {value}: the map has no ground to draw", path.display())]
+    AllNoData { path: PathBuf, value: f64 },
     #[error("{}: {count} heights are NaN or infinite", path.display())]
     NonFiniteHeights { path: PathBuf, count: usize },
     #[error("{}: {count} heights lie beyond +-{limit:e} m (heights must be metres)", path.display())]

@@ -250,7 +250,7 @@ fn fill_no_data<T: Copy>(
         }
     }
     if valid_rows.is_empty() {
-        return Err(WorldError::corrupt(path, format!("every sample holds the no-data value {n}")));
+        return Err(WorldError::AllNoData { path: path.to_path_buf(), value: n });
     }
     // Rows without a valid sample copy the nearest row that has one.
     for j in 0..values.len() / w {

@@ -69,7 +69,9 @@ impl Png16Source {
         let mut file = std::fs::File::open(path).map_err(|e| WorldError::io(path, e))?;
         std::io::Read::read_exact(&mut file, &mut head)
             .map_err(|_| WorldError::corrupt(path, "not a PNG file (shorter than its header)"))?;
-        check_header(&head, path)
+        let size = check_header(&head, path)?;
+        check_chunks(&mut file, path)?;
+        Ok(size)
     }
 
     /// Decodes an in-memory PNG; `label` names it in errors.
@@ -142,6 +144,36 @@ pub(crate) fn check_params(extent_m: [f64; 2], height_range_m: [f32; 2]) -> Resu
         return Err(WorldError::InvalidDesc(format!("height range must be finite with lo < hi, got {lo}..{hi}")));
     }
     Ok(())
+}
+
+/// Walks the chunk list to IEND by lengths alone (a seek each, no data
+/// read): a truncated file is refused by commands that read only headers
+/// (`vista memory`, plans), as decoding would refuse it. Chunk CRCs are the
+/// decoder's to check.
+fn check_chunks(file: &mut std::fs::File, label: &Path) -> Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let len = file.metadata().map_err(|e| WorldError::io(label, e))?.len();
+    let mut at = 8u64;
+    while at + 12 <= len {
+        let mut head = [0u8; 8];
+        file.seek(SeekFrom::Start(at))
+            .and_then(|_| file.read_exact(&mut head))
+            .map_err(|e| WorldError::io(label, e))?;
+        let chunk = u64::from(u32::from_be_bytes([head[0], head[1], head[2], head[3]]));
+        let end = at + 12 + chunk;
+        if end > len {
+            let name = String::from_utf8_lossy(&head[4..8]).into_owned();
+            return Err(WorldError::corrupt(
+                label,
+                format!("chunk {name} at byte {at} ends at byte {end}, the file has {len}"),
+            ));
+        }
+        if &head[4..8] == b"IEND" {
+            return Ok(());
+        }
+        at = end;
+    }
+    Err(WorldError::corrupt(label, format!("no IEND chunk in its {len} bytes")))
 }
 
 /// Reads the IHDR chunk by hand so size and pixel format are checked before

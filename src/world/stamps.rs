@@ -313,7 +313,10 @@ impl StampedSource {
                 .filter(|s| s.overlaps(b))
                 .fold(base, |r, s| s.placement.blend.range(r, s.height_range()));
             let [lo, hi] = stamp.placement.blend.range(under, stamp.height_range());
-            if lo < world[0] || hi > world[1] {
+            // Within half an R16 step of the range a height rounds into it:
+            // only beyond does it clip (bounds of the base carry rounding).
+            let half_step = (world[1] - world[0]) / 65535.0 * 0.5;
+            if lo < world[0] - half_step || hi > world[1] + half_step {
                 return Err(WorldError::InvalidStamp(format!(
                     "stamp {} ({} at {:.0},{:.0}) can take the ground to {lo:.1}..{hi:.1} m, outside the world's \
                      height range {}..{} m: widen height_range or lower the stamp's height or offset",

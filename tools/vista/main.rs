@@ -14,6 +14,7 @@ mod golden_cmd;
 mod heightmap_files;
 mod numbers;
 mod out_path;
+mod placements;
 mod progress;
 mod render_cmd;
 mod render_out;

@@ -29,7 +29,7 @@
 //! rotation_deg = 0             # counter-clockwise
 //! height = 80                  # metres spanned by the map's 0..1
 //! offset = 0                   # metres added to the stamp's heights
-//! blend = "add"                # replace | add | max | min
+//! blend = "add"                # replace | add | max | min (optional: replace)
 //! falloff = 20                 # metres inside the edge over which it fades in
 //! control_map = "crater-control.png"  # optional (control-map mode): its words where it weighs >= 0.5
 //!
@@ -164,6 +164,8 @@ struct SceneStamp {
     height: f64,
     #[serde(default)]
     offset: f64,
+    /// Optional: `replace` (the map pasted as it is) unless given.
+    #[serde(default = "replace")]
     blend: String,
     #[serde(default)]
     falloff: f64,
@@ -197,6 +199,10 @@ struct SceneDecal {
 
 fn full() -> f32 {
     1.0
+}
+
+fn replace() -> String {
+    "replace".to_string()
 }
 
 #[derive(Debug, Deserialize)]
@@ -439,6 +445,12 @@ mod tests {
         let e = format!("{:#}", Scene::load(&path).unwrap_err());
         assert!(e.contains("scree_slope_deg (60) must not exceed rock_slope_deg (40)"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_stamp_without_blend_replaces() {
+        let s = parse("[[stamps]]\nsource = \"a.png\"\ncenter = [1, 2]\nsize = 10\nheight = 5\n").unwrap();
+        assert_eq!(s.stamps().unwrap()[0].placement.blend, StampBlend::Replace);
     }
 
     #[test]

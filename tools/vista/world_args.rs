@@ -207,7 +207,19 @@ impl WorldArgs {
             self.note_overrides(&scene);
         }
         let defaults = WorldDesc::default();
-        let spacing_m = self.spacing.or(w.spacing).unwrap_or(defaults.spacing_m);
+        // A GeoTIFF's posts are its samples: its pixel size is the spacing
+        // that draws them (as a PNG world at its pixel size), not 0.5 m
+        // over a 90 m DEM, which would plan thousands of times the nodes.
+        // A map under a node's 128 quads a side halves it until one fits
+        // (the vertices still include every post).
+        let geotiff_spacing = geotiff.as_ref().and_then(|g| Some((g.pixel_m?, extent?))).map(|(p, e)| {
+            let mut s = p[0].min(p[1]);
+            while e[0].min(e[1]) < s * f64::from(vista::world::NODE_QUADS) && s > f64::MIN_POSITIVE {
+                s *= 0.5;
+            }
+            s
+        });
+        let spacing_m = self.spacing.or(w.spacing).or(geotiff_spacing).unwrap_or(defaults.spacing_m);
         let seed = self.seed.or(w.seed).unwrap_or(1);
         let origin_m = self.origin_m(&scene, geotiff.as_ref())?;
         let names = self.field_names(w, height_range);
@@ -235,11 +247,38 @@ impl WorldArgs {
             None => given.procedural(seed)?,
             Some((path, what)) => given.heightmap(path, what, geotiff.is_some())?,
         };
+        self.check_far_corner(&desc, origin_m)?;
         note_holes_outside(&holes, &desc, origin_m);
+        if let Some(path) = &self.scene {
+            crate::placements::check_inside(path, &stamps, &decals.decals, &assets, &desc, origin_m)?;
+        }
+        if let Some(map) = &scene.effects.control_map {
+            crate::placements::note_coarse_control_map(map, &desc);
+        }
         let max_sectors_per_side = self.max_sectors.unwrap_or(DEFAULT_MAX_SECTORS_PER_SIDE);
         let limits = Limits { max_sectors_per_side, ..Limits::default() };
         let bake = BakeSettings { format: self.payload, materials: scene.material_rules, control: None };
         Ok(WorldSpec { desc, source, holes, stamps, decals, assets, effects: scene.effects, origin_m, limits, bake })
+    }
+
+    /// The whole world, not only its corner, within the range `vista
+    /// stability` proves exact: otherwise the first camera over it (the
+    /// default one too) would be refused, naming a camera nobody gave.
+    fn check_far_corner(&self, desc: &WorldDesc, origin_m: [f64; 2]) -> Result<()> {
+        let far = [origin_m[0] + desc.extent_m[0], origin_m[1] + desc.extent_m[1]];
+        let limit = crate::render_cmd::PROVEN_RANGE_M;
+        if far.iter().any(|v| v.abs() > limit) {
+            let name = if self.origin.is_some() { "--origin" } else { "the scene's origin" };
+            bail!(
+                "{name} {},{}: the world then reaches {},{} m, beyond +-{limit:e} m, outside what `vista stability` \
+                 case 1 proves exact",
+                show_m(origin_m[0]),
+                show_m(origin_m[1]),
+                show_m(far[0]),
+                show_m(far[1])
+            );
+        }
+        Ok(())
     }
 
     /// The height map file (and who named it), with a GeoTIFF's header.
@@ -336,6 +375,11 @@ impl DescInputs<'_> {
         // An absurd world fails before the file is opened.
         check_desc(&desc, self.names)?;
         let kind = heightmap_kind(&path, what, height_range)?;
+        if kind == MapKind::Png {
+            // Its header and chunk list (no pixels): commands that never
+            // decode it (memory, plans) refuse a broken file as render does.
+            vista::world::Png16Source::header(&path).map_err(input_error)?;
+        }
         if clamp && kind == MapKind::Png {
             // (a GeoTIFF's data is clamped like an EXR's)
             bail!(

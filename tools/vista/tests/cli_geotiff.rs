@@ -25,5 +25,11 @@ fn the_command_line_takes_extent_and_origin_from_the_tags() {
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && !err.contains("outside the world"), "{err}");
+    // No --spacing: the pixel size (30 x 20 m; the finer), which puts the
+    // vertices on the posts, not the procedural world's 0.5 m; halved
+    // twice, as the map's 960 m are under 128 quads of 20 m.
+    let out = vista_cmd::vista_cmd().args(["bake", "--dry-run", "--heightmap"]).arg(&tif).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && text.contains("spacing 5 m"), "{text}{}", String::from_utf8_lossy(&out.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }

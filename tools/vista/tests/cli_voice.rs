@@ -125,6 +125,17 @@ fn render_world_cases(inputs: &Path) -> Vec<Vec<String>> {
     let rules = scene(inputs, "rules.toml", "[material_rules]\nsnow_line_m = \"high\"\n");
     let effect = scene(inputs, "effect.toml", "[effects]\nholes = 5\n");
     let syntax = scene(inputs, "syntax.toml", "[world\nlods = 3\n");
+    // Placements that miss the world entirely (each would do nothing).
+    let crater = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/stamps/crater.png");
+    let far_stamp = format!("[[stamps]]\nsource = \"{crater}\"\ncenter = [900000, 900000]\nsize = 300\nheight = 50\n");
+    let far_stamp = scene(inputs, "far_stamp.toml", &far_stamp);
+    let far_asset = scene(inputs, "far_asset.toml", "[[assets]]\nkind = \"rock\"\nat = [99999, 99999]\n");
+    let far_decal = "[[decals]]\ntexture = \"a.png\"\nquad = { center = [-5000, 10], size = [4, 2] }\n";
+    let far_decal = scene(inputs, "far_decal.toml", far_decal);
+    let truncated = inputs.join("truncated.png");
+    std::fs::write(&truncated, &std::fs::read(MONTBLANC).unwrap()[..4000]).unwrap();
+    let truncated = truncated.to_str().unwrap().to_string();
+    let flight = scene(inputs, "flight.txt", "100,100,500,0,-20\nscene nope.toml\n");
     let cargo = concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.toml");
     let mb_range = ["--extent", "60000", "--height-range", "454", "4810", "--spacing", "8"];
     let with_mb = |v: &[&str]| [s(v), s(&mb_range)].concat();
@@ -155,6 +166,14 @@ fn render_world_cases(inputs: &Path) -> Vec<Vec<String>> {
         s(&["render", "--camera", "1e300,0,0"]),
         s(&["render", "--fov", "1e-9"]),
         s(&["render", "--fov", "179.95"]),
+        s(&["render", "--origin", "1e7,5e6"]),
+        s(&["render", "--scene", &far_stamp]),
+        s(&["render", "--scene", &far_asset]),
+        s(&["render", "--scene", &far_decal]),
+        with_mb(&["memory", "--heightmap", &truncated]),
+        s(&["view", "--frames", "1", "--screenshot", "shot.jpg"]),
+        s(&["view", "--frames", "2", "--path", &flight]),
+        s(&["bake", "--out", "nodes", "--shard", "-1/2"]),
     ]
 }
 

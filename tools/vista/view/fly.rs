@@ -113,7 +113,13 @@ impl FlightPath {
             }
             if let Some(file) = line.strip_prefix("scene ") {
                 let dir = path.parent().unwrap_or(Path::new("."));
-                scenes.push((keys.len(), vista::world::resolve_relative(dir, Path::new(file.trim()))));
+                let scene = vista::world::resolve_relative(dir, Path::new(file.trim()));
+                // Checked now, not when the flight gets there: a typo is a
+                // missing file, not a world that differs.
+                if !scene.is_file() {
+                    bail!("--path {} line {}: scene {}: no such file", path.display(), n + 1, scene.display());
+                }
+                scenes.push((keys.len(), scene));
                 continue;
             }
             let arg = crate::render_cmd::parse_camera(line)

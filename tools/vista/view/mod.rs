@@ -95,6 +95,10 @@ pub fn check(args: &ViewArgs) -> Result<(LoadedWorld, Option<FlightPath>)> {
         bail!("--path needs --frames N (the flight is spread over them)");
     }
     if let Some(shot) = &args.screenshot {
+        // PNG is what it writes: another extension would name bytes it is not.
+        if !shot.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            bail!("--screenshot {}: the screenshot is a PNG; give a file name ending in .png", shot.display());
+        }
         crate::out_path::check_out_file(shot, "--screenshot")?;
     }
     if !(args.settle_seconds.is_finite() && args.settle_seconds >= 0.0) {
@@ -108,7 +112,7 @@ pub fn check(args: &ViewArgs) -> Result<(LoadedWorld, Option<FlightPath>)> {
 
 pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: Option<FlightPath>) -> Result<()> {
     if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
-        bail!("cannot open a window: DISPLAY is not set (no X display; under none, run `xvfb-run -a vista view ...`)");
+        bail!("cannot open a window: DISPLAY is not set (no X display); without one, run `xvfb-run -a vista view ...`");
     }
     let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window on DISPLAY: {e}"))?;
     let mut view = args.viewpoint.view(&world);
