@@ -1,22 +1,30 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Per-patch LOD selection (common/lod_select.glsl), one workgroup per
-// listed node (indirect, from traverse), one thread per patch, in two
+// listed node (indirect, from traverse), one thread per patch, in four
 // dispatches: phase 0 picks each patch's coarse level (the coarsest
 // ancestor whose patch meets the target, capped for the seams), phase 1
-// refines the LOD-0 patches that LOD 0 itself does not serve (capped by the
-// neighbours' coarse levels phase 0 wrote). cull_patches and cull_occluded
-// draw what they decided.
+// asks to refine the LOD-0 patches that LOD 0 itself does not serve (capped
+// by the neighbours' coarse levels phase 0 wrote) and counts them per
+// priority bucket, phase 2 (one workgroup) finds the lowest bucket the
+// refinement budget still holds whole, phase 3 refuses the rest. Which
+// patches are refined thus depends on their errors alone, never on the
+// order workgroups ran in. cull_patches and cull_occluded draw what they
+// decided.
 layout(local_size_x = 256) in;
 
 #define SELECT_WRITES 1
 #include "lod_select.glsl"
 
 layout(push_constant, std430) uniform SelectPush {
-    uint phase;      // 0: coarse levels; 1: refinement
-    uint lod_count;  // the world's LODs (the root is lod_count - 1)
+    uint phase;       // 0: coarse levels; 1: refinement asked; 2: cut-off; 3: refinement decided
+    uint lod_count;   // the world's LODs (the root is lod_count - 1)
+    uint budget;      // LOD-0 patches refined at most (<= MAX_REFINED_PATCHES)
+    uint buckets_at;  // index in `levels` of the REFINE_BUCKETS counts, then the cut-off
+    uint reversed;    // 1: the node list and each node's patches taken in reverse order (tests: order independence)
     uint pad0;
     uint pad1;
+    uint pad2;
 } pc;
 
 shared int s_finest;    // finest listed LOD along the node's edges (outside it)
@@ -87,6 +95,14 @@ void coarse_level(uint lod, ivec2 node, uint slot, uint t) {
     }
 }
 
+// Which of REFINE_BUCKETS a patch asking for refinement falls in: its LOD-0
+// error projected over the target, in REFINE_BUCKETS_PER_OCTAVE steps a
+// doubling (higher: more in need).
+uint priority_bucket(float err, vec3 lo, vec3 hi) {
+    float over = max(projected_px(err, lo, hi) / view.v.lod_params.x, 1.0);
+    return min(uint(log2(over) * float(REFINE_BUCKETS_PER_OCTAVE)), REFINE_BUCKETS - 1u);
+}
+
 // Phase 1: refinement of a LOD-0 patch drawn at LOD 0, by the errors of
 // LOD 0 and of the 2x refinement (the 4x one is the finest surface: 0).
 void refine_level(ivec2 node, uint slot, uint t) {
@@ -118,22 +134,65 @@ void refine_level(ivec2 node, uint slot, uint t) {
         r = min(r, int(MAX_LOD_DELTA) - coarsest);
     }
     if (r > 0) {
-        if (atomicAdd(select_levels.header.refined, 1u) >= MAX_REFINED_PATCHES) {
-            atomicAdd(select_levels.header.refine_capped, 1u);
-            r = 0;
-        }
+        atomicAdd(select_levels.header.refined, 1u);
+        uint b = priority_bucket(e.x, lo, hi);
+        atomicAdd(select_levels.levels[pc.buckets_at + b], 1);
+        // Phase 3 reads the bucket back: -(r | bucket << 2) until then.
+        select_levels.levels[2 * i + 1] = -(r | int(b << 2u));
+        return;
     }
-    select_levels.levels[2 * i + 1] = -max(r, 0);
+    select_levels.levels[2 * i + 1] = 0;
+}
+
+// Phase 2 (one workgroup): the lowest bucket from which every bucket up
+// fits the budget whole.
+void cut_off(uint t) {
+    if (t != 0u) {
+        return;
+    }
+    uint kept = 0u;
+    int cut = int(REFINE_BUCKETS);
+    for (int b = int(REFINE_BUCKETS) - 1; b >= 0; --b) {
+        uint n = uint(select_levels.levels[pc.buckets_at + uint(b)]);
+        if (kept + n > pc.budget) {
+            break;
+        }
+        kept += n;
+        cut = b;
+    }
+    select_levels.levels[pc.buckets_at + REFINE_BUCKETS] = cut;
+    select_levels.header.refine_capped = select_levels.header.refined - kept;
+}
+
+// Phase 3: a patch below the cut-off is drawn at LOD 0.
+void decide_refinement(uint slot, uint t) {
+    int i = select_index(slot, t);
+    int asked = -select_levels.levels[2 * i + 1];
+    if (select_levels.levels[2 * i] != 0 || asked <= 0) {
+        return;
+    }
+    int cut = select_levels.levels[pc.buckets_at + REFINE_BUCKETS];
+    int r = (asked >> 2) >= cut ? (asked & 3) : 0;
+    select_levels.levels[2 * i + 1] = -r;
 }
 
 void main() {
-    uint t = gl_LocalInvocationID.x;
-    uvec2 entry = traverse_out.nodes[gl_WorkGroupID.x];
+    uint t = pc.reversed != 0u ? gl_WorkGroupSize.x - 1u - gl_LocalInvocationID.x : gl_LocalInvocationID.x;
+    if (pc.phase == 2u) {
+        cut_off(t);
+        return;
+    }
+    uint w = pc.reversed != 0u ? traverse_out.header.dispatch_x - 1u - gl_WorkGroupID.x : gl_WorkGroupID.x;
+    uvec2 entry = traverse_out.nodes[w];
     uint n = entry.x, slot = entry.y, lod = node_lod(n);
     ivec2 node = ivec2(node_x(n), node_y(n));
     if (pc.phase == 0u) {
         coarse_level(lod, node, slot, t);
-    } else if (lod == 0u) {
+    } else if (lod != 0u) {
+        return;
+    } else if (pc.phase == 1u) {
         refine_level(node, slot, t);
+    } else {
+        decide_refinement(slot, t);
     }
 }

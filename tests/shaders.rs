@@ -172,7 +172,12 @@ fn culling_and_drawing_twins_match() {
         layouts::SELECT_HEADER,
         structs::SELECT_HEADER,
     );
-    check_layout("SelectPush", fields!(SelectPush: phase, lod_count, pad), layouts::SELECT_PUSH, structs::SELECT_PUSH);
+    check_layout(
+        "SelectPush",
+        fields!(SelectPush: phase, lod_count, budget, buckets_at, reversed, pad),
+        layouts::SELECT_PUSH,
+        structs::SELECT_PUSH,
+    );
     check_layout(
         "TerrainDrawPush",
         fields!(TerrainDrawPush: nan_bits, phase, pad),

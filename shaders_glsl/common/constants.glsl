@@ -86,6 +86,13 @@
 // LOD-0 patches refined per frame at most (the patch lists are sized for
 // them); beyond, a patch is drawn at LOD 0 and counted.
 #define MAX_REFINED_PATCHES 8192u
+// When more LOD-0 patches ask to be refined than the budget allows, the
+// ones refined are chosen by priority, not by which workgroup came first
+// (select_patches, phases 2 and 3): REFINE_BUCKETS buckets of the patch's
+// projected error over the target, REFINE_BUCKETS_PER_OCTAVE to a doubling;
+// whole buckets are kept or refused, so the set is the same on any device.
+#define REFINE_BUCKETS 256u
+#define REFINE_BUCKETS_PER_OCTAVE 16u
 // Counters before the per-slot levels in the selection buffer.
 #define SELECT_HEADER_WORDS 4u
 // A region no listed node covers (outside the world, or no root yet).

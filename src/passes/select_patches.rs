@@ -29,7 +29,8 @@ pub struct SelectHeader {
     pub conflicts: u32,
     /// LOD-0 patches that asked to be refined below the samples.
     pub refined: u32,
-    /// Of those, refused by the per-frame budget (`MAX_REFINED_PATCHES`).
+    /// Of those, refused by the per-frame budget (`LodOptions::refine_budget`,
+    /// by priority: see select_patches.comp).
     pub refine_capped: u32,
     /// Listed patches drawn from an ancestor.
     pub coarsened: u32,
@@ -43,24 +44,39 @@ const _: () = assert!(std::mem::size_of::<SelectHeader>() == 4 * k::SELECT_HEADE
 pub struct SelectPush {
     pub phase: u32,
     pub lod_count: u32,
-    pub pad: [u32; 2],
+    pub budget: u32,
+    pub buckets_at: u32,
+    /// 1: the node list and each node's patches taken in reverse order
+    /// (tests: order independence).
+    pub reversed: u32,
+    pub pad: [u32; 3],
 }
 
 pub struct SelectPatches {
     pipeline: Pipeline,
     sampler: Sampler,
     /// The counters, then two i32 levels (coarse, drawn) per patch of every
-    /// slot; one per frame parity (`frame::per_frame`).
+    /// slot, then the refinement's priority buckets and cut-off; one per
+    /// frame parity (`frame::per_frame`).
     levels: PerFrame<Buffer>,
     lod_count: u32,
+    /// LOD-0 patches refined a frame at most.
+    budget: u32,
+    /// Index in the levels of the first bucket.
+    buckets_at: u32,
+    /// The node list and each node's patches taken in reverse order (a
+    /// test's switch: the workgroup and invocation order of another device).
+    pub reversed: bool,
 }
 
 impl SelectPatches {
     pub const NAME: &'static str = sh::PASS;
 
-    pub fn new(ctx: &Context, world: &WorldDesc, slots: u32) -> Result<Self> {
+    pub fn new(ctx: &Context, world: &WorldDesc, slots: u32, budget: u32) -> Result<Self> {
         assert_eq!(sh::WORKGROUP_SIZE[0] as usize, PATCHES_PER_NODE, "one thread per patch of a node");
-        let entries = u64::from(slots + FIRST_SLOT) * PATCHES_PER_NODE as u64 * 2;
+        assert!((1..=k::MAX_REFINED_PATCHES).contains(&budget), "refine budget {budget}");
+        let levels_len = u64::from(slots + FIRST_SLOT) * PATCHES_PER_NODE as u64 * 2;
+        let entries = levels_len + u64::from(k::REFINE_BUCKETS) + 1;
         let levels = PerFrame::new(|i| {
             Buffer::new(
                 ctx,
@@ -80,6 +96,9 @@ impl SelectPatches {
             sampler: nearest_sampler(ctx, "select_patches_sampler")?,
             levels,
             lod_count: world.lod_count,
+            budget,
+            buckets_at: u32::try_from(levels_len).expect("levels fit u32 indices"),
+            reversed: false,
         })
     }
 
@@ -104,8 +123,8 @@ impl SelectPatches {
 
     /// Writes this frame's view (`view_bytes`, a TerrainView, into `view`)
     /// and resets the counters behind one barrier, then selects every listed
-    /// patch's level in two dispatches; the levels are visible to every
-    /// later command.
+    /// patch's level in four dispatches (select_patches.comp); the levels
+    /// are visible to every later command.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -119,6 +138,8 @@ impl SelectPatches {
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         rec.update_buffer(view, 0, view_bytes);
         rec.update_buffer(self.levels(), 0, bytemuck::bytes_of(&SelectHeader::default()));
+        let buckets = structs::SELECT_HEADER as u64 + u64::from(self.buckets_at) * 4;
+        rec.update_buffer(self.levels(), buckets, &[0u8; 4 * k::REFINE_BUCKETS as usize]);
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(
@@ -134,9 +155,22 @@ impl SelectPatches {
                 (sh::SELECT_LEVELS, Resource::Buffer(self.levels())),
             ],
         );
-        for phase in 0..2 {
-            rec.push_constants(&self.pipeline, &SelectPush { phase, lod_count: self.lod_count, pad: [0; 2] });
-            rec.dispatch_indirect(traverse.output(), 0);
+        for phase in 0..4 {
+            let push = SelectPush {
+                phase,
+                lod_count: self.lod_count,
+                budget: self.budget,
+                buckets_at: self.buckets_at,
+                reversed: u32::from(self.reversed),
+                pad: [0; 3],
+            };
+            rec.push_constants(&self.pipeline, &push);
+            // Phase 2 is one workgroup: the cut-off over all buckets.
+            if phase == 2 {
+                rec.dispatch(1, 1, 1);
+            } else {
+                rec.dispatch_indirect(traverse.output(), 0);
+            }
             rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::ALL_COMMANDS);
         }
     }

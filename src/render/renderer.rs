@@ -90,6 +90,12 @@ pub struct LodOptions {
     /// finest surface the error tree measures against). Below the finest,
     /// the error bound reported is the refused level's.
     pub refine_levels: u32,
+    /// LOD-0 patches refined per frame at most (1 to `MAX_REFINED_PATCHES`,
+    /// the default, which sizes the patch lists). Beyond it the patches
+    /// whose projected error exceeds the target most are refined, whole
+    /// priority buckets at a time, so the choice is the same on every run
+    /// and device; the rest are drawn at LOD 0 and counted.
+    pub refine_budget: u32,
     /// Tests only (feature `test-hooks`): off, edges are not snapped to
     /// coarser neighbours (seams open), to show that the watertightness
     /// tests can fail.
@@ -122,6 +128,7 @@ impl Default for LodOptions {
     fn default() -> Self {
         LodOptions {
             refine_levels: crate::shaders::consts::REFINE_LEVELS,
+            refine_budget: crate::shaders::consts::MAX_REFINED_PATCHES,
             #[cfg(feature = "test-hooks")]
             stitching: true,
         }

@@ -35,7 +35,7 @@ pub fn stability(device: Option<String>, args: &StabilityArgs) -> Result<()> {
     let options = ContextOptions { validation: true, device_name: device, ..Default::default() };
     if args.script_hashes {
         let ctx = Context::headless(&options).context("creating the Vulkan context")?;
-        let hashes = determinism::script_hashes(&ctx)?;
+        let (hashes, _) = determinism::script_hashes(&ctx)?;
         println!("{}", serde_json::to_string(&hashes)?);
         return Ok(());
     }

@@ -44,6 +44,13 @@ fn decisions(
     crate::terrain::check_plan(ctx, world, &options.terrain)?;
     options.depth.check().map_err(Error::BadInput)?;
     options.output.check().map_err(Error::BadInput)?;
+    let budget = options.lod.refine_budget;
+    if !(1..=crate::shaders::consts::MAX_REFINED_PATCHES).contains(&budget) {
+        return Err(Error::BadInput(format!(
+            "refine_budget {budget}: 1 to {} LOD-0 patches refined a frame",
+            crate::shaders::consts::MAX_REFINED_PATCHES
+        )));
+    }
     let (decals, assets) = (options.decals.decals.len(), options.assets.len());
     let mut content = world_content(world, holes, source.has_holes(), decals, assets);
     content.engine_lights = !options.output.lights();
@@ -215,7 +222,7 @@ impl TerrainRenderer {
             lod_map: LodMap::new(ctx, world)?,
             sector_data: SectorData::new(ctx, world)?,
             terrain,
-            select: SelectPatches::new(ctx, world, slot_capacity)?,
+            select: SelectPatches::new(ctx, world, slot_capacity, options.lod.refine_budget)?,
             traverse,
             cull,
             occlusion,
