@@ -1,21 +1,35 @@
 //! Case 8: faults. Every device-memory allocation of start-up and
 //! streaming is made to fail in turn (the quick form: a spread of them),
-//! and a lost device is injected at a queue submission and at a fence
-//! wait. Each failure must come back as an error (or the frame go on with
+//! with the default effects and with every effect a renderer can build
+//! (assets too; decals need a scene's textures and stay off), and a lost
+//! device is injected at a queue submission and at a fence wait, again
+//! with both. Each failure must come back as an error (or the frame go on with
 //! less), never a panic; and after it everything is destroyed cleanly: no
 //! live Vulkan object, no validation message, on a fresh context per try.
 
 use super::rig::Rig;
 use super::{CaseReport, Form};
+use crate::effects::assets::{Asset, AssetKind};
 use crate::error::{Error, Result};
 use crate::gpu::{Context, ContextOptions};
-use crate::render::RendererOptions;
+use crate::render::{Effects, RendererOptions};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// The renderers the faults meet: the default effects, and every effect.
+fn configurations() -> [(&'static str, RendererOptions); 2] {
+    let asset = |kind, at_m| Asset { kind, at_m, scale: 1.0, yaw_deg: 0.0 };
+    let every = RendererOptions {
+        effects: Effects::all(),
+        assets: vec![asset(AssetKind::Rock, [505.0, 530.0]), asset(AssetKind::Trunk, [495.0, 540.0])],
+        ..RendererOptions::default()
+    };
+    [("default effects", RendererOptions::default()), ("every effect", every)]
+}
 
 /// What the script does: start the renderer, stream one view until it
 /// settles, fly to another and stream that.
-fn script(ctx: &Context, on_start: &mut dyn FnMut()) -> Result<()> {
-    let mut rig = Rig::new(ctx, [64, 48], 60, RendererOptions::default(), Vec::new())?;
+fn script(ctx: &Context, options: &RendererOptions, on_start: &mut dyn FnMut()) -> Result<()> {
+    let mut rig = Rig::new(ctx, [64, 48], 60, options.clone(), Vec::new())?;
     on_start();
     let a = rig.view(rig.camera(500.0, 500.0, 30.0, 0.0, -30.0));
     rig.settled_shot(ctx, &a)?;
@@ -48,28 +62,70 @@ pub fn run(options: &ContextOptions, form: Form) -> Result<CaseReport> {
     r.measured = "panics, objects left alive, validation messages after an injected allocation failure (each of start-up and the frames) or a lost device at submit / fence wait; frames before a lost device is reported".into();
     r.bound = "0, 0, 0; 0 frames late".into();
     r.why = "a failure the caller cannot prevent must reach them as an error from the call that met it, and dropping what exists must still free everything, so an engine can recover or shut down".into();
+    let (mut panics, mut leaks, mut messages) = (0usize, 0i64, 0usize);
+    for (name, config) in configurations() {
+        let t = allocation_faults(options, form, &config, &mut r, name)?;
+        panics += t.0;
+        leaks += t.1;
+        messages += t.2;
+    }
+    // A lost device: the frame that submits (or waits) must fail.
+    let mut late = 0u32;
+    for (name, config) in configurations() {
+        for (what, which) in [("submit", 1usize), ("fence wait", 2)] {
+            let o = attempt(options, &|_| (), &|ctx| lose_device(ctx, &config, which))?;
+            let ok = matches!(o.result, Ok(Ok(())));
+            late += u32::from(!ok);
+            panics += usize::from(o.result.is_err());
+            leaks += o.live;
+            messages += o.messages;
+            let how = match &o.result {
+                Ok(Ok(())) => "the frame that met it returned DeviceLost".to_string(),
+                Ok(Err(e)) => format!("WRONG: {e}"),
+                Err(()) => "PANIC".into(),
+            };
+            r.details.push(format!(
+                "{name}, device lost at {what}: {how}; then {} objects alive, {} validation messages",
+                o.live, o.messages
+            ));
+        }
+    }
+    r.worst = format!("{panics}, {leaks}, {messages}; {late} late");
+    r.pass = panics == 0 && leaks == 0 && messages == 0 && late == 0;
+    Ok(r)
+}
+
+/// Every (quick: a spread of) allocation of one configuration failed in
+/// turn: (panics, objects left alive, validation messages).
+fn allocation_faults(
+    options: &ContextOptions,
+    form: Form,
+    config: &RendererOptions,
+    r: &mut CaseReport,
+    name: &str,
+) -> Result<(usize, i64, usize)> {
     // The clean run: how many allocations start-up and streaming make.
     let mut at_start = 0u64;
     let total = {
         let ctx = Context::headless(options)?;
         let base = ctx.faults().counts()[0];
-        script(&ctx, &mut || at_start = ctx.faults().counts()[0] - base)?;
+        script(&ctx, config, &mut || at_start = ctx.faults().counts()[0] - base)?;
         ctx.wait_idle()?;
         ctx.faults().counts()[0] - base
     };
     let indices = fault_indices(form, total, at_start);
     let (mut panics, mut leaks, mut messages, mut errors, mut survived) = (0usize, 0i64, 0usize, 0usize, 0usize);
     for &k in &indices {
-        let o = attempt(options, &|ctx| ctx.faults().fail_allocation_in(k), &|ctx| script(ctx, &mut || ()))?;
+        let o = attempt(options, &|ctx| ctx.faults().fail_allocation_in(k), &|ctx| script(ctx, config, &mut || ()))?;
         match &o.result {
             Err(()) => {
                 panics += 1;
-                r.details.push(format!("allocation {k}: PANIC"));
+                r.details.push(format!("{name}, allocation {k}: PANIC"));
             }
             Ok(Err(Error::OutOfDeviceMemory)) => errors += 1,
             Ok(Err(e)) => {
                 errors += 1;
-                r.details.push(format!("allocation {k}: error {e}"));
+                r.details.push(format!("{name}, allocation {k}: error {e}"));
             }
             Ok(Ok(())) => survived += 1,
         }
@@ -77,38 +133,17 @@ pub fn run(options: &ContextOptions, form: Form) -> Result<CaseReport> {
         messages += o.messages;
         if o.live != 0 || o.messages != 0 {
             r.details.push(format!(
-                "allocation {k}: {} objects alive, {} validation messages after teardown",
+                "{name}, allocation {k}: {} objects alive, {} validation messages after teardown",
                 o.live, o.messages
             ));
         }
     }
     r.details.push(format!(
-        "{} of {total} allocations failed in turn ({at_start} creating the renderer and targets, {} in the frames: the G-buffer and tile lists of the first frame, read-backs; streaming uses slots made at start-up): {errors} returned an error, {survived} went on without it",
+        "{name}: {} of {total} allocations failed in turn ({at_start} creating the renderer and targets, {} in the frames: the G-buffer and tile lists of the first frame, read-backs; streaming uses slots made at start-up): {errors} returned an error, {survived} went on without it",
         indices.len(),
         total - at_start
     ));
-    // A lost device: the frame that submits (or waits) must fail.
-    let mut late = 0u32;
-    for (what, which) in [("submit", 1usize), ("fence wait", 2)] {
-        let o = attempt(options, &|_| (), &|ctx| lose_device(ctx, which))?;
-        let ok = matches!(o.result, Ok(Ok(())));
-        late += u32::from(!ok);
-        panics += usize::from(o.result.is_err());
-        leaks += o.live;
-        messages += o.messages;
-        let how = match &o.result {
-            Ok(Ok(())) => "the frame that met it returned DeviceLost".to_string(),
-            Ok(Err(e)) => format!("WRONG: {e}"),
-            Err(()) => "PANIC".into(),
-        };
-        r.details.push(format!(
-            "device lost at {what}: {how}; then {} objects alive, {} validation messages",
-            o.live, o.messages
-        ));
-    }
-    r.worst = format!("{panics}, {leaks}, {messages}; {late} late");
-    r.pass = panics == 0 && leaks == 0 && messages == 0 && late == 0;
-    Ok(r)
+    Ok((panics, leaks, messages))
 }
 
 /// The allocations to fail, in turn: every one, or (quick) every start-up
@@ -128,8 +163,8 @@ fn fault_indices(form: Form, total: u64, at_start: u64) -> Vec<u64> {
 
 /// Renders frames with the device lost at the next submit (`which` 1) or
 /// fence wait (2): Ok when the frame that met it returned DeviceLost.
-fn lose_device(ctx: &Context, which: usize) -> Result<()> {
-    let mut rig = Rig::new(ctx, [64, 48], 60, RendererOptions::default(), Vec::new())?;
+fn lose_device(ctx: &Context, config: &RendererOptions, which: usize) -> Result<()> {
+    let mut rig = Rig::new(ctx, [64, 48], 60, config.clone(), Vec::new())?;
     let view = rig.view(rig.camera(500.0, 500.0, 30.0, 0.0, -30.0));
     rig.off.frame(ctx, &mut rig.renderer, &view)?;
     let armed = ctx.faults().counts()[which];
