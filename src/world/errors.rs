@@ -204,6 +204,14 @@ impl ErrorTree {
         &self.world
     }
 
+    /// Roots whose tile is neither in memory nor a file of the cache folder
+    /// (a file is not read here: an estimate of the work `prepare` does).
+    pub fn uncached_roots(&self) -> usize {
+        let tiles = self.roots.lock().unwrap_or_else(|e| e.into_inner());
+        let made = |r: &NodeId| tiles.get(r).is_some_and(|c| c.get().is_some());
+        self.world.roots().iter().filter(|r| !made(r) && !self.path(**r).is_some_and(|p| p.is_file())).count()
+    }
+
     /// The numbers of node `id` (valid in the world); the first call for a
     /// root computes (or reads) that root's tile.
     pub fn node(&self, id: NodeId) -> Result<NodeErrors> {

@@ -332,3 +332,21 @@ fn assert_plans_small_and_bakes_within(dir: &Path, world: &[&str], map_bytes: u6
         map_bytes / 1024
     );
 }
+
+/// A spacing far finer than a height map's pixels says so before any work
+/// (the README's Mont Blanc at 92.7 m pixels: 2 m is 46 x finer); the
+/// scenes' 8 m (12 x) gets no line.
+#[test]
+fn a_spacing_far_finer_than_the_map_is_noted_before_work() {
+    let mb = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/montblanc.png");
+    let world = ["--heightmap", mb, "--extent", "60000", "--height-range", "454", "4810"];
+    let fine = vista(&[&["bake", "--dry-run", "--spacing", "2"][..], &world].concat());
+    assert!(fine.ok, "{}", fine.err);
+    assert!(
+        fine.err.contains("note: spacing 2 m is 46 x finer than") && fine.err.contains("--spacing 92.7"),
+        "{}",
+        fine.err
+    );
+    let scene = vista(&[&["bake", "--dry-run", "--spacing", "8"][..], &world].concat());
+    assert!(scene.ok && !scene.err.contains("finer than"), "{}", scene.err);
+}
