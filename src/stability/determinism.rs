@@ -9,13 +9,16 @@
 //! does not depend on the order of disjoint triangles. The script runs with
 //! a small refinement budget (`REFINE_BUDGET`), so more LOD-0 patches ask
 //! to be refined than it holds: which ones are refused must come from
-//! their errors, not from which workgroup reached the counter first.
+//! their errors, not from which workgroup reached the counter first. A
+//! second script renders with every effect a renderer builds but the
+//! virtual texture (grass, assets, cliff meshes, shadows, atmosphere, ...)
+//! over the flight's first cameras (why not the virtual texture: `script_hashes`).
 
-use super::rig::{fly_through, Rig};
+use super::rig::{every_effect, fly_through, Rig};
 use super::{CaseReport, Form};
 use crate::error::Result;
 use crate::gpu::Context;
-use crate::render::{RendererOptions, View};
+use crate::render::{Effect, RendererOptions, View};
 use std::hash::Hasher;
 
 pub const FRAMES: u32 = 30;
@@ -25,15 +28,31 @@ pub const REFINE_BUDGET: u32 = 24;
 /// The script's target error (px).
 const TARGET_PX: f32 = 0.1;
 
-/// One hash per frame of the script (colour, depth and the selection's
+/// Frames of the second script: every effect but the virtual texture.
+pub const EVERY_EFFECT_FRAMES: u32 = 6;
+
+/// One hash per frame of both scripts (colour, depth and the selection's
 /// counters), and the frames whose refinement the budget capped.
 pub fn script_hashes(ctx: &Context) -> Result<(Vec<u64>, u32)> {
     let lod = crate::render::LodOptions { refine_budget: REFINE_BUDGET, ..Default::default() };
-    let mut rig = Rig::new(ctx, [96, 64], 400, RendererOptions { lod, ..RendererOptions::default() }, Vec::new())?;
+    let capped_script = RendererOptions { lod, ..RendererOptions::default() };
+    let (mut out, capped) = script(ctx, capped_script, FRAMES, TARGET_PX)?;
+    // Not the virtual texture (nor its decals): its pages are rendered from
+    // whatever terrain is resident when their request comes back, frames
+    // late, so a settled frame still depends on the loader threads' pace
+    // (1 of 4 frames differed between two runs); issue [X]'s open part.
+    let mut effects = every_effect();
+    effects.effects = effects.effects.with(Effect::VirtualTexture, false).with(Effect::Decals, false);
+    out.extend(script(ctx, effects, EVERY_EFFECT_FRAMES, 1.0)?.0);
+    Ok((out, capped))
+}
+
+/// `frames` settled frames of the fly-through at `target_px`.
+fn script(ctx: &Context, options: RendererOptions, frames: u32, target_px: f32) -> Result<(Vec<u64>, u32)> {
+    let mut rig = Rig::new(ctx, [96, 64], 400, options, Vec::new())?;
     let (mut out, mut capped) = (Vec::new(), 0);
-    for f in 0..FRAMES {
-        // A fine target, so the low frames ask to refine below the samples.
-        let view = View { target_error_px: TARGET_PX, ..rig.view(fly_through(&rig, f, FRAMES)) };
+    for f in 0..frames {
+        let view = View { target_error_px: target_px, ..rig.view(fly_through(&rig, f, FRAMES)) };
         let shot = rig.settled_shot(ctx, &view)?;
         let select = crate::render::stats::collect(ctx, &rig.renderer, &view)?.select;
         capped += u32::from(select.refine_capped > 0);
@@ -54,7 +73,10 @@ pub type Runs = Vec<(String, Result<Vec<u64>>)>;
 /// spawns itself; the test suite runs only the in-process half).
 pub fn run(ctx: &Context, _form: Form, others: Runs) -> Result<CaseReport> {
     let mut r = CaseReport::new(7, "determinism");
-    r.measured = format!("frames of a {FRAMES}-frame script that differ between runs: twice in one process, a second process, LP_NUM_THREADS=1");
+    r.measured = format!(
+        "frames of two scripts ({FRAMES} frames capped, {EVERY_EFFECT_FRAMES} with every effect but the virtual texture) \
+         that differ between runs: twice in one process, a second process, LP_NUM_THREADS=1"
+    );
     r.bound = "0 frames".into();
     r.why = "the same inputs must give the same picture, or regression tests (golden images) cannot tell a change from noise".into();
     let (first, capped) = script_hashes(ctx)?;
@@ -69,7 +91,7 @@ pub fn run(ctx: &Context, _form: Form, others: Runs) -> Result<CaseReport> {
         match hashes {
             Ok(h) => {
                 let differ = h.len().abs_diff(first.len()) + h.iter().zip(&first).filter(|(a, b)| a != b).count();
-                r.details.push(format!("{what}: {differ} of {FRAMES} frames differ"));
+                r.details.push(format!("{what}: {differ} of {} frames differ", first.len()));
                 worst = worst.max(differ);
             }
             Err(e) => {

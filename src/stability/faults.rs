@@ -1,7 +1,7 @@
 //! Case 8: faults. Every device-memory allocation of start-up and
 //! streaming is made to fail in turn (the quick form: a spread of them),
 //! with the default effects and with every effect a renderer can build
-//! (assets too; decals need a scene's textures and stay off), and a lost
+//! (a decal and assets too, `rig::every_effect`), and a lost
 //! device is injected at a queue submission and at a fence wait, again
 //! with both. Each failure must come back as an error (or the frame go on with
 //! less), never a panic; and after it everything is destroyed cleanly: no
@@ -9,21 +9,14 @@
 
 use super::rig::Rig;
 use super::{CaseReport, Form};
-use crate::effects::assets::{Asset, AssetKind};
 use crate::error::{Error, Result};
 use crate::gpu::{Context, ContextOptions};
-use crate::render::{Effects, RendererOptions};
+use crate::render::RendererOptions;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// The renderers the faults meet: the default effects, and every effect.
 fn configurations() -> [(&'static str, RendererOptions); 2] {
-    let asset = |kind, at_m| Asset { kind, at_m, scale: 1.0, yaw_deg: 0.0 };
-    let every = RendererOptions {
-        effects: Effects::all(),
-        assets: vec![asset(AssetKind::Rock, [505.0, 530.0]), asset(AssetKind::Trunk, [495.0, 540.0])],
-        ..RendererOptions::default()
-    };
-    [("default effects", RendererOptions::default()), ("every effect", every)]
+    [("default effects", RendererOptions::default()), ("every effect", super::rig::every_effect())]
 }
 
 /// What the script does: start the renderer, stream one view until it

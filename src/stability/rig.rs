@@ -88,6 +88,39 @@ pub fn fly_through(rig: &Rig, frame: u32, frames: u32) -> Camera {
     rig.camera(x, y, up, 30.0 + 60.0 * t, -60.0)
 }
 
+/// Every effect a renderer builds over the small world: two assets and a
+/// decal at the fly-through's start, where its first cameras look.
+pub fn every_effect() -> RendererOptions {
+    use crate::effects::assets::{Asset, AssetKind};
+    use crate::effects::virtual_texture::decals::{DecalSet, DecalTexture};
+    let checker = image::RgbaImage::from_fn(64, 64, |x, y| {
+        let on = (x / 8 + y / 8) % 2 == 0;
+        image::Rgba(if on { [220, 200, 60, 255] } else { [40, 40, 40, 200] })
+    });
+    let decals = DecalSet {
+        textures: vec![DecalTexture::from_rgba("checker", &checker)].into(),
+        decals: vec![script_decal(0.0)],
+    };
+    let asset = |kind, at_m| Asset { kind, at_m, scale: 1.0, yaw_deg: 0.0 };
+    RendererOptions {
+        effects: crate::render::Effects::all(),
+        decals,
+        assets: vec![asset(AssetKind::Rock, [306.0, 318.0]), asset(AssetKind::Trunk, [300.0, 322.0])],
+        ..RendererOptions::default()
+    }
+}
+
+/// The script's decal, turned by `rotation_deg` (the edit).
+pub fn script_decal(rotation_deg: f64) -> crate::effects::virtual_texture::decals::Decal {
+    use crate::effects::virtual_texture::decals::{Decal, DecalShape};
+    let shape = DecalShape::Quad {
+        center_m: glam::DVec2::new(306.0, 312.0),
+        size_m: glam::DVec2::new(12.0, 8.0),
+        rotation_deg,
+    };
+    Decal { shape, texture: 0, opacity: 1.0, roughness: Some(0.5), displace_m: None }
+}
+
 /// Pixels whose colour or depth bits differ.
 pub fn differing_pixels(a: &Capture, b: &Capture) -> usize {
     let colour = a.rgba.chunks(4).zip(b.rgba.chunks(4));

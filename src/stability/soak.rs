@@ -1,6 +1,7 @@
 //! Case 10: soak. A streaming fly-through back and forth over the small
 //! world with few resident slots (nodes are evicted and streamed in all the
-//! time) for 10 000 frames (the full form; 2 400 in the quick form), with
+//! time), every effect a renderer builds on (`rig::every_effect`) and the
+//! decal turned every 100 frames, for 10 000 frames (the full form; 2 400 in the quick form), with
 //! validation messages, live Vulkan objects, the allocator's bytes and the
 //! process's resident memory sampled every `every` frames. Not part of the
 //! test suite: `vista stability --cases 10 --full`.
@@ -17,7 +18,6 @@ use super::rig::{fly_through, Rig};
 use super::{CaseReport, Form};
 use crate::error::Result;
 use crate::gpu::Context;
-use crate::render::RendererOptions;
 use serde::Serialize;
 
 /// Process memory may move by allocator noise after warm-up, not grow.
@@ -54,13 +54,18 @@ pub fn run(ctx: &Context, form: Form, every: u32, mut on_sample: impl FnMut(&Soa
     );
     r.bound = format!("0 objects, 0 bytes, < {RSS_SLACK_MIB} MiB; 0 messages");
     r.why = "a renderer that runs for hours must hold steady: every per-frame or per-node resource is reused or freed once its frame's fence has passed".into();
-    let mut rig = Rig::new(ctx, [96, 64], SLOTS, RendererOptions::default(), Vec::new())?;
+    let mut rig = Rig::new(ctx, [96, 64], SLOTS, super::rig::every_effect(), Vec::new())?;
     let log = ctx.validation_log();
     let mut samples: Vec<SoakSample> = Vec::new();
     for f in 0..frames {
         // Back and forth along the fly-through.
         let leg = f % (2 * LEG);
         let at = if leg < LEG { leg } else { 2 * LEG - 1 - leg };
+        // A decal edit every 100 frames: the virtual texture re-renders
+        // the pages under it, and nothing may pile up from it.
+        if f % 100 == 99 {
+            rig.renderer.set_decals(ctx, vec![super::rig::script_decal(f64::from(f / 100 % 8) * 45.0)])?;
+        }
         let view = rig.view(fly_through(&rig, at, LEG));
         rig.off.frame(ctx, &mut rig.renderer, &view)?;
         if (f + 1) % every == 0 || f + 1 == frames {

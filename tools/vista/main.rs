@@ -25,6 +25,7 @@ mod stability_cmd;
 #[cfg(feature = "view")]
 mod view;
 mod world_args;
+mod world_notes;
 mod world_spec;
 
 use anyhow::{bail, Context as _, Result};

@@ -141,7 +141,7 @@ impl LoadedWorld {
         vista::terrain::check_plan(ctx, &self.desc, &terrain).map_err(plan_error_is_input)?;
         let dir = cache.map(Path::to_path_buf).or_else(vista::world::default_cache_dir);
         let tree = ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?;
-        note_error_tree_time(&self.desc, tree.uncached_roots());
+        crate::world_notes::note_error_tree_time(&self.desc, tree.uncached_roots());
         let p = tree.prepare(crate::progress::auto());
         let place = match tree.dir() {
             Some(d) => format!("cached in {}", d.display()),
@@ -248,9 +248,10 @@ impl WorldArgs {
             None => given.procedural(seed)?,
             Some((path, what)) => given.heightmap(path, what, geotiff.is_some())?,
         };
-        self.check_far_corner(&desc, origin_m)?;
+        let origin_name = if self.origin.is_some() { "--origin" } else { "the scene's origin" };
+        crate::world_notes::check_far_corner(&desc, origin_m, origin_name)?;
         if let SpecSource::Heightmap { path, kind, .. } = &source {
-            note_spacing_beyond_map(path, *kind, geotiff.as_ref(), &desc);
+            crate::world_notes::note_spacing_beyond_map(path, *kind, geotiff.as_ref(), &desc);
         }
         note_holes_outside(&holes, &desc, origin_m);
         if let Some(path) = &self.scene {
@@ -263,30 +264,6 @@ impl WorldArgs {
         let limits = Limits { max_sectors_per_side, ..Limits::default() };
         let bake = BakeSettings { format: self.payload, materials: scene.material_rules, control: None };
         Ok(WorldSpec { desc, source, holes, stamps, decals, assets, effects: scene.effects, origin_m, limits, bake })
-    }
-
-    /// The whole world, not only its corner, within the range `vista
-    /// stability` proves exact: otherwise the first camera over it (the
-    /// default one too) would be refused, naming a camera nobody gave.
-    fn check_far_corner(&self, desc: &WorldDesc, origin_m: [f64; 2]) -> Result<()> {
-        // Unplaced, a world that large is the plan's to refuse (its sectors).
-        if origin_m == [0.0, 0.0] {
-            return Ok(());
-        }
-        let far = [origin_m[0] + desc.extent_m[0], origin_m[1] + desc.extent_m[1]];
-        let limit = crate::render_cmd::PROVEN_RANGE_M;
-        if far.iter().any(|v| v.abs() > limit) {
-            let name = if self.origin.is_some() { "--origin" } else { "the scene's origin" };
-            bail!(
-                "{name} {},{}: the world then reaches {},{} m, beyond +-{limit:e} m, outside what `vista stability` \
-                 case 1 proves exact",
-                show_m(origin_m[0]),
-                show_m(origin_m[1]),
-                show_m(far[0]),
-                show_m(far[1])
-            );
-        }
-        Ok(())
     }
 
     /// The height map file (and who named it), with a GeoTIFF's header.
@@ -330,51 +307,6 @@ impl WorldArgs {
             );
         }
         Ok(origin_m)
-    }
-}
-
-/// The error tree reads every LOD-0 sample under the roots it computes
-/// before the first frame: a line first when that is long (the plan's
-/// per-quad estimate), so a new world does not sit silent for minutes.
-fn note_error_tree_time(desc: &WorldDesc, uncached: usize) {
-    if uncached == 0 {
-        return;
-    }
-    let plan = vista::world::WorldPlan::new(desc, None);
-    let seconds = plan.error_seconds() * uncached as f64 / desc.roots().len().max(1) as f64;
-    if seconds >= 30.0 {
-        eprintln!(
-            "note: the error tree of {uncached} roots needs every LOD-0 sample under them once (cached after): about \
-             {seconds:.0} s on {} threads before the first frame; a coarser --spacing shortens it",
-            plan.threads
-        );
-    }
-}
-
-/// A spacing far finer than the map's pixels (32 x and more; the scenes'
-/// Mont Blanc at 8 m is 12 x) plans nodes of interpolated
-/// detail (all but one in N^2 samples between posts): legal, and what the
-/// refinement asks for, but a plan of thousands of times the map's posts
-/// deserves a line before any work (a GeoTIFF's spacing defaults to its
-/// pixel size; a PNG's does not know it).
-fn note_spacing_beyond_map(path: &Path, kind: MapKind, geotiff: Option<&GeoTiffInfo>, desc: &WorldDesc) {
-    let pixel_m = match (kind, geotiff) {
-        (_, Some(g)) => g.pixel_m.map(|p| p[0].min(p[1])),
-        (MapKind::Png, None) => vista::world::Png16Source::header(path)
-            .ok()
-            .map(|(w, h)| (desc.extent_m[0] / f64::from(w)).min(desc.extent_m[1] / f64::from(h))),
-        _ => None,
-    };
-    let Some(pixel_m) = pixel_m else { return };
-    let finer = pixel_m / desc.spacing_m;
-    if finer >= 32.0 {
-        eprintln!(
-            "note: spacing {} m is {finer:.0} x finer than {}'s {pixel_m:.1} m pixels: {:.0} samples per post, \
-             interpolated (Catmull-Rom); --spacing {pixel_m:.1} draws the posts themselves",
-            show_m(desc.spacing_m),
-            path.display(),
-            finer * finer
-        );
     }
 }
 
