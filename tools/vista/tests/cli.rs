@@ -448,8 +448,8 @@ fn stability_prints_the_table_and_compares_processes() {
     let (ok, out, err) = vista(&["stability", "--cases", "2,7", "--json", json.to_str().unwrap()]);
     assert!(ok, "{out}\n{err}");
     assert!(out.contains("| 2 depth |") && out.contains("| 7 determinism |"), "{out}");
-    assert!(out.contains("a second process: 0 of 30 frames differ"), "{out}");
-    assert!(out.contains("a second process with LP_NUM_THREADS=1: 0 of 30 frames differ"), "{out}");
+    assert!(out.contains("a second process: 0 of 36 frames differ"), "{out}");
+    assert!(out.contains("a second process with LP_NUM_THREADS=1: 0 of 36 frames differ"), "{out}");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let cases = v["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 2);
