@@ -90,6 +90,48 @@ fn meshes_only_on_steep_cells_watertight_and_shaded_as_cliffs() {
     });
 }
 
+/// At a cell size that is no power of two (0.3 m: neither it nor a quarter
+/// of it is exact in binary), neighbouring cells still share their edge
+/// vertices bit for bit: the vertices are integer lattice indices times one
+/// spacing. (`cell * cell_m + k * cell_m / 4`, as before, rounds each side
+/// differently.)
+#[test]
+fn meshes_at_a_non_dyadic_cell_size_share_their_edges_bit_for_bit() {
+    gpu_test(|ctx| {
+        let mut fx = effects(true);
+        fx.cliff_meshes.cell_m = 0.3;
+        fx.cliff_meshes.radius_m = 12.0;
+        // Unpushed, so each cell is known by its first vertex (a push of
+        // more than half of 0.3 m would move it into the next cell's key).
+        fx.cliff_meshes.amplitude_m = 0.0;
+        let mut on = rig(ctx, fx);
+        on.shot(ctx, &low(), CullStages::default());
+        let c = on.renderer.effect::<vista::effects::cliff_meshes::CliffMeshes>().unwrap();
+        let p = c.params;
+        let (counters, vertices) = c.read(ctx).unwrap();
+        let cells = listed_cells(&vertices, &p);
+        assert_eq!(cells.len() as u32, counters.cells);
+        let side = (CLIFF_CELL_QUADS + 1) as usize;
+        let (mut east, mut north) = (0, 0);
+        for (cell, patch) in &cells {
+            if let Some(e) = cells.get(&[cell[0] + 1, cell[1]]) {
+                for r in 0..side {
+                    assert_eq!(patch[r * side + side - 1], e[r * side], "crack east of {cell:?}");
+                    east += 1;
+                }
+            }
+            if let Some(n) = cells.get(&[cell[0], cell[1] + 1]) {
+                for i in 0..side {
+                    assert_eq!(patch[(side - 1) * side + i], n[i], "crack north of {cell:?}");
+                    north += 1;
+                }
+            }
+        }
+        println!("{} cells of 0.3 m; {east} east and {north} north edge vertices shared, identical", cells.len());
+        assert!(east > 100 && north > 100, "{east} {north}");
+    });
+}
+
 /// Each listed cell by its first vertex (its south-west corner, on the grid).
 fn listed_cells<'v>(vertices: &'v [[f32; 4]], p: &CliffMeshParams) -> BTreeMap<[i32; 2], &'v [[f32; 4]]> {
     let mut cells: BTreeMap<[i32; 2], &[[f32; 4]]> = BTreeMap::new();
@@ -124,8 +166,10 @@ fn slope_points(p: &CliffMeshParams, candidates: &[[i32; 2]], step: f32) -> Vec<
     let mut points = Vec::new();
     for cell in candidates {
         for k in 0..CELL_VERTICES {
-            let v =
-                [cell[0] as f32 * p.cell_m + (k % side) as f32 * q, cell[1] as f32 * p.cell_m + (k / side) as f32 * q];
+            // As the shader: the integer lattice index times one spacing.
+            let quads = CLIFF_CELL_QUADS as i32;
+            let g = [cell[0] * quads + (k % side) as i32, cell[1] * quads + (k / side) as i32];
+            let v = [g[0] as f32 * q, g[1] as f32 * q];
             points.extend([[v[0] + step, v[1]], [v[0] - step, v[1]], [v[0], v[1] + step], [v[0], v[1] - step], v]);
         }
     }

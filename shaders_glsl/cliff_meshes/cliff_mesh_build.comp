@@ -104,9 +104,13 @@ void main() {
     atomicAdd(header.h.tested, 1u);
     const uint SIDE = CLIFF_CELL_QUADS + 1u;
     float q = pc.cell_m / float(CLIFF_CELL_QUADS);
+    // Vertices from integer lattice indices times one spacing: a vertex two
+    // cells share is the same product in both, so the same bits for any
+    // cell_m (cell * cell_m + k * q rounds differently on each side).
+    ivec2 lattice0 = cell * int(CLIFF_CELL_QUADS);
     bool steep = false;
     for (uint k = 0u; k < SIDE * SIDE && !steep; ++k) {
-        steep = cliff_ramp(ground_normal(origin + vec2(k % SIDE, k / SIDE) * q).z) > 0.0;
+        steep = cliff_ramp(ground_normal(vec2(lattice0 + ivec2(k % SIDE, k / SIDE)) * q).z) > 0.0;
     }
     if (!steep) {
         return;
@@ -119,7 +123,7 @@ void main() {
     }
     float e = 0.5 * q;
     for (uint k = 0u; k < SIDE * SIDE; ++k) {
-        vec2 p = origin + vec2(k % SIDE, k / SIDE) * q;
+        vec2 p = vec2(lattice0 + ivec2(k % SIDE, k / SIDE)) * q;
         vec3 tx = cliff_point(p + vec2(e, 0.0)) - cliff_point(p - vec2(e, 0.0));
         vec3 ty = cliff_point(p + vec2(0.0, e)) - cliff_point(p - vec2(0.0, e));
         vec3 n = normalize(cross(tx, ty));
