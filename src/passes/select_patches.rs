@@ -64,8 +64,10 @@ pub struct SelectPatches {
     budget: u32,
     /// Index in the levels of the first bucket.
     buckets_at: u32,
-    /// The node list and each node's patches taken in reverse order (a
-    /// test's switch: the workgroup and invocation order of another device).
+    /// Tests only (feature `test-hooks`): the node list and each node's
+    /// patches taken in reverse order (the workgroup and invocation order
+    /// of another device).
+    #[cfg(feature = "test-hooks")]
     pub reversed: bool,
 }
 
@@ -98,12 +100,21 @@ impl SelectPatches {
             lod_count: world.lod_count,
             budget,
             buckets_at: u32::try_from(levels_len).expect("levels fit u32 indices"),
+            #[cfg(feature = "test-hooks")]
             reversed: false,
         })
     }
 
     pub fn pipeline_label(&self) -> &str {
         &self.pipeline.label
+    }
+
+    /// Whether the order is reversed (always false without `test-hooks`).
+    fn reversed(&self) -> bool {
+        #[cfg(feature = "test-hooks")]
+        return self.reversed;
+        #[cfg(not(feature = "test-hooks"))]
+        false
     }
 
     /// The levels of the frame being (or last) recorded.
@@ -161,7 +172,7 @@ impl SelectPatches {
                 lod_count: self.lod_count,
                 budget: self.budget,
                 buckets_at: self.buckets_at,
-                reversed: u32::from(self.reversed),
+                reversed: u32::from(self.reversed()),
                 pad: [0; 3],
             };
             rec.push_constants(&self.pipeline, &push);

@@ -139,7 +139,8 @@ pub fn nearest_threshold(value: f32) -> u8 {
 /// Refuses a map whose texels the extent would stretch unevenly (a 3 x 5
 /// map over a square world): its words would land far from where they
 /// were painted. Up to 5 % is a rounding of the map's size, not a shape.
-fn check_shape(path: &Path, extent_m: [f64; 2]) -> Result<()> {
+/// Returns the map's texels a side and their size in metres.
+pub fn control_map_texels(path: &Path, extent_m: [f64; 2]) -> Result<([u32; 2], [f64; 2])> {
     let (w, h) =
         super::png16::Png16Source::header(path).map_err(|e| WorldError::InvalidDesc(format!("control map: {e}")))?;
     let texel = [extent_m[0] / f64::from(w), extent_m[1] / f64::from(h)];
@@ -154,7 +155,7 @@ fn check_shape(path: &Path, extent_m: [f64; 2]) -> Result<()> {
             texel[1]
         )));
     }
-    Ok(())
+    Ok(([w, h], texel))
 }
 
 /// A painted control map over the world's extent: a 16-bit grayscale PNG,
@@ -169,7 +170,7 @@ impl ControlMap {
     /// Reads `path` (checked like a height map before it is decoded) to
     /// cover `extent_m`.
     pub fn open(path: &Path, extent_m: [f64; 2]) -> Result<ControlMap> {
-        check_shape(path, extent_m)?;
+        control_map_texels(path, extent_m)?;
         let png = super::png16::Png16Source::open(path, extent_m, [0.0, 65535.0])
             .map_err(|e| WorldError::InvalidDesc(format!("control map: {e}")))?;
         Ok(ControlMap { grid: png.into_grid() })

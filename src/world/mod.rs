@@ -46,8 +46,8 @@ pub use cache::{
 };
 pub use cones::{cone_contains, fit_cone, patch_triangle_normals, NormalCone};
 pub use control_map::{
-    nearest_threshold, slope01, textures as control_textures, ControlBake, ControlCode, ControlLooks, ControlMap,
-    ControlRules, ControlSource, StampControl, CONTROL_TEXTURES, SLOPE_THRESHOLDS, UV_SCALES,
+    control_map_texels, nearest_threshold, slope01, textures as control_textures, ControlBake, ControlCode,
+    ControlLooks, ControlMap, ControlRules, ControlSource, StampControl, CONTROL_TEXTURES, SLOPE_THRESHOLDS, UV_SCALES,
 };
 pub use error::{Result, WorldError};
 pub use error_tile::diamond;

@@ -73,11 +73,8 @@ pub fn check_inside(
 /// samples) paints whole slopes with one word: legal, often meant, but
 /// worth a line (grass up a cliff is what a user sees otherwise).
 pub fn note_coarse_control_map(path: &std::path::Path, desc: &WorldDesc) {
-    let Ok((w, h)) = vista::world::Png16Source::header(path) else { return };
-    let [tx, ty] = [desc.extent_m[0] / f64::from(w), desc.extent_m[1] / f64::from(h)];
-    if (tx / ty).ln().abs() > 1.05f64.ln() {
-        return; // of another shape: the renderer refuses it, in one line
-    }
+    // Of another shape, or unreadable: the renderer refuses it, in one line.
+    let Ok(([w, h], [tx, ty])) = vista::world::control_map_texels(path, desc.extent_m) else { return };
     let texel = tx.max(ty);
     let splat = 2.0 * desc.spacing_m;
     if texel > 16.0 * splat {
