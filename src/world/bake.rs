@@ -192,9 +192,7 @@ fn texels(source: &dyn HeightSource, settings: &BakeSettings, g: &Grid, p: &Plac
             let s = [t as i64 - ATLAS_BORDER as i64, u as i64 - ATLAS_BORDER as i64];
             let n0 = [i64::from(p.id.x), i64::from(p.id.y)].map(|c| c * i64::from(NODE_QUADS));
             let pos = [world.grid_pos(0, n0[0] + s[0], p.step), world.grid_pos(1, n0[1] + s[1], p.step)];
-            let solid = !outside_extent(pos, world.extent_m, p.step)
-                && !p.holes.iter().any(|h| h.contains(pos[0], pos[1]))
-                && !source.is_hole(pos[0], pos[1]);
+            let solid = !is_hole_at(world, source, p.holes.iter().copied(), pos, p.step);
             let altitude = f[fj * width + fi];
             let word = settings.control.as_ref().map(|c| c.word(pos[0], pos[1], slope_deg, altitude));
             let (rgb, smooth) = match (&settings.control, word) {
@@ -250,6 +248,21 @@ fn patch_cones(decoded: &[f32], step: f64) -> Vec<[f32; 4]> {
         }
     }
     cones
+}
+
+/// Whether the sample at `pos` is a hole: outside the extent, in a hole
+/// shape, or a source's no-data (`step`: the grid's spacing, for the
+/// extent's rounding slack). The per-vertex bounds ask the same.
+pub(super) fn is_hole_at<'a>(
+    world: &WorldDesc,
+    source: &dyn HeightSource,
+    holes: impl IntoIterator<Item = &'a Hole>,
+    pos: [f64; 2],
+    step: f64,
+) -> bool {
+    outside_extent(pos, world.extent_m, step)
+        || holes.into_iter().any(|h| h.contains(pos[0], pos[1]))
+        || source.is_hole(pos[0], pos[1])
 }
 
 /// A sample position outside the world's extent (beyond rounding of the

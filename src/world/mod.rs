@@ -37,6 +37,9 @@ mod source;
 mod stamps;
 mod streaming;
 mod texels;
+pub mod vertex_bounds;
+mod vertex_bounds_fine;
+pub mod vertex_rule;
 
 pub use bake::{bake_node, bake_node_with, BakeSettings};
 pub use bake_claim::{claim_folder, CLAIM_FILE};

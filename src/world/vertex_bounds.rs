@@ -1,0 +1,279 @@
+//! Every vertex's numbers for the per-triangle rule ([`super::vertex_rule`])
+//! over a whole world, the way nodes carry them: per node, its 129 x 129
+//! grid points' saturated error and vertical reach (f16 each, rounded up),
+//! and a refinement bound (its quads' centres merged: what the traversal
+//! tests before it draws the node's children).
+//!
+//! A vertex's numbers depend on every lattice point under it, across node
+//! borders and up to the root's size, so they are computed for the whole
+//! world at once, from the finest level up, and each node's are read out of
+//! the one result: a point shared by two nodes (a border, or a coarser
+//! node's grid point that a finer node holds too) has one value, the same
+//! bits in every node that holds it.
+//!
+//! - the levels below the sample grid (Catmull-Rom refinement) in blocks of
+//!   two LOD-0 nodes, in parallel ([`super::vertex_bounds_fine`]);
+//! - the samples' own levels, one half-level at a time over the whole
+//!   world, each in parallel, kept as f32 rounded up (13 bytes a sample).
+
+use super::bintree::{classify, Bounds, Kind, VertexBound};
+use super::holes::Hole;
+use super::layout::{NodeId, WorldDesc, NODE_QUADS, NODE_SAMPLES};
+use super::source::HeightSource;
+use super::vertex_bounds_fine::{block_numbers, Samples, BLOCK, UNITS};
+use super::vertex_rule::{box_half_width, up_f16_bits, up_f32, vertex_numbers, VertexNumbers};
+use super::WorldError;
+use glam::{DVec3, I64Vec2};
+use rayon::prelude::*;
+
+/// Most samples a world's bounds are computed for at once (13 bytes each:
+/// 7 GB). The default world (20 481^2) is under it.
+pub const MAX_BOUNDS_SAMPLES: u64 = 1 << 29;
+
+/// A node's refinement bound: its quads' centres merged (the largest
+/// error, the lowest and highest point of their boxes); the traversal
+/// draws its children when that error, projected from the box, is over the
+/// target. Default: nothing to refine.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeRefine {
+    pub error_m: f32,
+    pub z_lo_m: f32,
+    pub z_hi_m: f32,
+}
+
+impl Default for NodeRefine {
+    fn default() -> Self {
+        NodeRefine { error_m: 0.0, z_lo_m: f32::INFINITY, z_hi_m: f32::NEG_INFINITY }
+    }
+}
+
+impl NodeRefine {
+    /// Takes in a centre at height `z` with numbers `n`.
+    pub fn merge(&mut self, z: f64, n: &VertexNumbers) {
+        if n.empty {
+            return;
+        }
+        self.error_m = self.error_m.max(up_f32(n.error_m));
+        if !z.is_nan() && n.error_m.is_finite() {
+            self.z_lo_m = self.z_lo_m.min(-up_f32(n.reach_m - z));
+            self.z_hi_m = self.z_hi_m.max(up_f32(z + n.reach_m));
+        }
+    }
+}
+
+/// A world's per-vertex numbers on its LOD-0 sample lattice.
+pub struct VertexBoundsTree {
+    world: WorldDesc,
+    /// Samples a row (and rows): the roots' grid, one more than its quads.
+    side: [usize; 2],
+    /// Stored heights (m), NaN at holes.
+    z: Vec<f32>,
+    error: Vec<f32>,
+    reach: Vec<f32>,
+    empty: Vec<bool>,
+    /// Per LOD-0 node (row-major over the roots' LOD-0 grid).
+    lod0_refine: Vec<NodeRefine>,
+}
+
+impl VertexBoundsTree {
+    /// Computes every vertex's numbers for `world` sampled from `source`
+    /// with `holes` cut (a sample is a hole as the bake decides it).
+    pub fn compute(world: &WorldDesc, source: &dyn HeightSource, holes: &[Hole]) -> Result<Self, WorldError> {
+        let root = i64::from(NODE_QUADS) << world.root_lod();
+        let [gx, gy] = world.grid(world.root_lod()).map(i64::from);
+        let last = I64Vec2::new(gx * root, gy * root);
+        let points = (last.x as u64 + 1) * (last.y as u64 + 1);
+        if points > MAX_BOUNDS_SAMPLES {
+            return Err(WorldError::InvalidConfig(format!(
+                "per-vertex bounds of {} x {} samples need {:.1} GB at once; at most {MAX_BOUNDS_SAMPLES} samples",
+                last.x + 1,
+                last.y + 1,
+                points as f64 * 13e-9
+            )));
+        }
+        let side = [last.x as usize + 1, last.y as usize + 1];
+        let z = stored(world, source, holes, I64Vec2::ZERO, side[0] as i64, side[1] as i64);
+        let n = side[0] * side[1];
+        let nodes = (gx * root / i64::from(NODE_QUADS)) as usize * (gy * root / i64::from(NODE_QUADS)) as usize;
+        let mut tree = VertexBoundsTree {
+            world: *world,
+            side,
+            z: z.z.iter().zip(&z.hole).map(|(h, hole)| if *hole { f32::NAN } else { *h as f32 }).collect(),
+            error: vec![0.0; n],
+            reach: vec![0.0; n],
+            empty: vec![false; n],
+            lod0_refine: vec![NodeRefine::default(); nodes],
+        };
+        tree.fine_levels(source, holes, last);
+        tree.sample_levels(last);
+        Ok(tree)
+    }
+
+    fn index(&self, s: I64Vec2) -> usize {
+        s.y as usize * self.side[0] + s.x as usize
+    }
+
+    fn numbers(&self, s: I64Vec2) -> VertexNumbers {
+        let i = self.index(s);
+        VertexNumbers { error_m: f64::from(self.error[i]), reach_m: f64::from(self.reach[i]), empty: self.empty[i] }
+    }
+
+    fn store(&mut self, s: I64Vec2, n: &VertexNumbers) {
+        let i = self.index(s);
+        (self.error[i], self.reach[i], self.empty[i]) = (up_f32(n.error_m), up_f32(n.reach_m), n.empty);
+    }
+
+    /// The levels below the sample grid, and the sample grid's finest.
+    fn fine_levels(&mut self, source: &dyn HeightSource, holes: &[Hole], last: I64Vec2) {
+        let world = self.world;
+        let blocks: Vec<I64Vec2> = (0..=last.y / BLOCK)
+            .flat_map(|by| (0..=last.x / BLOCK).map(move |bx| I64Vec2::new(bx, by) * BLOCK))
+            .collect();
+        let lod0_row = (last.x / i64::from(NODE_QUADS)) as usize;
+        // Blocks in parallel, a few at a time (each holds ~10 MB of window).
+        for chunk in blocks.chunks(rayon::current_num_threads() * 4) {
+            let done: Vec<_> = chunk
+                .par_iter()
+                .map(|&o| {
+                    let margin = I64Vec2::splat(6);
+                    let s = stored(&world, source, holes, o - margin, BLOCK + 13, BLOCK + 13);
+                    block_numbers(&s, o, last)
+                })
+                .collect();
+            for b in done {
+                for (s, n) in &b.samples {
+                    self.store(*s, n);
+                }
+                for (node, r) in b.nodes {
+                    self.lod0_refine[node.y as usize * lod0_row + node.x as usize] = r;
+                }
+            }
+        }
+    }
+
+    /// The sample grid's coarser levels, a half-level at a time.
+    fn sample_levels(&mut self, last: I64Vec2) {
+        let top = 64 - (last.max_element() * UNITS).leading_zeros();
+        let first = crate::shaders::consts::REFINE_LEVELS;
+        for t in first..=top {
+            for kind in [Kind::Edge, Kind::Centre] {
+                if t == first && kind == Kind::Edge {
+                    continue; // filled by the fine pass with the centres of its level
+                }
+                self.level(t, kind, last);
+            }
+        }
+    }
+
+    fn level(&mut self, t: u32, kind: Kind, last: I64Vec2) {
+        let d = (1i64 << t) / UNITS;
+        let this = &*self;
+        let inside = |p: I64Vec2| p.cmpge(I64Vec2::ZERO).all() && p.cmple(last * UNITS).all();
+        let z = |p: I64Vec2| f64::from(this.z[this.index(p / UNITS)]);
+        let child = |p: I64Vec2| this.numbers(p / UNITS);
+        let found: Vec<(I64Vec2, VertexNumbers)> = (0..=last.y / d)
+            .into_par_iter()
+            .flat_map_iter(|row| {
+                (0..=last.x / d).filter_map(move |col| {
+                    let s = I64Vec2::new(col, row) * d;
+                    let v = s * UNITS;
+                    (v != I64Vec2::ZERO && classify(v) == (t, kind)).then(|| (s, vertex_numbers(v, inside, z, child)))
+                })
+            })
+            .collect();
+        for (s, n) in found {
+            self.store(s, &n);
+        }
+    }
+}
+
+/// Stored heights and hole flags of `w` x `h` samples from `lo`.
+fn stored(world: &WorldDesc, source: &dyn HeightSource, holes: &[Hole], lo: I64Vec2, w: i64, h: i64) -> Samples {
+    let [ex, ey] = world.extent_m;
+    let xs: Vec<f64> = (0..w).map(|i| world.sample_pos(lo.x + i, 0)[0]).collect();
+    let clamped: Vec<f64> = xs.iter().map(|x| x.clamp(0.0, ex)).collect();
+    let rows: Vec<(Vec<f64>, Vec<bool>)> = (0..h)
+        .into_par_iter()
+        .map(|j| {
+            let y = world.sample_pos(0, lo.y + j)[1];
+            let mut raw = vec![0f32; w as usize];
+            source.sample_row(&clamped, y.clamp(0.0, ey), &mut raw);
+            let z = raw.iter().map(|r| f64::from(world.decode_height(world.encode_height(*r)))).collect();
+            let hole =
+                xs.iter().map(|x| super::bake::is_hole_at(world, source, holes, [*x, y], world.spacing_m)).collect();
+            (z, hole)
+        })
+        .collect();
+    let (z, hole) = rows.into_iter().fold((Vec::new(), Vec::new()), |(mut z, mut hole), (zr, hr)| {
+        z.extend(zr);
+        hole.extend(hr);
+        (z, hole)
+    });
+    Samples { lo, size: I64Vec2::new(w, h), z, hole }
+}
+
+impl VertexBoundsTree {
+    pub fn world(&self) -> &WorldDesc {
+        &self.world
+    }
+
+    /// Node `id`'s grid points, row-major from its south-west corner: the
+    /// error's f16 bits in the low half, the reach's in the high half (both
+    /// rounded up; an empty diamond's are 0).
+    pub fn node_values(&self, id: NodeId) -> Vec<u32> {
+        let step = 1i64 << id.lod;
+        let first = I64Vec2::new(i64::from(id.x), i64::from(id.y)) * i64::from(NODE_QUADS) * step;
+        let mut out = Vec::with_capacity(NODE_SAMPLES * NODE_SAMPLES);
+        for j in 0..NODE_SAMPLES as i64 {
+            for i in 0..NODE_SAMPLES as i64 {
+                let s = first + I64Vec2::new(i, j) * step;
+                let k = self.index(s);
+                out.push(u32::from(up_f16_bits(self.error[k])) | u32::from(up_f16_bits(self.reach[k])) << 16);
+            }
+        }
+        out
+    }
+
+    /// Node `id`'s refinement bound: its quads' centres merged (at LOD 0,
+    /// the centres below the samples, from the fine pass).
+    pub fn node_refine(&self, id: NodeId) -> NodeRefine {
+        if id.lod == 0 {
+            let row = (self.side[0] - 1) / NODE_QUADS as usize;
+            return self.lod0_refine[id.y as usize * row + id.x as usize];
+        }
+        let step = 1i64 << id.lod;
+        let first = I64Vec2::new(i64::from(id.x), i64::from(id.y)) * i64::from(NODE_QUADS) * step;
+        let mut r = NodeRefine::default();
+        for qy in 0..i64::from(NODE_QUADS) {
+            for qx in 0..i64::from(NODE_QUADS) {
+                let c = first + I64Vec2::new(qx, qy) * step + I64Vec2::splat(step / 2);
+                r.merge(f64::from(self.z[self.index(c)]), &self.numbers(c));
+            }
+        }
+        r
+    }
+
+    /// Numbers of sample `s` (grid origin 0): height, error, reach, empty.
+    pub fn at(&self, s: I64Vec2) -> (f32, VertexNumbers) {
+        (self.z[self.index(s)], self.numbers(s))
+    }
+}
+
+/// The samples' lattice read as the CPU twin's bounds (lattice units =
+/// samples: `reference::bintree_cut` with `below` 0): the box read as the
+/// sphere about the vertex that holds it and nests like it (radius sqrt(2)
+/// R + reach; see [`box_half_width`]).
+impl Bounds for VertexBoundsTree {
+    fn bound(&mut self, v: I64Vec2) -> VertexBound {
+        let (z, n) = self.at(v);
+        let (t, kind) = classify(v * UNITS);
+        let r = box_half_width(t, kind) as f64 * self.world.spacing_m / UNITS as f64;
+        let error_m = if n.empty { 0.0 } else { n.error_m };
+        VertexBound { z_m: f64::from(z), error_m, radius_m: std::f64::consts::SQRT_2 * r + n.reach_m }
+    }
+
+    fn point(&mut self, v: I64Vec2) -> DVec3 {
+        let [x, y] = self.world.sample_pos(v.x, v.y);
+        DVec3::new(x, y, f64::from(self.z[self.index(v)]))
+    }
+}

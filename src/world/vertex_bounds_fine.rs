@@ -1,0 +1,179 @@
+//! The sub-sample pass of [`super::vertex_bounds`]: per block of 256 x 256
+//! LOD-0 samples, the finest surface (Catmull-Rom of the stored samples,
+//! `REFINE_LEVELS` below them, x then y as the vertex shader evaluates it)
+//! on a window 4 samples wider on each side, and the numbers of every
+//! vertex of the lattice levels below the sample grid's own (levels 0 to
+//! `REFINE_LEVELS`, in lattice units). The window's margin is more than
+//! the deepest reach of a kept vertex's children (10 lattice units), so the
+//! kept numbers do not depend on where the block ends: a sample on a block
+//! border gets the same bits from either side.
+
+use super::bintree::{classify, Kind};
+use super::layout::NODE_QUADS;
+use super::vertex_rule::{vertex_numbers, VertexNumbers};
+use crate::shaders::consts::REFINE_LEVELS;
+use glam::I64Vec2;
+
+/// Block side in samples (two LOD-0 nodes: blocks hold whole nodes).
+pub const BLOCK: i64 = 2 * NODE_QUADS as i64;
+/// Window margin in samples around a block.
+const MARGIN: i64 = 4;
+/// Lattice units a sample.
+pub const UNITS: i64 = 1 << REFINE_LEVELS;
+
+/// The stored samples a block reads: heights as the bake rounds them
+/// (holes keep theirs: the Catmull-Rom taps read them), and hole flags.
+pub struct Samples {
+    /// First sample held (global index, may be negative).
+    pub lo: I64Vec2,
+    /// Samples a row, and rows.
+    pub size: I64Vec2,
+    pub z: Vec<f64>,
+    pub hole: Vec<bool>,
+}
+
+impl Samples {
+    fn index(&self, s: I64Vec2) -> usize {
+        let l = s - self.lo;
+        debug_assert!(l.cmpge(I64Vec2::ZERO).all() && l.cmplt(self.size).all(), "{s} not read");
+        (l.y * self.size.x + l.x) as usize
+    }
+
+    pub fn z(&self, s: I64Vec2) -> f64 {
+        self.z[self.index(s)]
+    }
+
+    pub fn hole(&self, s: I64Vec2) -> bool {
+        self.hole[self.index(s)]
+    }
+}
+
+/// What a block gives the samples' pass: the numbers of its samples whose
+/// level is the sample grid's finest, and per LOD-0 node in it, the
+/// numbers of its quads' centres merged (the node's refinement bound).
+pub struct BlockNumbers {
+    /// (sample index in the block, numbers), level-`REFINE_LEVELS` samples only.
+    pub samples: Vec<(I64Vec2, VertexNumbers)>,
+    /// (LOD-0 node, merged quad-centre numbers).
+    pub nodes: Vec<(I64Vec2, super::vertex_bounds::NodeRefine)>,
+}
+
+/// The window's lattice: heights and numbers of points `lo..=hi`.
+struct Window<'a> {
+    lo: I64Vec2,
+    side: i64,
+    /// The world lattice's last point (its first is 0).
+    last: I64Vec2,
+    z: Vec<f64>,
+    numbers: Vec<VertexNumbers>,
+    samples: &'a Samples,
+}
+
+impl Window<'_> {
+    fn inside(&self, v: I64Vec2) -> bool {
+        let l = v - self.lo;
+        l.cmpge(I64Vec2::ZERO).all()
+            && l.cmplt(I64Vec2::splat(self.side)).all()
+            && v.cmpge(I64Vec2::ZERO).all()
+            && v.cmple(self.last).all()
+    }
+
+    fn at(&self, v: I64Vec2) -> usize {
+        let l = v - self.lo;
+        (l.y * self.side + l.x) as usize
+    }
+}
+
+/// Catmull-Rom weights at `t`, as `world::source` computes them.
+fn weights(t: f64) -> [f64; 4] {
+    super::source::catmull_rom(t)
+}
+
+/// The finest surface at lattice point `v` (NaN where its nearest sample,
+/// ties up, is a hole: the vertex shader's rule below LOD 0).
+fn finest(samples: &Samples, v: I64Vec2) -> f64 {
+    let near = I64Vec2::new((v.x + UNITS / 2).div_euclid(UNITS), (v.y + UNITS / 2).div_euclid(UNITS));
+    if samples.hole(near) {
+        return f64::NAN;
+    }
+    let c = I64Vec2::new(v.x.div_euclid(UNITS), v.y.div_euclid(UNITS));
+    let f = v - c * UNITS;
+    if f == I64Vec2::ZERO {
+        return samples.z(c);
+    }
+    let (wx, wy) = (weights(f.x as f64 / UNITS as f64), weights(f.y as f64 / UNITS as f64));
+    (0..4)
+        .map(|b| {
+            let row: f64 = (0..4).map(|a| wx[a] * samples.z(c + I64Vec2::new(a as i64 - 1, b as i64 - 1))).sum();
+            wy[b] * row
+        })
+        .sum()
+}
+
+/// The block of samples `origin..origin + BLOCK` (clipped to the lattice's
+/// `last` sample): `samples` must hold `MARGIN + 2` samples around it.
+/// Samples whose level is the grid's finest get their numbers here.
+pub fn block_numbers(samples: &Samples, origin: I64Vec2, last: I64Vec2) -> BlockNumbers {
+    let lo = (origin - I64Vec2::splat(MARGIN)) * UNITS;
+    let side = (BLOCK + 2 * MARGIN) * UNITS + 1;
+    let mut w = Window { lo, side, last: last * UNITS, z: Vec::new(), numbers: Vec::new(), samples };
+    w.z = (0..side * side).map(|i| finest(w.samples, lo + I64Vec2::new(i % side, i / side))).collect();
+    w.numbers = vec![VertexNumbers::EMPTY; (side * side) as usize];
+    for t in 0..=REFINE_LEVELS {
+        fill(&mut w, t, Kind::Edge);
+        fill(&mut w, t, Kind::Centre);
+    }
+    let end = (origin + I64Vec2::splat(BLOCK - 1)).min(last);
+    let mut out = BlockNumbers { samples: Vec::new(), nodes: Vec::new() };
+    for y in origin.y..=end.y {
+        for x in origin.x..=end.x {
+            let s = I64Vec2::new(x, y);
+            if s != I64Vec2::ZERO && classify(s * UNITS).0 == REFINE_LEVELS {
+                out.samples.push((s, w.numbers[w.at(s * UNITS)]));
+            }
+        }
+    }
+    let node_side = i64::from(NODE_QUADS);
+    for ny in (origin.y..=end.y.min(last.y - 1)).step_by(node_side as usize) {
+        for nx in (origin.x..=end.x.min(last.x - 1)).step_by(node_side as usize) {
+            out.nodes.push((I64Vec2::new(nx, ny) / node_side, node_refine(&w, I64Vec2::new(nx, ny))));
+        }
+    }
+    out
+}
+
+/// Numbers of every window vertex of level `t` and `kind`.
+fn fill(w: &mut Window, t: u32, kind: Kind) {
+    let d = 1i64 << t;
+    let from = |lo: i64| (lo.max(0) + d - 1) / d * d;
+    let to = (w.lo + I64Vec2::splat(w.side - 1)).min(w.last);
+    let mut found = Vec::new();
+    for y in (from(w.lo.y)..=to.y).step_by(d as usize) {
+        for x in (from(w.lo.x)..=to.x).step_by(d as usize) {
+            let v = I64Vec2::new(x, y);
+            if v == I64Vec2::ZERO || classify(v) != (t, kind) {
+                continue;
+            }
+            let n = vertex_numbers(v, |p| w.inside(p), |p| w.z[w.at(p)], |p| w.numbers[w.at(p)]);
+            found.push((w.at(v), n));
+        }
+    }
+    for (i, n) in found {
+        w.numbers[i] = n;
+    }
+}
+
+/// The quad centres of the LOD-0 node whose first sample is `first`
+/// merged: the largest error, the lowest and highest box.
+fn node_refine(w: &Window, first: I64Vec2) -> super::vertex_bounds::NodeRefine {
+    let mut r = super::vertex_bounds::NodeRefine::default();
+    for qy in 0..i64::from(NODE_QUADS) {
+        for qx in 0..i64::from(NODE_QUADS) {
+            let c = (first + I64Vec2::new(qx, qy)) * UNITS + I64Vec2::splat(UNITS / 2);
+            if w.inside(c) {
+                r.merge(w.z[w.at(c)], &w.numbers[w.at(c)]);
+            }
+        }
+    }
+    r
+}
