@@ -117,7 +117,7 @@ fn selection_twins_match() {
     check_layout(
         "TraversePush",
         fields!(TraversePush: cameras, forwards, camera_count, target_error_px, sector_size_m, lod_count, root_grid_x,
-            root_grid_y, height_lo, height_scale, list_capacity, final_capacity, current_lod, pad),
+            root_grid_y, height_lo, height_scale, list_capacity, final_capacity, current_lod, box_pad),
         layouts::TRAVERSE_PUSH,
         structs::TRAVERSE_PUSH,
     );

@@ -7,8 +7,9 @@
 //! pigment map and the cliff meshes are redone, and a moving sun redoes
 //! shadows; one and two command buffers per frame, outputs `lit`, `hdr`
 //! and `gbuffer` (the latter two over an engine's loaded depth with its
-//! occluder). The layer reports nothing, and every pass the renderer built
-//! was recorded at least once.
+//! occluder); and the per-triangle LOD rule with every effect. The layer
+//! reports nothing, and every pass the renderer built was recorded at
+//! least once.
 
 mod common;
 
@@ -23,7 +24,7 @@ use vista::gpu::{ContextOptions, QueueMode};
 use vista::passes::debug_view::DebugView;
 use vista::passes::terrain_geometry::DepthOptions;
 use vista::render::offscreen::{EngineWall, Offscreen, OffscreenDesc};
-use vista::render::{Effect, Effects, RendererOptions, View};
+use vista::render::{Effect, Effects, LodOptions, LodRule, RendererOptions, View};
 use vista::scene::graph::{FramePass, Outcome};
 use vista::shaders::consts::DECAL_TEXELS;
 use vista::targets::{GbufferLayout, Output};
@@ -83,8 +84,9 @@ fn decals() -> DecalSet {
     }
 }
 
-fn options(output: Output, depth: DepthOptions) -> RendererOptions {
+fn options(output: Output, depth: DepthOptions, rule: LodRule) -> RendererOptions {
     RendererOptions {
+        lod: LodOptions { rule, ..LodOptions::default() },
         effects: effects(),
         decals: decals(),
         assets: vec![
@@ -108,10 +110,16 @@ fn walk(i: u32) -> View {
 
 /// Renders the walk in `mode` (the sun moving 7 degrees a frame, the debug
 /// views in turn on the lit output) and returns the passes recorded.
-fn run(ctx: &vista::gpu::Context, output: Output, depth: DepthOptions, mode: QueueMode) -> BTreeSet<String> {
+fn run(
+    ctx: &vista::gpu::Context,
+    output: Output,
+    depth: DepthOptions,
+    mode: QueueMode,
+    rule: LodRule,
+) -> BTreeSet<String> {
     let colour = output.color_format().is_some();
     let holes = vec![Hole::Circle { center_m: [505.0, 222.0], radius_m: 3.0 }];
-    let mut rig = Rig::with_options(ctx, world(), GROUND, holes, SIZE, false, options(output.clone(), depth));
+    let mut rig = Rig::with_options(ctx, world(), GROUND, holes, SIZE, false, options(output.clone(), depth, rule));
     let desc = OffscreenDesc { mode, output, ..OffscreenDesc::new(SIZE, common::terrain::MAGENTA) };
     rig.off = Offscreen::with_desc(ctx, &desc).unwrap();
     if depth.load {
@@ -156,7 +164,7 @@ fn syncval() -> ContextOptions {
 fn every_pass_of_every_effect_is_clean_under_synchronization_validation() {
     gpu_test_with(&syncval(), |ctx| {
         for mode in [QueueMode::Single, QueueMode::SplitOneQueue] {
-            let ran = run(ctx, Output::default(), DepthOptions::default(), mode);
+            let ran = run(ctx, Output::default(), DepthOptions::default(), mode, LodRule::Patch);
             // The effects' passes, each recorded (not only built).
             for p in ["vt_pages", "vt_feedback", "grass_place", "grass_draw", "grass_pigment", "asset_draw"] {
                 assert!(ran.contains(p), "{mode:?}: {p} did not run: {ran:?}");
@@ -170,11 +178,26 @@ fn every_pass_of_every_effect_is_clean_under_synchronization_validation() {
 }
 
 #[test]
+fn the_per_triangle_rule_with_every_effect_is_clean_under_synchronization_validation() {
+    gpu_test_with(&syncval(), |ctx| {
+        for mode in [QueueMode::Single, QueueMode::SplitOneQueue] {
+            let ran = run(ctx, Output::default(), DepthOptions::default(), mode, LodRule::Triangle);
+            for p in ["emit_triangles", "terrain_triangles", "grass_draw", "cliff_meshes", "sun_shadows", "vt_pages"] {
+                assert!(ran.contains(p), "{mode:?}: {p} did not run: {ran:?}");
+            }
+            for p in ["select_patches", "cull_patches", "terrain_geometry", "terrain_holes", "cull_occluded"] {
+                assert!(!ran.contains(p), "{mode:?}: {p} ran beside the per-triangle rule: {ran:?}");
+            }
+        }
+    });
+}
+
+#[test]
 fn hdr_and_gbuffer_over_a_loaded_depth_are_clean_under_synchronization_validation() {
     gpu_test_with(&syncval(), |ctx| {
         let load = DepthOptions { load: true, ..DepthOptions::default() };
-        run(ctx, Output::hdr(), load, QueueMode::SplitOneQueue);
-        let ran = run(ctx, Output::Gbuffer(GbufferLayout::octahedral()), load, QueueMode::Single);
+        run(ctx, Output::hdr(), load, QueueMode::SplitOneQueue, LodRule::Patch);
+        let ran = run(ctx, Output::Gbuffer(GbufferLayout::octahedral()), load, QueueMode::Single, LodRule::Patch);
         assert!(!ran.contains("lighting_resolve"), "output gbuffer lights nothing: {ran:?}");
         assert!(ran.contains("grass_draw") && ran.contains("asset_draw"), "{ran:?}");
     });
@@ -200,7 +223,7 @@ fn a_frames_compute_and_the_last_frames_graphics_share_nothing_either_writes() {
     use vista::render::offscreen::render_targets;
     common::gpu_test(|ctx| {
         let holes = vec![Hole::Circle { center_m: [505.0, 222.0], radius_m: 3.0 }];
-        let options = options(Output::default(), DepthOptions::default());
+        let options = options(Output::default(), DepthOptions::default(), LodRule::Patch);
         let mut rig = Rig::with_options(ctx, world(), GROUND, holes, SIZE, false, options);
         let mode = QueueMode::SplitOneQueue;
         let mut ring = FrameRing::with_mode(ctx, 2, mode).unwrap();

@@ -93,6 +93,16 @@
 // whole buckets are kept or refused, so the set is the same on any device.
 #define REFINE_BUCKETS 256u
 #define REFINE_BUCKETS_PER_OCTAVE 16u
+// The per-triangle rule (emit_triangles): a vertex of the emitted index
+// list is slot | grid x << TRIANGLE_X_SHIFT | grid y << TRIANGLE_Y_SHIFT
+// (x, y in 0..NODE_QUADS of its node's grid); each workgroup thread walks
+// one of the node's triangles at this depth (2 << depth = its 256 threads).
+#define TRIANGLE_X_SHIFT 11u
+#define TRIANGLE_Y_SHIFT 19u
+#define TRIANGLE_COORD_MASK 0xFFu
+#define EMIT_THREAD_DEPTH 7u
+// Triangles the index list holds (48 MiB); beyond, a triangle is counted, not drawn.
+#define MAX_EMITTED_TRIANGLES 4194304u
 // Counters before the per-slot levels in the selection buffer.
 #define SELECT_HEADER_WORDS 4u
 // A region no listed node covers (outside the world, or no root yet).

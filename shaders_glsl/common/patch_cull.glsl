@@ -35,17 +35,7 @@ layout(push_constant, std430) uniform CullPush {
     uint depth_h;
 } pc;
 
-bool box_outside_frustum(vec3 lo, vec3 hi) {
-    for (uint i = 0u; i < 5u; ++i) {
-        vec4 p = view.v.frustum[i];
-        // The corner farthest along the inward normal.
-        vec3 far_corner = mix(lo, hi, greaterThanEqual(p.xyz, vec3(0.0)));
-        if (dot(p.xyz, far_corner) + p.w < 0.0) {
-            return true;
-        }
-    }
-    return false;
-}
+#include "frustum_box.glsl"
 
 #ifdef CONE_CULL
 // Every triangle faces away iff every normal n in the cone has

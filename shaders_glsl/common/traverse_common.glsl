@@ -29,7 +29,7 @@ layout(push_constant, std430) uniform TraversePush {
     uint list_capacity;  // entries per level list (<= the shader's fixed bound)
     uint final_capacity; // entries of traverse_out.nodes
     uint current_lod;    // traverse_level.comp only (LEVEL_FINALIZE: write the cull dispatch)
-    uint pad;
+    float box_pad;       // added around a node's square, in node sides (the per-triangle rule: 1 / NODE_QUADS)
 } pc;
 
 uint node_value(uint lod, uint x, uint y) {
@@ -49,8 +49,10 @@ uint node_value(uint lod, uint x, uint y) {
 bool wants_refine(uint lod, uint x, uint y, uint slot) {
     uvec2 d = node_descs.descs[slot];
     precise float size = pc.sector_size_m * float(1u << lod);
-    precise vec3 bmin = vec3(float(x) * size, float(y) * size, pc.height_lo + float(bitfieldExtract(d.x, 0, int(HALF_BITS))) * pc.height_scale);
-    precise vec3 bmax = vec3(bmin.x + size, bmin.y + size, pc.height_lo + float(d.x >> HALF_BITS) * pc.height_scale);
+    precise float grow = pc.box_pad * size;
+    precise vec2 corner = vec2(float(x) * size, float(y) * size);
+    precise vec3 bmin = vec3(corner - grow, pc.height_lo + float(bitfieldExtract(d.x, 0, int(HALF_BITS))) * pc.height_scale);
+    precise vec3 bmax = vec3(corner + size + grow, pc.height_lo + float(d.x >> HALF_BITS) * pc.height_scale);
     int bias = bitfieldExtract(int(d.y), int(DESC_BIAS_SHIFT), int(DESC_BIAS_BITS));
     precise float err = ldexp(node_errors.errors[slot], bias);
     precise float target_sq = pc.target_error_px * pc.target_error_px;

@@ -27,7 +27,7 @@ use crate::passes::cull_patches::CullStages;
 use crate::reference::{flip_map, RayCaster, RaycastConfig, ReferenceImage};
 use crate::render::offscreen::{Capture, Offscreen};
 use crate::render::stats::{collect, RenderStats};
-use crate::render::{RendererOptions, TerrainRenderer};
+use crate::render::{LodOptions, LodRule, RendererOptions, TerrainRenderer};
 use crate::scene::shading::Shading;
 use crate::scene::view::{Camera, View, DEFAULT_NEAR_M};
 use crate::terrain::TerrainOptions;
@@ -70,6 +70,11 @@ pub struct AccuracyBenchConfig {
     /// Virtual-texture rows (when the scene has `virtual_texture` and
     /// splat), at the shading target.
     pub virtual_texture: Option<VtSweep>,
+    /// The LOD rules of the geometry sweep: the per-patch one's rows with
+    /// culling on and off, the per-triangle one's a row each (family "per
+    /// triangle"); the shading, shadow and virtual-texture rows draw per
+    /// patch.
+    pub rules: Vec<LodRule>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -261,13 +266,7 @@ pub fn bench_accuracy(
         };
         let (reference, info) = reference_image(&caster, &view(1.0), &fx, name, camera);
         out.references.push(info);
-        let mut r = TerrainRenderer::new(ctx, world, source.clone(), Vec::new(), &geometry)?;
-        for &target in &cfg.targets_px {
-            let keep = cfg.keep_images && target == cfg.shading_target_px;
-            let (points, images) = run.culling_rows(&mut r, &view(target), &reference, name, keep)?;
-            out.points.extend(points);
-            out.images.extend(images);
-        }
+        run.geometry_rows(&geometry, &view, &reference, name, &mut out)?;
         if out.shading_skipped.is_none() {
             out.points.extend(run.shading_rows(&options, &view(cfg.shading_target_px), &reference, name)?);
         }
@@ -362,6 +361,44 @@ impl Run<'_> {
             frame: on_img.rgba.clone(),
         });
         Ok(([on, off_pt], images))
+    }
+
+    /// The geometry sweep of one view: each rule's renderer at each target.
+    fn geometry_rows(
+        &mut self,
+        geometry: &RendererOptions,
+        view: &dyn Fn(f32) -> View,
+        reference: &ReferenceImage,
+        name: &str,
+        out: &mut AccuracyBench,
+    ) -> Result<()> {
+        for &rule in &self.cfg.rules {
+            let options = RendererOptions { lod: LodOptions { rule, ..LodOptions::default() }, ..geometry.clone() };
+            let mut r = TerrainRenderer::new(self.ctx, self.world, self.source.clone(), Vec::new(), &options)?;
+            for &target in &self.cfg.targets_px {
+                if rule == LodRule::Triangle {
+                    out.points.push(self.triangle_row(&mut r, &view(target), reference, name)?);
+                    continue;
+                }
+                let keep = self.cfg.keep_images && target == self.cfg.shading_target_px;
+                let (points, images) = self.culling_rows(&mut r, &view(target), reference, name, keep)?;
+                out.points.extend(points);
+                out.images.extend(images);
+            }
+        }
+        Ok(())
+    }
+
+    /// The per-triangle rule's row (its frustum culling is always on).
+    fn triangle_row(
+        &mut self,
+        r: &mut TerrainRenderer,
+        v: &View,
+        reference: &ReferenceImage,
+        name: &str,
+    ) -> Result<AccuracyPoint> {
+        let settled = self.settle(r, v)?;
+        Ok(self.point(r, v, reference, name, "per triangle", "per-triangle rule", settled)?.0)
     }
 
     pub(super) fn settle(&mut self, r: &mut TerrainRenderer, view: &View) -> Result<bool> {

@@ -167,7 +167,8 @@ pub fn required_features() -> FeatureChain {
             .multi_draw_indirect(true)
             .draw_indirect_first_instance(true)
             .shader_storage_image_extended_formats(true)
-            .texture_compression_bc(true),
+            .texture_compression_bc(true)
+            .full_draw_index_uint32(true),
         v12: vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
             .draw_indirect_count(true)
@@ -192,6 +193,9 @@ fn missing_features(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
         ("shaderStorageImageExtendedFormats", core.shader_storage_image_extended_formats),
         // The normal (BC3) and albedo (BC1) payload atlases.
         ("textureCompressionBC", core.texture_compression_bc),
+        // The per-triangle rule's index list: a vertex code is 27 bits
+        // (slot and grid point, triangle_list.glsl).
+        ("fullDrawIndexUint32", core.full_draw_index_uint32),
         ("timelineSemaphore", v12.timeline_semaphore),
         ("drawIndirectCount", v12.draw_indirect_count),
         ("hostQueryReset", v12.host_query_reset),

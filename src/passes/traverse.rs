@@ -42,7 +42,7 @@ pub struct TraversePush {
     pub list_capacity: u32,
     pub final_capacity: u32,
     pub current_lod: u32,
-    pub pad: u32,
+    pub box_pad: f32,
 }
 
 #[repr(C)]
@@ -90,6 +90,8 @@ pub struct Traverse {
     world: WorldDesc,
     list_capacity: u32,
     final_capacity: u32,
+    /// [`GpuInputs::box_pad`]: 0 but for the per-triangle rule.
+    box_pad: f32,
 }
 
 impl Traverse {
@@ -193,17 +195,25 @@ impl Traverse {
             world: *world,
             list_capacity: SHARED_LIST_CAPACITY,
             final_capacity,
+            box_pad: 0.0,
         })
     }
 
     /// Shrinks the level lists (tests provoke overflow with it).
+    /// Pads every node's box by `pad` node sides (the per-triangle rule:
+    /// its vertices' boxes reach a cell past their node).
+    pub fn set_box_pad(&mut self, pad: f32) {
+        assert!((0.0..1.0).contains(&pad));
+        self.box_pad = pad;
+    }
+
     pub fn set_list_capacity(&mut self, capacity: u32) {
         assert!((1..=SHARED_LIST_CAPACITY).contains(&capacity));
         self.list_capacity = capacity;
     }
 
     fn push(&self, params: &TraverseParams, current_lod: u32) -> TraversePush {
-        let g = GpuInputs::new(&self.world, params);
+        let g = GpuInputs { box_pad: self.box_pad, ..GpuInputs::new(&self.world, params) };
         let root = self.world.grid(self.world.root_lod());
         TraversePush {
             cameras: g.cameras,
@@ -219,7 +229,7 @@ impl Traverse {
             list_capacity: self.list_capacity,
             final_capacity: self.final_capacity,
             current_lod,
-            pad: 0,
+            box_pad: g.box_pad,
         }
     }
 

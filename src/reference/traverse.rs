@@ -12,8 +12,11 @@ use crate::world::{NodeId, WorldDesc};
 fn wants_refine(t: &QuadtreeShadow, g: &GpuInputs, n: NodeId, slot: u32) -> bool {
     let [w0, w1] = t.descs[slot as usize];
     let size = g.sector_size_m * (1u32 << n.lod) as f32;
-    let bmin = [n.x as f32 * size, n.y as f32 * size, g.height_lo + (w0 & 0xFFFF) as f32 * g.height_scale];
-    let bmax = [bmin[0] + size, bmin[1] + size, g.height_lo + (w0 >> k::HALF_BITS) as f32 * g.height_scale];
+    let grow = g.box_pad * size;
+    let corner = [n.x as f32 * size, n.y as f32 * size];
+    let bmin = [corner[0] - grow, corner[1] - grow, g.height_lo + (w0 & 0xFFFF) as f32 * g.height_scale];
+    let bmax =
+        [corner[0] + size + grow, corner[1] + size + grow, g.height_lo + (w0 >> k::HALF_BITS) as f32 * g.height_scale];
     // Sign-extend the 4-bit bias.
     let spare = 32 - k::DESC_BIAS_BITS;
     let bias = (((w1 >> k::DESC_BIAS_SHIFT) as i32) << spare) >> spare;

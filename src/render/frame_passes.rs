@@ -22,7 +22,7 @@ use crate::passes::terrain_geometry::{RenderTargets, TerrainGeometry};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::passes::traverse::{Traverse, TraverseMode};
-use crate::render::renderer::Occlusion;
+use crate::render::renderer::{Occlusion, TrianglePath};
 use crate::scene::graph::{FrameLog, FramePass, Skip};
 use crate::scene::view::TerrainViewGpu;
 use crate::targets::gbuffer::GBuffer;
@@ -37,6 +37,9 @@ pub(crate) struct FramePasses<'a> {
     pub select: &'a SelectPatches,
     pub cull: &'a CullPatches,
     pub occlusion: Option<&'a Occlusion>,
+    /// The per-triangle rule: it cuts and draws instead of select, cull,
+    /// geometry and holes.
+    pub triangles: Option<&'a TrianglePath>,
     pub geometry: &'a TerrainGeometry,
     pub holes: Option<&'a TerrainHoles>,
     pub classify: &'a ClassifyTiles,
@@ -127,6 +130,13 @@ impl FramePasses<'_> {
         pass(frame, log, FramePass::TRAVERSE, |r| traverse.record(r, tree, params, TraverseMode::SingleDispatch));
         pass(frame, log, FramePass::LOD_MAP, |r| lod_map.record(r, traverse));
         pass(frame, log, FramePass::SECTOR_DATA, |r| self.sector_data.record(r, tree));
+        if let Some(t) = self.triangles {
+            let view = bytemuck::bytes_of(view);
+            pass(frame, log, FramePass::EMIT_TRIANGLES, |r| {
+                t.emit.record(r, traverse, tree, lod_map, self.view_buffer, view)
+            });
+            return;
+        }
         pass(frame, log, FramePass::SELECT_PATCHES, |r| {
             select.record(r, traverse, tree, lod_map, self.view_buffer, bytemuck::bytes_of(view))
         });
@@ -141,6 +151,12 @@ impl FramePasses<'_> {
     pub fn record_draws(&self, frame: &mut Frame<'_, '_>, log: &mut FrameLog, t: &FrameTargets) {
         let (tree, targets, gb) = (t.tree, t.targets, t.gbuffer);
         let (geometry, view) = (self.geometry, self.view_buffer);
+        if let Some(tri) = self.triangles {
+            pass(frame, log, FramePass::TERRAIN_TRIANGLES, |r| tri.draw.record(r, targets, gb, view, &tri.emit, tree));
+            let base = materials(self.effects, false);
+            self.at(FramePoint::AfterTerrainDraws, frame, log, &self.inputs(t, base.as_ref()));
+            return;
+        }
         pass(frame, log, FramePass::TERRAIN_GEOMETRY, |r| {
             geometry.record(r, targets, gb, view, &self.cull.lists().list, tree, true)
         });

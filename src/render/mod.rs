@@ -19,5 +19,7 @@ pub use crate::passes::terrain_geometry::RenderTargets;
 pub use crate::scene::shading::Shading;
 pub use crate::scene::tonemap::Tonemap;
 pub use crate::scene::view::{linear_depth, overview_camera, Camera, Lighting, TerrainViewGpu, View, DEFAULT_NEAR_M};
-pub use renderer::{memory_for, slot_bytes, LodOptions, RendererOptions, TerrainRenderer};
+pub use renderer::{
+    memory_for, slot_bytes, vertex_bounds_slot_bytes, LodOptions, LodRule, RendererOptions, TerrainRenderer,
+};
 pub use report::{frame_report, FrameReport, PassState};

@@ -26,6 +26,7 @@ use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
+use crate::passes::emit_triangles::EmitTriangles;
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lighting_resolve::LightingResolve;
@@ -35,6 +36,7 @@ use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
 use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeometry};
 use crate::passes::terrain_holes::TerrainHoles;
+use crate::passes::terrain_triangles::TerrainTriangles;
 use crate::passes::traverse::Traverse;
 use crate::render::telemetry::{FrameCounters, Telemetry};
 use crate::scene::graph::PassGraph;
@@ -83,9 +85,27 @@ pub struct RendererOptions {
     pub output: Output,
 }
 
-/// Per-patch LOD selection settings.
+/// Which LOD selection draws the terrain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub enum LodRule {
+    /// Far Cry 5's: per patch of 8x8 quads, coarsened from ancestors,
+    /// refined below the samples, seams stitched (`select_patches`,
+    /// `cull_patches`, `terrain_geometry`).
+    #[default]
+    Patch,
+    /// A restricted bintree with saturated per-vertex errors (Lindstrom &
+    /// Pascucci): per triangle inside each drawn node, a conforming cut
+    /// with a strict bound (`emit_triangles`, `terrain_triangles`). Its
+    /// bounds are computed for the whole world when the renderer is made.
+    /// Not yet: refinement below the samples, occlusion and cone culling.
+    Triangle,
+}
+
+/// LOD selection settings.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LodOptions {
+    /// Per patch (the default) or per triangle.
+    pub rule: LodRule,
     /// Levels of refinement below LOD 0 allowed (0: none; 1: 2x; 2: 4x, the
     /// finest surface the error tree measures against). Below the finest,
     /// the error bound reported is the refused level's.
@@ -127,6 +147,7 @@ impl RendererOptions {
 impl Default for LodOptions {
     fn default() -> Self {
         LodOptions {
+            rule: LodRule::Patch,
             refine_levels: crate::shaders::consts::REFINE_LEVELS,
             refine_budget: crate::shaders::consts::MAX_REFINED_PATCHES,
             #[cfg(feature = "test-hooks")]
@@ -150,6 +171,9 @@ pub struct TerrainRenderer {
     pub geometry: TerrainGeometry,
     /// Effect `holes`.
     pub holes: Option<TerrainHoles>,
+    /// The per-triangle rule's passes, which draw instead of `select`,
+    /// `cull`, `geometry` and `holes` ([`LodRule::Triangle`]).
+    pub triangles: Option<TrianglePath>,
     pub classify: ClassifyTiles,
     pub gbuffer_tiles: GbufferTiles,
     /// Outputs `lit` and `hdr` (None with output `gbuffer`: the engine lights).
@@ -186,6 +210,12 @@ pub struct TerrainRenderer {
     decisions: Vec<EffectDecision>,
     /// How the last frame was recorded.
     mode: Option<QueueMode>,
+}
+
+/// The per-triangle rule's passes ([`LodRule::Triangle`]).
+pub struct TrianglePath {
+    pub emit: EmitTriangles,
+    pub draw: TerrainTriangles,
 }
 
 /// The passes of effect `occlusion` (phase 2).
@@ -275,6 +305,13 @@ pub fn slot_bytes(
         .map(|d| crate::effects::registry::kind_of(d.effect).slot_bytes(effects))
         .sum();
     memory_for(1, format, effects, world, holes, source_holes).gpu_total() as u64 + effect_layers
+}
+
+/// GPU bytes a slot's vertex numbers add for the per-triangle rule
+/// ([`LodRule::Triangle`]: an atlas layer of [`slot_bytes`]' kinds too).
+pub fn vertex_bounds_slot_bytes() -> u64 {
+    let plain = crate::world::MemoryReport::new(1);
+    (plain.clone().with_vertex_bounds().gpu_total() - plain.gpu_total()) as u64
 }
 
 /// `source_holes`: the height source has holes of its own (a DEM's no-data

@@ -6,6 +6,7 @@
 use crate::error::Result;
 use crate::gpu::Context;
 use crate::passes::cull_patches::CullCounters;
+use crate::passes::emit_triangles::TriangleListHeader;
 use crate::passes::select_patches::SelectHeader;
 use crate::reference::wanted_finer_cpu;
 use crate::render::renderer::TerrainRenderer;
@@ -17,6 +18,9 @@ pub use crate::render::telemetry::TRIANGLES_PER_PATCH;
 
 #[derive(Debug, Clone, Serialize)]
 pub struct RenderStats {
+    /// The per-triangle rule's list header (`None` on the per-patch path,
+    /// whose numbers are `patches` and `select`).
+    pub triangles: Option<TriangleListHeader>,
     pub patches: CullCounters,
     /// Per-patch LOD selection: patches coarsened and refined, seam conflicts.
     pub select: SelectHeader,
@@ -60,12 +64,17 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
     for e in renderer.built_effects() {
         effects.extend(e.stats(ctx, &c)?);
     }
+    let triangles = match &renderer.triangles {
+        Some(t) => Some(t.emit.read_header(ctx)?),
+        None => None,
+    };
     Ok(RenderStats {
+        triangles,
         patches: c.cull,
         select: c.select,
-        bound_px: c.cull.bound_px,
+        bound_px: triangles.map_or(c.cull.bound_px, |t| t.bound_px()),
         target_px: view.target_error_px,
-        triangles_drawn: c.triangles,
+        triangles_drawn: triangles.map_or(c.triangles, |t| u64::from(t.drawn())),
         node_count: c.traverse.nodes,
         nodes_per_lod: c.traverse.nodes_per_lod,
         wanted_finer_per_lod: wanted[..lods].to_vec(),

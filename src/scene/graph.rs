@@ -36,8 +36,12 @@ impl FramePass {
     pub const SECTOR_DATA: FramePass = FramePass::new(sh::sector_data::PASS);
     pub const SELECT_PATCHES: FramePass = FramePass::new(sh::select_patches::PASS);
     pub const CULL_PATCHES: FramePass = FramePass::new(sh::cull_patches::PASS);
+    /// The per-triangle rule's cut (instead of select and cull).
+    pub const EMIT_TRIANGLES: FramePass = FramePass::new(sh::emit_triangles::PASS);
     pub const TERRAIN_GEOMETRY: FramePass = FramePass::new(sh::terrain_geometry_vert::PASS);
     pub const TERRAIN_HOLES: FramePass = FramePass::new(sh::terrain_holes_vert::PASS);
+    /// The per-triangle rule's draw (instead of terrain_geometry and terrain_holes).
+    pub const TERRAIN_TRIANGLES: FramePass = FramePass::new(sh::terrain_triangles_vert::PASS);
     pub const HIZ_BUILD: FramePass = FramePass::new(sh::hiz_build::PASS);
     pub const CULL_OCCLUDED: FramePass = FramePass::new(sh::cull_occluded::PASS);
     /// Phase 2 of occlusion culling: the patches the pyramid left visible.
@@ -85,6 +89,7 @@ impl FramePass {
             FramePass::SECTOR_DATA,
             FramePass::SELECT_PATCHES,
             FramePass::CULL_PATCHES,
+            FramePass::EMIT_TRIANGLES,
         ];
         if compute.contains(&self) {
             QueueKind::Compute
@@ -127,15 +132,17 @@ enum Step {
     Point(FramePoint),
 }
 
-const FRAME: [Step; 20] = [
+const FRAME: [Step; 22] = [
     Step::Pass(FramePass::QUADTREE_UPDATE, &[]),
     Step::Pass(FramePass::TRAVERSE, &[]),
     Step::Pass(FramePass::LOD_MAP, &[]),
     Step::Pass(FramePass::SECTOR_DATA, &[]),
     Step::Pass(FramePass::SELECT_PATCHES, &[]),
     Step::Pass(FramePass::CULL_PATCHES, &[]),
+    Step::Pass(FramePass::EMIT_TRIANGLES, &[]),
     Step::Pass(FramePass::TERRAIN_GEOMETRY, &[]),
     Step::Pass(FramePass::TERRAIN_HOLES, &[Effect::Holes]),
+    Step::Pass(FramePass::TERRAIN_TRIANGLES, &[]),
     Step::Pass(FramePass::HIZ_BUILD, &[Effect::Occlusion]),
     Step::Pass(FramePass::CULL_OCCLUDED, &[Effect::Occlusion]),
     Step::Pass(FramePass::TERRAIN_GEOMETRY_LATE, &[Effect::Occlusion]),

@@ -11,7 +11,7 @@ use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
 use crate::terrain::quadtree::{texture_extent, NodeDesc, QuadtreeShadow, QuadtreeUpdate, FIRST_SLOT, MAX_SLOTS};
 use crate::world::{
-    BakedNode, NodeId, PayloadFormat, TexelKind, WorldDesc, ATLAS_SIDE, CONE_BLOCKS_PER_NODE_SIDE,
+    BakedNode, NodeId, PayloadFormat, TexelKind, WorldDesc, ATLAS_SIDE, CONE_BLOCKS_PER_NODE_SIDE, NODE_SAMPLES,
     PATCHES_PER_NODE_SIDE, SPLAT_RES,
 };
 use std::collections::VecDeque;
@@ -39,7 +39,7 @@ const fn texels(name: &'static str) -> AtlasKind {
 
 /// Atlas formats, in the order of `payload_bytes`; the `ATLAS_*` indices
 /// name them.
-const ATLASES: [AtlasKind; 9] = [
+const ATLASES: [AtlasKind; 10] = [
     plain("atlas_height", vk::Format::R16_UNORM, ATLAS_SIDE as u32, 2),
     texels("atlas_normal"),
     texels("atlas_albedo"),
@@ -49,6 +49,7 @@ const ATLASES: [AtlasKind; 9] = [
     plain("atlas_patch_holes", vk::Format::R8_UINT, PATCHES_PER_NODE_SIDE, 1),
     plain("atlas_patch_errors", vk::Format::R32G32_SFLOAT, PATCHES_PER_NODE_SIDE, 8),
     plain("atlas_control", vk::Format::R16_UINT, SPLAT_RES as u32, 2),
+    plain("atlas_vertex_bounds", vk::Format::R32_UINT, NODE_SAMPLES as u32, 4),
 ];
 
 /// Vulkan format and layer bytes of atlas `i` for payloads in `format`.
@@ -78,6 +79,8 @@ pub const ATLAS_PATCH_HOLES: usize = 6;
 pub const ATLAS_PATCH_ERRORS: usize = 7;
 /// A control-map world's control words (the control-map flavour only).
 pub const ATLAS_CONTROL: usize = 8;
+/// The per-triangle rule's vertex numbers (that rule's renderers only).
+pub const ATLAS_VERTEX_BOUNDS: usize = 9;
 
 /// Which payload atlases live on the GPU: one bit per `ATLAS_*` index. An
 /// effect that is off keeps none of the atlases only it reads (no image, no
@@ -88,8 +91,9 @@ pub struct AtlasSet(u16);
 impl AtlasSet {
     /// Every payload kind a world's nodes carry: all but the control words,
     /// which only a control-map bake makes (a renderer in control-map mode
-    /// adds them).
-    pub const ALL: AtlasSet = AtlasSet(((1 << ATLAS_COUNT) - 1) & !(1 << ATLAS_CONTROL));
+    /// adds them), and the vertex numbers, which only the per-triangle rule
+    /// attaches.
+    pub const ALL: AtlasSet = AtlasSet(((1 << ATLAS_COUNT) - 1) & !(1 << ATLAS_CONTROL) & !(1 << ATLAS_VERTEX_BOUNDS));
     /// What drawing needs in any case: heights, albedo, patch bounds and
     /// errors (the per-patch LOD selection).
     pub const CORE: AtlasSet =
@@ -130,6 +134,7 @@ fn payload_bytes(n: &BakedNode) -> [&[u8]; ATLAS_COUNT] {
         &n.patch_holes,
         bytemuck::cast_slice(&n.patch_errors),
         bytemuck::cast_slice(&n.control),
+        bytemuck::cast_slice(&n.vertex_bounds),
     ]
 }
 

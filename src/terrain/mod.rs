@@ -18,6 +18,7 @@ use crate::error::Result;
 use crate::gpu::Context;
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
+use crate::world::vertex_bounds::VertexBoundsTree;
 use crate::world::{
     bake_node_with, BakeSettings, ErrorTree, HeightSource, Hole, Limits, LoadFate, LoadFn, Loader, MemoryReport,
     NodeCache, NodeId, RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError, WorldPlan,
@@ -63,6 +64,10 @@ pub struct TerrainOptions {
     /// computed as their first nodes load. Must be the tree of this world
     /// and source.
     pub errors: Option<Arc<ErrorTree>>,
+    /// Draw with the per-triangle rule: the world's per-vertex bounds are
+    /// computed whole when the loader is made
+    /// ([`crate::world::vertex_bounds`]) and attached to every node.
+    pub vertex_bounds: bool,
 }
 
 /// A caller's node loader (see [`TerrainOptions::load`]).
@@ -91,6 +96,7 @@ impl Default for TerrainOptions {
             retry_frames: ResidencyConfig::default().retry_frames,
             limits: Limits::default(),
             errors: None,
+            vertex_bounds: false,
         }
     }
 }
@@ -209,6 +215,7 @@ impl Terrain {
             cache_dir: options.cache_dir.clone(),
             threads: options.loader_threads,
             custom: options.load.clone(),
+            vertex_bounds: options.vertex_bounds,
         };
         let loader = recipe.loader(source, Arc::clone(&errors))?;
         Ok(Terrain {
@@ -386,43 +393,55 @@ struct LoaderRecipe {
     cache_dir: Option<PathBuf>,
     threads: usize,
     custom: Option<CustomLoad>,
+    vertex_bounds: bool,
 }
 
 impl LoaderRecipe {
     /// Payloads from the caller's loader, the cache folder or a bake in
-    /// memory, each with the world's errors.
+    /// memory, each with the world's errors (and with the per-triangle
+    /// rule, its vertices' bounds, computed here for the whole world).
     fn loader(&self, source: Arc<dyn HeightSource>, errors: Arc<ErrorTree>) -> Result<Loader> {
-        let threads = self.threads;
+        let bounds = match self.vertex_bounds {
+            true => Some(Arc::new(VertexBoundsTree::compute(&self.world, source.as_ref(), &self.holes)?)),
+            false => None,
+        };
+        let load = self.load_fn(source, errors)?;
+        let load: Arc<LoadFn> = match bounds {
+            Some(b) => Arc::new(move |id| {
+                let mut node = load(id)?;
+                b.attach(&mut node);
+                Ok(node)
+            }),
+            None => load,
+        };
+        Ok(Loader::new(self.threads, load)?)
+    }
+
+    fn load_fn(&self, source: Arc<dyn HeightSource>, errors: Arc<ErrorTree>) -> Result<Arc<LoadFn>> {
         Ok(match (&self.custom, &self.cache_dir) {
             (Some(load), _) => {
                 // A caller's payloads without errors get the world's.
                 let load = Arc::clone(&load.0);
-                Loader::new(
-                    threads,
-                    Arc::new(move |id| {
-                        let mut node = load(id)?;
-                        if node.max_error_m.is_infinite() {
-                            errors.attach(&mut node)?;
-                        }
-                        Ok(node)
-                    }),
-                )?
+                Arc::new(move |id| {
+                    let mut node = load(id)?;
+                    if node.max_error_m.is_infinite() {
+                        errors.attach(&mut node)?;
+                    }
+                    Ok(node)
+                })
             }
             (None, Some(dir)) => {
                 let (w, holes, bake) = (self.world, self.holes.clone(), self.bake.clone());
-                Loader::with_cache(
-                    threads,
-                    Arc::new(NodeCache::with_settings(dir, w, source, holes, bake)?.with_errors(errors)),
-                )?
+                let cache = NodeCache::with_settings(dir, w, source, holes, bake)?.with_errors(errors);
+                Arc::new(move |id| cache.get_or_bake_for_render(id).map(|(node, _)| node))
             }
             (None, None) => {
                 let (w, holes, settings) = (self.world, self.holes.clone(), self.bake.clone());
-                let load: Arc<LoadFn> = Arc::new(move |id| {
+                Arc::new(move |id| {
                     let mut node = bake_node_with(&*source, &w, &holes, &settings, id);
                     errors.attach(&mut node)?;
                     Ok(node)
-                });
-                Loader::new(threads, load)?
+                })
             }
         })
     }

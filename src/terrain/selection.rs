@@ -29,6 +29,9 @@ pub struct GpuInputs {
     pub sector_size_m: f32,
     pub height_lo: f32,
     pub height_scale: f32,
+    /// Added around each node's square, in node sides (0 but for the
+    /// per-triangle rule, whose vertices' boxes reach a cell past it).
+    pub box_pad: f32,
 }
 
 impl GpuInputs {
@@ -55,6 +58,7 @@ impl GpuInputs {
             sector_size_m: world.sector_size_m() as f32,
             height_lo: lo,
             height_scale: (hi - lo) / 65535.0,
+            box_pad: 0.0,
         }
     }
 }

@@ -124,6 +124,7 @@ pub fn bake_node_with(
         max_error_m: f32::INFINITY,
         patch_errors: vec![[f32::INFINITY; 2]; PATCHES_PER_NODE],
         repr_error_m: f32::INFINITY,
+        vertex_bounds: Vec::new(),
     }
 }
 

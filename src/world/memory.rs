@@ -50,6 +50,8 @@ impl MemoryReport {
                 kind("patch errors", "RG32F 16x16", p * 8, p * 8),
                 // A control-map world's words (`with_control`).
                 kind("control", "R16_UINT 65x65", 0, 0),
+                // The per-triangle rule's vertex numbers (`with_vertex_bounds`).
+                kind("vertex bounds", "R32_UINT 129x129", 0, 0),
                 // id, min/max, error, representation error; on the GPU the
                 // 2 x u32 node description and the f32 LOD error.
                 kind("node scalars", "2 x u32 desc + f32 error", 9 + 4 + 4 + 4, 12),
@@ -62,6 +64,15 @@ impl MemoryReport {
         let sp = SPLAT_RES * SPLAT_RES * 2;
         let k = self.kinds.iter_mut().find(|k| k.name == "control").expect("the control kind");
         (k.cpu_bytes, k.gpu_bytes) = (sp, sp);
+        self
+    }
+
+    /// The report of a renderer drawing with the per-triangle rule, whose
+    /// nodes carry their vertices' numbers.
+    pub fn with_vertex_bounds(mut self) -> Self {
+        let b = super::layout::NODE_SAMPLES * super::layout::NODE_SAMPLES * 4;
+        let k = self.kinds.iter_mut().find(|k| k.name == "vertex bounds").expect("the vertex bounds kind");
+        (k.cpu_bytes, k.gpu_bytes) = (b, b);
         self
     }
 
@@ -93,6 +104,7 @@ pub fn node_cpu_bytes(n: &BakedNode) -> usize {
         + n.patch_cones.len() * 16
         + n.patch_holes.len()
         + n.patch_errors.len() * 8
+        + n.vertex_bounds.len() * 4
 }
 
 fn mib(b: usize) -> f64 {

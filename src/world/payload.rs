@@ -70,6 +70,11 @@ pub struct BakedNode {
     /// The largest LOD-0 representation error under the node (LOD 0's
     /// triangles against the finest surface), metres.
     pub repr_error_m: f32,
+    /// The per-triangle rule's numbers of the node's 129x129 grid points
+    /// (`world::vertex_bounds`): f16 error | f16 reach << 16. Attached after
+    /// the load by a renderer that draws with the rule (the world's bounds
+    /// are computed whole); empty otherwise, and never in the cache file.
+    pub vertex_bounds: Vec<u32>,
 }
 
 const SAMPLES: usize = NODE_SAMPLES * NODE_SAMPLES;
@@ -202,6 +207,7 @@ impl BakedNode {
             max_error_m,
             patch_errors,
             repr_error_m,
+            vertex_bounds: Vec::new(),
         })
     }
 }

@@ -19,6 +19,7 @@
 use super::bintree::{classify, Bounds, Kind, VertexBound};
 use super::holes::Hole;
 use super::layout::{NodeId, WorldDesc, NODE_QUADS, NODE_SAMPLES};
+use super::payload::BakedNode;
 use super::source::HeightSource;
 use super::vertex_bounds_fine::{block_numbers, Samples, BLOCK, UNITS};
 use super::vertex_rule::{box_half_width, up_f16_bits, up_f32, vertex_numbers, VertexNumbers};
@@ -48,15 +49,19 @@ impl Default for NodeRefine {
 }
 
 impl NodeRefine {
-    /// Takes in a centre at height `z` with numbers `n`.
+    /// Takes in a centre at height `z` with numbers `n`, as the nodes
+    /// store them (f16 rounded up): a test on the merged numbers never
+    /// passes a vertex the same test on its own numbers refines.
     pub fn merge(&mut self, z: f64, n: &VertexNumbers) {
         if n.empty {
             return;
         }
-        self.error_m = self.error_m.max(up_f32(n.error_m));
+        let f16 = |x: f64| half::f16::from_bits(up_f16_bits(up_f32(x))).to_f32();
+        self.error_m = self.error_m.max(f16(n.error_m));
         if !z.is_nan() && n.error_m.is_finite() {
-            self.z_lo_m = self.z_lo_m.min(-up_f32(n.reach_m - z));
-            self.z_hi_m = self.z_hi_m.max(up_f32(z + n.reach_m));
+            let reach = f64::from(f16(n.reach_m));
+            self.z_lo_m = self.z_lo_m.min(-up_f32(reach - z));
+            self.z_hi_m = self.z_hi_m.max(up_f32(z + reach));
         }
     }
 }
@@ -251,6 +256,23 @@ impl VertexBoundsTree {
             }
         }
         r
+    }
+
+    /// Gives `node` its grid points' numbers, and makes its LOD error and
+    /// height range the refinement bound's: the traversal then draws a
+    /// node's children exactly when one of their vertices may be split
+    /// (a vertex's box lies within a cell of the node's square: the
+    /// traversal pads it by that).
+    pub fn attach(&self, node: &mut BakedNode) {
+        node.vertex_bounds = self.node_values(node.id);
+        let r = self.node_refine(node.id);
+        node.max_error_m = r.error_m;
+        if r.z_lo_m <= r.z_hi_m {
+            let [lo, hi] = self.world.height_range_m;
+            let steps = |z: f32| f64::from((z - lo) / (hi - lo)) * 65535.0;
+            node.min_height = node.min_height.min((steps(r.z_lo_m).floor() - 1.0).clamp(0.0, 65535.0) as u16);
+            node.max_height = node.max_height.max((steps(r.z_hi_m).ceil() + 1.0).clamp(0.0, 65535.0) as u16);
+        }
     }
 
     /// Numbers of sample `s` (grid origin 0): height, error, reach, empty.

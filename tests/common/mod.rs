@@ -84,6 +84,7 @@ pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
         max_error_m: f32::from(tag) * 0.01,
         patch_errors: (0..PATCHES_PER_NODE).map(|i| [f32::from(tag) * 0.01, i as f32 * 0.001]).collect(),
         repr_error_m: 0.0,
+        vertex_bounds: Vec::new(),
     }
 }
 pub mod diamond_patch;

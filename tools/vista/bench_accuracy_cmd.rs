@@ -28,6 +28,7 @@ pub struct AccuracyArgs<'a> {
     /// None: what the default GPU budget buys (as `vista render`).
     pub slots: Option<u32>,
     pub shadows: ShadowSweep,
+    pub rules: Vec<vista::render::LodRule>,
 }
 
 pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()> {
@@ -68,6 +69,7 @@ pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()>
         keep_images: images.is_some(),
         shadows: Some(a.shadows.clone()),
         virtual_texture: Some(vista::bench::accuracy_vt::VtSweep::default()),
+        rules: a.rules.clone(),
     };
     let start = Instant::now();
     let result = bench_accuracy(ctx, &d, world.source.clone(), &world.effects, &all, &cfg);

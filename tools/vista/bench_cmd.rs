@@ -67,6 +67,11 @@ pub struct BenchArgs {
     /// 2047) [default: what the default GPU budget buys, as `vista render`].
     #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     slots: Option<u32>,
+    /// `bench accuracy`: the LOD rules of the geometry rows, side by side:
+    /// patch (culling on and off) and triangle (the per-triangle rule; its
+    /// world's per-vertex bounds are computed first) [default: patch].
+    #[arg(long, value_delimiter = ',', value_parser = crate::render_cmd::parse_lod_rule)]
+    lod_rules: Option<Vec<vista::render::LodRule>>,
     /// Measured frames per row (after warm-up); the median is reported
     /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects, 3 per block (3 rounds) for shade].
     #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
@@ -120,7 +125,7 @@ pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
 
 /// Which kinds read each kind-specific option (by its argument id); every
 /// other option is read by all kinds.
-const USED_BY: [(&str, &[BenchKind]); 9] = {
+const USED_BY: [(&str, &[BenchKind]); 10] = {
     use BenchKind::*;
     [
         ("sets", &[Traverse]),
@@ -132,6 +137,7 @@ const USED_BY: [(&str, &[BenchKind]); 9] = {
         ("plot", &[Accuracy]),
         ("images", &[Accuracy]),
         ("slots", &[Accuracy]),
+        ("lod_rules", &[Accuracy]),
     ]
 };
 
@@ -148,6 +154,7 @@ fn unused_options(args: &BenchArgs) -> Vec<String> {
         args.plot.is_some(),
         args.images.is_some(),
         args.slots.is_some(),
+        args.lod_rules.is_some(),
     ];
     USED_BY
         .iter()
@@ -217,6 +224,7 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
                 images: args.images.as_deref(),
                 slots: args.slots,
                 shadows,
+                rules: args.lod_rules.clone().unwrap_or(vec![vista::render::LodRule::Patch]),
             };
             crate::bench_accuracy_cmd::accuracy(ctx, &bench, &a)
         }

@@ -6,6 +6,7 @@
 use crate::render_cmd::ViewpointArgs;
 use crate::world_args::{check_slots, LoadedWorld};
 use anyhow::Result;
+use vista::render::LodRule;
 use vista::terrain::{default_gpu_budget, max_slots, slots_for_budget};
 
 /// Where the slot count came from.
@@ -31,9 +32,13 @@ pub struct NodeBudget {
 
 const MIB: f64 = (1u64 << 20) as f64;
 
-fn slot_bytes(world: &LoadedWorld) -> u64 {
+fn slot_bytes(world: &LoadedWorld, rule: LodRule) -> u64 {
     let source_holes = world.source.has_holes();
-    vista::render::slot_bytes(world.bake.format, &world.effects, &world.desc, &world.holes, source_holes)
+    let bytes = vista::render::slot_bytes(world.bake.format, &world.effects, &world.desc, &world.holes, source_holes);
+    match rule {
+        LodRule::Patch => bytes,
+        LodRule::Triangle => bytes + vista::render::vertex_bounds_slot_bytes(),
+    }
 }
 
 /// Refuses, before Vulkan starts, a slot count or a budget that cannot
@@ -48,7 +53,7 @@ pub fn check(args: &ViewpointArgs, world: &LoadedWorld) -> Result<()> {
             "--gpu-budget {mib}: a budget is a positive number of MiB"
         ))));
     }
-    let per = slot_bytes(world);
+    let per = slot_bytes(world, args.lod_rule);
     let fit = ((mib * MIB) as u64 / per).min(u64::from(vista::terrain::quadtree::MAX_SLOTS)) as u32;
     check_slots(fit.max(1), &world.desc).map_err(|e| {
         let why = e.to_string();
@@ -63,7 +68,7 @@ pub fn check(args: &ViewpointArgs, world: &LoadedWorld) -> Result<()> {
 /// The slots the default budget buys a renderer of `world` on this device
 /// (what `vista bench accuracy` gives its renderers without `--slots`).
 pub fn default_slots(world: &LoadedWorld, device: &vista::gpu::Limits) -> Result<u32> {
-    let per = slot_bytes(world);
+    let per = slot_bytes(world, LodRule::Patch);
     let slots = slots_for_budget(default_gpu_budget(device, per), per, device);
     check_slots(slots, &world.desc)?;
     Ok(slots)
@@ -72,7 +77,7 @@ pub fn default_slots(world: &LoadedWorld, device: &vista::gpu::Limits) -> Result
 impl NodeBudget {
     /// The slots `args` give a renderer of `world` on this device.
     pub fn of(args: &ViewpointArgs, world: &LoadedWorld, device: &vista::gpu::Limits) -> Result<Self> {
-        let slot_bytes = slot_bytes(world);
+        let slot_bytes = slot_bytes(world, args.lod_rule);
         if let Some(slots) = args.slots {
             let budget_bytes = u64::from(slots) * slot_bytes;
             return Ok(NodeBudget { slots, given: Given::Slots, slot_bytes, budget_bytes, capped: false });

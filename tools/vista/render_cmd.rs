@@ -13,7 +13,9 @@ use vista::frame::FrameTimings;
 use vista::gpu::{Context, QueueMode};
 use vista::passes::cull_patches::CullStages;
 use vista::render::offscreen::{Offscreen, OffscreenDesc, Settle};
-use vista::render::{overview_camera, Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
+use vista::render::{
+    overview_camera, Camera, LodOptions, LodRule, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M,
+};
 use vista::targets::{GbufferLayout, Output};
 use vista::terrain::TerrainOptions;
 use vista::world::Work;
@@ -110,6 +112,20 @@ pub struct ViewpointArgs {
     /// 11-bit).
     #[arg(long, conflicts_with = "gpu_budget", value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub slots: Option<u32>,
+    /// LOD selection: `patch` (per 8x8-quad patch, Far Cry 5's) or
+    /// `triangle` (per triangle inside each node, a restricted bintree with
+    /// saturated errors; computes the world's per-vertex bounds first, and
+    /// has no refinement below the samples, occlusion or cone culling yet).
+    #[arg(long, default_value = "patch", value_parser = parse_lod_rule)]
+    pub lod_rule: LodRule,
+}
+
+pub fn parse_lod_rule(s: &str) -> Result<LodRule, String> {
+    match s {
+        "patch" => Ok(LodRule::Patch),
+        "triangle" => Ok(LodRule::Triangle),
+        _ => Err(format!("unknown LOD rule {s:?}: use patch or triangle")),
+    }
 }
 
 impl ViewpointArgs {
@@ -143,6 +159,7 @@ impl ViewpointArgs {
                 ..TerrainOptions::default()
             },
             stages: self.cull,
+            lod: LodOptions { rule: self.lod_rule, ..LodOptions::default() },
             effects: world.effects.clone(),
             origin_m: world.origin_m,
             decals: world.decals.clone(),

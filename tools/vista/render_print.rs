@@ -34,7 +34,34 @@ pub fn print_fly(m: f64, frames: u32, pages: &[VtCounters], budget: Option<u32>)
     );
 }
 
+/// The per-triangle rule's lines (instead of the patches' and selection's).
+fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleListHeader) {
+    println!(
+        "triangles: {} drawn by the per-triangle rule ({} emitted, {} past the list), {} subtrees outside the \
+         frustum not emitted, {} splits forced by a finer neighbour's corner",
+        t.drawn(),
+        t.triangles,
+        t.overflow,
+        t.culled,
+        t.forced
+    );
+    println!(
+        "lod:     error bound {:.2} px (target {} px): unsplit vertices {:.2} px, grid cells (the node's own \
+         error) {:.2} px; {} vertices the rule splits drawn unsplit (a coarser node across lacks them)",
+        s.bound_px,
+        s.target_px,
+        f32::from_bits(t.bound_bits),
+        f32::from_bits(t.grid_bound_bits),
+        t.clamped
+    );
+}
+
 pub fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
+    if let Some(t) = &s.triangles {
+        print_triangles(s, t);
+        print_nodes(s);
+        return;
+    }
     let p = &s.patches;
     let stage = |on: bool, name: &str, n: u32| if on { format!("{n} after {name}") } else { format!("{name} off") };
     println!(
@@ -69,6 +96,11 @@ pub fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
         sel.conflicts,
         p.seam_overflow
     );
+    print_nodes(s);
+}
+
+/// The nodes drawn, and each effect's lines.
+fn print_nodes(s: &RenderStats) {
     let per_lod: Vec<String> = s
         .nodes_per_lod
         .iter()

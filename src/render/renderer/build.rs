@@ -2,7 +2,7 @@
 //! an effect that is off), then the terrain and the core passes, then
 //! each effect's built side through the registry.
 
-use super::{atlases_for, world_content, Occlusion, RendererOptions, TerrainRenderer};
+use super::{atlases_for, world_content, LodRule, Occlusion, RendererOptions, TerrainRenderer, TrianglePath};
 use crate::effects::frame_effect::{BuildInputs, FrameEffect};
 use crate::effects::registry::kinds;
 use crate::effects::{decide, Effect, EffectDecision, FrameSwitches, MaterialsMode};
@@ -13,6 +13,7 @@ use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation};
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches};
+use crate::passes::emit_triangles::EmitTriangles;
 use crate::passes::gbuffer_tiles::{GbufferTiles, TileMaterials};
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lighting_resolve::{LightingResolve, ResolveTarget};
@@ -22,12 +23,13 @@ use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
 use crate::passes::terrain_geometry::TerrainGeometry;
 use crate::passes::terrain_holes::TerrainHoles;
+use crate::passes::terrain_triangles::TerrainTriangles;
 use crate::passes::traverse::Traverse;
 use crate::render::telemetry::{CounterLayout, Telemetry, TRIANGLES_PER_PATCH};
 use crate::scene::graph::{FramePass, PassGraph};
 use crate::scene::shading::{ShadeRules, Shading};
 use crate::shaders::structs;
-use crate::terrain::gpu_quadtree::ATLAS_CONTROL;
+use crate::terrain::gpu_quadtree::{ATLAS_CONTROL, ATLAS_VERTEX_BOUNDS};
 use crate::terrain::{Terrain, TerrainOptions};
 use crate::world::{HeightSource, Hole, WorldDesc};
 use std::sync::Arc;
@@ -69,8 +71,12 @@ fn terrain_options(
     world: &WorldDesc,
     decisions: &[EffectDecision],
 ) -> Result<TerrainOptions> {
-    let atlases = atlases_for(decisions, options.effects.materials);
-    let mut terrain_options = TerrainOptions { atlases, ..options.terrain.clone() };
+    let mut atlases = atlases_for(decisions, options.effects.materials);
+    let triangle = options.lod.rule == LodRule::Triangle;
+    if triangle {
+        atlases = atlases.with(ATLAS_VERTEX_BOUNDS);
+    }
+    let mut terrain_options = TerrainOptions { atlases, vertex_bounds: triangle, ..options.terrain.clone() };
     if atlases.contains(ATLAS_CONTROL) && terrain_options.bake.control.is_none() {
         // The control-map flavour reads control words: bake them (from
         // the scene's map or the material rules) unless the caller did.
@@ -129,6 +135,30 @@ fn graph(decisions: &[EffectDecision], options: &RendererOptions) -> PassGraph {
         graph.not_built(FramePass::LIGHTING_RESOLVE, "output gbuffer: the engine lights the G-buffer".into());
         graph.not_built(FramePass::DEBUG_VIEW, "output gbuffer: no colour target to draw a debug view over".into());
     }
+    let per_patch = [
+        FramePass::SELECT_PATCHES,
+        FramePass::CULL_PATCHES,
+        FramePass::TERRAIN_GEOMETRY,
+        FramePass::TERRAIN_HOLES,
+        FramePass::HIZ_BUILD,
+        FramePass::CULL_OCCLUDED,
+        FramePass::TERRAIN_GEOMETRY_LATE,
+        FramePass::TERRAIN_HOLES_LATE,
+    ];
+    match options.lod.rule {
+        LodRule::Patch => {
+            for p in [FramePass::EMIT_TRIANGLES, FramePass::TERRAIN_TRIANGLES] {
+                graph.not_built(p, "LOD rule patch: the per-patch selection draws".into());
+            }
+        }
+        LodRule::Triangle => {
+            for p in per_patch {
+                let why = "LOD rule triangle: the per-triangle rule draws (its vertices test holes; no occlusion \
+                           or cone culling yet)";
+                graph.not_built(p, why.into());
+            }
+        }
+    }
     graph
 }
 
@@ -173,6 +203,30 @@ fn build_effects(b: &mut BuildInputs) -> Result<Vec<Box<dyn FrameEffect>>> {
     Ok(built)
 }
 
+/// The traversal, its boxes padded for the per-triangle rule (a vertex's
+/// box reaches less than a cell past its node: world/vertex_bounds.rs).
+fn traversal(ctx: &Context, world: &WorldDesc, options: &RendererOptions) -> Result<Traverse> {
+    let mut traverse = Traverse::new(ctx, world, options.terrain.slots)?;
+    if options.lod.rule == LodRule::Triangle {
+        traverse.set_box_pad(1.0 / crate::world::NODE_QUADS as f32);
+    }
+    Ok(traverse)
+}
+
+/// The per-triangle rule's passes, where it draws.
+fn triangle_path(
+    ctx: &Context,
+    triangle: bool,
+    slot_capacity: u32,
+    depth: crate::passes::terrain_geometry::DepthOptions,
+) -> Result<Option<TrianglePath>> {
+    if !triangle {
+        return Ok(None);
+    }
+    let emit = EmitTriangles::new(ctx, slot_capacity)?;
+    Ok(Some(TrianglePath { emit, draw: TerrainTriangles::new(ctx, depth)? }))
+}
+
 impl TerrainRenderer {
     pub fn new(
         ctx: &Context,
@@ -183,16 +237,18 @@ impl TerrainRenderer {
     ) -> Result<Self> {
         let decisions = decisions(ctx, world, source.as_ref(), &holes, options)?;
         let on = |e: Effect| is_on(&decisions, e);
+        let triangle = options.lod.rule == LodRule::Triangle;
         let terrain_options = terrain_options(options, world, &decisions)?;
         let depth = options.depth;
         let geometry = TerrainGeometry::new(ctx, depth)?;
         let (shade, gbuffer_tiles, variants) = tile_shading(ctx, options, &decisions)?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
-        let traverse = Traverse::new(ctx, world, options.terrain.slots)?;
+        let traverse = traversal(ctx, world, options)?;
         // Per-slot resources cover the reload slots too (gpu_quadtree::RELOAD_SLOTS).
         let slot_capacity = terrain.tree.slot_capacity();
-        let build =
-            CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes), occlusion: on(Effect::Occlusion) };
+        // The per-triangle rule has no occlusion phase 2 (yet).
+        let occlusion = on(Effect::Occlusion) && !triangle;
+        let build = CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes), occlusion };
         let cull = CullPatches::new(ctx, &traverse, geometry.index_count(), build)?;
         let occlusion = match build.occlusion {
             true => Some(Occlusion::new(ctx, &traverse, geometry.index_count(), build, slot_capacity)?),
@@ -228,6 +284,7 @@ impl TerrainRenderer {
             occlusion,
             geometry,
             holes: if build.holes { Some(TerrainHoles::new(ctx, depth)?) } else { None },
+            triangles: triangle_path(ctx, triangle, slot_capacity, depth)?,
             classify: ClassifyTiles::new(ctx)?,
             gbuffer_tiles,
             resolve,

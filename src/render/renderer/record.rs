@@ -149,6 +149,7 @@ impl TerrainRenderer {
             select: &self.select,
             cull: &self.cull,
             occlusion: self.occlusion.as_ref(),
+            triangles: self.triangles.as_ref(),
             geometry: &self.geometry,
             holes: self.holes.as_ref(),
             classify: &self.classify,
@@ -192,6 +193,9 @@ impl TerrainRenderer {
         self.sector_data.select_frame(frame);
         self.select.select_frame(frame);
         self.cull.select_frame(frame);
+        if let Some(t) = &mut self.triangles {
+            t.emit.select_frame(frame);
+        }
         if let Some(o) = &mut self.occlusion {
             o.cull.select_frame(frame);
         }

@@ -1,0 +1,343 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The per-triangle rule on the GPU (src/world/vertex_bounds.rs; its CPU
+// twin is src/reference/bintree_cut.rs): one workgroup per drawn node
+// (indirect, from traverse), each of its 256 threads walking one subtree of
+// the node's bintree from depth EMIT_THREAD_DEPTH down to the grid's cells
+// (the depths above are decided first, a depth at a time, each triangle
+// the cut reaches by one thread); the triangles left go to one index list
+// (terrain_triangles draws it).
+//
+// A triangle is split at the midpoint m of its hypotenuse when
+// - m is active: its saturated error, projected from its box (its level's
+//   width across, its reach up and down, within the world's height range),
+//   is over the target, and a node across the border (m on it) holds m in
+//   its grid (else the triangle stays whole and m counts as clamped); or
+// - an edge of it on the node's border holds a corner of a finer node
+//   across (forced: that node draws the corner as a vertex).
+// Both nodes of a border decide a vertex they share from the same bits in
+// the same arithmetic, so the list is a conforming cut: no T-junction and
+// no stitching. A subtree whose box is outside the frustum is dropped.
+layout(local_size_x = 256) in;
+
+#include "node_list.glsl"
+#include "terrain_view.glsl"
+#include "atlas_texels.glsl"
+#include "triangle_list.glsl"
+
+// Quads per node side (world NODE_QUADS): 1 << EMIT_THREAD_DEPTH.
+layout(constant_id = 0) const uint NODE_SIDE = 128u;
+
+layout(set = 0, binding = 0, std430) readonly buffer TraverseOutput {
+    TraverseHeader header;
+    uvec2 nodes[];
+} traverse_out;
+layout(set = 0, binding = 1, std430) readonly buffer View { TerrainView v; } view;
+layout(set = 0, binding = 2, r8ui) uniform readonly uimage2D lod_map;
+layout(set = 0, binding = 3) uniform texture2DArray height_atlas;
+layout(set = 0, binding = 4) uniform utexture2DArray vertex_bounds;
+layout(set = 0, binding = 5) uniform sampler nearest;
+layout(set = 0, binding = 6, std430) readonly buffer NodeDescs { uvec2 descs[]; } node_descs;
+layout(set = 0, binding = 7, std430) readonly buffer NodeErrors { float errors[]; } node_errors;
+layout(set = 0, binding = 8, std430) buffer Triangles {
+    TriangleListHeader header;
+    uint indices[];
+} tris;
+layout(set = 0, binding = 9, std430) buffer SlotNodes { uint nodes[]; } slot_nodes;
+
+layout(push_constant, std430) uniform EmitPush {
+    uint capacity;  // triangles the list holds
+    uint pad0;
+    uint pad1;
+    uint pad2;
+} pc;
+
+#include "projected_error.glsl"
+#include "frustum_box.glsl"
+
+const uint LEAF = 0u;
+const uint SPLIT = 1u;
+const uint CULLED = 2u;
+// A leaf whose hypotenuse has no midpoint in the grid (a cell's half).
+const uint CELL = 3u;
+
+struct Tri {
+    ivec2 apex;
+    ivec2 b;
+    ivec2 c;
+};
+
+uint g_slot;
+uint g_lod;
+ivec2 g_node;
+int g_side;
+
+ivec2 sample_of(ivec2 p) {
+    return (g_node * g_side + p) << int(g_lod);
+}
+
+// An infinite error's projection (a hole under the vertex): a literal
+// infinity would be folded into an invalid constant.
+const float HUGE_PX = 3.0e38;
+
+// Half the width (m) of the box of the vertex at LOD-0 sample s
+// (world/vertex_rule.rs box_half_width, in lattice units below the samples).
+float half_width_m(ivec2 s) {
+    int tx = s.x == 0 ? 30 : findLSB(s.x);
+    int ty = s.y == 0 ? 30 : findLSB(s.y);
+    int ts = min(tx, ty);
+    bool centre = ((s.x >> ts) & 1) == 1 && ((s.y >> ts) & 1) == 1;
+    int t = ts + int(REFINE_LEVELS);
+    int r = centre ? 3 * (1 << t) - 1 : (2 << t) - 1;
+    return float(r) * view.v.spacing_m / float(1u << REFINE_LEVELS);
+}
+
+// Projected error (px) of grid point p's numbers (0: it splits nothing;
+// HUGE_PX: a hole under it), and its camera-relative box.
+float vertex_px(ivec2 p, out vec3 lo, out vec3 hi) {
+    vec2 n = unpackHalf2x16(texelFetch(usampler2DArray(vertex_bounds, nearest), ivec3(p, int(g_slot)), 0).r);
+    ivec2 s = sample_of(p);
+    float h = texelFetch(sampler2DArray(height_atlas, nearest), ivec3(atlas_texel(p), int(g_slot)), 0).r;
+    float z = view.v.height_lo + h * view.v.height_range;
+    float top = view.v.height_lo + view.v.height_range;
+    float r = half_width_m(s);
+    vec2 xy = view_rel_xy(s, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
+    lo = vec3(xy - r, clamp(z - n.y, view.v.height_lo, top) - view.v.camera_z);
+    hi = vec3(xy + r, clamp(z + n.y, view.v.height_lo, top) - view.v.camera_z);
+    if (isinf(n.x)) {
+        return HUGE_PX;
+    }
+    return n.x > 0.0 ? projected_px(n.x, lo, hi) : 0.0;
+}
+
+// The LOD of the listed node covering sector q, or NO_LOD.
+uint lod_at(ivec2 q) {
+    if (any(lessThan(q, ivec2(0))) || q.x >= int(view.v.lod_map_w) || q.y >= int(view.v.lod_map_h)) {
+        return NO_LOD;
+    }
+    return imageLoad(lod_map, q).r;
+}
+
+// Whether every node across the border line through sample s (the line's
+// axis `along`; `out_step` -1 or 0 picks the sector across) holds s.
+bool held_on_line(ivec2 s, int along, int out_step) {
+    int side = g_side;
+    int a = s[along];
+    ivec2 q = s / side;
+    q[1 - along] += out_step;
+    for (int k = 0; k < 2; ++k) {
+        // A point on a sector boundary touches the sectors on both sides.
+        if (k == 1 && a % side != 0) {
+            break;
+        }
+        ivec2 at = q;
+        at[along] -= k;
+        uint l = lod_at(at);
+        if (l != NO_LOD && (a & ((1 << l) - 1)) != 0) {
+            return false;
+        }
+    }
+    return true;
+}
+
+bool held_across(ivec2 p) {
+    ivec2 s = sample_of(p);
+    bool ok = true;
+    if (p.x == 0 || p.x == g_side) {
+        ok = held_on_line(s, 1, p.x == 0 ? -1 : 0);
+    }
+    if (p.y == 0 || p.y == g_side) {
+        ok = ok && held_on_line(s, 0, p.y == 0 ? -1 : 0);
+    }
+    return ok;
+}
+
+// Whether the grid segment u-w lies on the node's border with a finer
+// node's corner strictly inside it, across.
+bool corner_across(ivec2 u, ivec2 w) {
+    int along;
+    int out_step;
+    if (u.x == w.x && (u.x == 0 || u.x == g_side)) {
+        along = 1;
+        out_step = u.x == 0 ? -1 : 0;
+    } else if (u.y == w.y && (u.y == 0 || u.y == g_side)) {
+        along = 0;
+        out_step = u.y == 0 ? -1 : 0;
+    } else {
+        return false;
+    }
+    ivec2 s0 = sample_of(min(u, w));
+    ivec2 s1 = sample_of(max(u, w));
+    int len = s1[along] - s0[along];
+    int side = g_side;
+    ivec2 q = s0 / side;
+    q[1 - along] += out_step;
+    for (int k = s0[along] / side; k < (s1[along] + side - 1) / side; ++k) {
+        ivec2 at = q;
+        at[along] = k;
+        uint l = lod_at(at);
+        if (l != NO_LOD && (side << l) < len) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// What to do with triangle t; `px`: its split vertex's projected error
+// when it stays whole.
+uint decide(Tri t, out float px) {
+    px = 0.0;
+    ivec2 sum = t.b + t.c;
+    if (((sum.x | sum.y) & 1) != 0) {
+        return CELL;
+    }
+    ivec2 m = sum / 2;
+    vec3 lo, hi;
+    px = vertex_px(m, lo, hi);
+    if (px < HUGE_PX && box_outside_frustum(lo, hi)) {
+        return CULLED;
+    }
+    if (corner_across(t.apex, t.b) || corner_across(t.b, t.c) || corner_across(t.c, t.apex)) {
+        atomicAdd(tris.header.forced, 1u);
+        return SPLIT;
+    }
+    if (px <= view.v.lod_params.x) {
+        return LEAF;
+    }
+    bool border = m.x == 0 || m.y == 0 || m.x == g_side || m.y == g_side;
+    if (border && !held_across(m)) {
+        atomicAdd(tris.header.clamped, 1u);
+        return LEAF;
+    }
+    return SPLIT;
+}
+
+void emit(Tri t) {
+    uint i = atomicAdd(tris.header.triangles, 1u);
+    if (i >= pc.capacity) {
+        atomicAdd(tris.header.overflow, 1u);
+        return;
+    }
+    ivec2 u = t.b - t.apex, w = t.c - t.apex;
+    // Counter-clockwise seen from above (the front faces).
+    bool ccw = u.x * w.y - u.y * w.x > 0;
+    tris.indices[3u * i] = triangle_vertex(g_slot, t.apex);
+    tris.indices[3u * i + 1u] = triangle_vertex(g_slot, ccw ? t.b : t.c);
+    tris.indices[3u * i + 2u] = triangle_vertex(g_slot, ccw ? t.c : t.b);
+    atomicAdd(tris.header.index_count, 3u);
+}
+
+// Its two halves, each with the split vertex as its right angle.
+Tri half_of(Tri t, uint which) {
+    ivec2 m = (t.b + t.c) / 2;
+    return which == 0u ? Tri(m, t.apex, t.b) : Tri(m, t.c, t.apex);
+}
+
+// The largest projected error (px) of the node's own error over cell
+// triangle t's column (its square across, the node's height range up):
+// what a cell of its grid may be off by.
+float cell_px(Tri t) {
+    uvec2 d = node_descs.descs[g_slot];
+    int bias = bitfieldExtract(int(d.y), int(DESC_BIAS_SHIFT), int(DESC_BIAS_BITS));
+    float err = ldexp(node_errors.errors[g_slot], bias);
+    ivec2 lo = min(min(t.apex, t.b), t.c), hi = max(max(t.apex, t.b), t.c);
+    vec2 xy0 = view_rel_xy(sample_of(lo), view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
+    vec2 xy1 = view_rel_xy(sample_of(hi), view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
+    float z0 = view.v.height_lo + float(bitfieldExtract(d.x, 0, int(HALF_BITS))) * view.v.height_scale;
+    float z1 = view.v.height_lo + float(d.x >> HALF_BITS) * view.v.height_scale;
+    return projected_px(err, vec3(xy0, z0 - view.v.camera_z), vec3(xy1, z1 - view.v.camera_z));
+}
+
+// Emits t as the rule leaves it (a leaf, culled, or split further).
+void finish(Tri t, uint what, float px) {
+    if (what == CULLED) {
+        atomicAdd(tris.header.culled, 1u);
+        return;
+    }
+    emit(t);
+    if (what == CELL) {
+        atomicMax(tris.header.grid_bound_bits, floatBitsToUint(cell_px(t)));
+    } else {
+        atomicMax(tris.header.bound_bits, floatBitsToUint(px));
+    }
+}
+
+// Depth-first over t's subtree (at most NODE_SIDE's depth below it).
+void walk(Tri root) {
+    Tri stack[EMIT_THREAD_DEPTH + 2u];
+    int top = 0;
+    stack[0] = root;
+    while (top >= 0) {
+        Tri t = stack[top--];
+        float px;
+        uint what = decide(t, px);
+        if (what == SPLIT) {
+            stack[++top] = half_of(t, 1u);
+            stack[++top] = half_of(t, 0u);
+        } else {
+            finish(t, what, px);
+        }
+    }
+}
+
+// Reached, split: its halves are decided next.
+const uint S_SPLIT = 1u;
+// Not reached, or emitted (or culled) whole.
+const uint S_DONE = 0u;
+// The decisions of one depth above the threads' own, and of the one before.
+shared uint s_state[2u << EMIT_THREAD_DEPTH];
+shared uint s_parent[2u << EMIT_THREAD_DEPTH];
+
+// Triangle i (0 .. 2 << depth) of the node's bintree at `depth`: bit
+// `depth` of i picks the square's half, the lower bits the halves below.
+Tri triangle_at(uint depth, uint i) {
+    ivec2 sw = ivec2(0), se = ivec2(g_side, 0), nw = ivec2(0, g_side), ne = ivec2(g_side);
+    bool slash = ((g_node.x + g_node.y) & 1) == 0;
+    bool first = (i >> depth) == 0u;
+    Tri t = slash ? (first ? Tri(se, sw, ne) : Tri(nw, ne, sw)) : (first ? Tri(sw, se, nw) : Tri(ne, nw, se));
+    for (uint d = 0u; d < depth; ++d) {
+        t = half_of(t, (i >> (depth - 1u - d)) & 1u);
+    }
+    return t;
+}
+
+void main() {
+    uvec2 entry = traverse_out.nodes[gl_WorkGroupID.x];
+    uint n = entry.x;
+    g_slot = entry.y;
+    g_lod = node_lod(n);
+    g_node = ivec2(node_x(n), node_y(n));
+    uint side_u = NODE_SIDE;  // read first: naga cannot parse a converted spec constant
+    g_side = int(side_u);
+    uint t = gl_LocalInvocationID.x;
+    if (t == 0u) {
+        slot_nodes.nodes[g_slot] = n;
+    }
+    // The depths above the threads' own, one at a time: each triangle the
+    // cut reaches is decided once, by the thread of its index.
+    for (uint d = 0u; d < EMIT_THREAD_DEPTH; ++d) {
+        if (t < (2u << d)) {
+            uint state = S_DONE;
+            if (d == 0u || s_parent[t >> 1u] == S_SPLIT) {
+                Tri tri = triangle_at(d, t);
+                float px;
+                uint what = decide(tri, px);
+                if (what == SPLIT) {
+                    state = S_SPLIT;
+                } else {
+                    finish(tri, what, px);
+                }
+            }
+            s_state[t] = state;
+        }
+        barrier();
+        if (t < (2u << d)) {
+            s_parent[t] = s_state[t];
+        }
+        barrier();
+    }
+    // Each thread walks the subtree of its own triangle, if the cut reaches it.
+    if (s_parent[t >> 1u] == S_SPLIT) {
+        walk(triangle_at(EMIT_THREAD_DEPTH, t));
+    }
+}

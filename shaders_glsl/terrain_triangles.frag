@@ -1,0 +1,4 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The per-triangle rule's draw's fragments (common/terrain_fragment.glsl).
+#include "terrain_fragment.glsl"
