@@ -71,8 +71,9 @@ pub struct VertexBoundsTree {
     world: WorldDesc,
     /// Samples a row (and rows): the roots' grid, one more than its quads.
     side: [usize; 2],
-    /// Stored heights (m), NaN at holes.
+    /// Stored heights (m), holes' too (the Catmull-Rom taps read them).
     z: Vec<f32>,
+    hole: Vec<bool>,
     error: Vec<f32>,
     reach: Vec<f32>,
     empty: Vec<bool>,
@@ -103,7 +104,8 @@ impl VertexBoundsTree {
         let mut tree = VertexBoundsTree {
             world: *world,
             side,
-            z: z.z.iter().zip(&z.hole).map(|(h, hole)| if *hole { f32::NAN } else { *h as f32 }).collect(),
+            z: z.z.iter().map(|h| *h as f32).collect(),
+            hole: z.hole,
             error: vec![0.0; n],
             reach: vec![0.0; n],
             empty: vec![false; n],
@@ -118,6 +120,34 @@ impl VertexBoundsTree {
         s.y as usize * self.side[0] + s.x as usize
     }
 
+    /// The stored height of sample `s` (NaN: a hole).
+    fn height(&self, s: I64Vec2) -> f64 {
+        let i = self.index(s);
+        if self.hole[i] {
+            f64::NAN
+        } else {
+            f64::from(self.z[i])
+        }
+    }
+
+    /// The samples `lo..lo + side` (each way) a block reads: from the
+    /// world's arrays, or where the window passes the lattice's edge, from
+    /// the source as the bake reads it.
+    fn block_samples(&self, source: &dyn HeightSource, holes: &[Hole], lo: I64Vec2, side: i64) -> Samples {
+        let last = I64Vec2::new(self.side[0] as i64 - 1, self.side[1] as i64 - 1);
+        if lo.cmplt(I64Vec2::ZERO).any() || (lo + I64Vec2::splat(side - 1)).cmpgt(last).any() {
+            return stored(&self.world, source, holes, lo, side, side);
+        }
+        let (mut z, mut hole) =
+            (Vec::with_capacity((side * side) as usize), Vec::with_capacity((side * side) as usize));
+        for j in 0..side {
+            let i = self.index(lo + I64Vec2::new(0, j));
+            z.extend(self.z[i..i + side as usize].iter().map(|h| f64::from(*h)));
+            hole.extend_from_slice(&self.hole[i..i + side as usize]);
+        }
+        Samples { lo, size: I64Vec2::splat(side), z, hole }
+    }
+
     fn numbers(&self, s: I64Vec2) -> VertexNumbers {
         let i = self.index(s);
         VertexNumbers { error_m: f64::from(self.error[i]), reach_m: f64::from(self.reach[i]), empty: self.empty[i] }
@@ -130,7 +160,6 @@ impl VertexBoundsTree {
 
     /// The levels below the sample grid, and the sample grid's finest.
     fn fine_levels(&mut self, source: &dyn HeightSource, holes: &[Hole], last: I64Vec2) {
-        let world = self.world;
         let blocks: Vec<I64Vec2> = (0..=last.y / BLOCK)
             .flat_map(|by| (0..=last.x / BLOCK).map(move |bx| I64Vec2::new(bx, by) * BLOCK))
             .collect();
@@ -140,8 +169,7 @@ impl VertexBoundsTree {
             let done: Vec<_> = chunk
                 .par_iter()
                 .map(|&o| {
-                    let margin = I64Vec2::splat(6);
-                    let s = stored(&world, source, holes, o - margin, BLOCK + 13, BLOCK + 13);
+                    let s = self.block_samples(source, holes, o - I64Vec2::splat(6), BLOCK + 13);
                     block_numbers(&s, o, last)
                 })
                 .collect();
@@ -174,7 +202,7 @@ impl VertexBoundsTree {
         let d = (1i64 << t) / UNITS;
         let this = &*self;
         let inside = |p: I64Vec2| p.cmpge(I64Vec2::ZERO).all() && p.cmple(last * UNITS).all();
-        let z = |p: I64Vec2| f64::from(this.z[this.index(p / UNITS)]);
+        let z = |p: I64Vec2| this.height(p / UNITS);
         let child = |p: I64Vec2| this.numbers(p / UNITS);
         let found: Vec<(I64Vec2, VertexNumbers)> = (0..=last.y / d)
             .into_par_iter()
@@ -252,7 +280,7 @@ impl VertexBoundsTree {
         for qy in 0..i64::from(NODE_QUADS) {
             for qx in 0..i64::from(NODE_QUADS) {
                 let c = first + I64Vec2::new(qx, qy) * step + I64Vec2::splat(step / 2);
-                r.merge(f64::from(self.z[self.index(c)]), &self.numbers(c));
+                r.merge(self.height(c), &self.numbers(c));
             }
         }
         r
@@ -277,7 +305,7 @@ impl VertexBoundsTree {
 
     /// Numbers of sample `s` (grid origin 0): height, error, reach, empty.
     pub fn at(&self, s: I64Vec2) -> (f32, VertexNumbers) {
-        (self.z[self.index(s)], self.numbers(s))
+        (self.height(s) as f32, self.numbers(s))
     }
 }
 
@@ -296,6 +324,6 @@ impl Bounds for VertexBoundsTree {
 
     fn point(&mut self, v: I64Vec2) -> DVec3 {
         let [x, y] = self.world.sample_pos(v.x, v.y);
-        DVec3::new(x, y, f64::from(self.z[self.index(v)]))
+        DVec3::new(x, y, self.height(v))
     }
 }

@@ -59,17 +59,16 @@ pub struct BlockNumbers {
 }
 
 /// The window's lattice: heights and numbers of points `lo..=hi`.
-struct Window<'a> {
+struct Window {
     lo: I64Vec2,
     side: i64,
     /// The world lattice's last point (its first is 0).
     last: I64Vec2,
     z: Vec<f64>,
     numbers: Vec<VertexNumbers>,
-    samples: &'a Samples,
 }
 
-impl Window<'_> {
+impl Window {
     fn inside(&self, v: I64Vec2) -> bool {
         let l = v - self.lo;
         l.cmpge(I64Vec2::ZERO).all()
@@ -89,25 +88,47 @@ fn weights(t: f64) -> [f64; 4] {
     super::source::catmull_rom(t)
 }
 
-/// The finest surface at lattice point `v` (NaN where its nearest sample,
-/// ties up, is a hole: the vertex shader's rule below LOD 0).
-fn finest(samples: &Samples, v: I64Vec2) -> f64 {
-    let near = I64Vec2::new((v.x + UNITS / 2).div_euclid(UNITS), (v.y + UNITS / 2).div_euclid(UNITS));
-    if samples.hole(near) {
-        return f64::NAN;
-    }
-    let c = I64Vec2::new(v.x.div_euclid(UNITS), v.y.div_euclid(UNITS));
-    let f = v - c * UNITS;
-    if f == I64Vec2::ZERO {
-        return samples.z(c);
-    }
-    let (wx, wy) = (weights(f.x as f64 / UNITS as f64), weights(f.y as f64 / UNITS as f64));
-    (0..4)
-        .map(|b| {
-            let row: f64 = (0..4).map(|a| wx[a] * samples.z(c + I64Vec2::new(a as i64 - 1, b as i64 - 1))).sum();
-            wy[b] * row
+/// Stored sample row `row` interpolated along x (Catmull-Rom) at lattice
+/// columns `lo..lo + side`: the first half of the finest surface's
+/// evaluation, shared by every point of those columns.
+fn x_row(samples: &Samples, lo: i64, side: i64, row: i64) -> Vec<f64> {
+    (lo..lo + side)
+        .map(|u| {
+            let c = u.div_euclid(UNITS);
+            let wx = weights((u - c * UNITS) as f64 / UNITS as f64);
+            (0..4).map(|a| wx[a] * samples.z(I64Vec2::new(c + a as i64 - 1, row))).sum::<f64>()
         })
-        .sum()
+        .collect()
+}
+
+/// The finest surface over the window `lo..lo + side` (NaN where a
+/// point's nearest sample, ties up, is a hole: the vertex shader's rule
+/// below LOD 0): along x over four rows, then along y, as
+/// `reference::FinestSurface` sums it (the same operations in the same
+/// order, so the same bits), each row's x pass done once.
+fn window_heights(samples: &Samples, lo: I64Vec2, side: i64) -> Vec<f64> {
+    let first = lo.y.div_euclid(UNITS) - 1;
+    let last = (lo.y + side - 1).div_euclid(UNITS) + 2;
+    let rows: Vec<Vec<f64>> = (first..=last).map(|r| x_row(samples, lo.x, side, r)).collect();
+    let mut out = Vec::with_capacity((side * side) as usize);
+    for j in 0..side {
+        let v = lo.y + j;
+        let cj = v.div_euclid(UNITS);
+        let wy = weights((v - cj * UNITS) as f64 / UNITS as f64);
+        for i in 0..side {
+            let u = lo.x + i;
+            let near = I64Vec2::new((u + UNITS / 2).div_euclid(UNITS), (v + UNITS / 2).div_euclid(UNITS));
+            let on_post = u.rem_euclid(UNITS) == 0 && v.rem_euclid(UNITS) == 0;
+            out.push(if samples.hole(near) {
+                f64::NAN
+            } else if on_post {
+                samples.z(I64Vec2::new(u / UNITS, v / UNITS))
+            } else {
+                (0..4).map(|b| wy[b] * rows[(cj + b as i64 - 1 - first) as usize][i as usize]).sum()
+            });
+        }
+    }
+    out
 }
 
 /// The block of samples `origin..origin + BLOCK` (clipped to the lattice's
@@ -116,8 +137,8 @@ fn finest(samples: &Samples, v: I64Vec2) -> f64 {
 pub fn block_numbers(samples: &Samples, origin: I64Vec2, last: I64Vec2) -> BlockNumbers {
     let lo = (origin - I64Vec2::splat(MARGIN)) * UNITS;
     let side = (BLOCK + 2 * MARGIN) * UNITS + 1;
-    let mut w = Window { lo, side, last: last * UNITS, z: Vec::new(), numbers: Vec::new(), samples };
-    w.z = (0..side * side).map(|i| finest(w.samples, lo + I64Vec2::new(i % side, i / side))).collect();
+    let mut w = Window { lo, side, last: last * UNITS, z: Vec::new(), numbers: Vec::new() };
+    w.z = window_heights(samples, lo, side);
     w.numbers = vec![VertexNumbers::EMPTY; (side * side) as usize];
     for t in 0..=REFINE_LEVELS {
         fill(&mut w, t, Kind::Edge);
