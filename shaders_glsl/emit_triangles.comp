@@ -47,7 +47,7 @@ layout(set = 0, binding = 9, std430) buffer SlotNodes { uint nodes[]; } slot_nod
 
 layout(push_constant, std430) uniform EmitPush {
     uint capacity;  // triangles the list holds
-    uint pad0;
+    uint frustum;   // 1: subtrees outside the frustum are dropped (CullStages::frustum)
     uint pad1;
     uint pad2;
 } pc;
@@ -194,7 +194,7 @@ uint decide(Tri t, out float px) {
     ivec2 m = sum / 2;
     vec3 lo, hi;
     px = vertex_px(m, lo, hi);
-    if (px < HUGE_PX && box_outside_frustum(lo, hi)) {
+    if (pc.frustum != 0u && px < HUGE_PX && box_outside_frustum(lo, hi)) {
         return CULLED;
     }
     if (corner_across(t.apex, t.b) || corner_across(t.b, t.c) || corner_across(t.c, t.apex)) {

@@ -1,7 +1,8 @@
 //! The per-triangle LOD rule through the renderer (`emit_triangles`,
 //! `terrain_triangles`): watertight over rough ground seen steeply from
 //! 40 random viewpoints (every pixel terrain: a T-junction would show the
-//! background), with no vertex clamped once streaming settled, with holes
+//! background), the same picture with the frustum culling off, with no
+//! vertex clamped once streaming settled, with holes
 //! cut where the scene cuts them and nowhere else, and with fewer triangles
 //! than the per-patch rule draws for the same views.
 
@@ -70,6 +71,9 @@ fn the_cut_is_watertight_from_40_steep_views_and_draws_fewer_triangles_than_the_
             clamped += h.clamped;
             assert_eq!(h.overflow, 0);
             drawn[0] += u64::from(h.drawn());
+            // Frustum culling drops only what cannot be seen.
+            let unculled = tri.shot(ctx, &v, CullStages::NONE);
+            assert!(c.rgba == unculled.rgba && c.depth == unculled.depth, "culling changed the picture");
             patch.shot(ctx, &v, CullStages::ALL);
             drawn[1] += vista::render::stats::collect(ctx, &patch.renderer, &v).unwrap().triangles_drawn;
         }

@@ -376,29 +376,18 @@ impl Run<'_> {
             let options = RendererOptions { lod: LodOptions { rule, ..LodOptions::default() }, ..geometry.clone() };
             let mut r = TerrainRenderer::new(self.ctx, self.world, self.source.clone(), Vec::new(), &options)?;
             for &target in &self.cfg.targets_px {
+                let keep = self.cfg.keep_images && target == self.cfg.shading_target_px && rule == LodRule::Patch;
+                let (mut points, images) = self.culling_rows(&mut r, &view(target), reference, name, keep)?;
                 if rule == LodRule::Triangle {
-                    out.points.push(self.triangle_row(&mut r, &view(target), reference, name)?);
-                    continue;
+                    for p in &mut points {
+                        p.family = format!("{} per triangle", p.family);
+                    }
                 }
-                let keep = self.cfg.keep_images && target == self.cfg.shading_target_px;
-                let (points, images) = self.culling_rows(&mut r, &view(target), reference, name, keep)?;
                 out.points.extend(points);
                 out.images.extend(images);
             }
         }
         Ok(())
-    }
-
-    /// The per-triangle rule's row (its frustum culling is always on).
-    fn triangle_row(
-        &mut self,
-        r: &mut TerrainRenderer,
-        v: &View,
-        reference: &ReferenceImage,
-        name: &str,
-    ) -> Result<AccuracyPoint> {
-        let settled = self.settle(r, v)?;
-        Ok(self.point(r, v, reference, name, "per triangle", "per-triangle rule", settled)?.0)
     }
 
     pub(super) fn settle(&mut self, r: &mut TerrainRenderer, view: &View) -> Result<bool> {

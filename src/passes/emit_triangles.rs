@@ -63,7 +63,9 @@ impl TriangleListHeader {
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct EmitPush {
     pub capacity: u32,
-    pub pad: [u32; 3],
+    /// 1: subtrees outside the frustum are dropped.
+    pub frustum: u32,
+    pub pad: [u32; 2],
 }
 
 pub struct EmitTriangles {
@@ -153,8 +155,10 @@ impl EmitTriangles {
 
     /// Writes this frame's view (`view_bytes`, a TerrainView, into `view`)
     /// and resets the list's header behind one barrier, then emits every
-    /// drawn node's triangles; the list is visible to the indirect draw and
-    /// every later command.
+    /// drawn node's triangles (`frustum`: dropping the subtrees outside
+    /// the frustum); the list is visible to the indirect draw and every
+    /// later command.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder,
@@ -163,6 +167,7 @@ impl EmitTriangles {
         lod_map: &LodMap,
         view: &Buffer,
         view_bytes: &[u8],
+        frustum: bool,
     ) {
         rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
         rec.update_buffer(view, 0, view_bytes);
@@ -189,7 +194,8 @@ impl EmitTriangles {
                 (sh::SLOT_NODES, Resource::Buffer(self.slot_nodes())),
             ],
         );
-        rec.push_constants(&self.pipeline, &EmitPush { capacity: self.capacity, pad: [0; 3] });
+        let push = EmitPush { capacity: self.capacity, frustum: u32::from(frustum), pad: [0; 2] };
+        rec.push_constants(&self.pipeline, &push);
         rec.dispatch_indirect(traverse.output(), 0);
         rec.barrier(
             vk::PipelineStageFlags2::COMPUTE_SHADER,

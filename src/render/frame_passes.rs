@@ -133,7 +133,7 @@ impl FramePasses<'_> {
         if let Some(t) = self.triangles {
             let view = bytemuck::bytes_of(view);
             pass(frame, log, FramePass::EMIT_TRIANGLES, |r| {
-                t.emit.record(r, traverse, tree, lod_map, self.view_buffer, view)
+                t.emit.record(r, traverse, tree, lod_map, self.view_buffer, view, self.stages.frustum)
             });
             return;
         }

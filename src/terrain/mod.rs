@@ -373,6 +373,9 @@ impl Terrain {
         if self.tree.atlas_set().contains(crate::terrain::gpu_quadtree::ATLAS_CONTROL) {
             report = report.with_control();
         }
+        if self.tree.atlas_set().contains(crate::terrain::gpu_quadtree::ATLAS_VERTEX_BOUNDS) {
+            report = report.with_vertex_bounds();
+        }
         mask_memory(report, self.tree.atlas_set())
     }
 }

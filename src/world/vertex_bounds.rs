@@ -98,14 +98,14 @@ impl VertexBoundsTree {
             )));
         }
         let side = [last.x as usize + 1, last.y as usize + 1];
-        let z = stored(world, source, holes, I64Vec2::ZERO, side[0] as i64, side[1] as i64);
+        let (z, hole) = stored_rows(world, source, holes, side);
         let n = side[0] * side[1];
         let nodes = (gx * root / i64::from(NODE_QUADS)) as usize * (gy * root / i64::from(NODE_QUADS)) as usize;
         let mut tree = VertexBoundsTree {
             world: *world,
             side,
-            z: z.z.iter().map(|h| *h as f32).collect(),
-            hole: z.hole,
+            z,
+            hole,
             error: vec![0.0; n],
             reach: vec![0.0; n],
             empty: vec![false; n],
@@ -198,26 +198,50 @@ impl VertexBoundsTree {
         }
     }
 
+    /// Level `t`'s vertices of `kind`, a band of rows at a time (their
+    /// children are all stored; a band's results are kept until stored).
     fn level(&mut self, t: u32, kind: Kind, last: I64Vec2) {
         let d = (1i64 << t) / UNITS;
-        let this = &*self;
-        let inside = |p: I64Vec2| p.cmpge(I64Vec2::ZERO).all() && p.cmple(last * UNITS).all();
-        let z = |p: I64Vec2| this.height(p / UNITS);
-        let child = |p: I64Vec2| this.numbers(p / UNITS);
-        let found: Vec<(I64Vec2, VertexNumbers)> = (0..=last.y / d)
-            .into_par_iter()
-            .flat_map_iter(|row| {
-                (0..=last.x / d).filter_map(move |col| {
-                    let s = I64Vec2::new(col, row) * d;
-                    let v = s * UNITS;
-                    (v != I64Vec2::ZERO && classify(v) == (t, kind)).then(|| (s, vertex_numbers(v, inside, z, child)))
+        let rows: Vec<i64> = (0..=last.y / d).collect();
+        for band in rows.chunks(512) {
+            let this = &*self;
+            let inside = |p: I64Vec2| p.cmpge(I64Vec2::ZERO).all() && p.cmple(last * UNITS).all();
+            let z = |p: I64Vec2| this.height(p / UNITS);
+            let child = |p: I64Vec2| this.numbers(p / UNITS);
+            let found: Vec<(I64Vec2, VertexNumbers)> = band
+                .par_iter()
+                .flat_map_iter(|&row| {
+                    (0..=last.x / d).filter_map(move |col| {
+                        let s = I64Vec2::new(col, row) * d;
+                        let v = s * UNITS;
+                        (v != I64Vec2::ZERO && classify(v) == (t, kind))
+                            .then(|| (s, vertex_numbers(v, inside, z, child)))
+                    })
                 })
-            })
-            .collect();
-        for (s, n) in found {
-            self.store(s, &n);
+                .collect();
+            for (s, n) in found {
+                self.store(s, &n);
+            }
         }
     }
+}
+
+/// The whole lattice's stored heights (f32, as decoded) and hole flags,
+/// a row at a time (no f64 copy of the world).
+fn stored_rows(
+    world: &WorldDesc,
+    source: &dyn HeightSource,
+    holes: &[Hole],
+    side: [usize; 2],
+) -> (Vec<f32>, Vec<bool>) {
+    let (mut z, mut hole) = (vec![0f32; side[0] * side[1]], vec![false; side[0] * side[1]]);
+    z.par_chunks_mut(side[0]).zip(hole.par_chunks_mut(side[0])).enumerate().for_each(|(j, (zr, hr))| {
+        let s = stored(world, source, holes, I64Vec2::new(0, j as i64), side[0] as i64, 1);
+        for (k, (h, o)) in s.z.iter().zip(&s.hole).enumerate() {
+            (zr[k], hr[k]) = (*h as f32, *o);
+        }
+    });
+    (z, hole)
 }
 
 /// Stored heights and hole flags of `w` x `h` samples from `lo`.

@@ -66,13 +66,17 @@ fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn st
             .label_style(("sans-serif", 13))
             .max_light_lines(1)
             .draw()?;
-        for (family, colour) in [("culling on", BLUE), ("culling off", RED)] {
+        let triangles = RGBColor(230, 140, 0);
+        for (family, colour) in [("culling on", BLUE), ("culling off", RED), ("culling on per triangle", triangles)] {
             let mut line: Vec<(f64, f64, f32)> = pts
                 .iter()
                 .filter(|p| p.family == family)
                 .map(|p| (p.gpu_ms, p.error.lod_px_p99, p.target_error_px))
                 .collect();
             line.sort_by(|a, b| a.2.total_cmp(&b.2));
+            if line.is_empty() {
+                continue;
+            }
             chart
                 .draw_series(LineSeries::new(line.iter().map(|&(x, y, _)| (x, y)), colour.stroke_width(2)))?
                 .label(family)
