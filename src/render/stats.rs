@@ -68,10 +68,15 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
         Some(t) => Some(t.emit.read_header(ctx)?),
         None => None,
     };
+    // The per-triangle rule draws no patch: the patch lists hold nothing of this frame.
+    let (patches, select) = match triangles {
+        Some(_) => (CullCounters::default(), SelectHeader::default()),
+        None => (c.cull, c.select),
+    };
     Ok(RenderStats {
         triangles,
-        patches: c.cull,
-        select: c.select,
+        patches,
+        select,
         bound_px: triangles.map_or(c.cull.bound_px, |t| t.bound_px()),
         target_px: view.target_error_px,
         triangles_drawn: triangles.map_or(c.triangles, |t| u64::from(t.drawn())),
