@@ -7,7 +7,6 @@ use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
-use super::cache::NodeCache;
 use super::error::{Result, WorldError};
 use super::layout::NodeId;
 use super::payload::BakedNode;
@@ -65,11 +64,6 @@ impl Loader {
             loader.workers.push(handle);
         }
         Ok(loader)
-    }
-
-    /// Loader reading from (and filling) a node cache.
-    pub fn with_cache(workers: usize, cache: Arc<NodeCache>) -> Result<Self> {
-        Self::new(workers, Arc::new(move |id| cache.get_or_bake_for_render(id).map(|(node, _)| node)))
     }
 
     /// Queues a load; never blocks.

@@ -83,11 +83,6 @@ impl Window {
     }
 }
 
-/// Catmull-Rom weights at `t`, as `world::source` computes them.
-fn weights(t: f64) -> [f64; 4] {
-    super::source::catmull_rom(t)
-}
-
 /// Stored sample row `row` interpolated along x (Catmull-Rom) at lattice
 /// columns `lo..lo + side`: the first half of the finest surface's
 /// evaluation, shared by every point of those columns.
@@ -95,7 +90,7 @@ fn x_row(samples: &Samples, lo: i64, side: i64, row: i64) -> Vec<f64> {
     (lo..lo + side)
         .map(|u| {
             let c = u.div_euclid(UNITS);
-            let wx = weights((u - c * UNITS) as f64 / UNITS as f64);
+            let wx = super::source::catmull_rom((u - c * UNITS) as f64 / UNITS as f64);
             (0..4).map(|a| wx[a] * samples.z(I64Vec2::new(c + a as i64 - 1, row))).sum::<f64>()
         })
         .collect()
@@ -114,7 +109,7 @@ fn window_heights(samples: &Samples, lo: I64Vec2, side: i64) -> Vec<f64> {
     for j in 0..side {
         let v = lo.y + j;
         let cj = v.div_euclid(UNITS);
-        let wy = weights((v - cj * UNITS) as f64 / UNITS as f64);
+        let wy = super::source::catmull_rom((v - cj * UNITS) as f64 / UNITS as f64);
         for i in 0..side {
             let u = lo.x + i;
             let near = I64Vec2::new((u + UNITS / 2).div_euclid(UNITS), (v + UNITS / 2).div_euclid(UNITS));
