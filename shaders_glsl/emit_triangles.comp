@@ -71,6 +71,15 @@ uint g_slot;
 uint g_lod;
 ivec2 g_node;
 int g_side;
+// This invocation's counts and largest errors, added to the header once at
+// the end instead of a global atomic each per triangle; only the
+// triangle's index slot is taken per triangle.
+uint g_written = 0u;
+uint g_forced = 0u;
+uint g_clamped = 0u;
+uint g_culled = 0u;
+float g_bound_px = 0.0;
+float g_grid_px = 0.0;
 
 ivec2 sample_of(ivec2 p) {
     return (g_node * g_side + p) << int(g_lod);
@@ -198,7 +207,7 @@ uint decide(Tri t, out float px) {
         return CULLED;
     }
     if (corner_across(t.apex, t.b) || corner_across(t.b, t.c) || corner_across(t.c, t.apex)) {
-        atomicAdd(tris.header.forced, 1u);
+        g_forced += 1u;
         return SPLIT;
     }
     if (px <= view.v.lod_params.x) {
@@ -206,7 +215,7 @@ uint decide(Tri t, out float px) {
     }
     bool border = m.x == 0 || m.y == 0 || m.x == g_side || m.y == g_side;
     if (border && !held_across(m)) {
-        atomicAdd(tris.header.clamped, 1u);
+        g_clamped += 1u;
         return LEAF;
     }
     return SPLIT;
@@ -224,7 +233,7 @@ void emit(Tri t) {
     tris.indices[3u * i] = triangle_vertex(g_slot, t.apex);
     tris.indices[3u * i + 1u] = triangle_vertex(g_slot, ccw ? t.b : t.c);
     tris.indices[3u * i + 2u] = triangle_vertex(g_slot, ccw ? t.c : t.b);
-    atomicAdd(tris.header.index_count, 3u);
+    g_written += 1u;
 }
 
 // Its two halves, each with the split vertex as its right angle.
@@ -251,14 +260,33 @@ float cell_px(Tri t) {
 // Emits t as the rule leaves it (a leaf, culled, or split further).
 void finish(Tri t, uint what, float px) {
     if (what == CULLED) {
-        atomicAdd(tris.header.culled, 1u);
+        g_culled += 1u;
         return;
     }
     emit(t);
     if (what == CELL) {
-        atomicMax(tris.header.grid_bound_bits, floatBitsToUint(cell_px(t)));
+        g_grid_px = max(g_grid_px, cell_px(t));
     } else {
-        atomicMax(tris.header.bound_bits, floatBitsToUint(px));
+        g_bound_px = max(g_bound_px, px);
+    }
+}
+
+// Adds this invocation's counts and errors to the header (errors >= 0:
+// their bits order as the values do).
+void flush() {
+    if (g_written != 0u) {
+        atomicAdd(tris.header.index_count, 3u * g_written);
+    }
+    if ((g_forced | g_clamped | g_culled) != 0u) {
+        atomicAdd(tris.header.forced, g_forced);
+        atomicAdd(tris.header.clamped, g_clamped);
+        atomicAdd(tris.header.culled, g_culled);
+    }
+    if (g_bound_px > 0.0) {
+        atomicMax(tris.header.bound_bits, floatBitsToUint(g_bound_px));
+    }
+    if (g_grid_px > 0.0) {
+        atomicMax(tris.header.grid_bound_bits, floatBitsToUint(g_grid_px));
     }
 }
 
@@ -340,4 +368,5 @@ void main() {
     if (s_parent[t >> 1u] == S_SPLIT) {
         walk(triangle_at(EMIT_THREAD_DEPTH, t));
     }
+    flush();
 }

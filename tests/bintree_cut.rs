@@ -77,12 +77,12 @@ fn the_cut_conforms_and_covers_the_world_over_100_views_of_rough_ground_with_hol
     let l = lattice(&w, FINEST);
     let whole = 2 * (l.hi - l.lo).x * (l.hi - l.lo).y;
     let mut rng = Lcg(7);
-    let (mut nested, mut off) = (errors(&w, &rough, Saturation::Nested), errors(&w, &rough, Saturation::Off));
+    let (mut rule, mut off) = (errors(&w, &rough, Saturation::Measured), errors(&w, &rough, Saturation::Off));
     let mut cracked_without_saturation = 0;
     for i in 0..100 {
         let v = random_view(&mut rng, if i % 2 == 0 { 1.0 } else { 4.0 });
         let cam = v.traverse_camera();
-        let tris = cut(&w, FINEST, &mut nested, &cam, f64::from(v.target_error_px));
+        let tris = cut(&w, FINEST, &mut rule, &cam, f64::from(v.target_error_px));
         assert_eq!(t_junctions(&tris), 0, "view {i}: {:?}", v.camera);
         // The triangles tile the roots: no gap a background pixel could
         // show through (they never overlap: bintree leaves).
@@ -101,7 +101,7 @@ fn per_node_bounds(w: &WorldDesc, height: &dyn Fn(I64Vec2) -> f64) -> usize {
     let mut shared = 0;
     let nodes: Vec<NodeId> = (0..w.lod_count as u8).flat_map(|l| w.nodes_at(l)).collect();
     for n in nodes {
-        let mut e = errors(w, height, Saturation::Nested);
+        let mut e = errors(w, height, Saturation::Measured);
         let step = 4i64 << n.lod;
         let base = I64Vec2::new(i64::from(n.x), i64::from(n.y)) * step * i64::from(NODE_QUADS);
         for j in 0..=i64::from(NODE_QUADS) {
@@ -165,7 +165,7 @@ fn every_drawn_triangle_keeps_the_target_on_terraces_and_a_sawtooth() {
         Camera { position_m: [128.0, 128.0, 400.0], yaw_deg: 45.0, pitch_deg: -89.0 },
     ];
     for (name, surface) in [("terraces", &terraces as &dyn Fn(I64Vec2) -> f64), ("sawtooth", &sawtooth)] {
-        let mut e = errors(&w, surface, Saturation::Nested);
+        let mut e = errors(&w, surface, Saturation::Measured);
         for target in [1.0f32, 4.0] {
             for c in cameras {
                 let v = view(c, target);
@@ -187,7 +187,7 @@ fn bounds_filled_at_once_equal_those_walked_vertex_by_vertex() {
     let l = lattice(&w, 0);
     // Heights as the bake stores them (f32), as the filled lattice keeps them.
     let height = |v: I64Vec2| f64::from(rough(v * 4) as f32);
-    let mut walked = VertexErrors::new(&height, l, Saturation::Nested);
+    let mut walked = VertexErrors::new(&height, l, Saturation::Measured);
     let row = |y: i64, out: &mut [f32]| {
         for (x, h) in out.iter_mut().enumerate() {
             *h = height(I64Vec2::new(x as i64, y)) as f32;
@@ -268,7 +268,7 @@ fn the_rule_s_popping_along_a_slow_flight_is_measured() {
     let w = world();
     let height = |v: I64Vec2| f64::from(rough(v) as f32);
     let height = |v: I64Vec2| if height(v).is_nan() { 100.0 } else { height(v) };
-    let mut e = errors(&w, &height, Saturation::Nested);
+    let mut e = errors(&w, &height, Saturation::Measured);
     for target in [1.0f32, 4.0] {
         let (p99, max) = popping(&w, &mut e, &height, target);
         eprintln!("popping at {target} px: p99 {p99:.3} px, max {max:.3} px");

@@ -53,7 +53,7 @@ pub(super) fn rule_triangles(
     if points(world, FINEST) <= MAX_FINEST_POINTS {
         let finest = FinestSurface::new(world, source);
         let height = |v: I64Vec2| finest.at_lattice(v.x, v.y);
-        let mut bounds = VertexErrors::new(&height, lattice(world, FINEST), Saturation::Nested);
+        let mut bounds = VertexErrors::new(&height, lattice(world, FINEST), Saturation::Measured);
         return Some(RuleFigure { per_pixel: count(seen, view, world, FINEST, &mut bounds), below: FINEST });
     }
     if points(world, 0) <= MAX_SAMPLE_POINTS {

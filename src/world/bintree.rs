@@ -116,6 +116,11 @@ pub enum Saturation {
     /// own error, and each half lies within its child's bound); radius:
     /// holding every child's sphere.
     Nested,
+    /// `Nested`, its error lowered to the diamond's largest vertical gap
+    /// from the lattice's heights (measured point by point) where that is
+    /// smaller, and raised to the largest child's: still a bound, still
+    /// saturated, without a term per level (what the renderer bakes).
+    Measured,
     /// The vertex's own vertical error and sphere only.
     Off,
 }
@@ -209,6 +214,38 @@ impl<'a> VertexErrors<'a> {
     }
 }
 
+impl VertexErrors<'_> {
+    /// The largest vertical gap between `v`'s diamond drawn unsplit (its
+    /// halves whose apex is on the lattice) and the lattice points in it.
+    fn measured_gap(&mut self, v: I64Vec2) -> f64 {
+        let ([a, b], parents) = diamond(v);
+        if !(self.contains(a) && self.contains(b)) {
+            return f64::INFINITY;
+        }
+        let mut gap = 0.0f64;
+        let lattice = self.lattice;
+        for p in parents.into_iter().filter(|p| lattice.contains(*p)) {
+            let corners = [a, b, p];
+            let z = corners.map(|c| self.z(c));
+            let area = (b - a).perp_dot(p - a) as f64;
+            let (lo, hi) = (a.min(b).min(p), a.max(b).max(p));
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let c = I64Vec2::new(x, y);
+                    // Barycentric weights: all >= 0 inside (edges included).
+                    let w = [(p - b).perp_dot(c - b), (a - p).perp_dot(c - p), (b - a).perp_dot(c - a)];
+                    let w = w.map(|k| k as f64 / area);
+                    if w.iter().all(|k| *k >= 0.0) {
+                        let flat = w[0] * z[0] + w[1] * z[1] + w[2] * z[2];
+                        gap = gap.max((self.z(c) - flat).abs());
+                    }
+                }
+            }
+        }
+        gap
+    }
+}
+
 impl Bounds for VertexErrors<'_> {
     fn point(&mut self, v: I64Vec2) -> DVec3 {
         let z = self.z(v);
@@ -224,12 +261,17 @@ impl Bounds for VertexErrors<'_> {
         let own = own_bound(&lattice, v, &mut |c| self.z(c));
         let b = match self.saturation {
             Saturation::Off => own,
-            Saturation::Nested => {
+            Saturation::Nested | Saturation::Measured => {
                 let inside: Vec<I64Vec2> = children(v).into_iter().filter(|c| lattice.contains(*c)).collect();
                 let kids: Vec<(DVec3, VertexBound)> =
                     inside.into_iter().map(|c| (self.point(c), self.bound(c))).collect();
                 let p = self.point(v);
-                nest(own, p, &kids)
+                let mut b = nest(own, p, &kids);
+                if self.saturation == Saturation::Measured && b.error_m.is_finite() {
+                    let floor = kids.iter().map(|(_, k)| k.error_m).fold(0.0, f64::max);
+                    b.error_m = b.error_m.min(self.measured_gap(v)).max(floor);
+                }
+                b
             }
         };
         self.bounds.insert(v, b);

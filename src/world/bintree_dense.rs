@@ -4,8 +4,11 @@
 //! (the edge midpoints of lattice level t, then the quad centres of level
 //! t, whose children are all finer), each half-level in parallel. Values
 //! are stored as f32 rounded away from zero, so a bound stays a bound.
+//! Errors are the rule's sum lowered to the diamond's gap measured against
+//! the lattice ([`super::vertex_bounds_exact`]), as the renderer bakes them.
 
 use super::bintree::{children, nest, own_bound, Bounds, Kind, Lattice, VertexBound};
+use super::vertex_bounds_exact::{diamond_gap, SampleGrid};
 use glam::{DVec3, I64Vec2};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -92,7 +95,14 @@ impl DenseBounds {
             .filter(|c| lattice.contains(*c))
             .map(|c| (lattice.point(c, self.height(c)), self.stored(c)))
             .collect();
-        let b = nest(own, lattice.point(v, own.z_m), &kids);
+        let mut b = nest(own, lattice.point(v, own.z_m), &kids);
+        if b.error_m.is_finite() {
+            // The rule's sum lowered to the measured gap, never under a child's.
+            let rows = self.z.len() / self.width;
+            let grid = SampleGrid { side: [self.width, rows], z: &self.z, hole: &[], base: &[], unit: 1 };
+            let floor = kids.iter().map(|(_, k)| k.error_m).fold(0.0, f64::max);
+            b.error_m = b.error_m.min(diamond_gap(&grid, v)).max(floor);
+        }
         let i = self.index(v);
         self.error[i].store(up(b.error_m).to_bits(), Ordering::Relaxed);
         self.radius[i].store(up(b.radius_m).to_bits(), Ordering::Relaxed);

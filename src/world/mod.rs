@@ -38,6 +38,7 @@ mod stamps;
 mod streaming;
 mod texels;
 pub mod vertex_bounds;
+pub(crate) mod vertex_bounds_exact;
 mod vertex_bounds_fine;
 pub mod vertex_rule;
 

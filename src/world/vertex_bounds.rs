@@ -14,21 +14,25 @@
 //! - the levels below the sample grid (Catmull-Rom refinement) in blocks of
 //!   two LOD-0 nodes, in parallel ([`super::vertex_bounds_fine`]);
 //! - the samples' own levels, one half-level at a time over the whole
-//!   world, each in parallel, kept as f32 rounded up (13 bytes a sample).
+//!   world, each in parallel, kept as f32 rounded up: the rule's sum
+//!   lowered to the diamond's measured gap ([`super::vertex_bounds_exact`]),
+//!   raised to the children's (14 bytes a sample kept, 2 more while the
+//!   levels run).
 
-use super::bintree::{classify, Bounds, Kind, VertexBound};
+use super::bintree::{classify, diamond, Bounds, Kind, VertexBound};
 use super::holes::Hole;
 use super::layout::{NodeId, WorldDesc, NODE_QUADS, NODE_SAMPLES};
 use super::payload::BakedNode;
 use super::source::HeightSource;
+use super::vertex_bounds_exact::{diamond_gap, SampleGrid};
 use super::vertex_bounds_fine::{block_numbers, Samples, BLOCK, UNITS};
-use super::vertex_rule::{box_half_width, up_f16_bits, up_f32, vertex_numbers, VertexNumbers};
+use super::vertex_rule::{box_half_width, child_points, up_f16_bits, up_f32, vertex_numbers, VertexNumbers};
 use super::WorldError;
 use glam::{DVec3, I64Vec2};
 use rayon::prelude::*;
 
-/// Most samples a world's bounds are computed for at once (13 bytes each:
-/// 7 GB). The default world (20 481^2) is under it.
+/// Most samples a world's bounds are computed for at once (16 bytes each
+/// at the peak: 8.6 GB). The default world (20 481^2) is under it.
 pub const MAX_BOUNDS_SAMPLES: u64 = 1 << 29;
 
 /// A node's refinement bound: its quads' centres merged (the largest
@@ -94,7 +98,7 @@ impl VertexBoundsTree {
                 "per-vertex bounds of {} x {} samples need {:.1} GB at once; at most {MAX_BOUNDS_SAMPLES} samples",
                 last.x + 1,
                 last.y + 1,
-                points as f64 * 13e-9
+                points as f64 * 16e-9
             )));
         }
         let side = [last.x as usize + 1, last.y as usize + 1];
@@ -111,8 +115,8 @@ impl VertexBoundsTree {
             empty: vec![false; n],
             lod0_refine: vec![NodeRefine::default(); nodes],
         };
-        tree.fine_levels(source, holes, last);
-        tree.sample_levels(last);
+        let base = tree.fine_levels(source, holes, last);
+        tree.sample_levels(last, &base);
         Ok(tree)
     }
 
@@ -158,8 +162,10 @@ impl VertexBoundsTree {
         (self.error[i], self.reach[i], self.empty[i]) = (up_f32(n.error_m), up_f32(n.reach_m), n.empty);
     }
 
-    /// The levels below the sample grid, and the sample grid's finest.
-    fn fine_levels(&mut self, source: &dyn HeightSource, holes: &[Hole], last: I64Vec2) {
+    /// The levels below the sample grid, and the sample grid's finest;
+    /// gives each sample's `base` ([`SampleGrid`]).
+    fn fine_levels(&mut self, source: &dyn HeightSource, holes: &[Hole], last: I64Vec2) -> Vec<u16> {
+        let mut base = vec![0u16; self.z.len()];
         let blocks: Vec<I64Vec2> = (0..=last.y / BLOCK)
             .flat_map(|by| (0..=last.x / BLOCK).map(move |bx| I64Vec2::new(bx, by) * BLOCK))
             .collect();
@@ -174,18 +180,37 @@ impl VertexBoundsTree {
                 })
                 .collect();
             for b in done {
-                for (s, n) in &b.samples {
+                for (s, n, below) in &b.samples {
                     self.store(*s, n);
+                    self.spread_base(&mut base, *s, *below, last);
                 }
                 for (node, r) in b.nodes {
                     self.lod0_refine[node.y as usize * lod0_row + node.x as usize] = r;
                 }
             }
         }
+        base
+    }
+
+    /// Raises the `base` of edge-midpoint sample `s`'s diamond's samples to
+    /// `below`: the halves drawn at the samples lie within it of the finest
+    /// surface.
+    fn spread_base(&self, base: &mut [u16], s: I64Vec2, below: f64, last: I64Vec2) {
+        if classify(s * UNITS).1 != Kind::Edge {
+            return;
+        }
+        let bits = up_f16_bits(up_f32(below));
+        let ([a, b], [p, q]) = diamond(s * UNITS);
+        for c in [s * UNITS, a, b, p, q].map(|c| c / UNITS) {
+            if c.cmpge(I64Vec2::ZERO).all() && c.cmple(last).all() {
+                let i = self.index(c);
+                base[i] = base[i].max(bits);
+            }
+        }
     }
 
     /// The sample grid's coarser levels, a half-level at a time.
-    fn sample_levels(&mut self, last: I64Vec2) {
+    fn sample_levels(&mut self, last: I64Vec2, base: &[u16]) {
         let top = 64 - (last.max_element() * UNITS).leading_zeros();
         let first = crate::shaders::consts::REFINE_LEVELS;
         for t in first..=top {
@@ -193,14 +218,16 @@ impl VertexBoundsTree {
                 if t == first && kind == Kind::Edge {
                     continue; // filled by the fine pass with the centres of its level
                 }
-                self.level(t, kind, last);
+                self.level(t, kind, last, base);
             }
         }
     }
 
     /// Level `t`'s vertices of `kind`, a band of rows at a time (their
-    /// children are all stored; a band's results are kept until stored).
-    fn level(&mut self, t: u32, kind: Kind, last: I64Vec2) {
+    /// children are all stored; a band's results are kept until stored):
+    /// the rule's numbers, the error lowered to the measured bound where
+    /// that is smaller, never below a child's.
+    fn level(&mut self, t: u32, kind: Kind, last: I64Vec2, base: &[u16]) {
         let d = (1i64 << t) / UNITS;
         let rows: Vec<i64> = (0..=last.y / d).collect();
         for band in rows.chunks(512) {
@@ -215,7 +242,7 @@ impl VertexBoundsTree {
                         let s = I64Vec2::new(col, row) * d;
                         let v = s * UNITS;
                         (v != I64Vec2::ZERO && classify(v) == (t, kind))
-                            .then(|| (s, vertex_numbers(v, inside, z, child)))
+                            .then(|| (s, this.tightened(vertex_numbers(v, inside, z, child), v, base)))
                     })
                 })
                 .collect();
@@ -223,6 +250,23 @@ impl VertexBoundsTree {
                 self.store(s, &n);
             }
         }
+    }
+}
+
+impl VertexBoundsTree {
+    /// `n` (vertex `v`'s by the rule) with the smaller of its error and
+    /// the measured bound ([`diamond_gap`]), raised to its children's.
+    fn tightened(&self, mut n: VertexNumbers, v: I64Vec2, base: &[u16]) -> VertexNumbers {
+        if n.empty || !n.error_m.is_finite() {
+            return n;
+        }
+        let grid = SampleGrid { side: self.side, z: &self.z, hole: &self.hole, base, unit: UNITS };
+        let last = I64Vec2::new(self.side[0] as i64 - 1, self.side[1] as i64 - 1) * UNITS;
+        let kids =
+            child_points(v).into_iter().flatten().filter(|c| c.cmpge(I64Vec2::ZERO).all() && c.cmple(last).all());
+        let floor = kids.map(|c| self.numbers(c / UNITS)).filter(|c| !c.empty).map(|c| c.error_m).fold(0.0, f64::max);
+        n.error_m = n.error_m.min(diamond_gap(&grid, v)).max(floor);
+        n
     }
 }
 

@@ -10,7 +10,7 @@
 
 use super::bintree::{classify, Kind};
 use super::layout::NODE_QUADS;
-use super::vertex_rule::{vertex_numbers, VertexNumbers};
+use super::vertex_rule::{child_points, vertex_numbers, VertexNumbers};
 use crate::shaders::consts::REFINE_LEVELS;
 use glam::I64Vec2;
 
@@ -52,8 +52,10 @@ impl Samples {
 /// level is the sample grid's finest, and per LOD-0 node in it, the
 /// numbers of its quads' centres merged (the node's refinement bound).
 pub struct BlockNumbers {
-    /// (sample index in the block, numbers), level-`REFINE_LEVELS` samples only.
-    pub samples: Vec<(I64Vec2, VertexNumbers)>,
+    /// (sample index in the block, numbers, largest child error: how far
+    /// the diamond's halves drawn at the samples lie from the finest
+    /// surface), level-`REFINE_LEVELS` samples only.
+    pub samples: Vec<(I64Vec2, VertexNumbers, f64)>,
     /// (LOD-0 node, merged quad-centre numbers).
     pub nodes: Vec<(I64Vec2, super::vertex_bounds::NodeRefine)>,
 }
@@ -145,7 +147,7 @@ pub fn block_numbers(samples: &Samples, origin: I64Vec2, last: I64Vec2) -> Block
         for x in origin.x..=end.x {
             let s = I64Vec2::new(x, y);
             if s != I64Vec2::ZERO && classify(s * UNITS).0 == REFINE_LEVELS {
-                out.samples.push((s, w.numbers[w.at(s * UNITS)]));
+                out.samples.push((s, w.numbers[w.at(s * UNITS)], below(&w, s * UNITS)));
             }
         }
     }
@@ -156,6 +158,12 @@ pub fn block_numbers(samples: &Samples, origin: I64Vec2, last: I64Vec2) -> Block
         }
     }
     out
+}
+
+/// The largest error among `v`'s children (none empty).
+fn below(w: &Window, v: I64Vec2) -> f64 {
+    let kids = child_points(v).into_iter().flatten().filter(|c| w.inside(*c));
+    kids.map(|c| w.numbers[w.at(c)]).filter(|n| !n.empty).map(|n| n.error_m).fold(0.0, f64::max)
 }
 
 /// Numbers of every window vertex of level `t` and `kind`.

@@ -93,7 +93,7 @@ pub fn vertex_numbers(
 
 /// [`children`] without a heap allocation (the passes call this for every
 /// lattice point).
-fn child_points(v: I64Vec2) -> [Option<I64Vec2>; 4] {
+pub(super) fn child_points(v: I64Vec2) -> [Option<I64Vec2>; 4] {
     let (t, kind) = classify(v);
     let d = 1i64 << t;
     let offsets = match kind {
