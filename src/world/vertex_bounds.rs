@@ -251,9 +251,7 @@ impl VertexBoundsTree {
             }
         }
     }
-}
 
-impl VertexBoundsTree {
     /// `n` (vertex `v`'s by the rule) with the smaller of its error and
     /// the measured bound ([`diamond_gap`]), raised to its children's.
     fn tightened(&self, mut n: VertexNumbers, v: I64Vec2, base: &[u16]) -> VertexNumbers {
