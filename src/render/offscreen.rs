@@ -18,6 +18,11 @@ use crate::targets::gbuffer_layout::texel_bytes;
 use crate::targets::Output;
 use std::time::{Duration, Instant};
 
+/// Frames in a row the renderer reports settled before a picture counts as
+/// final: the first draws the last set streamed, the second culls against
+/// that frame's depth (occlusion culling sees the previous frame).
+pub const CALM_FRAMES: u32 = 2;
+
 /// A frame read back: the output's target(s) and the raw reversed-Z depth.
 pub struct Capture {
     pub size: [u32; 2],
@@ -236,9 +241,8 @@ impl Offscreen {
         Ok(())
     }
 
-    /// Renders until streaming is at rest (nothing loading or waiting for
-    /// upload after two frames in a row: the second shows that the first's
-    /// arrivals asked for nothing more), or until `timeout`.
+    /// Renders until streaming is at rest ([`TerrainRenderer::settled`]
+    /// after [`CALM_FRAMES`] frames in a row), or until `timeout`.
     pub fn settle(
         &mut self,
         ctx: &Context,
@@ -247,12 +251,12 @@ impl Offscreen {
         timeout: Duration,
     ) -> Result<Settle> {
         let start = Instant::now();
-        let (mut frames, mut calm) = (0, 0);
+        let (mut frames, mut calm) = (0, 0u32);
         loop {
             self.frame(ctx, renderer, view)?;
             frames += 1;
             calm = if renderer.settled() { calm + 1 } else { 0 };
-            if calm >= 2 {
+            if calm >= CALM_FRAMES {
                 return Ok(Settle { frames, seconds: start.elapsed().as_secs_f64(), settled: true });
             }
             if start.elapsed() >= timeout {

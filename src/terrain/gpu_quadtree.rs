@@ -6,6 +6,7 @@
 //! and reads), the atlases SHADER_READ_ONLY_OPTIMAL (sampled); uploads
 //! transition to TRANSFER_DST_OPTIMAL and back.
 
+use super::upload_queue::{UploadQueue, Waiting};
 use crate::error::{Error, Result};
 use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Recorder};
@@ -14,7 +15,6 @@ use crate::world::{
     BakedNode, NodeId, PayloadFormat, TexelKind, WorldDesc, ATLAS_SIDE, CONE_BLOCKS_PER_NODE_SIDE, NODE_SAMPLES,
     PATCHES_PER_NODE_SIDE, SPLAT_RES,
 };
-use std::collections::VecDeque;
 
 /// Most node payloads copied per frame; later arrivals wait a frame (a
 /// node becomes visible to the GPU only once its payload is in the atlas).
@@ -158,13 +158,6 @@ struct RingSlot {
     payloads: Buffer,
 }
 
-struct Waiting {
-    node: BakedNode,
-    lod_bias: i8,
-    /// A new payload for a resident node: it moves to a fresh slot.
-    reload: bool,
-}
-
 pub struct GpuQuadtree {
     pub shadow: QuadtreeShadow,
     /// One per frame parity (`frame::per_frame`): frame N+1's update writes
@@ -183,7 +176,7 @@ pub struct GpuQuadtree {
     frame: u64,
     current: usize,
     /// Payloads to upload: arrivals, and reloads of resident nodes.
-    waiting: VecDeque<Waiting>,
+    waiting: UploadQueue,
     update_capacity: u32,
     /// Nodes made resident by this frame's `prepare_frame`, with their slots.
     arrived: Vec<(NodeId, u32)>,
@@ -236,7 +229,7 @@ impl GpuQuadtree {
             ring,
             frame: 0,
             current: 0,
-            waiting: VecDeque::new(),
+            waiting: UploadQueue::default(),
             update_capacity,
             arrived: Vec::new(),
             written,
@@ -271,7 +264,7 @@ impl GpuQuadtree {
 
     /// Removes a resident (or still waiting) node; its slot is free at once.
     pub fn remove(&mut self, id: NodeId) {
-        self.waiting.retain(|w| w.node.id != id);
+        self.waiting.remove(id);
         self.shadow.remove(id);
     }
 
@@ -279,17 +272,17 @@ impl GpuQuadtree {
     /// uploaded by `record_updates` (at most MAX_UPLOADS_PER_FRAME a frame).
     pub fn add(&mut self, node: BakedNode, lod_bias: i8) {
         assert_eq!(node.format, self.format, "{} baked for other atlases", node.id);
-        self.waiting.push_back(Waiting { node, lod_bias, reload: false });
+        self.waiting.push(Waiting { node, lod_bias, reload: false });
     }
 
     /// Queues a new payload for a resident node (its source was edited):
     /// uploaded like an arrival into a fresh slot, which replaces the old
-    /// one in the same update, so the node is drawn without a gap. Dropped
-    /// if the node leaves before then.
+    /// one in the same update, so the node is drawn without a gap; reloads
+    /// queued together swap in one update where a frame holds them (see
+    /// `upload_queue`). Dropped if the node leaves before then.
     pub fn reload(&mut self, node: BakedNode, lod_bias: i8) {
         assert_eq!(node.format, self.format, "{} baked for other atlases", node.id);
-        self.waiting.retain(|w| w.node.id != node.id || !w.reload);
-        self.waiting.push_back(Waiting { node, lod_bias, reload: true });
+        self.waiting.push(Waiting { node, lod_bias, reload: true });
     }
 
     /// Slots the GPU resources hold: the budget and the reload slots
@@ -363,7 +356,8 @@ impl GpuQuadtree {
         self.current = slot_index;
         let mut uploaded = Vec::new();
         while uploaded.len() < MAX_UPLOADS_PER_FRAME {
-            let Some(w) = self.waiting.pop_front() else { break };
+            let (room, free) = (MAX_UPLOADS_PER_FRAME - uploaded.len(), self.shadow.free_slots());
+            let Some(w) = self.waiting.next(uploaded.len(), room, free) else { break };
             let resident = self.shadow.slot_of(w.node.id).is_some();
             if resident != w.reload {
                 // An arrival already resident, or a reload of a node gone.

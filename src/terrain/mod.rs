@@ -13,6 +13,7 @@ pub mod gpu_quadtree;
 pub mod patch_grid;
 pub mod quadtree;
 pub mod selection;
+mod upload_queue;
 
 use crate::error::Result;
 use crate::gpu::Context;
@@ -169,6 +170,9 @@ pub struct Terrain {
     /// The residency budget (`TerrainOptions::slots`).
     slots: u32,
     paused: bool,
+    /// Payloads came in the last stream: their error bounds have not been
+    /// through a residency update yet, so the next one may want more.
+    unweighed: bool,
     /// A root given up: every later frame reports it.
     root_failure: Option<(NodeId, u32, String)>,
 }
@@ -228,6 +232,7 @@ impl Terrain {
             ring_prefetch: options.ring_prefetch,
             slots: options.slots,
             paused: false,
+            unweighed: false,
             root_failure: None,
         })
     }
@@ -269,6 +274,7 @@ impl Terrain {
             self.tree.remove(*id);
         }
         self.stats.arrived_total += s.arrived.len();
+        self.unweighed = !s.arrived.is_empty() || !s.reloaded.is_empty();
         for node in s.arrived {
             self.tree.add(node, 0);
         }
@@ -355,11 +361,14 @@ impl Terrain {
         TerrainStats { waiting_upload: self.tree.waiting(), ..self.stats.clone() }
     }
 
-    /// True once nothing is loading, waiting for a retry or for upload
-    /// (nodes given up do not hold it back; a root given up is an error
-    /// from [`Terrain::stream`], and never settles).
+    /// True once nothing is loading, waiting for a retry or for upload,
+    /// and the last stream weighed every payload's bounds (one that came
+    /// in that stream, a reload's taller mountain say, may want children
+    /// in the next). Nodes given up do not hold it back; a root given up
+    /// is an error from [`Terrain::stream`], and never settles.
     pub fn settled(&self) -> bool {
-        self.stats.loading == 0
+        !self.unweighed
+            && self.stats.loading == 0
             && self.streamer.reloading() == 0
             && self.stats.retry_waiting == 0
             && self.tree.waiting() == 0

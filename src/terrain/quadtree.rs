@@ -261,6 +261,11 @@ impl QuadtreeShadow {
     }
 
     /// Whether any write waits for `take_updates`.
+    /// Slots `add` or `replace` may hand out now.
+    pub fn free_slots(&self) -> usize {
+        self.free.len()
+    }
+
     pub fn has_updates(&self) -> bool {
         !(self.texels.is_empty() && self.desc_writes.is_empty() && self.error_writes.is_empty())
     }

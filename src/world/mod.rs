@@ -35,6 +35,7 @@ mod resample_bound;
 mod shard;
 mod source;
 mod stamps;
+mod streamer;
 mod streaming;
 mod texels;
 pub mod vertex_bounds;
@@ -84,9 +85,9 @@ pub use resample_bound::RangeFit;
 pub use shard::{ShardError, ShardPlan, ShardSplit, MAX_SHARDS, UNITS_PER_SHARD};
 pub use source::{GridSource, HeightSource};
 pub use stamps::{load_stamp_map, Stamp, StampBlend, StampPlacement, StampedSource};
+pub use streamer::{StreamFrame, Streamer};
 pub use streaming::{
-    Arrival, FailureCounts, LoadFate, RefineWant, Residency, ResidencyChanges, ResidencyConfig, StreamFrame, Streamer,
-    MAX_LOAD_ATTEMPTS,
+    Arrival, FailureCounts, LoadFate, RefineWant, Residency, ResidencyChanges, ResidencyConfig, MAX_LOAD_ATTEMPTS,
 };
 pub use texels::{
     pack_normal, texel_index, unpack_normal, PayloadFormat, TexelKind, ATLAS_BORDER, ATLAS_SIDE, ATLAS_TEXELS,

@@ -15,15 +15,12 @@
 //! the caller gets an error (nothing could draw there).
 //!
 //! [`Residency`] is the bookkeeping (what is wanted, pending, resident);
-//! [`Streamer`] ties it to a [`Loader`] and tells the GPU side, per frame,
-//! which payloads arrived and which resident nodes to remove.
+//! [`super::Streamer`] ties it to a loader.
 
 use std::collections::{HashMap, HashSet};
 
 use super::error::{Result, WorldError};
 use super::layout::{NodeId, WorldDesc};
-use super::loader::Loader;
-use super::payload::BakedNode;
 use super::projection::TraverseCamera;
 
 /// Streaming parameters.
@@ -254,6 +251,11 @@ impl Residency {
         self.slots.get(&id) == Some(&Slot::Pending)
     }
 
+    /// Nodes requested from the loader and not yet arrived, unordered.
+    pub fn pending(&self) -> impl Iterator<Item = NodeId> + '_ {
+        self.slots.iter().filter(|(_, s)| **s == Slot::Pending).map(|(id, _)| *id)
+    }
+
     /// Resident nodes, unordered.
     pub fn resident(&self) -> impl Iterator<Item = NodeId> + '_ {
         self.slots.iter().filter(|(_, s)| **s == Slot::Resident).map(|(id, _)| *id)
@@ -433,135 +435,4 @@ fn dist_to_box(p: [f64; 2], b: [f64; 4]) -> f64 {
     let dx = (b[0] - p[0]).max(p[0] - b[2]).max(0.0);
     let dy = (b[1] - p[1]).max(p[1] - b[3]).max(0.0);
     dx.hypot(dy)
-}
-
-/// One frame of streaming for the GPU side: apply `removed` (free slots)
-/// then upload `arrived` and `reloaded`.
-#[derive(Debug, Default)]
-pub struct StreamFrame {
-    pub arrived: Vec<BakedNode>,
-    /// New payloads of resident nodes asked for by [`Streamer::reload`].
-    pub reloaded: Vec<BakedNode>,
-    pub removed: Vec<NodeId>,
-    /// Loads that failed this frame, and what becomes of each node.
-    pub failed: Vec<(NodeId, WorldError)>,
-    pub fates: Vec<LoadFate>,
-}
-
-/// Residency driven by a loader.
-pub struct Streamer {
-    residency: Residency,
-    loader: Loader,
-    /// Loaded payloads waiting for their parent to become resident.
-    parked: HashMap<NodeId, BakedNode>,
-    /// Resident nodes whose payload is being made again ([`Self::reload`]):
-    /// they stay drawn until it arrives.
-    reloading: HashSet<NodeId>,
-}
-
-impl Streamer {
-    pub fn new(residency: Residency, loader: Loader) -> Self {
-        Streamer { residency, loader, parked: HashMap::new(), reloading: HashSet::new() }
-    }
-
-    /// Makes every payload with `loader` from now on (the source was
-    /// edited): loads under way, and payloads parked for their parent for
-    /// which `stale` is true, are asked of it again; the old loader's
-    /// queue is dropped with it.
-    pub fn replace_loader(&mut self, loader: Loader, stale: impl Fn(NodeId) -> bool) {
-        self.loader = loader;
-        self.parked.retain(|id, _| !stale(*id));
-        let pending: Vec<NodeId> =
-            self.residency.slots.iter().filter(|(_, s)| **s == Slot::Pending).map(|(id, _)| *id).collect();
-        for id in pending.into_iter().filter(|id| !self.parked.contains_key(id)).chain(self.reloading.iter().copied()) {
-            self.loader.request(id);
-        }
-    }
-
-    /// Loads resident `id` again (its source changed); the payload comes
-    /// back in [`StreamFrame::reloaded`] while the old one stays drawn.
-    /// False when `id` is not resident (a pending load gets the new
-    /// source anyway).
-    pub fn reload(&mut self, id: NodeId) -> bool {
-        if !self.residency.is_resident(id) {
-            return false;
-        }
-        if self.reloading.insert(id) {
-            self.loader.request(id);
-        }
-        true
-    }
-
-    /// Reloads not back yet.
-    pub fn reloading(&self) -> usize {
-        self.reloading.len()
-    }
-
-    pub fn residency(&self) -> &Residency {
-        &self.residency
-    }
-
-    /// Never blocks: updates the wanted set (rings, and `want`'s error
-    /// criterion on resident nodes), queues loads and collects whatever
-    /// finished.
-    pub fn frame(&mut self, camera_pos_m: [f64; 3], want: Option<&RefineWant>) -> StreamFrame {
-        let changes = self.residency.update_with(camera_pos_m, want);
-        for id in &changes.cancels {
-            self.loader.cancel(*id);
-            self.parked.remove(id);
-        }
-        for id in &changes.removes {
-            if self.reloading.remove(id) {
-                self.loader.cancel(*id);
-            }
-        }
-        for id in &changes.adds {
-            self.loader.request(*id);
-        }
-        let mut frame = StreamFrame { removed: changes.removes, ..StreamFrame::default() };
-        for (id, result) in self.loader.poll() {
-            if self.reloading.remove(&id) && self.residency.is_resident(id) {
-                match result {
-                    Ok(node) => {
-                        let w = self.residency.world;
-                        let z = [w.decode_height(node.min_height), w.decode_height(node.max_height)];
-                        self.residency.note_bounds(id, node.max_error_m, z);
-                        frame.reloaded.push(node);
-                    }
-                    // The old payload stays: better stale than missing.
-                    Err(e) => log::error!("node {id} could not be reloaded (its old payload stays): {e}"),
-                }
-                continue;
-            }
-            match result {
-                Ok(node) => {
-                    self.parked.insert(id, node);
-                }
-                Err(e) => {
-                    frame.fates.push(self.residency.on_failed(id));
-                    frame.failed.push((id, e));
-                }
-            }
-        }
-        // Coarsest first so a parent accepted now lets its children in.
-        let mut ids: Vec<NodeId> = self.parked.keys().copied().collect();
-        ids.sort_by_key(|id| std::cmp::Reverse(id.lod));
-        for id in ids {
-            match self.residency.on_loaded(id) {
-                Arrival::Accept => {
-                    if let Some(node) = self.parked.remove(&id) {
-                        let w = self.residency.world;
-                        let z = [w.decode_height(node.min_height), w.decode_height(node.max_height)];
-                        self.residency.note_bounds(id, node.max_error_m, z);
-                        frame.arrived.push(node);
-                    }
-                }
-                Arrival::Discard => {
-                    self.parked.remove(&id);
-                }
-                Arrival::Defer => {}
-            }
-        }
-        frame
-    }
 }

@@ -42,7 +42,8 @@ pub struct ViewArgs {
     pub cache: Option<PathBuf>,
     /// Present N frames, then exit (0: until the window is closed or Esc).
     /// With --screenshot, the camera then waits at its last position until
-    /// streaming settled, and the last of those frames is written.
+    /// streaming settled (as `vista render`'s), and the last of those
+    /// frames is written.
     #[arg(long, default_value_t = 0, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     pub frames: u32,
     /// A scripted flight over --frames: one X,Y,Z,YAW,PITCH per line (#
@@ -143,6 +144,7 @@ pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: O
         presented_all: 0,
         started: None,
         settling_since: None,
+        calm: 0,
         last: Instant::now(),
         fps: 0.0,
         overlay: Overlay::default(),
@@ -192,6 +194,8 @@ struct App {
     started: Option<Instant>,
     /// When --frames ended with a screenshot pending: waiting for streaming.
     settling_since: Option<Instant>,
+    /// Redraws in a row that found the renderer settled.
+    calm: u32,
     last: Instant,
     fps: f64,
     cursor: Option<[f64; 2]>,
@@ -294,7 +298,8 @@ impl App {
         let overlay = if self.show_overlay { Some(self.run_overlay()?) } else { None };
         let open = self.state.as_mut().expect("checked above");
         let final_frame = frames > 0 && self.presented + 1 >= frames;
-        let settled = open.viewer.renderer.settled()
+        self.calm = if open.viewer.renderer.settled() { self.calm + 1 } else { 0 };
+        let settled = self.calm >= vista::render::offscreen::CALM_FRAMES
             || self.settling_since.is_some_and(|t| t.elapsed() > Duration::from_secs_f64(self.args.settle_seconds));
         let shoot = final_frame && self.args.screenshot.is_some() && settled;
         let shot = if shoot { Some(open.viewer.readback()?) } else { None };
