@@ -133,15 +133,20 @@ fn a_decal_shows_its_texture_blended_over_the_material() {
         let (center, size, rot) = (DVec2::new(515.0, 258.0), DVec2::new(40.0, 30.0), 30.0);
         let decal = quad(center.to_array(), size.to_array(), rot);
         let set = DecalSet { textures: vec![texture()].into(), decals: vec![decal] };
-        let mut plain = rig(ctx, DecalSet { textures: set.textures.clone(), decals: vec![] });
+        let plain = rig(ctx, DecalSet { textures: set.textures.clone(), decals: vec![] });
         let mut with = rig(ctx, set);
         // Off without decals: nothing of it is built.
         assert!(!plain.renderer.effect_on(Effect::Decals) && with.renderer.effect_on(Effect::Decals));
         let has_decals = |r: &Rig| r.renderer.pipelines().iter().any(|p| p.contains("vt_pages[DECALS]"));
         assert!(!has_decals(&plain) && has_decals(&with), "{:?}", with.renderer.pipelines());
-        let a = plain.shot(ctx, &low(), CullStages::ALL);
         let b = with.shot(ctx, &low(), CullStages::ALL);
         let points = world_points(ctx, &with, &b);
+        // The material without the decal from the same renderer (its pages
+        // under the decal dropped and rendered again): another renderer's
+        // pages may stand at another mix of levels and sources when
+        // captured, as streaming timed them.
+        with.renderer.set_decals(ctx, vec![]).expect("decals removed");
+        let a = with.shot(ctx, &low(), CullStages::ALL);
         let mut errors = Vec::new();
         let (mut outside, mut outside_worst) = (0, 0);
         for (i, p) in points.iter().enumerate() {
@@ -149,9 +154,7 @@ fn a_decal_shows_its_texture_blended_over_the_material() {
             let (uv, inside) = quad_uv(center, size, rot, p);
             let (pa, pb) = (&a.rgba[i * 4..i * 4 + 3], &b.rgba[i * 4..i * 4 + 3]);
             if inside < -1.0 {
-                // Well outside: the material alone, as without decals, but
-                // for the last bit where the two renderers' pages stand at
-                // another mix of levels and sources when captured.
+                // Well outside: the material alone, as without the decal.
                 let d = pa.iter().zip(pb).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0);
                 outside_worst = outside_worst.max(d);
                 outside += 1;
@@ -177,6 +180,8 @@ fn a_decal_shows_its_texture_blended_over_the_material() {
         eprintln!("decal pixels: {} channels, |error| mean {mean:.2}, p99 {p99:.2}, max {max:.2} (8-bit)", n);
         assert!(mean <= MAX_MEAN && p99 <= MAX_P99, "mean {mean} p99 {p99}");
         assert!(outside > 3000, "{outside} pixels outside");
+        // 1: a pixel that takes a coarse page under the decal (its texels
+        // span more than the metre) or trilinear's next level shows it.
         assert!(outside_worst <= 1, "pixels a metre or more outside the decal changed by {outside_worst}/255");
     });
 }

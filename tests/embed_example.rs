@@ -96,4 +96,12 @@ fn the_embedding_example_without_a_display_says_so_in_one_line() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.trim_end().lines().count() == 1 && err.contains("xvfb-run") && !err.contains("panicked"), "{err}");
+    assert!(!err.contains(".rs:"), "winit's source position leaks: {err}");
+    // Bad arguments: one line in the user's words (no Rust debug text).
+    for (args, want) in [(&["--output", "jpg"][..], "--output jpg: use"), (&["--output"][..], "--output takes a value")]
+    {
+        let out = std::process::Command::new(&example).args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want) && !err.contains("Some(") && !err.contains("None"), "{args:?}: {err}");
+    }
 }

@@ -90,6 +90,25 @@ fn float_and_signed_bands_keep_their_metres() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// GDAL's "nan" no-data (float maps): its samples are holes, and a map of
+/// nothing else is refused as such, not as non-finite heights.
+#[test]
+fn a_nan_no_data_value_marks_holes() {
+    let dir = temp_dir("nan-nodata");
+    let tags = Tags { no_data: Some("nan"), ..TAGS };
+    let mut f: Vec<f32> = (0..12).map(|k| 100.0 + k as f32).collect();
+    f[5] = f32::NAN;
+    let (holed, empty) = (dir.join("holed.tif"), dir.join("empty.tif"));
+    write_tiff::<colortype::Gray32Float>(&holed, 4, 3, &f, &tags);
+    write_tiff::<colortype::Gray32Float>(&empty, 4, 3, &[f32::NAN; 12], &tags);
+    let src = GeoTiffSource::open(&holed, [120.0, 60.0]).unwrap();
+    // Pixel 5 is (col 1, row 1): x 30..60, y 20..40.
+    assert!(src.has_holes() && src.is_hole(45.0, 30.0) && !src.is_hole(15.0, 30.0));
+    let err = GeoTiffSource::open(&empty, [120.0, 60.0]).map(|_| ()).expect_err("refused").to_string();
+    assert!(err.contains("every sample holds the no-data value NaN"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn no_data_samples_become_holes_in_the_bake() {
     use vista::world::{bake_node, NodeId, WorldDesc, PATCHES_PER_NODE_SIDE, PATCH_HOLE_NONE};

@@ -62,10 +62,11 @@ fn args() -> Result<Args, String> {
                     Some("gbuffer") => Mode::Gbuffer,
                     Some("hdr") => Mode::Hdr,
                     Some("lit") => Mode::Lit,
-                    other => return Err(format!("--output {other:?}: {usage}")),
+                    Some(other) => return Err(format!("--output {other}: {usage}")),
+                    None => return Err(format!("--output takes a value: {usage}")),
                 }
             }
-            other => return Err(format!("unknown argument {other:?}: {usage}")),
+            other => return Err(format!("unknown argument {other}: {usage}")),
         }
     }
     if a.screenshot.is_some() && a.frames == 0 {
@@ -300,7 +301,7 @@ impl ApplicationHandler for App {
         let window = match el.create_window(attrs) {
             Ok(w) => Arc::new(w),
             Err(e) => {
-                self.result = Err(format!("cannot open a window: {e}"));
+                self.result = Err(format!("cannot open a window: {}", reason(&e)));
                 return el.exit();
             }
         };
@@ -351,7 +352,7 @@ fn main() {
     let event_loop = match EventLoop::new() {
         Ok(l) => l,
         Err(e) => {
-            eprintln!("embed: cannot open a window ({e}); without a display, run it under `xvfb-run -a`");
+            eprintln!("embed: cannot open a window ({}); without a display, run it under `xvfb-run -a`", reason(&e));
             std::process::exit(2);
         }
     };
@@ -363,5 +364,15 @@ fn main() {
     if let Err(e) = app.result {
         eprintln!("embed: {e}");
         std::process::exit(1);
+    }
+}
+
+/// The window system's reason without the source position winit's errors
+/// carry ("os error at .../linux/mod.rs:765: ...").
+fn reason(e: &dyn std::fmt::Display) -> String {
+    let text = e.to_string();
+    match text.split_once(".rs:").and_then(|(_, rest)| rest.split_once(": ")) {
+        Some((_, reason)) => reason.to_string(),
+        None => text,
     }
 }

@@ -40,8 +40,13 @@ impl Claim {
         let what = if self.world != other.world {
             format!("a {} x {} m world at {} m spacing", w.extent_m[0], w.extent_m[1], w.spacing_m)
         } else if self.keys != other.keys {
-            // The same extent: the source, holes or settings differ.
-            format!("this world with another source, hole set or bake settings (source key {})", self.keys[1])
+            // The same extent: name what differs, with this bake's key of it.
+            let kinds = ["world", "height source", "hole set", "bake settings"];
+            let differs: Vec<String> = (1..4)
+                .filter(|&k| self.keys[k] != other.keys[k])
+                .map(|k| format!("{} {}", kinds[k], &self.keys[k][..8]))
+                .collect();
+            format!("this world with {}", differs.join(", "))
         } else {
             "this world".to_string()
         };

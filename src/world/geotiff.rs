@@ -226,8 +226,10 @@ fn fill_no_data<T: Copy>(
 ) -> Result<Option<Vec<u64>>> {
     let Some(n) = no_data else { return Ok(None) };
     let mut mask = vec![0u64; values.len().div_ceil(64)];
+    // GDAL writes "nan" for float maps: NaN equals nothing, so test it apart.
+    let is_no_data = |x: f64| x == n || (n.is_nan() && x.is_nan());
     for (k, v) in values.iter().enumerate() {
-        if as_f64(v) == n {
+        if is_no_data(as_f64(v)) {
             mask[k / 64] |= 1 << (k % 64);
         }
     }

@@ -79,6 +79,7 @@ enum Command {
 }
 
 fn main() {
+    quiet_when_stdout_closes();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     // `vista bench KIND --help` is the kind's own (clap's would list every
     // kind's options).
@@ -106,6 +107,21 @@ fn main() {
         // exit 2 like a usage error; 1 is a failure while running.
         std::process::exit(if e.chain().any(|c| c.is::<InputError>()) { 2 } else { 1 });
     }
+}
+
+/// `vista ... | head`: once the reader has gone, `println!` panics on the
+/// closed pipe; stop quietly instead, with the status a shell gives a
+/// process SIGPIPE ended (128 + 13), as Unix tools do.
+fn quiet_when_stdout_closes() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let text = payload.downcast_ref::<String>().map(String::as_str).or(payload.downcast_ref::<&str>().copied());
+        if text.is_some_and(|t| t.starts_with("failed printing to stdout") && t.contains("Broken pipe")) {
+            std::process::exit(141);
+        }
+        default(info);
+    }));
 }
 
 /// Tests read the process's peak memory here (`VISTA_PEAK_RSS_FILE=PATH`):

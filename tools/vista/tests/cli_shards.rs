@@ -260,6 +260,13 @@ fn a_shard_refuses_a_folder_of_another_bake() {
     other.args(["bake", "--extent", "2048", "--spacing", "2", "--lods", "4", "--no-progress", "--out"]);
     other.arg(&dir).args(["--shard", "1/2"]);
     refused(other, &["2 shards of a 4096 x 4096 m world", "this one is 2 shards of a 2048 x 2048 m world"]);
+    // The same world from another source (a seed): the line names it.
+    let mut seeded = shard_cmd(&dir, "1/2");
+    seeded.args(["--seed", "7"]);
+    refused(
+        seeded,
+        &["2 shards of this world with height source ", "this one is 2 shards of this world with height source "],
+    );
     assert!(products(&dir) == before, "a refused shard wrote into the folder");
     refused(shard_cmd(&dir, "-1/2"), &["--shard \"-1/2\": the index must be 0 or more"]);
 

@@ -260,3 +260,24 @@ fn each_bench_kind_has_its_own_help() {
     assert!(cull.contains("Patch culling per view") && !cull.contains("--camera") && cull.contains("--size"), "{cull}");
     assert!(accuracy.contains("--plot") && accuracy.contains("--views") && !accuracy.contains("--sets"), "{accuracy}");
 }
+
+/// `vista ... | head`: a reader that leaves early ends vista quietly (the
+/// shell's SIGPIPE status, 141), not with a panic's backtrace.
+#[test]
+fn a_closed_stdout_ends_the_run_quietly() {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let dir = temp_dir("closed-stdout");
+    let out = vista_cmd::vista_cmd()
+        .args(["render", "--extent", "1024", "--spacing", "2", "--lods", "3", "--size", "32x24", "--frames", "1"])
+        .arg("--out")
+        .arg(dir.join("out"))
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(141), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -115,7 +115,9 @@ pub fn view(options: ContextOptions, args: ViewArgs, world: LoadedWorld, path: O
     if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
         bail!("cannot open a window: DISPLAY is not set (no X display); without one, run `xvfb-run -a vista view ...`");
     }
-    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window on DISPLAY: {e}"))?;
+    let display = std::env::var("DISPLAY").unwrap_or_default();
+    let event_loop =
+        EventLoop::new().map_err(|e| anyhow!("cannot open a window on DISPLAY {display}: {}", reason(&e)))?;
     let mut view = args.viewpoint.view(&world);
     if let Some(p) = &path {
         view.camera = p.first();
@@ -533,5 +535,15 @@ impl ApplicationHandler for App {
             Some(e) => Err(e),
             None => r,
         });
+    }
+}
+
+/// The window system's reason without the source position winit's errors
+/// carry ("os error at .../linux/mod.rs:788: ...").
+fn reason(e: &dyn std::fmt::Display) -> String {
+    let text = e.to_string();
+    match text.split_once(".rs:").and_then(|(_, rest)| rest.split_once(": ")) {
+        Some((_, reason)) => reason.to_string(),
+        None => text,
     }
 }
