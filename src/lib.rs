@@ -1,5 +1,36 @@
 //! vista: a GPU-driven terrain renderer for Vulkan (Far Cry 5 style) on ash.
 //!
+//! # Embedding, in short
+//!
+//! vista records into an engine's command buffers; the engine submits them
+//! (`docs/embedding.md` has the whole contract: outputs lit, HDR or into the
+//! engine's G-buffer, its depth kept, queues, frames in flight). A renderer
+//! is made once and recorded each frame:
+//!
+//! ```no_run
+//! use std::sync::Arc;
+//! use vista::gpu::{vk, Context, Image, Recorder};
+//! use vista::render::{RenderTargets, RendererOptions, TerrainRenderer, View};
+//! use vista::world::{ProceduralSource, WorldDesc};
+//!
+//! /// Once, beside the engine's own passes (`ctx`: `Context::from_raw` over its device).
+//! fn make(ctx: &Context) -> vista::error::Result<TerrainRenderer> {
+//!     let world = WorldDesc::default(); // 10 240 m, 0.5 m spacing
+//!     let source = Arc::new(ProceduralSource::new(1, world.extent_m, world.height_range_m)?);
+//!     TerrainRenderer::new(ctx, &world, source, vec![], &RendererOptions::default())
+//! }
+//!
+//! /// Each frame, into the engine's recording command buffer, before it submits.
+//! fn draw(ctx: &Context, r: &mut TerrainRenderer, cmd: vk::CommandBuffer, view: &View, color: &Image, depth: &Image)
+//!     -> vista::error::Result<()> {
+//!     // SAFETY: `cmd` is recording, from `ctx`'s device, and the engine submits it.
+//!     let mut rec = unsafe { Recorder::from_raw(ctx, cmd) };
+//!     r.record(&mut rec, view, &RenderTargets::color(color, depth, [0.0; 4]))
+//! }
+//! ```
+//!
+//! # The house
+//!
 //! Floors, each importing only its own and those below it (the house's
 //! plan with the frame's phases and the effect traits:
 //! `docs/architecture.md`; `tests/layout.rs` holds the rules):

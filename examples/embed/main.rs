@@ -1,5 +1,5 @@
-//! A small deferred engine with vista inside, the README's embedding
-//! section as a program: the engine owns the instance, device, queue,
+//! A small deferred engine with vista inside, docs/embedding.md
+//! as a program: the engine owns the instance, device, queue,
 //! swapchain, command buffers, render targets and frame loop; vista gets
 //! its handles through `Context::from_raw`, wraps the engine's images,
 //! records the terrain into the engine's command buffer between the

@@ -1,8 +1,8 @@
 //! The renderer an engine records into: [`TerrainRenderer`] owns the
 //! terrain passes and the effects a scene calls for, built into a pass
-//! [`graph`], and records one frame into the caller's command buffer from a
-//! [`View`]; [`report`] says what was built and what ran; [`offscreen`] is
-//! the headless frame loop of the tools and tests.
+//! graph (`scene::graph`), and records one frame into the caller's command
+//! buffer from a [`View`]; [`report`] says what was built and what ran;
+//! [`offscreen`] is the headless frame loop of the tools and tests.
 
 mod frame_passes;
 pub mod offscreen;

@@ -1,7 +1,7 @@
 //! [`TerrainRenderer`]: owns the terrain (streaming, GPU quadtree) and the
 //! passes that turn it into pixels, built from the scene's effects, and
 //! records one frame into a command buffer the caller provides. The frame
-//! is the pass graph of [`graph`](super::graph) (in order: quadtree_update,
+//! is the pass graph of `scene::graph` (in order: quadtree_update,
 //! traverse, lod_map, sector_data, select_patches, cull_patches, terrain_geometry,
 //! terrain_holes, the occlusion passes, classify_tiles, gbuffer_tiles,
 //! lighting_resolve); a pass whose effect is off is not built (no pipeline, no

@@ -1,7 +1,7 @@
 //! How the display image (`image.png`) is made from the linear HDR image
 //! (`lit.exr`): an exposure, then a named tonemapper. A scene picks both
 //! (`lighting = { tonemap = "aces", exposure_ev = 0.5 }`); the CPU reference
-//! ([`crate::reference::tonemap`]) applies the same curve from its
+//! (`reference::tonemap`, feature `reference`) applies the same curve from its
 //! published definition, so a test can compare the two.
 
 use std::fmt;

@@ -68,7 +68,7 @@ fn atlas_format(i: usize, format: PayloadFormat) -> (vk::Format, u64) {
     (vk_format, format.layer_bytes(kind) as u64)
 }
 
-/// Index of each atlas in [`GpuQuadtree::atlases`].
+/// Index of each atlas in `GpuQuadtree::atlases`.
 pub const ATLAS_HEIGHT: usize = 0;
 pub const ATLAS_NORMAL: usize = 1;
 pub const ATLAS_ALBEDO: usize = 2;

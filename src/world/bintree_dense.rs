@@ -5,7 +5,7 @@
 //! t, whose children are all finer), each half-level in parallel. Values
 //! are stored as f32 rounded away from zero, so a bound stays a bound.
 //! Errors are the rule's sum lowered to the diamond's gap measured against
-//! the lattice ([`super::vertex_bounds_exact`]), as the renderer bakes them.
+//! the lattice (`vertex_bounds_exact`), as the renderer bakes them.
 
 use super::bintree::{children, nest, own_bound, Bounds, Kind, Lattice, VertexBound};
 use super::vertex_bounds_exact::{diamond_gap, SampleGrid};

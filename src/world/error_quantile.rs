@@ -6,8 +6,7 @@
 //! within the target but for 1 % of its area keeps the first half wherever
 //! it is drawn; only the largest error needs the full guarantee, at twice
 //! the target. Selecting by the largest error alone measured about a third
-//! of the asked error at 1 px, paid in triangles (README, "What accuracy
-//! costs").
+//! of the asked error at 1 px, paid in triangles (docs/accuracy.md).
 
 /// Bins per octave (the top 2 mantissa bits of an f32).
 const BINS_PER_OCTAVE_LOG2: u32 = 2;

@@ -190,7 +190,7 @@ impl WorldDesc {
     /// The default LOD count of an extent: coarse roots, so the far field
     /// can be drawn coarsely where the error allows and the roots (always
     /// resident) hold few slots. The most LODs whose roots tile the extent
-    /// exactly with at most [`DEFAULT_MAX_ROOTS_PER_SIDE`] a side (no part
+    /// exactly with at most `DEFAULT_MAX_ROOTS_PER_SIDE` a side (no part
     /// of a root outside the world for the hole path to cut away): the
     /// default 10 240 m world at 0.5 m gets 6, 5 x 5 roots of 2 048 m. When
     /// none does, the fewest LODs with at most 2 roots a side (Mont Blanc's

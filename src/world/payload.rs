@@ -33,7 +33,7 @@ pub struct BakedNode {
     /// ([`texel_index`]), so the vertex shader's Catmull-Rom refinement
     /// below the samples reads its 4x4 taps inside the node's own layer.
     pub heights: Vec<u16>,
-    /// How `normals` and `albedo` are stored ([`super::texels`]).
+    /// How `normals` and `albedo` are stored (`world::texels`).
     pub format: PayloadFormat,
     /// 132x132 normal layer (samples -2..=129): x, y of the unit normal as
     /// `n * 127.5 + 127.5` in alpha and green (z is positive and implied),

@@ -276,8 +276,8 @@ impl WorldPlan {
     /// it (a LOD-0 node samples a quarter of the points a coarser one
     /// does), spread over it and baked in parallel as [`super::bake_world`]
     /// does, and weighs the two costs by the region's node counts. Each
-    /// level bakes batches of `samples / 2` nodes until [`MIN_TIMED_SECONDS`]
-    /// have passed (cheap nodes jitter) or [`MAX_SAMPLE_BATCHES`] batches.
+    /// level bakes batches of `samples / 2` nodes until `MIN_TIMED_SECONDS`
+    /// have passed (cheap nodes jitter) or `MAX_SAMPLE_BATCHES` batches.
     /// Writes nothing to disk.
     pub fn measure_bake(&mut self, source: &dyn HeightSource, holes: &[Hole], settings: &BakeSettings, samples: usize) {
         let coarse_nodes: u64 = self.nodes_per_lod.iter().skip(1).sum();

@@ -12,10 +12,10 @@
 //! bits in every node that holds it.
 //!
 //! - the levels below the sample grid (Catmull-Rom refinement) in blocks of
-//!   two LOD-0 nodes, in parallel ([`super::vertex_bounds_fine`]);
+//!   two LOD-0 nodes, in parallel (`vertex_bounds_fine`);
 //! - the samples' own levels, one half-level at a time over the whole
 //!   world, each in parallel, kept as f32 rounded up: the rule's sum
-//!   lowered to the diamond's measured gap ([`super::vertex_bounds_exact`]),
+//!   lowered to the diamond's measured gap (`vertex_bounds_exact`),
 //!   raised to the children's (14 bytes a sample kept, 2 more while the
 //!   levels run).
 

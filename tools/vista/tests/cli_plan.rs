@@ -334,7 +334,7 @@ fn assert_plans_small_and_bakes_within(dir: &Path, world: &[&str], map_bytes: u6
 }
 
 /// A spacing far finer than a height map's pixels says so before any work
-/// (the README's Mont Blanc at 92.7 m pixels: 2 m is 46 x finer); the
+/// (docs/world-pipeline.md's Mont Blanc at 92.7 m pixels: 2 m is 46 x finer); the
 /// scenes' 8 m (12 x) gets no line.
 #[test]
 fn a_spacing_far_finer_than_the_map_is_noted_before_work() {

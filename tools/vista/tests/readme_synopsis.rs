@@ -1,6 +1,8 @@
-//! The README's command synopsis names the options `--help` lists, no more
-//! and no fewer, per command: a new option appears in both, a renamed one
-//! is renamed in both.
+//! The command synopsis (docs/commands.md) names the options `--help`
+//! lists, no more and no fewer, per command: a new option appears in both,
+//! a renamed one is renamed in both. The README's command table names every
+//! command, its links reach every chapter, and its embedding snippet is the
+//! library's front-page doctest (so `cargo test --doc` compiles it).
 
 use std::collections::BTreeSet;
 mod vista_cmd;
@@ -19,11 +21,11 @@ fn options(text: &str) -> BTreeSet<String> {
     out
 }
 
-/// The README's synopsis block, split by command: each `vista CMD` entry
-/// runs to the next one.
+/// The synopsis block, split by command: each `vista CMD` entry runs to
+/// the next one.
 fn readme_sections() -> Vec<(String, String)> {
-    let readme = include_str!("../../../README.md");
-    let start = readme.find("## Command line").expect("the README has a command line section");
+    let readme = include_str!("../../../docs/commands.md");
+    let start = readme.find("# Command line").expect("docs/commands.md has its title");
     let block = &readme[start..];
     let block = &block[block.find("```").unwrap() + 3..];
     let block = &block[..block.find("```").unwrap()];
@@ -87,9 +89,63 @@ fn the_readme_synopsis_names_every_option_of_every_command_and_no_other() {
         let extra: Vec<_> = readme.iter().filter(|o| !helped.contains(*o)).collect();
         if !missing.is_empty() || !extra.is_empty() {
             problems.push(format!(
-                "vista {cmd}: --help has {missing:?} the README lacks; the README has {extra:?} --help lacks"
+                "vista {cmd}: --help has {missing:?} docs/commands.md lacks; it has {extra:?} --help lacks"
             ));
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+const README: &str = include_str!("../../../README.md");
+
+/// `vista --help`'s commands.
+fn commands() -> BTreeSet<String> {
+    let out = vista_cmd::vista_cmd().arg("--help").output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let list = &text[text.find("Commands:").expect("clap lists the commands")..];
+    let list = &list[..list.find("\n\n").unwrap_or(list.len())];
+    list.lines()
+        .skip(1)
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn the_readme_names_every_command_and_links_every_chapter() {
+    let table: BTreeSet<String> =
+        README.lines().filter_map(|l| l.strip_prefix("| `vista ")?.split('`').next().map(String::from)).collect();
+    assert_eq!(table, commands(), "the README's command table against `vista --help`");
+    let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs");
+    let chapters: BTreeSet<String> = std::fs::read_dir(&docs)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".md"))
+        .collect();
+    let linked: BTreeSet<String> = README
+        .match_indices("](docs/")
+        .filter_map(|(i, _)| README[i + "](docs/".len()..].split(')').next().map(String::from))
+        .collect();
+    let pages: BTreeSet<String> = linked.iter().filter(|l| l.ends_with(".md")).cloned().collect();
+    assert_eq!(pages, chapters, "the README links every chapter in docs/ and no other page");
+    for l in &linked {
+        assert!(docs.join(l).exists(), "the README links docs/{l}, which is missing");
+    }
+    assert!(README.lines().count() <= 300, "the README is {} lines", README.lines().count());
+}
+
+#[test]
+fn the_readme_snippet_is_the_librarys_front_page_doctest() {
+    let start = README.find("```rust\n").expect("the README has an embedding snippet") + 8;
+    let snippet = &README[start..start + README[start..].find("```").unwrap()];
+    let lib = include_str!("../../../src/lib.rs");
+    let doc: String = lib
+        .lines()
+        .filter_map(|l| l.strip_prefix("//!"))
+        .map(|l| format!("{}\n", l.strip_prefix(' ').unwrap_or(l)))
+        .collect();
+    let block = doc.find("```no_run\n").expect("src/lib.rs has the doctest") + 10;
+    let doctest = &doc[block..block + doc[block..].find("```").unwrap()];
+    assert_eq!(snippet, doctest, "README's snippet and src/lib.rs's doctest differ");
 }
