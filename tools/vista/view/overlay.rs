@@ -14,6 +14,9 @@ use vista::terrain::TerrainStats;
 /// Frames of history kept per pass.
 const HISTORY: usize = 120;
 
+/// Below this window size (points) the overlay starts folded.
+const SMALL: [f32; 2] = [800.0, 450.0];
+
 /// What the overlay may change; read by the viewer each frame.
 pub struct Settings {
     pub target_error_px: f32,
@@ -81,8 +84,14 @@ impl Overlay {
     pub fn ui(&mut self, ctx: &egui::Context, shown: &Shown, settings: &mut Settings) {
         // Taller than the window (many shading variants, a small window):
         // it scrolls rather than hiding the switches below the edge.
-        let max_height = (ctx.content_rect().height() - 48.0).max(120.0);
-        egui::Window::new("vista").default_pos([8.0, 8.0]).default_width(360.0).resizable(false).show(ctx, |ui| {
+        let screen = ctx.content_rect();
+        let max_height = (screen.height() - 48.0).max(120.0);
+        // A small window (320x180, say) would be all overlay: there it
+        // starts folded and narrower; its arrow opens it.
+        let small = screen.width() < SMALL[0] || screen.height() < SMALL[1];
+        let width = if small { (screen.width() * 0.45).max(120.0) } else { 360.0 };
+        let window = egui::Window::new("vista").default_pos([8.0, 8.0]).default_width(width).default_open(!small);
+        window.resizable(false).show(ctx, |ui| {
             egui::ScrollArea::vertical()
                 .max_height(max_height)
                 .min_scrolled_height(max_height)
