@@ -493,3 +493,63 @@ fn bake_world_region_and_timings() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A second edit while the first's reloads are coming back: the ones
+/// already back (held until all are) were made from the first edit's
+/// source, so they are asked of the second's loader again; every node of
+/// both edits is handed over once, together, from the last source.
+#[test]
+fn an_edit_during_anothers_reloads_reloads_both_from_the_last_source() {
+    use std::sync::{Condvar, Mutex};
+    type Gate = Arc<(Mutex<bool>, Condvar)>;
+    let world = WorldDesc {
+        extent_m: [2048.0, 2048.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 3,
+        ..WorldDesc::default()
+    };
+    let flat = |h: f32, gated: Option<(NodeId, Gate)>| {
+        let load: Arc<LoadFn> = Arc::new(move |id| {
+            if let Some((g, gate)) = &gated {
+                let (open, cv) = &**gate;
+                let _open = cv.wait_while(open.lock().unwrap(), |o| *g == id && !*o).unwrap();
+            }
+            Ok(bake_node(&Flat(h), &world, &[], id))
+        });
+        Loader::new(2, load).unwrap()
+    };
+    let mut s = Streamer::new(Residency::new(&world, ResidencyConfig::default()).unwrap(), flat(10.0, None));
+    let pos = [1000.0, 1000.0, 10.0];
+    while s.residency().resident().count() < s.residency().roots().len() || s.residency().pending_count() > 0 {
+        s.frame(pos, None);
+        std::thread::yield_now();
+    }
+    let (a, b) = (s.residency().roots()[0], s.residency().roots()[1]);
+    // Edit 1 touches a and b; b's load waits at the gate.
+    let gate = Arc::new((Mutex::new(false), Condvar::new()));
+    s.replace_loader(flat(20.0, Some((b, Arc::clone(&gate)))), |_| false);
+    assert!(s.reload(a) && s.reload(b));
+    while s.reloading() > 1 {
+        assert!(s.frame(pos, None).reloaded.is_empty(), "a reload handed over before the others were back");
+        std::thread::yield_now();
+    }
+    // Edit 2 touches b only; the gate opens so the old loader can finish.
+    *gate.0.lock().unwrap() = true;
+    gate.1.notify_all();
+    s.replace_loader(flat(30.0, None), |_| false);
+    assert!(s.reload(b));
+    let mut handed = Vec::new();
+    while handed.is_empty() {
+        handed = s.frame(pos, None).reloaded;
+        std::thread::yield_now();
+    }
+    let mut ids: Vec<NodeId> = handed.iter().map(|n| n.id).collect();
+    ids.sort();
+    let mut want = vec![a, b];
+    want.sort();
+    assert_eq!(ids, want, "both edits' nodes, together");
+    let top = world.decode_height(handed[0].max_height);
+    assert!(handed.iter().all(|n| world.decode_height(n.max_height) == top), "one source for all");
+    assert!((top - 30.0).abs() < 0.01, "from the last edit's source: {top} m");
+}

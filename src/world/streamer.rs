@@ -51,12 +51,14 @@ impl Streamer {
 
     /// Makes every payload with `loader` from now on (the source was
     /// edited): loads under way, payloads parked for which `stale` is true
-    /// and reloads not handed over yet are asked of it again; the old
-    /// loader's queue is dropped with it.
+    /// and every reload not handed over yet (back or not: those back were
+    /// made from the old source) are asked of it again; the old loader's
+    /// queue is dropped with it.
     pub fn replace_loader(&mut self, loader: Loader, stale: impl Fn(NodeId) -> bool) {
         self.loader = loader;
         self.parked.retain(|id, _| !stale(*id));
-        self.reloaded.clear();
+        let held: Vec<NodeId> = self.reloaded.drain().map(|(id, _)| id).collect();
+        self.reloading.extend(held);
         let pending: Vec<NodeId> = self.residency.pending().filter(|id| !self.parked.contains_key(id)).collect();
         for id in pending.into_iter().chain(self.reloading.iter().copied()) {
             self.loader.request(id);
