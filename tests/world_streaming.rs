@@ -17,6 +17,17 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 /// Constant-height source: cheap to bake, hash set by the caller.
+/// 2 x 2 roots of 1 024 m, three LODs.
+fn small_world() -> WorldDesc {
+    WorldDesc {
+        extent_m: [2048.0, 2048.0],
+        height_range_m: [0.0, 100.0],
+        spacing_m: 1.0,
+        lod_count: 3,
+        ..WorldDesc::default()
+    }
+}
+
 struct Flat(f32);
 
 impl HeightSource for Flat {
@@ -322,13 +333,7 @@ fn streamer_with_loader_threads() {
 fn frames_never_wait_for_loads() {
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::sync::{Condvar, Mutex};
-    let world = WorldDesc {
-        extent_m: [2048.0, 2048.0],
-        height_range_m: [0.0, 100.0],
-        spacing_m: 1.0,
-        lod_count: 3,
-        ..WorldDesc::default()
-    };
+    let world = small_world();
     let gate = Arc::new((Mutex::new(false), Condvar::new()));
     let started = Arc::new(AtomicUsize::new(0));
     let (g, st, w2) = (Arc::clone(&gate), Arc::clone(&started), world);
@@ -502,13 +507,7 @@ fn bake_world_region_and_timings() {
 fn an_edit_during_anothers_reloads_reloads_both_from_the_last_source() {
     use std::sync::{Condvar, Mutex};
     type Gate = Arc<(Mutex<bool>, Condvar)>;
-    let world = WorldDesc {
-        extent_m: [2048.0, 2048.0],
-        height_range_m: [0.0, 100.0],
-        spacing_m: 1.0,
-        lod_count: 3,
-        ..WorldDesc::default()
-    };
+    let world = small_world();
     let flat = |h: f32, gated: Option<(NodeId, Gate)>| {
         let load: Arc<LoadFn> = Arc::new(move |id| {
             if let Some((g, gate)) = &gated {
