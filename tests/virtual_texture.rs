@@ -363,3 +363,46 @@ fn virtual_texture_shading_stays_close_to_direct_splat_shading() {
         assert!(worst.0 <= MAX_MEAN && worst.1 <= MAX_P99, "FLIP mean {} p99 {}", worst.0, worst.1);
     });
 }
+
+/// Nebula's window on the GPU: with 32 x 32 regions and a window of 11, the
+/// camera flies to the far corner and back, so regions share slots (region
+/// x and x + 11 take the same). At every stop, a probe at each region's
+/// centre finds a sub-texture exactly where the CPU state gave the region
+/// one (a slot holding another region reads as none), and the page it
+/// finds carries that region's position code. The view reaches farther
+/// than the window: the regions left out are counted.
+#[test]
+fn a_window_smaller_than_the_world_hands_its_slots_on() {
+    gpu_test(|ctx| {
+        let mut fx = effects(true);
+        fx.virtual_texture.position_code = true;
+        fx.virtual_texture.region_m = 32.0;
+        fx.virtual_texture.window_m = 320.0;
+        let mut rig = rig(ctx, fx);
+        let centres: Vec<[f32; 4]> =
+            (0..32 * 32).map(|r| [(r % 32) as f32 * 32.0 + 16.0, (r / 32) as f32 * 32.0 + 16.0, 0.0, 0.0]).collect();
+        let (mut with_sub, mut beyond) = (0, 0);
+        for [x, y] in [[500.0, 200.0], [800.0, 700.0], [980.0, 990.0], [120.0, 60.0], [500.0, 200.0]] {
+            // Looking towards the world's middle (compass degrees).
+            let yaw = (512.0f64 - x).atan2(512.0 - y).to_degrees();
+            let v = view([x, y, Surface::Hills.height(x, y) + 4.0], yaw, -12.0, SIZE, 1.0);
+            rig.shot(ctx, &v, CullStages::ALL);
+            let vt = rig.renderer.effect::<vista::effects::virtual_texture::VirtualTexture>().unwrap();
+            assert_eq!((vt.layout().window, vt.layout().regions), (11, [32, 32]));
+            beyond += vt.counters().beyond_window;
+            for (r, g) in probe(ctx, vt, &centres).iter().enumerate() {
+                let cpu = vt.state.sub_texture(r as u32);
+                assert_eq!(g[0] & 1 == 1, cpu.is_some(), "camera ({x}, {y}), region {r}: GPU and CPU agree");
+                if let Some(sub) = cpu {
+                    with_sub += 1;
+                    assert_eq!(g[3], sub.k, "region {r}: the slot's sub-texture");
+                    if g[0] & 2 == 2 {
+                        assert_eq!(g[1] & 0xFFFF, r as u32, "camera ({x}, {y}): region {r}'s page");
+                    }
+                }
+            }
+        }
+        eprintln!("{with_sub} region probes inside sub-textures; {beyond} regions beyond the window over 5 stops");
+        assert!(with_sub > 100 && beyond > 0);
+    });
+}

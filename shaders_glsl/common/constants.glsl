@@ -180,8 +180,10 @@
 #define VT_NONE 0xFFFFFFFFu
 // The state buffer: VT_STATE_HEADER words (regions x, regions y,
 // indirection side, cache tiles per row, region metres as float bits,
-// cache texels x, y, unused), one sub-texture word per region, then the
-// indirection's mips (a physical tile index per texel, or VT_NONE).
+// cache texels x, y, window side W in regions), a sub-texture word per
+// window slot (W x W; region (x, y) in slot x mod W + (y mod W) W), the
+// region each slot holds per slot, then the indirection's mips (a
+// physical tile index per texel, or VT_NONE).
 #define VT_STATE_HEADER 8u
 // Sub-texture word: mip-0 x | y << 11 | K << 22 (VT_NONE: no sub-texture).
 #define VT_SUB_Y_SHIFT 11u

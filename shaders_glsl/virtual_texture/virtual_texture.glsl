@@ -26,8 +26,11 @@ VtSub vt_sub_texture(vec2 xy) {
     }
     uvec2 r = uvec2(c);
     s.region = r.x + r.y * n.x;
-    uint w = VISTA_VT_WORD(VT_STATE_HEADER + s.region);
-    if (w == VT_NONE) {
+    // The window's slot of the region: empty, or another region's.
+    uint window = VISTA_VT_WORD(7u);
+    uint slot = r.x % window + (r.y % window) * window;
+    uint w = VISTA_VT_WORD(VT_STATE_HEADER + slot);
+    if (w == VT_NONE || VISTA_VT_WORD(VT_STATE_HEADER + window * window + slot) != s.region) {
         return s;
     }
     s.valid = true;
@@ -60,9 +63,9 @@ uint vt_indirection_word(VtSub s, uint level, uvec2 p) {
     for (uint i = 0u; i < m; ++i) {
         offset += (side >> i) * (side >> i);
     }
-    uint regions = VISTA_VT_WORD(0u) * VISTA_VT_WORD(1u);
+    uint window = VISTA_VT_WORD(7u);
     uvec2 t = (s.offset >> m) + p;
-    return VT_STATE_HEADER + regions + offset + t.y * (side >> m) + t.x;
+    return VT_STATE_HEADER + 2u * window * window + offset + t.y * (side >> m) + t.x;
 }
 
 // The page holding `xy` at `level` (<= s.k), or at the nearest coarser

@@ -44,8 +44,8 @@ layout(push_constant, std430) uniform VtFeedbackPush {
 } pc;
 
 void request(VtSub s, uint level, uvec2 p) {
-    uint regions = VISTA_VT_WORD(0u) * VISTA_VT_WORD(1u);
-    uint texel = vt_indirection_word(s, level, p) - VT_STATE_HEADER - regions;
+    uint window = VISTA_VT_WORD(7u);
+    uint texel = vt_indirection_word(s, level, p) - VT_STATE_HEADER - 2u * window * window;
     if (atomicExchange(status.s[texel], pc.stamp) != pc.stamp) {
         uint i = atomicAdd(requests.count, 1u);
         if (i < VT_REQUEST_CAPACITY) {

@@ -150,8 +150,10 @@ fn requests_at(w: &[u32], world: Vec2, raw: f32) -> BTreeSet<[u32; 2]> {
         return out;
     }
     let region = c.x as u32 + c.y as u32 * regions[0];
-    let word = w[(VT_STATE_HEADER + region) as usize];
-    if word == VT_NONE {
+    let window = w[7];
+    let slot = c.x as u32 % window + (c.y as u32 % window) * window;
+    let word = w[(VT_STATE_HEADER + slot) as usize];
+    if word == VT_NONE || w[(VT_STATE_HEADER + window * window + slot) as usize] != region {
         return out;
     }
     let k = word >> VT_SUB_K_SHIFT;

@@ -36,7 +36,7 @@ impl EffectKind for VirtualTextureKind {
     }
 
     fn parameters(&self) -> &'static [&'static str] {
-        &["cache_mb", "pages_per_frame", "region_m", "indirection"]
+        &["cache_mb", "pages_per_frame", "region_m", "indirection", "window_m"]
     }
 
     fn read(&self, fx: &mut Effects, key: &str, name: &str, v: &toml::Value, _: &Path) -> Result<()> {
@@ -47,6 +47,7 @@ impl EffectKind for VirtualTextureKind {
                 p.pages_per_frame = whole(key, v, 1, i64::from(crate::shaders::consts::VT_MAX_JOBS))?;
             }
             "region_m" => p.region_m = number(key, v, 1.0, 1e5)?,
+            "window_m" => p.window_m = number(key, v, 1.0, 1e6)?,
             "indirection" => {
                 let side = whole(key, v, 64, 2048)?;
                 if !side.is_power_of_two() {

@@ -14,9 +14,17 @@
 //! as in seed 001's page-status buffer). A sub-texture of level K occupies
 //! an aligned 2^K square of mip 0 at (ox, oy); its level-L page (x, y) is
 //! the texel (ox >> m + x, oy >> m + y) of mip m = K - L.
+//!
+//! Only regions in a window of `window` x `window` regions around the
+//! camera can hold a sub-texture (Nebula keeps a few hundred metres): the
+//! per-region state is one slot per window cell, region (x, y) in slot
+//! (x mod window, y mod window), so it and the CPU's walk over it per frame
+//! stay the window's size however large the world is. A slot names the
+//! region it holds; a region whose slot names another has none.
 
 use crate::shaders::consts::{
-    VT_MAX_LEVEL, VT_SUB_COORD_MASK, VT_SUB_K_SHIFT, VT_SUB_Y_SHIFT, VT_TILE_BORDER, VT_TILE_TEXELS,
+    VT_MAX_LEVEL, VT_NONE, VT_STATE_HEADER, VT_SUB_COORD_MASK, VT_SUB_K_SHIFT, VT_SUB_Y_SHIFT, VT_TILE_BORDER,
+    VT_TILE_TEXELS,
 };
 
 /// One page of one region's sub-texture.
@@ -45,6 +53,9 @@ pub struct VtLayout {
     pub region_m: f64,
     pub regions: [u32; 2],
     pub indirection_side: u32,
+    /// Regions per side of the window that can hold sub-textures (at most
+    /// the world's regions per side).
+    pub window: u32,
     /// Physical tiles per row and rows of the cache image.
     pub cache_tiles: [u32; 2],
 }
@@ -54,17 +65,90 @@ impl VtLayout {
     pub const TILE_BYTES: u64 = PADDED_TILE as u64 * PADDED_TILE as u64 * 8;
 
     /// The layout over a world of `extent_m`, with a cache of at most
-    /// `cache_mb` MiB (a square grid of tiles).
-    pub fn new(extent_m: [f64; 2], region_m: f64, indirection_side: u32, cache_mb: u32) -> VtLayout {
-        assert!(region_m > 0.0 && indirection_side.is_power_of_two());
+    /// `cache_mb` MiB (a square grid of tiles) and sub-textures in a
+    /// window of at least `window_m` around the camera.
+    pub fn new(extent_m: [f64; 2], region_m: f64, indirection_side: u32, cache_mb: u32, window_m: f64) -> VtLayout {
+        assert!(region_m > 0.0 && indirection_side.is_power_of_two() && window_m > 0.0);
         let regions = extent_m.map(|e| (e / region_m).ceil().max(1.0) as u32);
+        assert!(u64::from(regions[0]) * u64::from(regions[1]) < u64::from(VT_NONE), "region ids fit a word");
+        let window = ((window_m / region_m).ceil() as u32 + 1).min(regions[0].max(regions[1]));
         let tiles = (u64::from(cache_mb) << 20) / Self::TILE_BYTES;
         let side = (tiles as f64).sqrt().floor().max(1.0) as u32;
-        VtLayout { region_m, regions, indirection_side, cache_tiles: [side, side] }
+        VtLayout { region_m, regions, indirection_side, window, cache_tiles: [side, side] }
     }
 
     pub fn region_count(&self) -> u32 {
         self.regions[0] * self.regions[1]
+    }
+
+    /// Slots of the window (per-region state words: a sub-texture and the
+    /// region it belongs to each).
+    pub fn slots(&self) -> u32 {
+        self.window * self.window
+    }
+
+    /// Region `r`'s column and row.
+    pub fn region_xy(&self, r: u32) -> [u32; 2] {
+        [r % self.regions[0], r / self.regions[0]]
+    }
+
+    /// The slot region `r` takes while it is in the window.
+    pub fn slot_of(&self, r: u32) -> u32 {
+        let [x, y] = self.region_xy(r);
+        x % self.window + (y % self.window) * self.window
+    }
+
+    /// The first column and row of the window around `camera_xy`: centred
+    /// on the camera's region, kept inside the world.
+    pub fn window_origin(&self, camera_xy: [f64; 2]) -> [u32; 2] {
+        [0, 1].map(|a| {
+            let c = (camera_xy[a] / self.region_m).floor().clamp(0.0, f64::from(self.regions[a] - 1)) as u32;
+            c.saturating_sub(self.window / 2).min(self.regions[a].saturating_sub(self.window))
+        })
+    }
+
+    /// The regions of the window starting at `origin`, row by row.
+    pub fn window_regions(&self, origin: [u32; 2]) -> impl Iterator<Item = u32> + '_ {
+        let end = [0, 1].map(|a| (origin[a] + self.window).min(self.regions[a]));
+        (origin[1]..end[1]).flat_map(move |y| (origin[0]..end[0]).map(move |x| x + y * self.regions[0]))
+    }
+
+    /// Regions of the world within `range_m` of `camera_xy` along both
+    /// axes that the window at `origin` leaves out (they get no
+    /// sub-texture: the window is smaller than the range).
+    pub fn beyond_window(&self, origin: [u32; 2], camera_xy: [f64; 2], range_m: f64) -> u32 {
+        let span = |a: usize, lo: f64, hi: f64| {
+            let f = |v: f64| (v / self.region_m).floor().clamp(0.0, f64::from(self.regions[a])) as u32;
+            (f(lo), (f(hi) + 1).min(self.regions[a]))
+        };
+        let mut cells = [0u64; 2];
+        let mut inside = [0u64; 2];
+        for a in 0..2 {
+            let (lo, hi) = span(a, camera_xy[a] - range_m, camera_xy[a] + range_m);
+            cells[a] = u64::from(hi.saturating_sub(lo));
+            let (wlo, whi) = (origin[a].max(lo), (origin[a] + self.window).min(hi));
+            inside[a] = u64::from(whi.saturating_sub(wlo));
+        }
+        (cells[0] * cells[1] - inside[0] * inside[1]).min(u64::from(u32::MAX)) as u32
+    }
+
+    /// State-buffer words: slot `s`'s sub-texture word, its region word,
+    /// and the first indirection word.
+    pub fn sub_word(&self, slot: u32) -> u32 {
+        VT_STATE_HEADER + slot
+    }
+
+    pub fn region_word(&self, slot: u32) -> u32 {
+        VT_STATE_HEADER + self.slots() + slot
+    }
+
+    pub fn indirection_base(&self) -> u32 {
+        VT_STATE_HEADER + 2 * self.slots()
+    }
+
+    /// Words of the state buffer.
+    pub fn state_words(&self) -> u64 {
+        u64::from(self.indirection_base()) + self.indirection_texels()
     }
 
     pub fn tile_count(&self) -> u32 {
@@ -126,7 +210,7 @@ impl VtLayout {
     /// Bytes of the indirection, the page statuses and the cache images.
     pub fn memory_bytes(&self) -> [u64; 3] {
         let ind = self.indirection_texels() * 4;
-        [ind + u64::from(self.region_count()) * 4, ind, u64::from(self.tile_count()) * Self::TILE_BYTES]
+        [ind + u64::from(self.slots()) * 8, ind, u64::from(self.tile_count()) * Self::TILE_BYTES]
     }
 }
 
@@ -153,7 +237,7 @@ mod tests {
 
     #[test]
     fn pages_of_a_sub_texture_fill_its_square_at_every_mip() {
-        let l = VtLayout::new([1024.0, 1024.0], 64.0, 256, 16);
+        let l = VtLayout::new([1024.0, 1024.0], 64.0, 256, 16, 1024.0);
         let (k, off) = (3, [8, 16]);
         let mut seen = std::collections::HashSet::new();
         for level in 0..=k {

@@ -61,6 +61,11 @@ pub struct VtParams {
     pub pages_per_frame: u32,
     /// Texels per side of the indirection's mip 0 (a power of two).
     pub indirection: u32,
+    /// Side of the window around the camera whose regions can hold
+    /// sub-textures (m); at least twice the view's reach (the near
+    /// flavour's far end over the corner's secant) or `beyond_window`
+    /// counts the regions left out.
+    pub window_m: f64,
     /// Tests only (feature `test-hooks`): pages hold the position code of
     /// each texel (region, page, level, texel) instead of the material.
     #[cfg(feature = "test-hooks")]
@@ -83,6 +88,7 @@ impl Default for VtParams {
             cache_mb: 64,
             pages_per_frame: 16,
             indirection: 2048,
+            window_m: 2048.0,
             #[cfg(feature = "test-hooks")]
             position_code: false,
         }
@@ -208,9 +214,9 @@ impl VirtualTexture {
             Some(set) => Some(Decals { set: set.clone(), gpu: DecalResources::new(ctx, set)?, dirty: true }),
             None => None,
         };
-        let layout = VtLayout::new(extent_m, params.region_m, params.indirection, params.cache_mb);
+        let layout = VtLayout::new(extent_m, params.region_m, params.indirection, params.cache_mb, params.window_m);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-        let words = u64::from(VT_STATE_HEADER + layout.region_count()) + layout.indirection_texels();
+        let words = layout.state_words();
         let image = |name| {
             Image::new(
                 ctx,
@@ -397,9 +403,9 @@ impl VirtualTexture {
         list
     }
 
-    /// See [`VtState::settled`].
+    /// See [`VtState::settled`]; and no state write waits for a later frame.
     pub fn settled(&self) -> bool {
-        self.state.settled()
+        self.state.settled() && self.writes.is_empty()
     }
 
     /// What `gbuffer_tiles`' virtual-texture flavour samples.
@@ -482,7 +488,7 @@ impl VirtualTexture {
             (l.region_m as f32).to_bits(),
             (texels[0] as f32).to_bits(),
             (texels[1] as f32).to_bits(),
-            0,
+            l.window,
         ];
         rec.fill_buffer(&self.state_buffer, VT_NONE);
         rec.fill_buffer(&self.status, 0);

@@ -6,9 +6,7 @@
 use super::allocator::QuadtreeAllocator;
 use super::cache::TileCache;
 use super::layout::{pack_sub_texture, wanted_level, PageKey, VtLayout};
-use crate::shaders::consts::{
-    VT_NONE, VT_REQ_COORD_MASK, VT_REQ_LEVEL_MASK, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT, VT_STATE_HEADER,
-};
+use crate::shaders::consts::{VT_NONE, VT_REQ_COORD_MASK, VT_REQ_LEVEL_MASK, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT};
 use serde::Serialize;
 use std::collections::BTreeSet;
 
@@ -73,6 +71,9 @@ pub struct VtCounters {
     /// Sub-textures that got a smaller level than wanted (the indirection
     /// was full).
     pub squeezed: u32,
+    /// Regions within the range (along both axes) outside the window
+    /// (`window_m` smaller than the view's reach): no sub-texture.
+    pub beyond_window: u32,
     pub sub_textures: u32,
     /// Pages rendered and evicted since the renderer was made.
     pub rendered_total: u64,
@@ -112,7 +113,8 @@ pub enum PageEvent {
 pub struct VtState {
     pub layout: VtLayout,
     alloc: QuadtreeAllocator,
-    subs: Vec<Option<SubTexture>>,
+    /// Per window slot: the region it holds and that region's sub-texture.
+    subs: Vec<Option<(u32, SubTexture)>>,
     cache: TileCache,
     misses: BTreeSet<(u32, PageKey)>,
     /// Frame of the newest harvested requests (pages it used are kept).
@@ -131,7 +133,7 @@ impl VtState {
         VtState {
             layout,
             alloc: QuadtreeAllocator::new(layout.indirection_side),
-            subs: vec![None; layout.region_count() as usize],
+            subs: vec![None; layout.slots() as usize],
             cache: TileCache::new(layout.tile_count()),
             misses: BTreeSet::new(),
             harvested: 0,
@@ -144,7 +146,10 @@ impl VtState {
     }
 
     pub fn sub_texture(&self, region: u32) -> Option<SubTexture> {
-        self.subs[region as usize]
+        if region >= self.layout.region_count() {
+            return None;
+        }
+        self.subs[self.layout.slot_of(region) as usize].filter(|s| s.0 == region).map(|s| s.1)
     }
 
     pub fn cache(&self) -> &TileCache {
@@ -153,31 +158,38 @@ impl VtState {
 
     fn indirection_word(&self, key: PageKey, sub: SubTexture) -> u32 {
         let i = self.layout.indirection_index(key, sub.k, sub.offset);
-        (u64::from(VT_STATE_HEADER + self.layout.region_count()) + i) as u32
+        (u64::from(self.layout.indirection_base()) + i) as u32
     }
 
     fn write(&mut self, start: u32, count: u32, value: u32) {
         self.writes.push(StateWrite { start, count, value, pad: 0 });
     }
 
-    /// Gives each region the level its distance from `camera_xy` asks for
-    /// (none beyond `range_m`), moving changed sub-textures to new squares
-    /// and mapping the pages they already have there.
+    /// Gives each region of the window around `camera_xy` the level its
+    /// distance asks for (none beyond `range_m`), moving changed
+    /// sub-textures to new squares and mapping the pages they already have
+    /// there; a region that left the window gives up its slot. The walk is
+    /// the window's, not the world's.
     pub fn place_sub_textures(&mut self, frame: u64, camera_xy: [f64; 2], pixel_rad: f64, range_m: f64) {
         let l = self.layout;
+        let origin = l.window_origin(camera_xy);
         let (mut squeezed, mut count) = (0, 0);
-        for r in 0..l.region_count() {
+        for r in l.window_regions(origin) {
+            let slot = l.slot_of(r);
+            if let Some((_, old)) = self.subs[slot as usize].filter(|s| s.0 != r) {
+                self.release(slot, old, frame);
+            }
             let o = l.region_origin(r);
             let near = [0, 1].map(|a| camera_xy[a].clamp(o[a], o[a] + l.region_m) - camera_xy[a]);
             let d = near[0].hypot(near[1]);
             let want = (d <= range_m).then(|| wanted_level(l.region_m, d, pixel_rad));
-            let have = self.subs[r as usize];
+            let have = self.subs[slot as usize].map(|s| s.1);
             if want == have.map(|s| s.k) {
                 count += u32::from(have.is_some());
                 continue;
             }
             if let Some(old) = have {
-                self.alloc.free(old.offset, old.k);
+                self.release(slot, old, frame);
             }
             self.changed = frame;
             let placed = want.and_then(|k| {
@@ -186,25 +198,39 @@ impl VtState {
             if want.is_some() && placed.is_none_or(|p| Some(p.k) != want) {
                 squeezed += 1;
             }
-            self.subs[r as usize] = placed;
-            let word = VT_STATE_HEADER + r;
-            match placed {
-                None => self.write(word, 1, VT_NONE),
-                Some(sub) => {
-                    self.clear_square(sub);
-                    for (page, tile) in self.cache.pages_of_region(r) {
-                        if page.level <= sub.k {
-                            let w = self.indirection_word(page, sub);
-                            self.write(w, 1, tile);
-                        }
-                    }
-                    self.write(word, 1, pack_sub_texture(sub.offset, sub.k));
-                    count += 1;
-                }
+            if let Some(sub) = placed {
+                self.subs[slot as usize] = Some((r, sub));
+                self.map_sub_texture(r, slot, sub);
+                count += 1;
             }
         }
         self.counters.squeezed = squeezed;
         self.counters.sub_textures = count;
+        self.counters.beyond_window = l.beyond_window(origin, camera_xy, range_m);
+    }
+
+    /// Empties `slot` (holding `old`): the GPU sees no sub-texture there
+    /// before its square is given to another.
+    fn release(&mut self, slot: u32, old: SubTexture, frame: u64) {
+        self.alloc.free(old.offset, old.k);
+        self.subs[slot as usize] = None;
+        self.write(self.layout.sub_word(slot), 1, VT_NONE);
+        self.changed = frame;
+    }
+
+    /// Clears `sub`'s square, maps region `r`'s resident pages into it, and
+    /// only then names the region and the sub-texture in `slot` (writes
+    /// apply in order, a frame may stop after any of them).
+    fn map_sub_texture(&mut self, r: u32, slot: u32, sub: SubTexture) {
+        self.clear_square(sub);
+        for (page, tile) in self.cache.pages_of_region(r) {
+            if page.level <= sub.k {
+                let w = self.indirection_word(page, sub);
+                self.write(w, 1, tile);
+            }
+        }
+        self.write(self.layout.region_word(slot), 1, r);
+        self.write(self.layout.sub_word(slot), 1, pack_sub_texture(sub.offset, sub.k));
     }
 
     /// A node of LOD `lod` over `bounds` (x0, y0, x1, y1 m) arrived in
@@ -236,7 +262,7 @@ impl VtState {
             if let Some(h) = &mut self.history {
                 h.push(PageEvent::Invalidated(*page));
             }
-            if let Some(sub) = self.subs[page.region as usize].filter(|s| page.level <= s.k) {
+            if let Some(sub) = self.sub_texture(page.region).filter(|s| page.level <= s.k) {
                 let w = self.indirection_word(*page, sub);
                 self.write(w, 1, VT_NONE);
             }
@@ -277,7 +303,7 @@ impl VtState {
         for p in &pages {
             if self.cache.touch(*p, frame) {
                 hits += 1;
-            } else if self.subs.get(p.region as usize).copied().flatten().is_some_and(|s| p.level <= s.k) {
+            } else if self.sub_texture(p.region).is_some_and(|s| p.level <= s.k) {
                 // Coarser first: a page's parents serve it meanwhile.
                 self.misses.insert((p.level, *p));
             }
@@ -297,7 +323,7 @@ impl VtState {
         while jobs.len() < self.budget as usize {
             let Some((_, page)) = self.misses.pop_first() else { break };
             // Its sub-texture went or shrank since it was asked for.
-            let Some(sub) = self.subs[page.region as usize].filter(|s| page.level <= s.k) else { continue };
+            let Some(sub) = self.sub_texture(page.region).filter(|s| page.level <= s.k) else { continue };
             // Pages the newest harvested frame used are not given up.
             let Some((tile, old)) = self.cache.insert(page, frame, self.harvested, source_lod(page.region)) else {
                 self.misses.insert((page.level, page));
@@ -309,7 +335,7 @@ impl VtState {
             }
             if let Some(old) = old {
                 evicted += 1;
-                if let Some(sub) = self.subs[old.region as usize].filter(|s| old.level <= s.k) {
+                if let Some(sub) = self.sub_texture(old.region).filter(|s| old.level <= s.k) {
                     let w = self.indirection_word(old, sub);
                     self.write(w, 1, VT_NONE);
                 }
@@ -335,25 +361,49 @@ impl VtState {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shaders::consts::{VT_STATE_HEADER, VT_SUB_COORD_MASK, VT_SUB_K_SHIFT, VT_SUB_Y_SHIFT};
+
+    /// Region `region`'s sub-texture as the state words name it (as
+    /// `vt_sub_texture` in virtual_texture.glsl reads them).
+    fn word_sub(l: &VtLayout, words: &[u32], region: u32) -> Option<SubTexture> {
+        let w = words[7];
+        let [x, y] = l.region_xy(region);
+        let slot = x % w + (y % w) * w;
+        let sub = words[(VT_STATE_HEADER + slot) as usize];
+        if words[(VT_STATE_HEADER + w * w + slot) as usize] != region || sub == VT_NONE {
+            return None;
+        }
+        let offset = [sub & VT_SUB_COORD_MASK, (sub >> VT_SUB_Y_SHIFT) & VT_SUB_COORD_MASK];
+        Some(SubTexture { k: sub >> VT_SUB_K_SHIFT, offset })
+    }
 
     /// The page (and its tile) the GPU samples for world point `xy` at
     /// `level`, or a coarser one when that page is not resident (as
-    /// `vt_find` in virtual_texture.glsl).
-    fn lookup(s: &VtState, xy: [f64; 2], level: u32) -> Option<(PageKey, u32)> {
-        let l = &s.layout;
+    /// `vt_find` in virtual_texture.glsl), read from the state words.
+    fn lookup(l: &VtLayout, words: &[u32], xy: [f64; 2], level: u32) -> Option<(PageKey, u32)> {
         let c = [0, 1].map(|a| (xy[a] / l.region_m).floor());
         if c.iter().zip(l.regions).any(|(&c, n)| c < 0.0 || c >= f64::from(n)) {
             return None;
         }
         let region = c[0] as u32 + c[1] as u32 * l.regions[0];
-        let sub = s.subs[region as usize]?;
+        let sub = word_sub(l, words, region)?;
         let o = l.region_origin(region);
+        let base = u64::from(VT_STATE_HEADER + 2 * words[7] * words[7]);
         (0..=level.min(sub.k)).rev().find_map(|lv| {
             let page_m = l.region_m / f64::from(1u32 << lv);
             let p = [0, 1].map(|a| (((xy[a] - o[a]) / page_m).floor() as u32).min((1 << lv) - 1));
             let key = PageKey { region, level: lv, x: p[0], y: p[1] };
-            s.cache.tile_of(key).map(|t| (key, t))
+            let tile = words[(base + l.indirection_index(key, sub.k, sub.offset)) as usize];
+            (tile != VT_NONE).then_some((key, tile))
         })
+    }
+
+    /// A state buffer as `record_init` leaves it (the header's window word
+    /// is all the lookups read).
+    fn fresh_words(l: &VtLayout) -> Vec<u32> {
+        let mut words = vec![VT_NONE; l.state_words() as usize];
+        words[7] = l.window;
+        words
     }
 
     /// The state buffer as the writes leave it.
@@ -365,10 +415,9 @@ mod tests {
 
     #[test]
     fn resized_sub_textures_keep_their_pages_and_evictions_unmap() {
-        let layout = VtLayout::new([256.0, 256.0], 64.0, 256, 4);
+        let layout = VtLayout::new([256.0, 256.0], 64.0, 256, 4, 1000.0);
         let mut s = VtState::new(layout, 4);
-        let n = (VT_STATE_HEADER + layout.region_count()) as usize + layout.indirection_texels() as usize;
-        let mut words = vec![VT_NONE; n];
+        let mut words = fresh_words(&layout);
         let rad = 1e-3;
         s.place_sub_textures(1, [10.0, 10.0], rad, 1000.0);
         let sub = s.sub_texture(0).unwrap();
@@ -393,6 +442,58 @@ mod tests {
         assert!(jobs.is_empty());
         assert_eq!(words[s.indirection_word(key, moved) as usize], tile);
         assert_eq!(words[VT_STATE_HEADER as usize], pack_sub_texture(moved.offset, moved.k));
-        assert_eq!(lookup(&s, [40.0, 10.0], 7).map(|h| h.0), Some(key), "finer levels fall back to the page held");
+        let held = lookup(&layout, &words, [40.0, 10.0], 7).map(|h| h.0);
+        assert_eq!(held, Some(key), "finer levels fall back to the page held");
+    }
+
+    /// Nebula's window on a world of 4096 x 4096 regions (the 262 km
+    /// continent at 64 m): the per-region state is the window's, a camera
+    /// flying across hands slots from the regions it leaves to those it
+    /// reaches, and the state words (read as the shader reads them) give
+    /// every region what the CPU gave it: its sub-texture inside the
+    /// window and in range, none elsewhere.
+    #[test]
+    fn the_window_follows_the_camera_across_a_continent() {
+        let region_m = 64.0;
+        let layout = VtLayout::new([262_144.0; 2], region_m, 2048, 4, 1024.0);
+        assert_eq!((layout.window, layout.regions), (17, [4096, 4096]));
+        let mut s = VtState::new(layout, 4);
+        assert_eq!(s.subs.len(), 17 * 17, "state per window slot, not per region");
+        let mut words = fresh_words(&layout);
+        let (rad, range) = (1e-3, 400.0);
+        let seen_region = |s: &VtState, words: &[u32], camera: [f64; 2]| {
+            let c = [0, 1].map(|a| (camera[a] / region_m).floor() as i64);
+            let origin = layout.window_origin(camera);
+            for dy in -12..=12 {
+                for dx in -12..=12 {
+                    let (x, y) = (c[0] + dx, c[1] + dy);
+                    if x < 0 || y < 0 || x >= 4096 || y >= 4096 {
+                        continue;
+                    }
+                    let r = (x + y * 4096) as u32;
+                    let inside = [x, y].iter().zip(origin).all(|(&v, o)| v >= i64::from(o) && v < i64::from(o + 17));
+                    let o = layout.region_origin(r);
+                    let near = [0, 1].map(|a| camera[a].clamp(o[a], o[a] + region_m) - camera[a]);
+                    let want = inside && near[0].hypot(near[1]) <= range;
+                    assert_eq!(s.sub_texture(r).is_some(), want, "region ({x}, {y}), camera {camera:?}");
+                    assert_eq!(word_sub(&layout, words, r), s.sub_texture(r), "region ({x}, {y}): the words agree");
+                }
+            }
+        };
+        // A flight from the south-west corner diagonally, then a jump.
+        let mut cameras: Vec<[f64; 2]> =
+            (0..60).map(|i| [10.0 + 97.0 * f64::from(i), 5.0 + 61.0 * f64::from(i)]).collect();
+        cameras.extend([[200_000.0, 150_000.0], [262_000.0, 262_000.0], [3000.0, 4000.0]]);
+        for (f, &camera) in cameras.iter().enumerate() {
+            s.place_sub_textures(f as u64 + 1, camera, rad, range);
+            let (_, writes) = s.plan(f as u64 + 1, |_| 0);
+            apply(&mut words, &writes);
+            assert_eq!(s.counters.beyond_window, 0, "a 1024 m window holds a 400 m range");
+            seen_region(&s, &words, camera);
+        }
+        // A range beyond the window is counted, not silently dropped.
+        s.place_sub_textures(99, [100_000.0; 2], rad, 1500.0);
+        let reach = (2.0 * 1500.0 / region_m).ceil() as u32;
+        assert!(s.counters.beyond_window >= reach * reach - 17 * 17 - 4 * reach);
     }
 }

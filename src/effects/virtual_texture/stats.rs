@@ -63,6 +63,13 @@ impl VtStats {
             mib(self.status_bytes),
             mib(self.cache_bytes)
         )];
+        if c.beyond_window > 0 {
+            out.push(format!(
+                "virtual texture: {} regions within the view's reach lie outside the sub-texture window and are shaded \
+                 without pages (raise [effects.virtual_texture] window_m)",
+                c.beyond_window
+            ));
+        }
         if self.decals > 0 {
             out.push(format!(
                 "decals: {} drawn into the pages; this frame's pages blended {} (a page's decals each once); \
