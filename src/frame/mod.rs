@@ -43,6 +43,15 @@ pub struct FrameTimings {
     /// Passes with timestamps; a pass on a queue without timestamp support
     /// is missing.
     pub passes: Vec<PassTiming>,
+    /// CPU milliseconds the renderer spent recording the frame: streaming,
+    /// the quadtree's and effects' plans, command recording (not the
+    /// submission, never a wait for the GPU; the read of earlier frames'
+    /// timestamps is `query_ms`). 0 when not set.
+    pub cpu_ms: f64,
+    /// CPU milliseconds the executor's read of finished frames' timestamps
+    /// took while recording this frame (a driver may wait there: lavapipe
+    /// drains the device).
+    pub query_ms: f64,
 }
 
 /// Timer label of a pass: its name, marked in phase 2.
@@ -61,6 +70,7 @@ struct Slot {
     mode: QueueMode,
     frame: u64,
     pending: bool,
+    cpu_ms: [f64; 2],
 }
 
 pub struct FrameExecutor {
@@ -89,7 +99,14 @@ impl FrameExecutor {
             } else {
                 None
             };
-            slots.push(Slot { pool, passes: Vec::new(), mode: QueueMode::Single, frame: 0, pending: false });
+            slots.push(Slot {
+                pool,
+                passes: Vec::new(),
+                mode: QueueMode::Single,
+                frame: 0,
+                pending: false,
+                cpu_ms: [0.0; 2],
+            });
         }
         let compute_timestamps =
             ctx.info().queue_families.iter().any(|f| {
@@ -142,17 +159,26 @@ impl FrameExecutor {
                     gpu_ms: (ns(ticks[2 * i + 1]) - ns(ticks[2 * i])) / 1e6,
                 })
                 .collect();
-            self.latest = Some(FrameTimings { frame: slot.frame, start_ns: t0, mode: slot.mode, passes });
+            let (frame, mode, [cpu_ms, query_ms]) = (slot.frame, slot.mode, slot.cpu_ms);
+            self.latest = Some(FrameTimings { frame, start_ns: t0, mode, passes, cpu_ms, query_ms });
         }
     }
 
-    /// Starts recording a frame into `cmds` (`mode` says how they are
-    /// submitted); collects any finished timings first.
+    /// Frame `frame`'s CPU recording time and its timestamp read's,
+    /// reported with its timings.
+    pub fn set_cpu_ms(&mut self, frame: u64, cpu_ms: f64, query_ms: f64) {
+        if let Some(slot) = self.slots.iter_mut().find(|s| s.frame == frame) {
+            slot.cpu_ms = [cpu_ms, query_ms];
+        }
+    }
+
     /// The number the next `begin` gives its frame.
     pub fn next_frame(&self) -> u64 {
         self.frame + 1
     }
 
+    /// Starts recording a frame into `cmds` (`mode` says how they are
+    /// submitted); collects any finished timings first.
     pub fn begin<'e, 'r>(&'e mut self, mut cmds: FrameCommands<'e, 'r>, mode: QueueMode) -> Frame<'e, 'r> {
         assert_eq!(mode.is_split(), matches!(cmds, FrameCommands::Split { .. }), "{mode:?} with the wrong buffers");
         self.harvest();
@@ -164,6 +190,7 @@ impl FrameExecutor {
             log::debug!("timings of frame {} were not back in time and are dropped", slot.frame);
         }
         slot.passes.clear();
+        slot.cpu_ms = [0.0; 2];
         slot.frame = self.frame;
         slot.mode = mode;
         slot.pending = false;

@@ -128,6 +128,8 @@ mod overlap_tests {
                 pass("terrain_geometry", QueueKind::Graphics, 2.0, 3.0),
                 pass("lighting_resolve", QueueKind::Graphics, 5.0, 2.0),
             ],
+            cpu_ms: 0.0,
+            query_ms: 0.0,
         };
         // Frame 2's compute from 4 ms to 6.5 ms (two overlapping passes).
         let next = FrameTimings {
@@ -138,6 +140,8 @@ mod overlap_tests {
                 pass("traverse", QueueKind::Compute, 0.0, 2.0),
                 pass("cull_patches", QueueKind::Compute, 1.0, 1.5),
             ],
+            cpu_ms: 0.0,
+            query_ms: 0.0,
         };
         let (all, geometry) = overlap_ms(&prev, &next, "terrain_geometry").unwrap();
         assert!((all - 2.5).abs() < 1e-9, "{all}");

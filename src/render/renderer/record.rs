@@ -39,6 +39,7 @@ impl TerrainRenderer {
         view: &View,
         targets: &RenderTargets,
     ) -> Result<()> {
+        let started = std::time::Instant::now();
         let view = &self.check_frame(view, targets)?;
         let ctx = match &mut cmds {
             FrameCommands::One(r) => r.context(),
@@ -55,12 +56,18 @@ impl TerrainRenderer {
         let mut exec = self.exec.take().expect("one frame records at a time");
         self.select_copies(exec.next_frame());
         let terrain_changed = self.terrain.tree.has_work();
+        let begin = std::time::Instant::now();
         let mut frame = exec.begin(cmds, mode);
+        let query_ms = begin.elapsed().as_secs_f64() * 1e3;
         let mut log = self.graph.begin_frame(frame.number());
         log.switched_off = switched_off;
         let begun = Begun { ctx, ctx_frame, terrain_changed, params };
         let recorded = self.record_phases(&mut frame, &mut log, &begun, view, targets);
+        let number = frame.number();
         drop(frame);
+        // The executor's read of finished timestamps is the driver's time
+        // (lavapipe drains the device there), not the renderer's work.
+        exec.set_cpu_ms(number, started.elapsed().as_secs_f64() * 1e3 - query_ms, query_ms);
         self.exec = Some(exec);
         recorded?;
         self.graph.end_frame(log);
