@@ -212,19 +212,35 @@ Surface cliff_surface(vec3 world, vec3 ng, vec3 ddx, vec3 ddy, bool far_cliff, f
 #endif
 
 #ifdef VIRTUAL_TEXTURE
+// Bilinear by hand around `c` (texels, relative to `corner`): the weights
+// come from the page's own coordinates, so a page filters to the same
+// value in whichever tile it was cached (which tile depends on when its
+// request came back; the sampler's weights would follow the cache's
+// absolute coordinates and differ in the last bit from tile to tile).
+vec4 vt_bilinear(texture2D t, ivec2 corner, vec2 c) {
+    vec2 f = floor(c);
+    vec2 w = c - f;
+    ivec2 i = corner + ivec2(f);
+    vec4 a = mix(texelFetch(sampler2D(t, nearest), i, 0), texelFetch(sampler2D(t, nearest), i + ivec2(1, 0), 0), w.x);
+    vec4 b = mix(texelFetch(sampler2D(t, nearest), i + ivec2(0, 1), 0),
+                 texelFetch(sampler2D(t, nearest), i + ivec2(1, 1), 0), w.x);
+    return mix(a, b, w.y);
+}
+
 // The cached page texels at `xy` of `level`, or of the nearest coarser
 // level resident (false: none is, not even level 0).
 bool vt_fetch(VtSub s, vec2 xy, uint level, out vec4 albedo, out vec4 detail) {
-    vec2 texel;
+    uvec2 corner;
+    vec2 local;
     uint found;
-    if (!vt_find(s, xy, level, texel, found)) {
+    if (!vt_find_tile(s, xy, level, corner, local, found)) {
         return false;
     }
-    vec2 cache = vec2(uintBitsToFloat(vt_state.words[5]), uintBitsToFloat(vt_state.words[6]));
-    albedo = textureLod(sampler2D(vt_albedo, linear_clamp), texel / cache, 0.0);
-    detail = textureLod(sampler2D(vt_detail, linear_clamp), texel / cache, 0.0);
+    // Texel centres at half-integers, as the sampler's.
+    albedo = vt_bilinear(vt_albedo, ivec2(corner), local - 0.5);
+    detail = vt_bilinear(vt_detail, ivec2(corner), local - 0.5);
     // The material id is not filtered: the nearest texel's.
-    detail.z = texelFetch(sampler2D(vt_detail, nearest), ivec2(texel), 0).z;
+    detail.z = texelFetch(sampler2D(vt_detail, nearest), ivec2(corner) + ivec2(floor(local)), 0).z;
     return true;
 }
 

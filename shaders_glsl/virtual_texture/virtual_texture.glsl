@@ -69,9 +69,12 @@ uint vt_indirection_word(VtSub s, uint level, uvec2 p) {
 }
 
 // The page holding `xy` at `level` (<= s.k), or at the nearest coarser
-// level resident: its texel coordinate in the cache (texels, the padded
-// tile's border skipped) and the level found; false where no level is.
-bool vt_find(VtSub s, vec2 xy, uint level, out vec2 texel, out uint found) {
+// level resident: its tile's first texel in the cache past the border
+// (texels), the point's place in the page (texels, 0..VT_TILE_TEXELS)
+// and the level found; false where no level is. Filtering from `local`
+// gives the same result wherever the tile lies (the cache's absolute
+// coordinates round differently from tile to tile).
+bool vt_find_tile(VtSub s, vec2 xy, uint level, out uvec2 corner, out vec2 local, out uint found) {
     for (int l = int(level); l >= 0; --l) {
         vec2 within;
         uvec2 p = vt_page(s, xy, uint(l), within);
@@ -81,14 +84,24 @@ bool vt_find(VtSub s, vec2 xy, uint level, out vec2 texel, out uint found) {
         }
         uint tiles_x = VISTA_VT_WORD(3u);
         uint padded = VT_TILE_TEXELS + 2u * VT_TILE_BORDER;
-        texel = vec2(uvec2(tile % tiles_x, tile / tiles_x) * padded) + float(VT_TILE_BORDER)
-                + within * float(VT_TILE_TEXELS);
+        corner = uvec2(tile % tiles_x, tile / tiles_x) * padded + VT_TILE_BORDER;
+        local = within * float(VT_TILE_TEXELS);
         found = uint(l);
         return true;
     }
-    texel = vec2(0.0);
+    corner = uvec2(0u);
+    local = vec2(0.0);
     found = 0u;
     return false;
+}
+
+// As vt_find_tile, the texel coordinate in the cache in one.
+bool vt_find(VtSub s, vec2 xy, uint level, out vec2 texel, out uint found) {
+    uvec2 corner;
+    vec2 local;
+    bool hit = vt_find_tile(s, xy, level, corner, local, found);
+    texel = vec2(corner) + local;
+    return hit;
 }
 
 uint vt_request_word(uint level, uvec2 p) {

@@ -9,13 +9,21 @@
 use super::layout::PageKey;
 use std::collections::HashMap;
 
+/// What a page was rendered from: the coarsest of the finest resident
+/// LODs over its padded tile, and a hash of the resident nodes over it
+/// (the same nodes make the same page, whenever it was rendered).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PageSource {
+    pub lod: u8,
+    pub nodes: u64,
+}
+
 #[derive(Debug, Clone, Copy)]
 struct Tile {
     page: Option<PageKey>,
     /// Frame of the newest request for the page (or of its rendering).
     used: u64,
-    /// The coarsest LOD of the finest nodes it was rendered from.
-    source_lod: u8,
+    source: PageSource,
 }
 
 /// The tiles of the cache and the page each holds.
@@ -29,7 +37,7 @@ pub struct TileCache {
 impl TileCache {
     pub fn new(tiles: u32) -> TileCache {
         TileCache {
-            tiles: vec![Tile { page: None, used: 0, source_lod: 0 }; tiles as usize],
+            tiles: vec![Tile { page: None, used: 0, source: PageSource::default() }; tiles as usize],
             by_page: HashMap::new(),
             free: (0..tiles).rev().collect(),
         }
@@ -61,12 +69,12 @@ impl TileCache {
         true
     }
 
-    /// The LOD of the data `page` was rendered from (see `insert`).
-    pub fn source_lod(&self, page: PageKey) -> Option<u8> {
-        self.tile_of(page).map(|t| self.tiles[t as usize].source_lod)
+    /// What `page` was rendered from (see `insert`).
+    pub fn source(&self, page: PageKey) -> Option<PageSource> {
+        self.tile_of(page).map(|t| self.tiles[t as usize].source)
     }
 
-    /// A tile for `page`, rendered from nodes of LOD `source_lod` or finer:
+    /// A tile for `page`, rendered from `source`:
     /// a free one, else the least recently used one not
     /// used since `protect` (whose page is returned as evicted). `None`
     /// when every tile was used at or after `protect` (the cache is smaller
@@ -76,7 +84,7 @@ impl TileCache {
         page: PageKey,
         frame: u64,
         protect: u64,
-        source_lod: u8,
+        source: PageSource,
     ) -> Option<(u32, Option<PageKey>)> {
         debug_assert!(!self.by_page.contains_key(&page));
         let (tile, evicted) = match self.free.pop() {
@@ -95,7 +103,7 @@ impl TileCache {
                 (t, old)
             }
         };
-        self.tiles[tile as usize] = Tile { page: Some(page), used: frame, source_lod };
+        self.tiles[tile as usize] = Tile { page: Some(page), used: frame, source };
         self.by_page.insert(page, tile);
         Some((tile, evicted))
     }
@@ -103,7 +111,7 @@ impl TileCache {
     /// Drops `page` (its content is stale); its tile becomes free.
     pub fn remove(&mut self, page: PageKey) -> Option<u32> {
         let t = self.by_page.remove(&page)?;
-        self.tiles[t as usize] = Tile { page: None, used: 0, source_lod: 0 };
+        self.tiles[t as usize] = Tile { page: None, used: 0, source: PageSource::default() };
         self.free.push(t);
         Some(t)
     }
@@ -134,18 +142,18 @@ mod tests {
     fn the_least_recently_used_page_goes_first_and_recent_ones_stay() {
         let mut c = TileCache::new(3);
         for (f, x) in [(1, 0), (2, 1), (3, 2)] {
-            assert_eq!(c.insert(page(x), f, f, 0).unwrap().1, None);
+            assert_eq!(c.insert(page(x), f, f, PageSource::default()).unwrap().1, None);
         }
         assert!(c.touch(page(0), 4));
         // Page 1 is the oldest now.
-        let (t, evicted) = c.insert(page(3), 5, 5, 0).unwrap();
+        let (t, evicted) = c.insert(page(3), 5, 5, PageSource::default()).unwrap();
         assert_eq!(evicted, Some(page(1)));
         assert_eq!(c.tile_of(page(3)), Some(t));
         assert_eq!(c.tile_of(page(1)), None);
         // Everything used at or after frame 3 is protected: no room.
-        assert!(c.insert(page(4), 6, 3, 0).is_none());
+        assert!(c.insert(page(4), 6, 3, PageSource::default()).is_none());
         assert_eq!(c.resident(), 3);
         assert_eq!(c.remove(page(0)), Some(0));
-        assert_eq!(c.insert(page(4), 6, 3, 0).unwrap(), (0, None), "a freed tile is reused first");
+        assert_eq!(c.insert(page(4), 6, 3, PageSource::default()).unwrap(), (0, None), "a freed tile is reused first");
     }
 }

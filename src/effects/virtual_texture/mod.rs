@@ -44,6 +44,8 @@ use crate::passes::gbuffer_tiles::VtBindings;
 use crate::shaders::consts::{
     DECAL_COUNT_SHIFT, DECAL_MAX_PER_PAGE, VT_MAX_JOBS, VT_MAX_WRITES, VT_NONE, VT_REQUEST_CAPACITY, VT_STATE_HEADER,
 };
+use crate::world::NodeId;
+use cache::PageSource;
 use decal_gpu::DecalResources;
 use decals::{Decal, DecalSet};
 use layout::VtLayout;
@@ -143,24 +145,29 @@ struct Decals {
     dirty: bool,
 }
 
-/// The coarsest of the finest resident LODs at region `r`'s corners and
-/// centre (the world's LOD count where none covers a point).
-fn source_lod(terrain: &crate::terrain::Terrain, layout: &VtLayout, r: u32) -> u8 {
+/// What a page over `rect` (x0, y0, x1, y1 m) is rendered from now: the
+/// coarsest of the finest resident LODs over it, the first level whose
+/// nodes over it are all resident (a resident node's ancestors are
+/// resident, so a point's finest resident LOD is at most l exactly where
+/// its level-l node is; the world's LOD count where none is), and a hash
+/// of the resident nodes over it, which fix the finest data at every
+/// point: the page the GPU renders from them.
+fn page_source(terrain: &crate::terrain::Terrain, rect: [f64; 4]) -> PageSource {
+    use std::hash::{Hash, Hasher};
     let world = &terrain.world;
     let lods = world.lod_count as u8;
-    let o = layout.region_origin(r);
-    let inset = layout.region_m * 1e-3;
-    let near = layout.region_m - inset;
-    [[inset, inset], [near, inset], [inset, near], [near, near], [layout.region_m * 0.5; 2]]
-        .iter()
-        .map(|d| {
-            let (x, y) = (o[0] + d[0], o[1] + d[1]);
-            (0..lods)
-                .find(|&l| world.node_at(l, x, y).is_some_and(|n| terrain.tree.shadow.slot_of(n).is_some()))
-                .unwrap_or(lods)
-        })
-        .max()
-        .unwrap_or(lods)
+    let [ex, ey] = world.extent_m;
+    let (lo, hi) = ([rect[0].max(0.0), rect[1].max(0.0)], [rect[2].min(ex), rect[3].min(ey)]);
+    let nodes = |l: u8| {
+        let span = world.node_at(l, lo[0], lo[1]).zip(world.node_at(l, hi[0], hi[1]));
+        span.into_iter()
+            .flat_map(move |(a, b)| (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| NodeId::new(l, x, y))))
+    };
+    let resident = |n: &NodeId| terrain.tree.shadow.slot_of(*n).is_some();
+    let lod = (0..lods).find(|&l| nodes(l).all(|n| resident(&n))).unwrap_or(lods);
+    let mut h = std::hash::DefaultHasher::new();
+    (0..lods.min(lod + 1)).flat_map(nodes).filter(resident).for_each(|n| n.hash(&mut h));
+    PageSource { lod, nodes: h.finish() }
 }
 
 /// The virtual texture's GPU objects, passes and CPU state.
@@ -430,6 +437,7 @@ impl VirtualTexture {
         terrain: &crate::terrain::Terrain,
     ) -> VtFrame {
         self.last_push = Some(VtFeedbackPush::for_frame(frame, camera.size));
+        let (layout, at_rest) = (self.state.layout, terrain.settled());
         let done = ctx.frames_completed();
         let mut slots: Vec<&mut Slot> = self.ring.iter_mut().filter(|s| s.pending && s.ctx_frame <= done).collect();
         slots.sort_by_key(|s| s.frame);
@@ -439,15 +447,19 @@ impl VirtualTexture {
             let words: &[u32] = bytemuck::cast_slice(bytes);
             let n = words[0].min(VT_REQUEST_CAPACITY) as usize;
             let entries: Vec<[u32; 2]> = words[4..4 + 2 * n].chunks_exact(2).map(|c| [c[0], c[1]]).collect();
-            self.state.harvest(slot.frame, &entries);
+            let source = |page| at_rest.then(|| page_source(terrain, layout.padded_rect(page)));
+            self.state.harvest(slot.frame, &entries, source);
         }
         let world = terrain.world;
+        // Pages are rendered from the finest resident nodes: one that
+        // arrives finer than a page's source makes it stale (one leaving
+        // from under a page is caught once streaming rests, when the page
+        // is asked for again: its source differs, `harvest`).
         for &(node, _) in terrain.tree.arrived() {
-            self.state.invalidate(node.bounds_m(&world), node.lod, frame);
+            self.state.invalidate(node.bounds_m(&world), node.lod + 1, frame);
         }
         self.state.place_sub_textures(frame, camera.xy, camera.pixel_rad, camera.range_m);
-        let layout = self.state.layout;
-        let (mut jobs, writes) = self.state.plan(frame, |r| source_lod(terrain, &layout, r));
+        let (mut jobs, writes) = self.state.plan(frame, |page| page_source(terrain, layout.padded_rect(page)));
         let job_decals = self.assign_decals(&mut jobs);
         let decal_lists = match &mut self.decals {
             Some(d) if !jobs.is_empty() && d.dirty => {

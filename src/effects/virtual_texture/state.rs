@@ -4,11 +4,18 @@
 //! from the page requests the GPU listed frames ago. No Vulkan here.
 
 use super::allocator::QuadtreeAllocator;
-use super::cache::TileCache;
+use super::cache::{PageSource, TileCache};
 use super::layout::{pack_sub_texture, wanted_level, PageKey, VtLayout};
-use crate::shaders::consts::{VT_NONE, VT_REQ_COORD_MASK, VT_REQ_LEVEL_MASK, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT};
+use crate::shaders::consts::{
+    VT_FEEDBACK_STRIDE, VT_NONE, VT_REQ_COORD_MASK, VT_REQ_LEVEL_MASK, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT,
+};
 use serde::Serialize;
 use std::collections::BTreeSet;
+
+/// The feedback's jitter cycle (frames), a bit each in `clean_phases`.
+const PHASES: u64 = (VT_FEEDBACK_STRIDE * VT_FEEDBACK_STRIDE) as u64;
+const PHASES_ALL: u64 = if PHASES == 64 { u64::MAX } else { (1 << PHASES) - 1 };
+const _: () = assert!(PHASES <= 64, "a bit per phase");
 
 /// One region's sub-texture: its finest level and its square in mip 0.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -123,6 +130,9 @@ pub struct VtState {
     pub counters: VtCounters,
     /// The newest frame that rendered, dropped or moved anything.
     changed: u64,
+    /// Feedback phases (frame % VT_FEEDBACK_STRIDE^2, a bit each) whose
+    /// requests, made after `changed`, came back without a miss.
+    clean_phases: u64,
     /// Tests: every page event, in order, when `Some`.
     pub history: Option<Vec<PageEvent>>,
     writes: Vec<StateWrite>,
@@ -140,6 +150,7 @@ impl VtState {
             budget,
             counters: VtCounters::default(),
             changed: 0,
+            clean_phases: 0,
             history: None,
             writes: Vec::new(),
         }
@@ -191,7 +202,7 @@ impl VtState {
             if let Some(old) = have {
                 self.release(slot, old, frame);
             }
-            self.changed = frame;
+            self.changed(frame);
             let placed = want.and_then(|k| {
                 (0..=k).rev().find_map(|k| self.alloc.allocate(k).map(|offset| SubTexture { k, offset }))
             });
@@ -215,7 +226,7 @@ impl VtState {
         self.alloc.free(old.offset, old.k);
         self.subs[slot as usize] = None;
         self.write(self.layout.sub_word(slot), 1, VT_NONE);
-        self.changed = frame;
+        self.changed(frame);
     }
 
     /// Clears `sub`'s square, maps region `r`'s resident pages into it, and
@@ -233,19 +244,20 @@ impl VtState {
         self.write(self.layout.sub_word(slot), 1, pack_sub_texture(sub.offset, sub.k));
     }
 
-    /// A node of LOD `lod` over `bounds` (x0, y0, x1, y1 m) arrived in
-    /// `frame`: drops the pages of the regions it overlaps that were
-    /// rendered from coarser nodes (their splat map is no longer the
-    /// finest there); returns how many.
-    pub fn invalidate(&mut self, bounds: [f64; 4], lod: u8, frame: u64) -> u32 {
+    /// The resident nodes over `bounds` (x0, y0, x1, y1 m) changed in
+    /// `frame`: drops the pages overlapping it whose source LOD (see
+    /// `plan`) is `from_lod` or coarser (an arrival of LOD l: l + 1, their
+    /// splat map is no longer the finest there; a removal of LOD l: l, they
+    /// may have been made from it); returns how many.
+    pub fn invalidate(&mut self, bounds: [f64; 4], from_lod: u8, frame: u64) -> u32 {
         let l = self.layout;
-        let inside = |r: u32| {
-            let o = l.region_origin(r);
-            o[0] < bounds[2] && o[0] + l.region_m > bounds[0] && o[1] < bounds[3] && o[1] + l.region_m > bounds[1]
+        let inside = |p: &PageKey| {
+            let r = l.padded_rect(*p);
+            r[0] < bounds[2] && r[2] > bounds[0] && r[1] < bounds[3] && r[3] > bounds[1]
         };
         let cache = &self.cache;
         let stale: Vec<PageKey> =
-            cache.pages().filter(|p| inside(p.region) && cache.source_lod(*p).is_some_and(|s| s > lod)).collect();
+            cache.pages().filter(|p| inside(p) && cache.source(*p).is_some_and(|s| s.lod >= from_lod)).collect();
         self.drop_pages(&stale, frame)
     }
 
@@ -268,16 +280,25 @@ impl VtState {
             }
         }
         if !stale.is_empty() {
-            self.changed = frame;
+            self.changed(frame);
         }
         stale.len() as u32
     }
 
-    /// Every page the views of a whole jitter cycle asked for is resident
-    /// and nothing changed since: more frames show the same picture.
+    /// Every phase of the feedback's jitter cycle came back without a miss
+    /// since anything changed: every pixel's pages are resident, and more
+    /// frames show the same picture. Counted by phase, not by frames: a
+    /// readback that was not back in time is dropped (how many depends on
+    /// the device's pace), and a phase it skipped was never checked.
     pub fn settled(&self) -> bool {
-        let cycle = u64::from(crate::shaders::consts::VT_FEEDBACK_STRIDE.pow(2));
-        self.misses.is_empty() && self.harvested >= self.changed + cycle && self.harvested > 0
+        self.misses.is_empty() && self.clean_phases == PHASES_ALL
+    }
+
+    /// Something the pictures sample changed in `frame`: every phase is to
+    /// be checked again.
+    fn changed(&mut self, frame: u64) {
+        self.changed = frame;
+        self.clean_phases = 0;
     }
 
     /// Writes "no page" over every indirection texel of `sub`'s square.
@@ -292,12 +313,21 @@ impl VtState {
         }
     }
 
-    /// Takes the page requests of `frame` (read back frames late): touches
-    /// the resident ones and remembers the others as misses.
-    pub fn harvest(&mut self, frame: u64, requests: &[[u32; 2]]) {
+    /// Takes the page requests of `frame` (read back frames late): drops
+    /// the resident ones whose `source` changed since they were rendered
+    /// (nodes left from under them; `source` gives `None` while streaming
+    /// is under way: the nodes may come back, and the page with them),
+    /// touches the others and remembers the rest as misses.
+    pub fn harvest(&mut self, frame: u64, requests: &[[u32; 2]], source: impl Fn(PageKey) -> Option<PageSource>) {
         let mut pages: Vec<PageKey> = requests.iter().map(|&e| unpack_request(e)).collect();
         pages.sort();
         pages.dedup();
+        let stale: Vec<PageKey> = pages
+            .iter()
+            .copied()
+            .filter(|p| self.cache.source(*p).is_some_and(|s| source(*p).is_some_and(|n| n != s)))
+            .collect();
+        self.drop_pages(&stale, frame);
         self.misses.clear();
         let mut hits = 0;
         for p in &pages {
@@ -309,15 +339,17 @@ impl VtState {
             }
         }
         self.harvested = self.harvested.max(frame);
+        if frame > self.changed && self.misses.is_empty() {
+            self.clean_phases |= 1 << (frame % PHASES);
+        }
         self.counters.requested = pages.len() as u32;
         self.counters.hits = hits;
     }
 
     /// This frame's pages to render (at most the budget, coarser levels
     /// first) and every state write due, in order; clears both queues.
-    /// `source_lod(region)`: the coarsest LOD among the finest resident
-    /// nodes over the region (what its pages are rendered from).
-    pub fn plan(&mut self, frame: u64, source_lod: impl Fn(u32) -> u8) -> (Vec<PageJob>, Vec<StateWrite>) {
+    /// `source(page)`: what the page is rendered from now.
+    pub fn plan(&mut self, frame: u64, source: impl Fn(PageKey) -> PageSource) -> (Vec<PageJob>, Vec<StateWrite>) {
         let mut jobs = Vec::new();
         let mut evicted = 0;
         while jobs.len() < self.budget as usize {
@@ -325,7 +357,7 @@ impl VtState {
             // Its sub-texture went or shrank since it was asked for.
             let Some(sub) = self.sub_texture(page.region).filter(|s| page.level <= s.k) else { continue };
             // Pages the newest harvested frame used are not given up.
-            let Some((tile, old)) = self.cache.insert(page, frame, self.harvested, source_lod(page.region)) else {
+            let Some((tile, old)) = self.cache.insert(page, frame, self.harvested, source(page)) else {
                 self.misses.insert((page.level, page));
                 break;
             };
@@ -345,7 +377,7 @@ impl VtState {
             jobs.push(PageJob { tile, region: page.region, page: pack_page(page), decals: 0 });
         }
         if !jobs.is_empty() {
-            self.changed = frame;
+            self.changed(frame);
         }
         self.counters.rendered = jobs.len() as u32;
         self.counters.evicted = evicted;
@@ -424,9 +456,9 @@ mod tests {
         assert_eq!(sub.k, 7);
         // Requests for region 0's coarsest pages.
         let req: Vec<[u32; 2]> = (0..2).map(|x| [0, pack_page(PageKey { region: 0, level: 1, x, y: 0 })]).collect();
-        s.harvest(1, &req);
+        s.harvest(1, &req, |_| None);
         assert_eq!((s.counters.requested, s.counters.hits), (2, 0));
-        let (jobs, writes) = s.plan(4, |_| 0);
+        let (jobs, writes) = s.plan(4, |_| PageSource::default());
         apply(&mut words, &writes);
         assert_eq!(jobs.len(), 2);
         let key = PageKey { region: 0, level: 1, x: 1, y: 0 };
@@ -437,7 +469,7 @@ mod tests {
         s.place_sub_textures(5, [250.0, 250.0], rad, 1000.0);
         let moved = s.sub_texture(0).unwrap();
         assert!(moved.k < 7 && moved.k >= 1);
-        let (jobs, writes) = s.plan(5, |_| 0);
+        let (jobs, writes) = s.plan(5, |_| PageSource::default());
         apply(&mut words, &writes);
         assert!(jobs.is_empty());
         assert_eq!(words[s.indirection_word(key, moved) as usize], tile);
@@ -486,7 +518,7 @@ mod tests {
         cameras.extend([[200_000.0, 150_000.0], [262_000.0, 262_000.0], [3000.0, 4000.0]]);
         for (f, &camera) in cameras.iter().enumerate() {
             s.place_sub_textures(f as u64 + 1, camera, rad, range);
-            let (_, writes) = s.plan(f as u64 + 1, |_| 0);
+            let (_, writes) = s.plan(f as u64 + 1, |_| PageSource::default());
             apply(&mut words, &writes);
             assert_eq!(s.counters.beyond_window, 0, "a 1024 m window holds a 400 m range");
             seen_region(&s, &words, camera);
@@ -495,5 +527,36 @@ mod tests {
         s.place_sub_textures(99, [100_000.0; 2], rad, 1500.0);
         let reach = (2.0 * 1500.0 / region_m).ceil() as u32;
         assert!(s.counters.beyond_window >= reach * reach - 17 * 17 - 4 * reach);
+    }
+
+    /// A page is rendered again when its nodes changed under it, once
+    /// streaming rests (`source` gives `None` before), and settling waits
+    /// for every feedback phase to come back clean after that.
+    #[test]
+    fn a_page_whose_nodes_changed_is_rendered_again_once_streaming_rests() {
+        let layout = VtLayout::new([256.0, 256.0], 64.0, 256, 4, 1000.0);
+        let mut s = VtState::new(layout, 4);
+        s.place_sub_textures(1, [10.0, 10.0], 1e-3, 1000.0);
+        let key = PageKey { region: 0, level: 1, x: 0, y: 0 };
+        let req = [[0, pack_page(key)]];
+        let (made, moved) = (PageSource { lod: 0, nodes: 1 }, PageSource { lod: 1, nodes: 2 });
+        s.harvest(1, &req, |_| None);
+        assert_eq!(s.plan(2, |_| made).0.len(), 1);
+        for f in 3..3 + PHASES {
+            s.harvest(f, &req, |_| None);
+            assert!(s.plan(f, |_| made).0.is_empty(), "kept while the nodes may come back");
+        }
+        assert!(s.settled());
+        let f = 3 + PHASES;
+        s.harvest(f, &req, |_| Some(moved));
+        assert!(!s.settled(), "a changed page is a miss");
+        assert_eq!(s.plan(f, |_| moved).0.len(), 1, "rendered again");
+        assert_eq!(s.cache().source(key), Some(moved));
+        for g in f + 1..f + PHASES {
+            s.harvest(g, &req, |_| Some(moved));
+            assert!(!s.settled(), "phase {} not yet checked since the change", g % PHASES);
+        }
+        s.harvest(f + PHASES, &req, |_| Some(moved));
+        assert!(s.settled());
     }
 }
