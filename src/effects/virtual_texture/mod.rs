@@ -456,7 +456,7 @@ impl VirtualTexture {
         // from under a page is caught once streaming rests, when the page
         // is asked for again: its source differs, `harvest`).
         for &(node, _) in terrain.tree.arrived() {
-            self.state.invalidate(node.bounds_m(&world), node.lod + 1, frame);
+            self.state.invalidate(node.bounds_m(&world), node.lod, frame);
         }
         self.state.place_sub_textures(frame, camera.xy, camera.pixel_rad, camera.range_m);
         let (mut jobs, writes) = self.state.plan(frame, |page| page_source(terrain, layout.padded_rect(page)));

@@ -244,12 +244,11 @@ impl VtState {
         self.write(self.layout.sub_word(slot), 1, pack_sub_texture(sub.offset, sub.k));
     }
 
-    /// The resident nodes over `bounds` (x0, y0, x1, y1 m) changed in
-    /// `frame`: drops the pages overlapping it whose source LOD (see
-    /// `plan`) is `from_lod` or coarser (an arrival of LOD l: l + 1, their
-    /// splat map is no longer the finest there; a removal of LOD l: l, they
-    /// may have been made from it); returns how many.
-    pub fn invalidate(&mut self, bounds: [f64; 4], from_lod: u8, frame: u64) -> u32 {
+    /// A node of LOD `lod` over `bounds` (x0, y0, x1, y1 m) arrived in
+    /// `frame`: drops the pages overlapping it that were rendered from
+    /// coarser nodes (their splat map is no longer the finest there);
+    /// returns how many.
+    pub fn invalidate(&mut self, bounds: [f64; 4], lod: u8, frame: u64) -> u32 {
         let l = self.layout;
         let inside = |p: &PageKey| {
             let r = l.padded_rect(*p);
@@ -257,7 +256,7 @@ impl VtState {
         };
         let cache = &self.cache;
         let stale: Vec<PageKey> =
-            cache.pages().filter(|p| inside(p) && cache.source(*p).is_some_and(|s| s.lod >= from_lod)).collect();
+            cache.pages().filter(|p| inside(p) && cache.source(*p).is_some_and(|s| s.lod > lod)).collect();
         self.drop_pages(&stale, frame)
     }
 
