@@ -200,3 +200,39 @@ fn no_triangle_lies_farther_from_the_finest_surface_than_its_patch_error() {
         }
     }
 }
+
+/// A tree with a cache folder keeps at most its held budget of root tiles
+/// in memory (and the tile in use); the others are read back from their
+/// files when a node asks, with the numbers a tree holding everything gives.
+#[test]
+fn a_cached_tree_holds_its_budget_and_reads_dropped_tiles_back() {
+    let (w, source) = procedural();
+    // 8 x 7 sectors of 128 m at 2 LODs: 4 x 4 roots.
+    let world = WorldDesc { lod_count: 2, ..w };
+    assert_eq!(world.roots().len(), 16);
+    // A LOD-1 root: 32 x 32 patches at LOD 0 and 16 x 16 at LOD 1, each
+    // five f32 and two f64 in memory.
+    let per_root = (32 * 32 + 16 * 16) * (5 * 4 + 2 * 8);
+    assert_eq!(ErrorTree::root_tile_bytes(&world), per_root);
+    let whole = ErrorTree::new(&world, Arc::clone(&source), None).unwrap();
+    let p = whole.prepare(vista::world::Progress::Hidden);
+    assert_eq!((p.roots, p.read), (16, 0));
+    assert_eq!(whole.memory_bytes(), 16 * per_root, "without a folder every tile stays");
+    let dir = std::env::temp_dir().join(format!("vista-held-tiles-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let budget = 3 * per_root;
+    for pass in 0..2 {
+        let held = ErrorTree::new(&world, Arc::clone(&source), Some(&dir)).unwrap().with_held_bytes(budget);
+        let p = held.prepare(vista::world::Progress::Hidden);
+        assert_eq!(p.read, if pass == 0 { 0 } else { 16 }, "pass {pass}: the second reads the first's files");
+        assert!(held.memory_bytes() <= budget, "pass {pass}: {} held", held.memory_bytes());
+        // Every node in an order that crosses roots back and forth.
+        let mut nodes = every_node(&world);
+        nodes.sort_by_key(|n| (n.x % 2, n.y, n.x, n.lod));
+        for n in nodes {
+            assert_eq!(held.node(n).unwrap(), whole.node(n).unwrap(), "pass {pass}: {n}");
+            assert!(held.memory_bytes() <= budget, "pass {pass}: {} held after {n}", held.memory_bytes());
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -9,6 +9,7 @@ pub mod accuracy_floor;
 pub mod accuracy_rule;
 pub mod accuracy_shadows;
 pub mod accuracy_vt;
+pub mod cpu;
 pub mod cull;
 pub mod effects;
 pub mod shade;
@@ -17,6 +18,7 @@ pub mod traverse;
 
 pub use accuracy::{bench_accuracy, AccuracyBench, AccuracyBenchConfig, AccuracyPoint};
 pub use accuracy_error::{accuracy_error, AccuracyError};
+pub use cpu::{bench_cpu, CpuBenchConfig, CpuBenchRow, CpuWorld};
 pub use cull::{bench_cull, cull_views, CullBenchConfig, CullBenchRow};
 pub use effects::{bench_effects, EffectsBenchConfig, EffectsBenchRow};
 pub use shade::{bench_shade, ShadeBench, ShadeBenchConfig, ShadeRow};

@@ -47,6 +47,27 @@ const TILE_VERSION: u32 = 4;
 /// One root's patches of every level (index = LOD).
 type Tile = Arc<Vec<LevelPatches>>;
 
+/// Bytes of root tiles an [`ErrorTree`] with a cache folder keeps in memory
+/// by default: the least recently used tiles past it are dropped and read
+/// again from their file when a node asks (a whole 0.5 m, 10 km world's
+/// tree is 315 MiB, a 60 km world's at 10 LODs several GiB).
+pub const DEFAULT_HELD_TILE_BYTES: u64 = 96 << 20;
+
+/// Bytes per patch of a level in memory (five f32, two f64).
+pub const TILE_BYTES_PER_PATCH: u64 = 5 * 4 + 2 * 8;
+
+fn tile_bytes(tile: &[LevelPatches]) -> u64 {
+    tile.iter().map(|l| (l.side * l.side) as u64 * TILE_BYTES_PER_PATCH).sum()
+}
+
+/// Root tiles in memory that their file holds too, least recently used
+/// first, with their bytes.
+#[derive(Default)]
+struct Held {
+    order: std::collections::VecDeque<(NodeId, u64)>,
+    bytes: u64,
+}
+
 /// The number a target bounds, from a patch's largest error and its 99th
 /// percentile: both halves of the promise (p99 within the target, the
 /// largest within twice it) hold where it does.
@@ -86,6 +107,10 @@ pub struct ErrorTree {
     computed: AtomicUsize,
     /// A tile could not be cached: reported once, then not tried again.
     unwritable: AtomicBool,
+    /// Root tiles that may be dropped (their file holds them) and the
+    /// bytes they may take together.
+    held: Mutex<Held>,
+    held_budget: u64,
 }
 
 impl std::fmt::Debug for ErrorTree {
@@ -124,7 +149,35 @@ impl ErrorTree {
             roots: Mutex::new(HashMap::new()),
             computed: AtomicUsize::new(0),
             unwritable: AtomicBool::new(false),
+            held: Mutex::new(Held::default()),
+            held_budget: DEFAULT_HELD_TILE_BYTES,
         })
+    }
+
+    /// The same tree keeping at most `bytes` of cached root tiles in memory
+    /// (at least the one in use); tiles without a file are always kept.
+    pub fn with_held_bytes(mut self, bytes: u64) -> Self {
+        self.held_budget = bytes;
+        self
+    }
+
+    /// Bytes of tiles in memory now.
+    pub fn memory_bytes(&self) -> u64 {
+        let tiles = self.roots.lock().unwrap_or_else(|e| e.into_inner());
+        tiles.values().filter_map(|c| c.get()).map(|t| tile_bytes(t)).sum()
+    }
+
+    /// Bytes of one root's tile in memory: every level over the root's
+    /// whole area (a border root's too).
+    pub fn root_tile_bytes(world: &WorldDesc) -> u64 {
+        let (per_side, root) = (u64::from(super::layout::PATCHES_PER_NODE_SIDE), u64::from(world.root_lod()));
+        (0..=root).map(|k| (per_side << (root - k)).pow(2)).sum::<u64>() * TILE_BYTES_PER_PATCH
+    }
+
+    /// Bytes of every root's tile: what a tree without a cache folder keeps.
+    pub fn whole_bytes(world: &WorldDesc) -> u64 {
+        let [rx, ry] = world.grid(world.root_lod());
+        u64::from(rx) * u64::from(ry) * Self::root_tile_bytes(world)
     }
 
     /// The error tree of the same world after an edit of its source
@@ -133,16 +186,23 @@ impl ErrorTree {
     /// along, the others are made again when asked for (or read from the
     /// folder, where an earlier run left them).
     pub fn edited(&self, source: Arc<dyn HeightSource>, cache_dir: Option<&Path>) -> Result<ErrorTree> {
-        let tree = ErrorTree::new(&self.world, source, cache_dir)?;
+        let tree = ErrorTree::new(&self.world, source, cache_dir)?.with_held_bytes(self.held_budget);
         let root_lod = self.world.root_lod();
         let old = self.roots.lock().unwrap_or_else(|e| e.into_inner());
         let mut kept = tree.roots.lock().unwrap_or_else(|e| e.into_inner());
+        let mut files = Vec::new();
         for (id, cell) in old.iter().filter(|(id, _)| id.lod == root_lod) {
             if let Some(tile) = cell.get().filter(|_| self.tile_keys(*id) == tree.tile_keys(*id)) {
                 kept.insert(*id, Arc::new(OnceLock::from(Arc::clone(tile))));
+                if tree.path(*id).is_some_and(|p| p.is_file()) {
+                    files.push((*id, tile_bytes(tile)));
+                }
             }
         }
         drop(kept);
+        for (id, bytes) in files {
+            tree.hold(id, bytes);
+        }
         Ok(tree)
     }
 
@@ -157,7 +217,9 @@ impl ErrorTree {
     }
 
     /// Reads or computes every root's tile now, reporting progress, so that
-    /// no node waits for one later. Several processes preparing one world
+    /// no node waits for one to be computed later (with a cache folder, the
+    /// tiles past the held budget are dropped again and read back from
+    /// their files when a node asks). Several processes preparing one world
     /// into one folder share the work: each starts at another root (by
     /// process id) and reads what the others have written meanwhile.
     pub fn prepare(&self, progress: Progress) -> PreparedErrors {
@@ -270,10 +332,34 @@ impl ErrorTree {
             let made = |n: NodeId| tiles.get(&n).and_then(|c| c.get()).map(Arc::clone);
             let mut above = (id.lod..root.lod).map(|l| NodeId::new(l, id.x >> (l - id.lod), id.y >> (l - id.lod)));
             if let Some(found) = made(root).map(|t| (root, t)).or_else(|| above.find_map(|n| Some((n, made(n)?)))) {
+                drop(tiles);
+                self.touch(found.0);
                 return found;
             }
         }
         (root, self.tile(root))
+    }
+
+    /// Marks a held root tile as just used.
+    fn touch(&self, root: NodeId) {
+        let mut held = self.held.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(i) = held.order.iter().position(|(id, _)| *id == root) {
+            let entry = held.order.remove(i).expect("found");
+            held.order.push_back(entry);
+        }
+    }
+
+    /// Counts a root tile that its file holds too, then drops the least
+    /// recently used such tiles past the budget (never the newest).
+    fn hold(&self, root: NodeId, bytes: u64) {
+        let mut held = self.held.lock().unwrap_or_else(|e| e.into_inner());
+        held.order.push_back((root, bytes));
+        held.bytes += bytes;
+        while held.bytes > self.held_budget && held.order.len() > 1 {
+            let (old, b) = held.order.pop_front().expect("more than one");
+            held.bytes -= b;
+            self.roots.lock().unwrap_or_else(|e| e.into_inner()).remove(&old);
+        }
     }
 
     /// A node's tile: from memory, the cache folder (roots only), or
@@ -281,21 +367,32 @@ impl ErrorTree {
     fn tile(&self, root: NodeId) -> Tile {
         let is_root = root.lod == self.world.root_lod();
         let cell = Arc::clone(self.roots.lock().unwrap_or_else(|e| e.into_inner()).entry(root).or_default());
-        Arc::clone(cell.get_or_init(|| {
+        // Set by the one thread that makes the tile: whether a file holds it.
+        let mut in_file = None;
+        let tile = Arc::clone(cell.get_or_init(|| {
             if let Some(tile) = is_root.then(|| self.read(root)).flatten() {
+                in_file = Some(true);
                 return Arc::new(tile);
             }
             let tile = compute_root(&self.world, self.source.as_ref(), root);
             self.computed.fetch_add(1, Ordering::Relaxed);
-            if is_root && !self.unwritable.load(Ordering::Relaxed) {
+            in_file = Some(is_root && self.dir.is_some() && !self.unwritable.load(Ordering::Relaxed));
+            if in_file == Some(true) {
                 if let Err(e) = self.write(root, &tile) {
+                    in_file = Some(false);
                     if !self.unwritable.swap(true, Ordering::Relaxed) {
                         log::warn!("{e}; the error tree is not cached");
                     }
                 }
             }
             Arc::new(tile)
-        }))
+        }));
+        if in_file == Some(true) {
+            self.hold(root, tile_bytes(&tile));
+        } else if in_file.is_none() {
+            self.touch(root);
+        }
+        tile
     }
 
     /// The world and what the source is over the root's area (and the

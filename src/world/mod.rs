@@ -56,7 +56,9 @@ pub use control_map::{
 };
 pub use error::{Result, WorldError};
 pub use error_tile::diamond;
-pub use errors::{selection_error, ErrorTree, NodeErrors, PreparedErrors};
+pub use errors::{
+    selection_error, ErrorTree, NodeErrors, PreparedErrors, DEFAULT_HELD_TILE_BYTES, TILE_BYTES_PER_PATCH,
+};
 pub use exr_source::{write_height_exr, ExrSource};
 pub use geotiff::{GeoTiffInfo, GeoTiffSource};
 pub use holes::{holes_hash, Hole};
@@ -77,6 +79,7 @@ pub use plan::{
     bytes as human_bytes, slot_capacity, Limits, PlanError, TimeBasis, WorldPlan, DEFAULT_MAX_BAKE_DISK_BYTES,
     DEFAULT_MAX_SECTORS_PER_SIDE, DEFAULT_SLOTS, NODE_BAKE_THREAD_SECONDS, RELOAD_SLOTS,
 };
+pub use plan_display::{ErrorMemory, LARGE_ERROR_MEMORY};
 pub use png16::Png16Source;
 pub use procedural::ProceduralSource;
 pub use progress::{Progress, ProgressEvent, ProgressFn, Reporter, Work};

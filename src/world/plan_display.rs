@@ -1,6 +1,7 @@
 //! How a [`WorldPlan`] reads to a person (`vista plan`, the refusals).
 
 use super::cache::estimated_file_bytes;
+use super::errors::{ErrorTree, DEFAULT_HELD_TILE_BYTES};
 use super::plan::*;
 use std::fmt;
 
@@ -60,6 +61,54 @@ impl fmt::Display for WorldPlan {
             self.error_quads,
             duration(self.node_bake_seconds()),
             1000.0 * self.node_seconds
+        )?;
+        let e = self.error_memory();
+        writeln!(
+            f,
+            "errors:   the error tree's tiles are {} ({} of {} each); computing holds about {} at once ({} on {} \
+             threads, each its tile and its file's bytes); a render keeps at most {} of them with a cache folder, \
+             all without{}",
+            bytes(e.tiles as f64),
+            roots(e.roots),
+            bytes(e.per_root as f64),
+            bytes(e.peak as f64),
+            roots(e.at_once),
+            self.threads,
+            bytes(DEFAULT_HELD_TILE_BYTES as f64),
+            if e.peak >= LARGE_ERROR_MEMORY {
+                "; more than this machine may have: fewer --lods make smaller roots"
+            } else {
+                ""
+            }
         )
+    }
+}
+
+fn roots(n: u64) -> String {
+    format!("{n} root{}", if n == 1 { "" } else { "s" })
+}
+
+/// Memory of the error tree at which the plan and `vista render` warn.
+pub const LARGE_ERROR_MEMORY: u64 = 1 << 30;
+
+/// What the error tree of a plan's region takes in memory.
+pub struct ErrorMemory {
+    pub roots: u64,
+    pub per_root: u64,
+    /// Every root's tile.
+    pub tiles: u64,
+    /// Roots computed at once.
+    pub at_once: u64,
+    /// While computing: `at_once` tiles and their encoded files.
+    pub peak: u64,
+}
+
+impl WorldPlan {
+    /// The error tree's memory over the plan's region.
+    pub fn error_memory(&self) -> ErrorMemory {
+        let roots = self.nodes_per_lod.last().copied().unwrap_or(0);
+        let per_root = ErrorTree::root_tile_bytes(&self.world);
+        let at_once = roots.min(self.threads as u64);
+        ErrorMemory { roots, per_root, tiles: roots * per_root, at_once, peak: at_once * 2 * per_root }
     }
 }

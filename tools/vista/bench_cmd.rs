@@ -25,6 +25,10 @@ pub enum BenchKind {
     /// against a CPU ray-caster (depth, silhouette, geometric error in px,
     /// PSNR and FLIP of the lit image), with a Pareto plot (`--plot`).
     Accuracy,
+    /// The renderer's CPU ms per frame on the world and on a far larger one
+    /// from the same generator (--far-extent), same view and slots: per-frame
+    /// CPU work should follow what is near, not the world's size.
+    Cpu,
 }
 
 #[derive(Args)]
@@ -63,8 +67,9 @@ pub struct BenchArgs {
     /// [default: 8,24,64].
     #[arg(long, value_delimiter = ',', value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     shadow_steps: Option<Vec<u32>>,
-    /// `bench accuracy`: resident node slots of the renderers (at most
-    /// 2047) [default: what the default GPU budget buys, as `vista render`].
+    /// `bench accuracy` and `bench cpu`: resident node slots of the renderers
+    /// (at most 2047) [default: what the default GPU budget buys, as `vista
+    /// render`, for accuracy; 128 for cpu, in both worlds].
     #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     slots: Option<u32>,
     /// `bench accuracy`: the LOD rules of the geometry rows, side by side:
@@ -72,11 +77,18 @@ pub struct BenchArgs {
     /// world's per-vertex bounds are computed first) [default: patch].
     #[arg(long, value_delimiter = ',', value_parser = crate::render_cmd::parse_lod_rule)]
     lod_rules: Option<Vec<vista::render::LodRule>>,
+    /// `bench cpu`: the far world's side, metres [default: 292000].
+    #[arg(long, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
+    far_extent: Option<f64>,
+    /// `bench cpu`: the far world's post spacing, metres (its error tree is
+    /// made, so not as fine as a 10 km world's) [default: 32].
+    #[arg(long, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
+    far_spacing: Option<f64>,
     /// Measured frames per row (after warm-up); the median is reported
-    /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects, 3 per block (3 rounds) for shade].
+    /// [default: 15 for traverse, 7 per stage block for cull, 2 per block (4 rounds) for effects, 3 per block (3 rounds) for shade, 10 per block (3 rounds) for cpu].
     #[arg(long, value_parser = crate::numbers::whole_u32, allow_negative_numbers = true)]
     frames: Option<u32>,
-    /// Target size of every kind but traverse [default: 1280x720].
+    /// Target size of every kind but traverse [default: 1280x720; 320x180 for cpu].
     #[arg(long, value_parser = crate::render_cmd::parse_size, allow_hyphen_values = true)]
     size: Option<[u32; 2]>,
     /// Target projected error of every kind but traverse, pixels [default: 1].
@@ -125,19 +137,21 @@ pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
 
 /// Which kinds read each kind-specific option (by its argument id); every
 /// other option is read by all kinds.
-const USED_BY: [(&str, &[BenchKind]); 10] = {
+const USED_BY: [(&str, &[BenchKind]); 12] = {
     use BenchKind::*;
     [
         ("sets", &[Traverse]),
         ("camera", &[Traverse]),
         ("targets", &[Traverse, Accuracy]),
-        ("size", &[Cull, Effects, Shade, Accuracy]),
-        ("target_error", &[Cull, Effects, Shade, Accuracy]),
+        ("size", &[Cull, Effects, Shade, Accuracy, Cpu]),
+        ("target_error", &[Cull, Effects, Shade, Accuracy, Cpu]),
         ("views", &[Accuracy]),
         ("plot", &[Accuracy]),
         ("images", &[Accuracy]),
-        ("slots", &[Accuracy]),
+        ("slots", &[Accuracy, Cpu]),
         ("lod_rules", &[Accuracy]),
+        ("far_extent", &[Cpu]),
+        ("far_spacing", &[Cpu]),
     ]
 };
 
@@ -155,6 +169,8 @@ fn unused_options(args: &BenchArgs) -> Vec<String> {
         args.images.is_some(),
         args.slots.is_some(),
         args.lod_rules.is_some(),
+        args.far_extent.is_some(),
+        args.far_spacing.is_some(),
     ];
     USED_BY
         .iter()
@@ -199,7 +215,7 @@ pub fn check(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-fn input_error(message: impl Into<String>) -> Result<()> {
+pub fn input_error(message: impl Into<String>) -> Result<()> {
     Err(anyhow::Error::new(crate::InputError(message.into())))
 }
 
@@ -209,6 +225,7 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
         BenchKind::Cull => crate::bench_cull_cmd::cull(ctx, &ViewBench::new(&args, 7)?),
         BenchKind::Effects => crate::bench_effects_cmd::effects(ctx, &ViewBench::new(&args, 2)?),
         BenchKind::Shade => crate::bench_shade_cmd::shade(ctx, &ViewBench::new(&args, 3)?),
+        BenchKind::Cpu => cpu(ctx, &args),
         BenchKind::Accuracy => {
             let targets = args.targets.clone().unwrap_or(crate::bench_accuracy_cmd::DEFAULT_TARGETS.to_vec());
             let bench = ViewBench::new(&args, 3)?;
@@ -229,6 +246,24 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
             crate::bench_accuracy_cmd::accuracy(ctx, &bench, &a)
         }
     }
+}
+
+fn cpu(ctx: &Context, args: &BenchArgs) -> Result<()> {
+    let b = ViewBench::new(args, 10)?;
+    let a = crate::bench_cpu_cmd::CpuArgs {
+        far_extent_m: args.far_extent.unwrap_or(292_000.0),
+        far_spacing_m: args.far_spacing.unwrap_or(32.0),
+        slots: args.slots.unwrap_or(128),
+        frames: b.frames,
+        size: args.size.unwrap_or([320, 180]),
+        target_error_px: b.target_error_px,
+    };
+    for (v, name) in [(a.far_extent_m, "--far-extent"), (a.far_spacing_m, "--far-spacing")] {
+        if !(v.is_finite() && v > 0.0) {
+            input_error(format!("{name} {v}: give a positive number of metres"))?;
+        }
+    }
+    crate::bench_cpu_cmd::cpu(ctx, &args.world, &a, b.json)
 }
 
 fn traverse(ctx: &Context, args: BenchArgs) -> Result<()> {

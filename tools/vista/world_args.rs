@@ -70,6 +70,11 @@ pub struct WorldArgs {
     /// checked before anything is read or allocated [default: 16384].
     #[arg(long, value_name = "N", value_parser = crate::numbers::whole_u64, allow_negative_numbers = true, help_heading = "World")]
     pub max_sectors: Option<u64>,
+    /// Set by a command that derives a world from the user's (not an
+    /// option): it says itself what it changed, so the "replaces the
+    /// scene's" notes would name options the user never gave.
+    #[arg(skip)]
+    pub derived: bool,
 }
 
 /// A resolved world, ready to bake or render.
@@ -147,12 +152,16 @@ impl LoadedWorld {
             Some(d) => format!("cached in {}", d.display()),
             None => "in memory only ($VISTA_CACHE is empty)".to_string(),
         };
+        let mib = |b: u64| b as f64 / f64::from(1 << 20);
         eprintln!(
-            "error tree: {} roots, {} read, {} computed in {:.1} s; {place}",
+            "error tree: {} roots, {} read, {} computed in {:.1} s; {place}; {:.0} MiB in memory of {:.0} MiB for the whole tree{}",
             p.roots,
             p.read,
             p.roots - p.read,
-            p.seconds
+            p.seconds,
+            mib(tree.memory_bytes()),
+            mib(ErrorTree::whole_bytes(&self.desc)),
+            if tree.dir().is_some() { " (tiles past the budget are read again from the folder when a node asks)" } else { "" }
         );
         Ok(Arc::new(tree))
     }
@@ -204,7 +213,7 @@ impl WorldArgs {
         };
         let clamp = self.clamp_heights || w.clamp_heights;
         let clamp_name = if self.clamp_heights { "--clamp-heights" } else { "the scene's clamp_heights" };
-        if self.scene.is_some() {
+        if self.scene.is_some() && !self.derived {
             self.note_overrides(&scene);
         }
         let defaults = WorldDesc::default();

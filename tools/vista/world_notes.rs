@@ -35,7 +35,8 @@ pub fn check_far_corner(desc: &WorldDesc, origin_m: [f64; 2], name: &str) -> Res
 
 /// The error tree reads every LOD-0 sample under the roots it computes
 /// before the first frame: a line first when that is long (the plan's
-/// per-quad estimate), so a new world does not sit silent for minutes.
+/// per-quad estimate) or needs much memory (a root's tile covers its whole
+/// area), so a new world does not sit silent for minutes or swap.
 pub fn note_error_tree_time(desc: &WorldDesc, uncached: usize) {
     if uncached == 0 {
         return;
@@ -47,6 +48,16 @@ pub fn note_error_tree_time(desc: &WorldDesc, uncached: usize) {
             "note: the error tree of {uncached} roots needs every LOD-0 sample under them once (cached after): about \
              {seconds:.0} s on {} threads before the first frame; a coarser --spacing shortens it",
             plan.threads
+        );
+    }
+    let m = plan.error_memory();
+    let peak = m.peak.min(2 * m.per_root * uncached as u64);
+    if peak >= vista::world::LARGE_ERROR_MEMORY {
+        eprintln!(
+            "note: the error tree needs about {} of memory while it computes ({} a root tile, as large as the root's \
+             area at every level, and its file's bytes); fewer --lods make smaller roots",
+            vista::world::human_bytes(peak as f64),
+            vista::world::human_bytes(m.per_root as f64)
         );
     }
 }

@@ -70,6 +70,11 @@ impl WorldSpec {
         }
     }
 
+    /// Whether the heights come from the procedural generator.
+    pub fn is_procedural(&self) -> bool {
+        matches!(self.source, SpecSource::Procedural { .. })
+    }
+
     /// The scene's effects and the holes (world-relative).
     pub fn effects_and_holes(&self) -> (&Effects, &[Hole]) {
         (&self.effects, &self.holes)

@@ -452,7 +452,8 @@ impl VirtualTexture {
         }
         let world = terrain.world;
         // Pages are rendered from the finest resident nodes: one that
-        // arrives finer than a page's source makes it stale (one leaving
+        // arrives as fine as a page's source or finer, or is reloaded with
+        // new data, makes it stale (one leaving
         // from under a page is caught once streaming rests, when the page
         // is asked for again: its source differs, `harvest`).
         for &(node, _) in terrain.tree.arrived() {

@@ -244,10 +244,12 @@ impl VtState {
         self.write(self.layout.sub_word(slot), 1, pack_sub_texture(sub.offset, sub.k));
     }
 
-    /// A node of LOD `lod` over `bounds` (x0, y0, x1, y1 m) arrived in
-    /// `frame`: drops the pages overlapping it that were rendered from
-    /// coarser nodes (their splat map is no longer the finest there);
-    /// returns how many.
+    /// A node of LOD `lod` over `bounds` (x0, y0, x1, y1 m) arrived or was
+    /// reloaded in `frame`: drops the pages overlapping it that were
+    /// rendered from nodes as coarse or coarser (their splat map is no
+    /// longer the finest there; a reload, after a stamp edit, changes the
+    /// data of a node the page's source already names, so its hash of node
+    /// ids stays); returns how many.
     pub fn invalidate(&mut self, bounds: [f64; 4], lod: u8, frame: u64) -> u32 {
         let l = self.layout;
         let inside = |p: &PageKey| {
@@ -256,7 +258,7 @@ impl VtState {
         };
         let cache = &self.cache;
         let stale: Vec<PageKey> =
-            cache.pages().filter(|p| inside(p) && cache.source(*p).is_some_and(|s| s.lod > lod)).collect();
+            cache.pages().filter(|p| inside(p) && cache.source(*p).is_some_and(|s| s.lod >= lod)).collect();
         self.drop_pages(&stale, frame)
     }
 

@@ -169,3 +169,56 @@ fn bench_cull_writes_a_row_per_view() {
     }
     let _ = std::fs::remove_file(&json);
 }
+
+/// `bench cpu` on two small worlds (a 32 km far world at 16 m, so its error
+/// tree is quick): one row each, the table saying what the JSON says, the
+/// ratio the rows' own quotient, both renderers within the slots.
+#[test]
+fn bench_cpu_compares_a_world_with_a_larger_one() {
+    let json = std::env::temp_dir().join(format!("vista-bench-cpu-{}.json", std::process::id()));
+    let args = [
+        "--validation",
+        "bench",
+        "cpu",
+        "--extent",
+        "2048",
+        "--spacing",
+        "2",
+        "--lods",
+        "4",
+        "--far-extent",
+        "32768",
+        "--far-spacing",
+        "16",
+        "--slots",
+        "64",
+        "--size",
+        "64x48",
+        "--frames",
+        "2",
+    ];
+    let (ok, out, err) = vista(&[&args[..], &["--json", json.to_str().unwrap()]].concat());
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2, "{out}");
+    assert_eq!(rows[0]["extent_m"][0].as_f64(), Some(2048.0));
+    assert_eq!((rows[1]["extent_m"][0].as_f64(), rows[1]["spacing_m"].as_f64()), (Some(32768.0), Some(16.0)));
+    // extent km, spacing, lods, roots, resident, cpu ms, p90 ms, query ms, ratio.
+    let table: Vec<Vec<f64>> = out
+        .lines()
+        .map(|l| l.split_whitespace().take(9).map(str::parse::<f64>).collect::<Result<Vec<_>, _>>())
+        .filter_map(|r| r.ok().filter(|r| r.len() == 9))
+        .collect();
+    assert_eq!(table.len(), 2, "two numeric rows in:\n{out}");
+    for (t, r) in table.iter().zip(rows) {
+        assert_eq!(t[3], r["roots"].as_f64().unwrap(), "{out}");
+        assert_eq!(t[4], r["resident"].as_f64().unwrap(), "{out}");
+        assert!(r["resident"].as_u64().unwrap() <= 64 && r["slots"].as_u64() == Some(64), "{r}");
+        assert!((t[5] - r["cpu_ms"].as_f64().unwrap()).abs() <= 5e-4 + 1e-9, "{t:?} vs {r}");
+        assert!(r["cpu_ms"].as_f64().unwrap() > 0.0 && r["samples"].as_u64() == Some(6), "3 rounds of 2: {r}");
+    }
+    let (a, b) = (rows[0]["cpu_ms"].as_f64().unwrap(), rows[1]["cpu_ms"].as_f64().unwrap());
+    assert!((rows[1]["ratio"].as_f64().unwrap() - b / a).abs() < 1e-9 && rows[0]["ratio"].as_f64() == Some(1.0));
+    let _ = std::fs::remove_file(&json);
+}

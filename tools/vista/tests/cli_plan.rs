@@ -119,6 +119,11 @@ fn dry_run_prints_the_plan_and_bakes_nothing() {
         assert!(run.out.contains(key), "{key:?} missing:\n{}", run.out);
     }
     assert!(!out.exists(), "a dry run creates no cache folder");
+    // The error tree's memory: one LOD-3 root whose tile holds 128^2, 64^2,
+    // 32^2 and 16^2 patches of 36 bytes (783 360 B), twice while computed.
+    let errors = "the error tree's tiles are 765.00 KiB (1 root of 765.00 KiB each); computing holds about 1.49 MiB";
+    assert!(run.out.contains(errors), "{errors:?} missing:\n{}", run.out);
+    assert!(!run.out.contains("more than this machine may have"), "{}", run.out);
 
     // A region: cells of LOD k overlapping 0..300 m.
     let run = vista(&[&["bake", "--out", o, "--dry-run", "--region", "0,0,300,300"][..], &world[..]].concat());
@@ -137,6 +142,22 @@ fn dry_run_prints_the_plan_and_bakes_nothing() {
     assert!(run.ok && run.out.contains("dry run: nothing baked"), "{}", run.err);
     let run = vista(&[&["bake"][..], &world[..]].concat());
     assert!(!run.ok && run.err.contains("--out") && run.err.trim().lines().count() == 1, "{}", run.err);
+}
+
+/// A 60 km world at 8 m with 10 LODs has one root 524 km a side: its tile
+/// covers that whole area at every level (3 GiB; a render peaked at 5.3 GiB
+/// computing it), which the plan says before any work.
+#[test]
+fn a_root_tile_beyond_a_gibibyte_is_said_in_the_plan() {
+    let run = vista(&["bake", "--dry-run", "--extent", "60000", "--spacing", "8", "--lods", "10"]);
+    assert!(run.ok, "{}", run.err);
+    // (8192^2 + 4096^2 + ... + 16^2) patches of 36 bytes = 3 GiB.
+    let per_root: u64 = (0..10).map(|k| (16u64 << (9 - k)).pow(2)).sum::<u64>() * 36;
+    assert_eq!(per_root / (1 << 20), 3071, "about 3 GiB");
+    for key in ["(1 root of 3.00 GiB each)", "about 6.00 GiB at once", "more than this machine may have: fewer --lods"]
+    {
+        assert!(run.out.contains(key), "{key:?} missing:\n{}", run.out);
+    }
 }
 
 #[test]
