@@ -79,7 +79,12 @@ enum Command {
     Stability(stability_cmd::StabilityArgs),
 }
 
+/// When the process started: `vista render` says how long the first frame
+/// took to come (the world, its error tree and the renderer made).
+pub static STARTED: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+
 fn main() {
+    STARTED.get_or_init(std::time::Instant::now);
     fewer_malloc_arenas();
     quiet_when_stdout_closes();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
