@@ -1,7 +1,7 @@
 //! Case 10: soak. A streaming fly-through back and forth over the small
 //! world with few resident slots (nodes are evicted and streamed in all the
-//! time), every effect a renderer builds on (`rig::every_effect`) and the
-//! decal turned every 100 frames, for 10 000 frames (the full form; 2 400 in the quick form), with
+//! time), every effect a renderer builds on (`rig::every_effect`), the sun
+//! turning a degree a frame and the decal turned every 100 frames, for 10 000 frames (the full form; 2 400 in the quick form), with
 //! validation messages, live Vulkan objects, the allocator's bytes and the
 //! process's resident memory sampled every `every` frames. Not part of the
 //! test suite: `vista stability --cases 10 --full`.
@@ -66,6 +66,9 @@ pub fn run(ctx: &Context, form: Form, every: u32, mut on_sample: impl FnMut(&Soa
         if f % 100 == 99 {
             rig.renderer.set_decals(ctx, vec![super::rig::script_decal(f64::from(f / 100 % 8) * 45.0)])?;
         }
+        // The sun turns a degree a frame: the shadows are made again as it
+        // moves, and nothing may pile up from that either.
+        rig.renderer.effects.lighting.sun_azimuth_deg = 200.0 + f64::from(f % 360);
         let view = rig.view(fly_through(&rig, at, LEG));
         rig.off.frame(ctx, &mut rig.renderer, &view)?;
         if (f + 1) % every == 0 || f + 1 == frames {

@@ -94,7 +94,9 @@ pub struct LoadedWorld {
     /// The limits it was planned against (the library checks them again
     /// with the device's).
     pub limits: Limits,
-    /// Each stamp's id and box, in order: what a scene edit compares.
+    /// Each stamp's id and box, in order: what a scene edit compares (in
+    /// `vista view`, so unread in a build without the window).
+    #[cfg_attr(not(feature = "view"), allow(dead_code))]
     pub stamps: Vec<(u64, [f64; 4])>,
     /// The scene's decals (world metres) with their textures read.
     pub decals: vista::effects::virtual_texture::decals::DecalSet,
