@@ -9,6 +9,7 @@
 //! - [`selection`]: what LOD selection is asked for and returns;
 //! - [`patch_grid`]: the index pattern of one patch.
 
+mod atlases;
 pub mod gpu_quadtree;
 pub mod patch_grid;
 pub mod quadtree;

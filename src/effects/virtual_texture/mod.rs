@@ -452,12 +452,13 @@ impl VirtualTexture {
         }
         let world = terrain.world;
         // Pages are rendered from the finest resident nodes: one that
-        // arrives as fine as a page's source or finer, or is reloaded with
-        // new data, makes it stale (one leaving
+        // arrives finer than a page's source, or is reloaded with new data,
+        // makes it stale (one leaving
         // from under a page is caught once streaming rests, when the page
         // is asked for again: its source differs, `harvest`).
+        let reloaded = terrain.tree.reloaded();
         for &(node, _) in terrain.tree.arrived() {
-            self.state.invalidate(node.bounds_m(&world), node.lod, frame);
+            self.state.invalidate(node.bounds_m(&world), node.lod, reloaded.contains(&node), frame);
         }
         self.state.place_sub_textures(frame, camera.xy, camera.pixel_rad, camera.range_m);
         let (mut jobs, writes) = self.state.plan(frame, |page| page_source(terrain, layout.padded_rect(page)));

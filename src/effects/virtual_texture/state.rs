@@ -244,21 +244,23 @@ impl VtState {
         self.write(self.layout.sub_word(slot), 1, pack_sub_texture(sub.offset, sub.k));
     }
 
-    /// A node of LOD `lod` over `bounds` (x0, y0, x1, y1 m) arrived or was
-    /// reloaded in `frame`: drops the pages overlapping it that were
-    /// rendered from nodes as coarse or coarser (their splat map is no
-    /// longer the finest there; a reload, after a stamp edit, changes the
-    /// data of a node the page's source already names, so its hash of node
-    /// ids stays); returns how many.
-    pub fn invalidate(&mut self, bounds: [f64; 4], lod: u8, frame: u64) -> u32 {
+    /// A node of LOD `lod` over `bounds` (x0, y0, x1, y1 m) arrived in
+    /// `frame`: drops the pages overlapping it that were rendered from
+    /// coarser nodes (their splat map is no longer the finest there), and,
+    /// for a `reload` (a stamp edit's new payload of a resident node), those
+    /// rendered from nodes of its own LOD too (the page's source names the
+    /// node, whose data changed under the same id); returns how many.
+    pub fn invalidate(&mut self, bounds: [f64; 4], lod: u8, reload: bool, frame: u64) -> u32 {
         let l = self.layout;
         let inside = |p: &PageKey| {
             let r = l.padded_rect(*p);
             r[0] < bounds[2] && r[2] > bounds[0] && r[1] < bounds[3] && r[3] > bounds[1]
         };
         let cache = &self.cache;
-        let stale: Vec<PageKey> =
-            cache.pages().filter(|p| inside(p) && cache.source(*p).is_some_and(|s| s.lod >= lod)).collect();
+        let stale: Vec<PageKey> = cache
+            .pages()
+            .filter(|p| inside(p) && cache.source(*p).is_some_and(|s| s.lod > lod || (reload && s.lod == lod)))
+            .collect();
         self.drop_pages(&stale, frame)
     }
 
