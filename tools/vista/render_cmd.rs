@@ -411,11 +411,6 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let (mut renderer, mut off) = renderer_and_target(ctx, world, view, args)?;
     let ready_s = crate::STARTED.get().map_or(0.0, |t| t.elapsed().as_secs_f64());
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
-    println!(
-        "time: {ready_s:.1} s from start to the first frame (world, error tree, renderer), then {:.1} s streaming to {}",
-        settle.seconds,
-        if settle.settled { "settled" } else { "the --settle-seconds limit" }
-    );
     let first = renderer.frames_recorded() + 1;
     // A bar on a terminal, a line every 5 s otherwise (long runs only).
     let progress = vista::world::Reporter::new(crate::progress::auto(), u64::from(args.frames), Work::Frames);
@@ -446,6 +441,11 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     print_device_and_world(ctx, world, view, args, timed.len(), warmup);
     let budget = crate::budget::NodeBudget::of(&args.viewpoint, world, &ctx.info().limits)?;
     print_stream_and_queues(ctx, &renderer, args, (&settle, &budget), timed);
+    println!(
+        "time: {ready_s:.1} s from start to the first frame (world, error tree, renderer), then {:.1} s streaming to {}",
+        settle.seconds,
+        if settle.settled { "settled" } else { "the --settle-seconds limit" }
+    );
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
     let built = built_stages(args, &renderer);
     if let Some(m) = args.fly {
