@@ -5,6 +5,9 @@ mod vista_cmd;
 
 use vista_cmd::vista_cmd;
 
+/// The small world most kinds are run on here: 2 km at 2 m, 4 LODs.
+const SMALL_WORLD: [&str; 6] = ["--extent", "2048", "--spacing", "2", "--lods", "4"];
+
 fn vista(args: &[&str]) -> (bool, String, String) {
     let out = vista_cmd().args(args).output().expect("run vista");
     (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
@@ -67,26 +70,9 @@ fn bench_accuracy_sweeps_targets_and_culling_against_the_reference() {
     let dir = std::env::temp_dir().join(format!("vista-bench-accuracy-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (json, plot) = (dir.join("acc.json"), dir.join("acc.png"));
-    let args = [
-        "bench",
-        "accuracy",
-        "--extent",
-        "2048",
-        "--spacing",
-        "2",
-        "--lods",
-        "4",
-        "--size",
-        "128x128",
-        "--frames",
-        "1",
-        "--targets",
-        "1,4",
-        "--views",
-        "high-flight",
-    ];
+    let args = ["--size", "128x128", "--frames", "1", "--targets", "1,4", "--views", "high-flight"];
     let extra = ["--json", json.to_str().unwrap(), "--plot", plot.to_str().unwrap(), "--images", dir.to_str().unwrap()];
-    let (ok, out, err) = vista(&[&args[..], &extra[..]].concat());
+    let (ok, out, err) = vista(&[&["bench", "accuracy"][..], &SMALL_WORLD, &args, &extra].concat());
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let points = v["bench"]["points"].as_array().unwrap();
@@ -177,27 +163,25 @@ fn bench_cull_writes_a_row_per_view() {
 fn bench_cpu_compares_a_world_with_a_larger_one() {
     let json = std::env::temp_dir().join(format!("vista-bench-cpu-{}.json", std::process::id()));
     let args = [
-        "--validation",
-        "bench",
-        "cpu",
-        "--extent",
-        "2048",
-        "--spacing",
-        "2",
-        "--lods",
-        "4",
-        "--far-extent",
-        "32768",
-        "--far-spacing",
-        "16",
-        "--slots",
-        "64",
-        "--size",
-        "64x48",
-        "--frames",
-        "2",
-    ];
-    let (ok, out, err) = vista(&[&args[..], &["--json", json.to_str().unwrap()]].concat());
+        &["--validation", "bench", "cpu"][..],
+        &SMALL_WORLD,
+        &[
+            "--far-extent",
+            "32768",
+            "--far-spacing",
+            "16",
+            "--slots",
+            "64",
+            "--size",
+            "64x48",
+            "--frames",
+            "2",
+            "--json",
+            json.to_str().unwrap(),
+        ],
+    ]
+    .concat();
+    let (ok, out, err) = vista(&args);
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = v["rows"].as_array().unwrap();
