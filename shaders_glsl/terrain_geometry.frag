@@ -1,4 +1,5 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // The per-patch terrain draw's fragments (common/terrain_fragment.glsl).
+// variants: SINK
 #include "terrain_fragment.glsl"

@@ -2,8 +2,10 @@
 //! the threshold (a CPU twin of the rule from the terrain's heights),
 //! watertight among themselves (shared vertices bit-identical) and to the
 //! height field (every vertex on the mesh's open rim lies on it), shaded
-//! by the cliff flavours (classification read back), and off nothing of
-//! it is built and the image is the one without it.
+//! by the cliff flavours (classification read back), the height field
+//! under a meshed cell sunk behind its mesh (no fight, no hole, at a
+//! spacing that is no power of two), and off nothing of it is built and
+//! the image is the one without it.
 
 mod common;
 
@@ -17,6 +19,7 @@ use vista::passes::terrain_query::{TerrainQuery, VistaTerrain};
 use vista::render::offscreen::Capture;
 use vista::render::{Effect, Effects, RendererOptions, View};
 use vista::shaders::consts::{CLIFF_CELL_QUADS, FLAVOUR_FAR_CLIFF, FLAVOUR_NEAR_CLIFF};
+use vista::world::WorldDesc;
 
 const SIZE: [u32; 2] = [256, 192];
 /// A meadow with a 51-degree cone (its flanks past the 40-degree threshold).
@@ -290,4 +293,103 @@ fn off_nothing_is_built_and_the_image_is_the_one_without_it() {
         let b = no_cliffs.shot(ctx, &low(), CullStages::default());
         assert!(a.rgba == b.rgba && a.depth == b.depth, "cliff meshes refused changed the image");
     });
+}
+
+/// A world whose spacing is no power of two: 0.3 m posts, so the 2 m
+/// cells' edges fall between them and the meshes' rim meets the terrain's
+/// triangles mid-quad.
+fn odd_world() -> WorldDesc {
+    WorldDesc {
+        extent_m: [307.2, 307.2],
+        height_range_m: [100.0, 500.0],
+        spacing_m: 0.3,
+        lod_count: 4,
+        ..WorldDesc::default()
+    }
+}
+
+/// The cone of GROUND, in the odd world, 14 m ahead of the camera.
+const ODD_GROUND: Surface = Surface::Bump { z0: 300.0, c: [150.0, 164.0], r: 10.0, h: 12.0 };
+
+/// The cliff meshes unpushed (`amplitude_m` 0: the mesh IS the height
+/// field, at its own triangulation, the case where the two fight most)
+/// with the height field sunk `sink_m` behind them; None: meshes off.
+fn odd_rig(ctx: &Context, sink_m: Option<f32>) -> Rig {
+    let mut fx = effects(sink_m.is_some());
+    fx.cliff_meshes.amplitude_m = 0.0;
+    fx.cliff_meshes.sink_m = sink_m.unwrap_or(0.0);
+    let options = RendererOptions { effects: fx, ..RendererOptions::default() };
+    Rig::with_options(ctx, odd_world(), ODD_GROUND, vec![], SIZE, false, options)
+}
+
+#[test]
+fn at_a_non_dyadic_spacing_the_meshes_are_watertight_and_the_height_field_sinks_behind_them() {
+    gpu_test(|ctx| {
+        let at = view([150.0, 150.0, 303.0], 0.0, -8.0, SIZE, 1.0);
+        let bare = odd_rig(ctx, None).shot(ctx, &at, CullStages::default());
+        let mut on = odd_rig(ctx, Some(CliffMeshParams::default().sink_m));
+        let a = on.shot(ctx, &at, CullStages::default());
+        check_on_the_height_field(ctx, &on);
+        // Sunk far past any gap between the two triangulations: what the
+        // mesh alone shows wherever it is drawn.
+        let deep = odd_rig(ctx, Some(20.0)).shot(ctx, &at, CullStages::default());
+        // Sunk by a micrometre: the same pipeline (a written depth rounds
+        // unlike the fixed function's), the two surfaces left to fight.
+        let none = odd_rig(ctx, Some(1e-6)).shot(ctx, &at, CullStages::default());
+        let (mut drawn, mut meshed, mut fights, mut holes) = (0, 0, 0, 0);
+        for i in 0..bare.depth.len() {
+            holes += usize::from(bare.depth[i] > 0.0 && a.depth[i] == 0.0);
+            // Where `deep` shows the sunk terrain (20 m behind: its depth
+            // far below the bare terrain's), no mesh covers the pixel.
+            if deep.depth[i] < bare.depth[i] * 0.99 {
+                continue;
+            }
+            drawn += 1;
+            // The mesh's triangulation parts from the terrain's by
+            // millimetres, 1e-4 of the depth; rounding is 1e-7.
+            meshed += usize::from((deep.depth[i] - bare.depth[i]).abs() > 1e-6 * bare.depth[i]);
+            assert_eq!(a.depth[i], deep.depth[i], "pixel {i}: the height field won over its mesh");
+            fights += usize::from(none.depth[i] != deep.depth[i]);
+        }
+        println!(
+            "{drawn} pixels without the sunk terrain in view, {meshed} where the mesh's depth parts from the bare \
+             terrain's; sunk by the default, every one shows what the mesh alone shows; sunk by a micrometre, \
+             the height field wins {fights}; {holes} holes"
+        );
+        assert_eq!(holes, 0, "pixels the bare terrain covered are empty with the meshes");
+        assert!(meshed > 500, "{meshed}");
+        // The test can fail: without the sink the two triangulations fight.
+        assert!(fights > 50, "{fights}");
+    });
+}
+
+/// Unpushed, every mesh vertex lies on the height field, neighbouring
+/// cells share their edges bit for bit, and the sink marks exactly the
+/// meshed cells.
+fn check_on_the_height_field(ctx: &Context, on: &Rig) {
+    let c = on.renderer.effect::<vista::effects::cliff_meshes::CliffMeshes>().unwrap();
+    let (counters, vertices) = c.read(ctx).unwrap();
+    let cells = listed_cells(&vertices, &c.params);
+    let (header, sunk) = c.sink().expect("sink_m > 0").read(ctx).unwrap();
+    assert_eq!(header.sink_m, c.params.sink_m);
+    assert_eq!(sunk.into_iter().collect::<BTreeSet<_>>(), cells.keys().copied().collect::<BTreeSet<_>>());
+    let points: Vec<[f32; 2]> = vertices.iter().map(|v| [v[0], v[1]]).collect();
+    let h = heights(ctx, on, &points);
+    let worst = vertices.iter().zip(&h).map(|(v, z)| (v[2] - z).abs()).fold(0.0f32, f32::max);
+    let side = (CLIFF_CELL_QUADS + 1) as usize;
+    let mut shared = 0;
+    for (cell, patch) in &cells {
+        if let Some(e) = cells.get(&[cell[0] + 1, cell[1]]) {
+            for r in 0..side {
+                assert_eq!(patch[r * side + side - 1], e[r * side], "crack east of {cell:?}");
+                shared += 1;
+            }
+        }
+    }
+    println!(
+        "{} cells meshed, {shared} east edge vertices shared, worst gap to the height field {worst:.6} m",
+        counters.cells
+    );
+    // f32 at 300 m: the same bilinear height, a few ulps apart at most.
+    assert!(counters.cells > 40 && shared > 100 && worst <= 1e-4, "{} {shared} {worst}", counters.cells);
 }

@@ -12,11 +12,14 @@
 // height field: the mesh is watertight to it. The cells are those within
 // the reach of a centre that snaps to a step of the radius, so the build
 // holds while the camera stays in its step; rebuilt when it leaves it or
-// the resident terrain changes.
+// the resident terrain changes. Each meshed (drawn) cell's bit in the
+// terrain's sink (terrain_sink.glsl) pushes the height field there behind
+// its mesh.
 #include "constants.glsl"
 #include "octahedral.glsl"
 #include "hashed_noise.glsl"
 #include "cliff_mesh.glsl"
+#include "terrain_sink.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -25,6 +28,8 @@ layout(set = 0, binding = 2) uniform texture2DArray height_atlas;
 layout(set = 0, binding = 3) uniform sampler nearest;
 layout(set = 0, binding = 4, std430) buffer CliffHeaderBlock { CliffHeader h; } header;
 layout(set = 0, binding = 5, std430) buffer CliffVertices { CliffVertex v[]; } vertices;
+// Its header and zeroed bits written by the host before the dispatch.
+layout(set = 0, binding = 6, std430) buffer Sink { TerrainSinkHeader h; uint bits[]; } sink;
 
 #define VISTA_SECTOR_WORD(i) sector_data.words[i]
 #define VISTA_HEIGHT_ATLAS height_atlas
@@ -121,6 +126,7 @@ void main() {
         atomicMin(header.h.instance_count, pc.capacity);
         return;
     }
+    atomicOr(sink.bits[idx >> 5u], 1u << (idx & 31u));
     float e = 0.5 * q;
     for (uint k = 0u; k < SIDE * SIDE; ++k) {
         vec2 p = vec2(lattice0 + ivec2(k % SIDE, k / SIDE)) * q;

@@ -27,10 +27,39 @@ layout(location = 0) out uint classification;
 layout(location = 1) out uvec4 normals;
 layout(location = 2) out uint patch_info;
 
+#ifdef SINK
+#include "terrain_sink.glsl"
+layout(set = 0, binding = 7, std430) readonly buffer Sink { TerrainSinkHeader h; uint bits[]; } sink;
+// Only ever farther (reversed-Z: smaller), so early depth rejection holds.
+layout(depth_less) out float gl_FragDepth;
+
+// This fragment's depth, pushed behind by the sink along its normal where
+// its world cell is sunk (the view ray's share of the normal clamped).
+float sunk_depth(vec3 normal) {
+    vec2 world = view.v.camera_world.xy + rel_pos.xy;
+    ivec2 c = ivec2(floor(world / sink.h.cell_m)) - sink.h.cell0;
+    uint side = sink.h.side;
+    if (any(lessThan(c, ivec2(0))) || any(greaterThanEqual(c, ivec2(side)))) {
+        return gl_FragCoord.z;
+    }
+    uint i = uint(c.y) * side + uint(c.x);
+    if ((sink.bits[i >> 5u] & (1u << (i & 31u))) == 0u) {
+        return gl_FragCoord.z;
+    }
+    float d = length(rel_pos);
+    float along = sink.h.sink_m / max(abs(dot(normal, rel_pos / d)), TERRAIN_SINK_MIN_COSINE);
+    vec4 clip = view.v.view_proj * vec4(rel_pos * ((d + along) / d), 1.0);
+    return min(clip.z / clip.w, gl_FragCoord.z);
+}
+#endif
+
 void main() {
     vec3 uvw = vec3(atlas_uv, float(atlas_layer));
     vec2 nxy = atlas_normal_xy(texture(sampler2DArray(normal_atlas, linear_clamp), uvw));
     vec3 geometric = normalize(vec3(nxy, sqrt(max(1.0 - dot(nxy, nxy), 0.0))));
+#ifdef SINK
+    gl_FragDepth = sunk_depth(geometric);
+#endif
     vec3 t = cross(dFdx(rel_pos), dFdy(rel_pos));
     float tl = length(t);
     // Degenerate derivatives (a sliver seen edge-on): the baked normal.

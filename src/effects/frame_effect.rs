@@ -155,6 +155,13 @@ pub trait FrameEffect: Any {
         let _ = (point, frame, log, r);
     }
 
+    /// The cells where its surface replaces the height field
+    /// (terrain_sink.glsl), written before the terrain's draws; the
+    /// terrain's fragments there are pushed behind it (at most one effect).
+    fn terrain_sink(&self) -> Option<&Buffer> {
+        None
+    }
+
     /// Its material bindings (the material effects make them, the virtual
     /// texture adds its own for the tile shading and what follows it:
     /// `shading`; the passes before it read the materials alone).

@@ -17,5 +17,6 @@ pub mod select_patches;
 pub mod terrain_geometry;
 pub mod terrain_holes;
 pub mod terrain_query;
+pub mod terrain_sink;
 pub mod terrain_triangles;
 pub mod traverse;

@@ -50,16 +50,22 @@ impl TerrainDrawPush {
     }
 }
 
-/// The terrain pipeline of pass `name` with vertex shader `vertex`.
+/// The terrain pipeline of pass `name` with vertex shader `vertex`
+/// (`sink`: its fragments pushed behind in the sunk cells, terrain_sink.rs).
 pub(crate) fn terrain_pipeline(
     ctx: &Context,
     name: &str,
     vertex: &'static ShaderInfo,
     depth: DepthOptions,
+    sink: bool,
 ) -> Result<Pipeline> {
     let spec = [(vs::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (vs::SPEC_PATCH_QUADS, PATCH_QUADS)];
-    geometry_pipeline(ctx, name, (vertex, &fs::SHADER), &spec, depth)
+    let fragment = fs::variant(if sink { fs::VARIANT_SINK } else { 0 });
+    geometry_pipeline(ctx, name, (vertex, fragment), &spec, depth)
 }
+
+/// Indices of one patch instance.
+pub const PATCH_INDEX_COUNT: u32 = PATCH_QUADS * PATCH_QUADS * 6;
 
 /// A pipeline of the geometry pass (the terrain's and the meshes drawn
 /// beside it): its three targets, reversed-Z depth written, the terrain
@@ -100,13 +106,15 @@ pub struct TerrainGeometry {
     linear: Sampler,
     index_count: u32,
     depth: DepthOptions,
+    /// Built with the SINK variant: draws want the sink bound.
+    sink: bool,
 }
 
 impl TerrainGeometry {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context, depth: DepthOptions) -> Result<Self> {
-        let pipeline = terrain_pipeline(ctx, Self::NAME, &vs::SHADER, depth)?;
+    pub fn new(ctx: &Context, depth: DepthOptions, sink: bool) -> Result<Self> {
+        let pipeline = terrain_pipeline(ctx, Self::NAME, &vs::SHADER, depth, sink)?;
         let idx = patch_indices();
         let indices = Buffer::new(
             ctx,
@@ -128,6 +136,7 @@ impl TerrainGeometry {
             linear: sampler("terrain_geometry_linear", vk::Filter::LINEAR)?,
             index_count: idx.len() as u32,
             depth,
+            sink,
         })
     }
 
@@ -141,6 +150,11 @@ impl TerrainGeometry {
         self.index_count
     }
 
+    /// Built with the sink (every terrain draw pushes sunk cells behind).
+    pub fn sinks(&self) -> bool {
+        self.sink
+    }
+
     pub fn pipeline_label(&self) -> &str {
         &self.pipeline.label
     }
@@ -151,7 +165,9 @@ impl TerrainGeometry {
     }
 
     /// Binds `pipeline` (this pass's or `terrain_holes`') with the patch
-    /// list `list`; `extra` adds the bindings only that pipeline has.
+    /// list `list` and the sink where built with it; `extra` adds the
+    /// bindings only that pipeline has.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn bind(
         &self,
         rec: &mut Recorder,
@@ -159,8 +175,10 @@ impl TerrainGeometry {
         view: &Buffer,
         list: &Buffer,
         tree: &GpuQuadtree,
+        sink: Option<&Buffer>,
         extra: &[(Binding, Resource)],
     ) {
+        assert_eq!(sink.is_some(), self.sink, "the terrain's sink is bound exactly to its SINK variant");
         rec.bind_pipeline(pipeline);
         let mut bindings = vec![
             (vs::VIEW, Resource::Buffer(view)),
@@ -170,12 +188,14 @@ impl TerrainGeometry {
             (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
             (fs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
         ];
+        bindings.extend(sink.map(|s| (fs::SINK, Resource::Buffer(s))));
         bindings.extend(extra.iter().map(|(b, r)| (*b, *r)));
         rec.push_descriptors(pipeline, &bindings);
     }
 
     /// Draws patch list `list` (phase 1's, after clearing the targets, or
-    /// phase 2's over them: `clear` is false only there).
+    /// phase 2's over them: `clear` is false only there), with the sink
+    /// where built with it.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -185,10 +205,11 @@ impl TerrainGeometry {
         view: &Buffer,
         list: &Buffer,
         tree: &GpuQuadtree,
+        sink: Option<&Buffer>,
         clear: bool,
     ) {
         begin_geometry(rec, targets, gbuffer, self.depth, clear);
-        self.bind(rec, &self.pipeline, view, list, tree, &[]);
+        self.bind(rec, &self.pipeline, view, list, tree, sink, &[]);
         rec.push_constants(&self.pipeline, &TerrainDrawPush::new(!clear));
         rec.draw_indexed_indirect(&self.indices, list, 0);
         rec.end_rendering();
@@ -248,7 +269,7 @@ mod tests {
         let plain: BTreeSet<[u32; 3]> = diamond_indices(PATCH_QUADS).chunks(3).map(canonical).collect();
         let opt = patch_indices();
         let reordered: BTreeSet<[u32; 3]> = opt.chunks(3).map(canonical).collect();
-        assert_eq!(opt.len(), (PATCH_QUADS * PATCH_QUADS * 6) as usize);
+        assert_eq!(opt.len(), PATCH_INDEX_COUNT as usize);
         assert_eq!(plain, reordered, "same triangles with the same winding");
         assert_ne!(opt, diamond_indices(PATCH_QUADS), "the optimizer reordered something");
     }

@@ -22,8 +22,9 @@ pub struct TerrainHoles {
 impl TerrainHoles {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context, depth: DepthOptions) -> Result<Self> {
-        Ok(TerrainHoles { pipeline: terrain_pipeline(ctx, Self::NAME, &vs::SHADER, depth)? })
+    /// `sink`: as `terrain_geometry`'s (both draw the same terrain).
+    pub fn new(ctx: &Context, depth: DepthOptions, sink: bool) -> Result<Self> {
+        Ok(TerrainHoles { pipeline: terrain_pipeline(ctx, Self::NAME, &vs::SHADER, depth, sink)? })
     }
 
     pub fn pipeline_label(&self) -> &str {
@@ -42,12 +43,13 @@ impl TerrainHoles {
         lists: &PatchLists,
         geometry: &TerrainGeometry,
         tree: &GpuQuadtree,
+        sink: Option<&crate::gpu::Buffer>,
         late: bool,
     ) {
         let list = lists.hole_list.as_ref().expect("terrain_holes is built only with the hole list");
         begin_geometry(rec, targets, gbuffer, geometry.depth(), false);
         let albedo = (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT));
-        geometry.bind(rec, &self.pipeline, view, list, tree, &[albedo]);
+        geometry.bind(rec, &self.pipeline, view, list, tree, sink, &[albedo]);
         rec.push_constants(&self.pipeline, &TerrainDrawPush::new(late));
         rec.draw_indexed_indirect(geometry.indices(), list, 0);
         rec.end_rendering();

@@ -28,14 +28,17 @@ pub struct TerrainTriangles {
     nearest: Sampler,
     linear: Sampler,
     depth: DepthOptions,
+    /// Built with the SINK variant (terrain_sink.rs): draws want it bound.
+    sink: bool,
 }
 
 impl TerrainTriangles {
     pub const NAME: &'static str = vs::PASS;
 
-    pub fn new(ctx: &Context, depth: DepthOptions) -> Result<Self> {
+    pub fn new(ctx: &Context, depth: DepthOptions, sink: bool) -> Result<Self> {
         let spec = [(vs::SPEC_NODE_SIDE, NODE_QUADS)];
-        let pipeline = geometry_pipeline(ctx, Self::NAME, (&vs::SHADER, &fs::SHADER), &spec, depth)?;
+        let fragment = fs::variant(if sink { fs::VARIANT_SINK } else { 0 });
+        let pipeline = geometry_pipeline(ctx, Self::NAME, (&vs::SHADER, fragment), &spec, depth)?;
         let sampler = |name, filter| {
             Sampler::new(ctx, &SamplerDesc { name, filter, address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE })
         };
@@ -44,6 +47,7 @@ impl TerrainTriangles {
             nearest: sampler("terrain_triangles_nearest", vk::Filter::NEAREST)?,
             linear: sampler("terrain_triangles_linear", vk::Filter::LINEAR)?,
             depth,
+            sink,
         })
     }
 
@@ -51,7 +55,9 @@ impl TerrainTriangles {
         &self.pipeline.label
     }
 
-    /// Draws the list `emit` wrote, after clearing the targets.
+    /// Draws the list `emit` wrote, after clearing the targets, with the
+    /// sink where built with it.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder,
@@ -60,21 +66,22 @@ impl TerrainTriangles {
         view: &crate::gpu::Buffer,
         emit: &EmitTriangles,
         tree: &GpuQuadtree,
+        sink: Option<&crate::gpu::Buffer>,
     ) {
+        assert_eq!(sink.is_some(), self.sink, "the terrain's sink is bound exactly to its SINK variant");
         begin_geometry(rec, targets, gbuffer, self.depth, true);
         rec.bind_pipeline(&self.pipeline);
-        rec.push_descriptors(
-            &self.pipeline,
-            &[
-                (vs::VIEW, Resource::Buffer(view)),
-                (vs::SLOT_NODES, Resource::Buffer(emit.slot_nodes())),
-                (vs::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
-                (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),
-                (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
-                (fs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
-                (fs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
-            ],
-        );
+        let mut bindings = vec![
+            (vs::VIEW, Resource::Buffer(view)),
+            (vs::SLOT_NODES, Resource::Buffer(emit.slot_nodes())),
+            (vs::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
+            (vs::ALBEDO_ATLAS, Resource::Image(tree.required_atlas(ATLAS_ALBEDO), ATLAS_LAYOUT)),
+            (vs::NEAREST, Resource::Sampler(self.nearest.raw())),
+            (fs::NORMAL_ATLAS, Resource::Image(tree.required_atlas(ATLAS_NORMAL), ATLAS_LAYOUT)),
+            (fs::LINEAR_CLAMP, Resource::Sampler(self.linear.raw())),
+        ];
+        bindings.extend(sink.map(|s| (fs::SINK, Resource::Buffer(s))));
+        rec.push_descriptors(&self.pipeline, &bindings);
         rec.push_constants(&self.pipeline, &TrianglesPush { nan_bits: QUIET_NAN_BITS, pad: [0; 3] });
         rec.draw_indexed_indirect(emit.list(), emit.list(), 0);
         rec.end_rendering();

@@ -146,29 +146,36 @@ impl FramePasses<'_> {
         });
     }
 
-    /// The terrain's draws, both occlusion phases, then what the effects
-    /// draw beside them.
+    /// The cells an effect's surface replaces (terrain_sink.rs).
+    fn sink(&self) -> Option<&Buffer> {
+        self.effects.iter().find_map(|e| e.terrain_sink())
+    }
+
+    /// What the effects record before the terrain's draws, the draws (both
+    /// occlusion phases), then what the effects draw beside them.
     pub fn record_draws(&self, frame: &mut Frame<'_, '_>, log: &mut FrameLog, t: &FrameTargets) {
         let (tree, targets, gb) = (t.tree, t.targets, t.gbuffer);
-        let (geometry, view) = (self.geometry, self.view_buffer);
+        let (geometry, view, sink) = (self.geometry, self.view_buffer, self.sink());
+        let base = materials(self.effects, false);
+        self.at(FramePoint::BeforeTerrainDraws, frame, log, &self.inputs(t, base.as_ref()));
         if let Some(tri) = self.triangles {
-            pass(frame, log, FramePass::TERRAIN_TRIANGLES, |r| tri.draw.record(r, targets, gb, view, &tri.emit, tree));
-            let base = materials(self.effects, false);
+            pass(frame, log, FramePass::TERRAIN_TRIANGLES, |r| {
+                tri.draw.record(r, targets, gb, view, &tri.emit, tree, sink)
+            });
             self.at(FramePoint::AfterTerrainDraws, frame, log, &self.inputs(t, base.as_ref()));
             return;
         }
         pass(frame, log, FramePass::TERRAIN_GEOMETRY, |r| {
-            geometry.record(r, targets, gb, view, &self.cull.lists().list, tree, true)
+            geometry.record(r, targets, gb, view, &self.cull.lists().list, tree, sink, true)
         });
         if let Some(holes) = self.holes_drawn(log, FramePass::TERRAIN_HOLES) {
             pass(frame, log, FramePass::TERRAIN_HOLES, |r| {
-                holes.record(r, targets, gb, view, self.cull.lists(), geometry, tree, false)
+                holes.record(r, targets, gb, view, self.cull.lists(), geometry, tree, sink, false)
             });
         }
         if let Some(o) = self.occlusion {
             self.record_phase_two(frame, log, t, o);
         }
-        let base = materials(self.effects, false);
         self.at(FramePoint::AfterTerrainDraws, frame, log, &self.inputs(t, base.as_ref()));
     }
 
@@ -193,11 +200,11 @@ impl FramePasses<'_> {
         });
         let late = &o.cull.lists;
         pass(frame, log, FramePass::TERRAIN_GEOMETRY_LATE, |r| {
-            geometry.record(r, targets, gb, view, &late.list, tree, false)
+            geometry.record(r, targets, gb, view, &late.list, tree, self.sink(), false)
         });
         if let Some(holes) = self.holes_drawn(log, FramePass::TERRAIN_HOLES_LATE) {
             pass(frame, log, FramePass::TERRAIN_HOLES_LATE, |r| {
-                holes.record(r, targets, gb, view, late, geometry, tree, true)
+                holes.record(r, targets, gb, view, late, geometry, tree, self.sink(), true)
             });
         }
     }

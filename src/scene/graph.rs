@@ -103,6 +103,9 @@ impl FramePass {
 /// effects record in registry order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FramePoint {
+    /// After the LOD phase, before the terrain's draws: what they read
+    /// (the terrain's sink).
+    BeforeTerrainDraws,
     /// After the terrain's draws (both occlusion phases): meshes drawn into
     /// the geometry pass.
     AfterTerrainDraws,
@@ -132,7 +135,7 @@ enum Step {
     Point(FramePoint),
 }
 
-const FRAME: [Step; 22] = [
+const FRAME: [Step; 23] = [
     Step::Pass(FramePass::QUADTREE_UPDATE, &[]),
     Step::Pass(FramePass::TRAVERSE, &[]),
     Step::Pass(FramePass::LOD_MAP, &[]),
@@ -140,6 +143,7 @@ const FRAME: [Step; 22] = [
     Step::Pass(FramePass::SELECT_PATCHES, &[]),
     Step::Pass(FramePass::CULL_PATCHES, &[]),
     Step::Pass(FramePass::EMIT_TRIANGLES, &[]),
+    Step::Point(FramePoint::BeforeTerrainDraws),
     Step::Pass(FramePass::TERRAIN_GEOMETRY, &[]),
     Step::Pass(FramePass::TERRAIN_HOLES, &[Effect::Holes]),
     Step::Pass(FramePass::TERRAIN_TRIANGLES, &[]),

@@ -50,7 +50,8 @@ impl CliffMeshBuild {
         &self.pipeline.label
     }
 
-    /// Builds into `vertices`, counting in `header` (reset by the caller).
+    /// Builds into `vertices`, counting in `header` and marking the cells
+    /// in `sink` (both reset by the caller).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -60,6 +61,7 @@ impl CliffMeshBuild {
         tree: &GpuQuadtree,
         header: &Buffer,
         vertices: &Buffer,
+        sink: &Buffer,
     ) {
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(
@@ -70,6 +72,7 @@ impl CliffMeshBuild {
                 (sh::NEAREST, Resource::Sampler(self.nearest.raw())),
                 (sh::HEADER, Resource::Buffer(header)),
                 (sh::VERTICES, Resource::Buffer(vertices)),
+                (sh::SINK, Resource::Buffer(sink)),
             ],
         );
         rec.push_constants(&self.pipeline, push);

@@ -1,6 +1,6 @@
-//! Effect `cliff_meshes` in the frame: built again when the camera leaves
-//! its step or the terrain changes, drawn into the geometry pass after the
-//! terrain's draws.
+//! Effect `cliff_meshes` in the frame: built again, before the terrain's
+//! draws (which read its sink), when the camera leaves its step or the
+//! terrain changes; drawn into the geometry pass after the terrain's draws.
 
 use super::CliffMeshes;
 use crate::effects::frame_effect::{
@@ -38,23 +38,29 @@ impl FrameEffect for CliffMeshes {
     }
 
     fn record(&self, point: FramePoint, frame: &mut Frame<'_, '_>, log: &mut FrameLog, r: &RecordInputs) {
-        if point != FramePoint::AfterTerrainDraws {
-            return;
-        }
-        let sector = r.sector_data.buffer();
-        match &self.planned {
-            Some(push) => {
-                frame.pass(CLIFF_MESH_BUILD.name(), false, QueueKind::Graphics, |rec| {
-                    self.record_build(rec, push, sector, r.tree)
+        match point {
+            FramePoint::BeforeTerrainDraws => match &self.planned {
+                Some(push) => {
+                    let sector = r.sector_data.buffer();
+                    frame.pass(CLIFF_MESH_BUILD.name(), false, QueueKind::Graphics, |rec| {
+                        self.record_build(rec, push, sector, r.tree)
+                    });
+                    log.ran(CLIFF_MESH_BUILD, None);
+                }
+                None => log.skipped(CLIFF_MESH_BUILD, Skip::CliffMeshesCurrent),
+            },
+            FramePoint::AfterTerrainDraws => {
+                frame.pass(CLIFF_MESHES.name(), false, QueueKind::Graphics, |rec| {
+                    self.record_draw(rec, r.targets, r.gbuffer, r.view_buffer)
                 });
-                log.ran(CLIFF_MESH_BUILD, None);
+                log.ran(CLIFF_MESHES, None);
             }
-            None => log.skipped(CLIFF_MESH_BUILD, Skip::CliffMeshesCurrent),
+            _ => {}
         }
-        frame.pass(CLIFF_MESHES.name(), false, QueueKind::Graphics, |rec| {
-            self.record_draw(rec, r.targets, r.gbuffer, r.view_buffer)
-        });
-        log.ran(CLIFF_MESHES, None);
+    }
+
+    fn terrain_sink(&self) -> Option<&crate::gpu::Buffer> {
+        self.sink().map(|s| s.buffer())
     }
 
     fn pipelines(&self) -> Vec<String> {

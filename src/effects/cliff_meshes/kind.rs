@@ -13,7 +13,7 @@ impl EffectKind for CliffMeshesKind {
     fn passes(&self) -> &'static [EffectPass] {
         const ON: &[Effect] = &[Effect::CliffMeshes];
         &[
-            EffectPass { point: FramePoint::AfterTerrainDraws, pass: super::frame::CLIFF_MESH_BUILD, effects: ON },
+            EffectPass { point: FramePoint::BeforeTerrainDraws, pass: super::frame::CLIFF_MESH_BUILD, effects: ON },
             EffectPass { point: FramePoint::AfterTerrainDraws, pass: super::frame::CLIFF_MESHES, effects: ON },
         ]
     }

@@ -7,11 +7,15 @@
 //! the GPU from the resident terrain, around a centre snapped to an eighth
 //! of the radius and out to the radius plus that step, so it runs again only
 //! when the camera leaves its step or the terrain changes; `cliff_meshes`
-//! draws them in one indexed indirect draw.
+//! draws them in one indexed indirect draw. The build runs before the
+//! terrain's draws and marks the meshed cells in the terrain's sink
+//! (passes/terrain_sink.rs): the height field there is pushed `sink_m`
+//! behind its mesh, so the mesh's unpushed parts, which lie on the height
+//! field at another triangulation, do not fight it.
 //!
 //! ```toml
 //! [effects]
-//! cliff_meshes = { slope_deg = 40, band_deg = 10, amplitude_m = 0.8, radius_m = 100, cell_m = 2 }
+//! cliff_meshes = { slope_deg = 40, band_deg = 10, amplitude_m = 0.8, radius_m = 100, cell_m = 2, sink_m = 0.5 }
 //! ```
 
 pub mod cliff_mesh_build;
@@ -27,6 +31,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation, Recorder};
 use crate::passes::terrain_geometry::{DepthOptions, RenderTargets};
 use crate::passes::terrain_query::VistaTerrain;
+use crate::passes::terrain_sink::{TerrainSink, TerrainSinkHeader};
 use crate::shaders::consts::CLIFF_CELL_QUADS;
 use crate::shaders::structs;
 use crate::targets::gbuffer::GBuffer;
@@ -45,12 +50,23 @@ pub struct CliffMeshParams {
     /// Cells whose centre lies within this distance of the camera.
     pub radius_m: f32,
     pub cell_m: f32,
+    /// How far the height field under a meshed cell is pushed behind its
+    /// mesh, along its normal (m; 0: not pushed, the two may fight).
+    pub sink_m: f32,
     pub seed: u32,
 }
 
 impl Default for CliffMeshParams {
     fn default() -> Self {
-        CliffMeshParams { slope_deg: 40.0, band_deg: 10.0, amplitude_m: 0.8, radius_m: 100.0, cell_m: 2.0, seed: 7 }
+        CliffMeshParams {
+            slope_deg: 40.0,
+            band_deg: 10.0,
+            amplitude_m: 0.8,
+            radius_m: 100.0,
+            cell_m: 2.0,
+            sink_m: 0.5,
+            seed: 7,
+        }
     }
 }
 
@@ -58,7 +74,7 @@ impl Default for CliffMeshParams {
 pub const MAX_SIDE: u32 = 512;
 
 impl CliffMeshParams {
-    pub const PARAMETERS: [&'static str; 5] = ["slope_deg", "band_deg", "amplitude_m", "radius_m", "cell_m"];
+    pub const PARAMETERS: [&'static str; 6] = ["slope_deg", "band_deg", "amplitude_m", "radius_m", "cell_m", "sink_m"];
 
     /// The step the build's centre snaps to: an eighth of the radius.
     pub fn step_m(&self) -> f32 {
@@ -112,6 +128,7 @@ impl CliffMeshParams {
             "amplitude_m" => self.amplitude_m = number(key, v, 0.0, 20.0)? as f32,
             "radius_m" => self.radius_m = number(key, v, 1.0, 2000.0)? as f32,
             "cell_m" => self.cell_m = number(key, v, 0.25, 50.0)? as f32,
+            "sink_m" => self.sink_m = number(key, v, 0.0, 20.0)? as f32,
             _ => unreachable!("{key} is a cliff_meshes parameter but not read"),
         }
         Ok(())
@@ -170,6 +187,8 @@ pub struct CliffMeshes {
     header: Buffer,
     vertices: Buffer,
     indices: Buffer,
+    /// The meshed cells, where the terrain's draws push the height field behind.
+    sink: TerrainSink,
     /// The centre last built around.
     built_at: Option<[f32; 2]>,
     /// This frame's build (None: the last one holds).
@@ -202,6 +221,7 @@ impl CliffMeshes {
             )?,
             vertices: buffer("cliff_mesh_vertices", vertex_bytes, readable)?,
             indices,
+            sink: TerrainSink::new(ctx, "cliff_mesh_sink", params.side())?,
             built_at: None,
             planned: None,
         })
@@ -245,8 +265,21 @@ impl CliffMeshes {
         let index_count = 6 * CLIFF_CELL_QUADS * CLIFF_CELL_QUADS;
         let reset = CliffHeaderGpu { index_count, ..CliffHeaderGpu::default() };
         rec.update_buffer(&self.header, 0, bytemuck::bytes_of(&reset));
+        let sink = TerrainSinkHeader {
+            cell0: push.cell0,
+            side: push.side,
+            cell_m: push.cell_m,
+            sink_m: self.params.sink_m,
+            pad: [0; 3],
+        };
+        self.sink.reset(rec, &sink);
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
-        self.build.record(rec, push, sector, tree, &self.header, &self.vertices);
+        self.build.record(rec, push, sector, tree, &self.header, &self.vertices, self.sink.buffer());
+    }
+
+    /// The sink the terrain's draws read, where the height field is pushed at all.
+    pub fn sink(&self) -> Option<&TerrainSink> {
+        (self.params.sink_m > 0.0).then_some(&self.sink)
     }
 
     pub fn record_draw(&self, rec: &mut Recorder, targets: &RenderTargets, gb: &GBuffer, view: &Buffer) {
@@ -274,7 +307,10 @@ impl CliffMeshes {
     }
 
     pub fn memory(&self) -> Vec<(String, u64)> {
-        [&self.header, &self.vertices, &self.indices].iter().map(|b| (b.name.clone(), b.memory_bytes())).collect()
+        let mut m: Vec<(String, u64)> =
+            [&self.header, &self.vertices, &self.indices].iter().map(|b| (b.name.clone(), b.memory_bytes())).collect();
+        m.push(self.sink.memory());
+        m
     }
 }
 

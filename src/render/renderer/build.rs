@@ -21,7 +21,7 @@ use crate::passes::lod_map::LodMap;
 use crate::passes::quadtree_update::QuadtreeUpdatePass;
 use crate::passes::sector_data::SectorData;
 use crate::passes::select_patches::SelectPatches;
-use crate::passes::terrain_geometry::TerrainGeometry;
+use crate::passes::terrain_geometry::{TerrainGeometry, PATCH_INDEX_COUNT};
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_triangles::TerrainTriangles;
 use crate::passes::traverse::Traverse;
@@ -213,18 +213,25 @@ fn traversal(ctx: &Context, world: &WorldDesc, options: &RendererOptions) -> Res
     Ok(traverse)
 }
 
-/// The per-triangle rule's passes, where it draws.
-fn triangle_path(
+/// The terrain's draws: the patch draw, the hole draw where built and the
+/// per-triangle rule's passes where it draws (`triangle`: its slots), each
+/// pushing an effect's sunk cells behind where one has a sink (terrain_sink.rs).
+fn terrain_draws(
     ctx: &Context,
-    triangle: bool,
-    slot_capacity: u32,
     depth: crate::passes::terrain_geometry::DepthOptions,
-) -> Result<Option<TrianglePath>> {
-    if !triangle {
-        return Ok(None);
-    }
-    let emit = EmitTriangles::new(ctx, slot_capacity)?;
-    Ok(Some(TrianglePath { emit, draw: TerrainTriangles::new(ctx, depth)? }))
+    effects: &[Box<dyn FrameEffect>],
+    holes: bool,
+    triangle: Option<u32>,
+) -> Result<(TerrainGeometry, Option<TerrainHoles>, Option<TrianglePath>)> {
+    let sink = effects.iter().any(|e| e.terrain_sink().is_some());
+    let holes = if holes { Some(TerrainHoles::new(ctx, depth, sink)?) } else { None };
+    let triangles = match triangle {
+        Some(slots) => {
+            Some(TrianglePath { emit: EmitTriangles::new(ctx, slots)?, draw: TerrainTriangles::new(ctx, depth, sink)? })
+        }
+        None => None,
+    };
+    Ok((TerrainGeometry::new(ctx, depth, sink)?, holes, triangles))
 }
 
 impl TerrainRenderer {
@@ -239,8 +246,6 @@ impl TerrainRenderer {
         let on = |e: Effect| is_on(&decisions, e);
         let triangle = options.lod.rule == LodRule::Triangle;
         let terrain_options = terrain_options(options, world, &decisions)?;
-        let depth = options.depth;
-        let geometry = TerrainGeometry::new(ctx, depth)?;
         let (shade, gbuffer_tiles, variants) = tile_shading(ctx, options, &decisions)?;
         let terrain = Terrain::new(ctx, world, source, holes, &terrain_options)?;
         let traverse = traversal(ctx, world, options)?;
@@ -249,18 +254,18 @@ impl TerrainRenderer {
         // The per-triangle rule has no occlusion phase 2 (yet).
         let occlusion = on(Effect::Occlusion) && !triangle;
         let build = CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes), occlusion };
-        let cull = CullPatches::new(ctx, &traverse, geometry.index_count(), build)?;
-        let occlusion = match build.occlusion {
-            true => Some(Occlusion::new(ctx, &traverse, geometry.index_count(), build, slot_capacity)?),
-            false => None,
-        };
+        let cull = CullPatches::new(ctx, &traverse, PATCH_INDEX_COUNT, build)?;
+        let occlusion = build
+            .occlusion
+            .then(|| Occlusion::new(ctx, &traverse, PATCH_INDEX_COUNT, build, slot_capacity))
+            .transpose()?;
         let mut graph = graph(&decisions, options);
         let built = build_effects(&mut BuildInputs {
             ctx,
             world,
             effects: &options.effects,
             decisions: &decisions,
-            depth,
+            depth: options.depth,
             layout: options.output.gbuffer(),
             occlusion: build.occlusion,
             frames_in_flight: options.terrain.frames_in_flight,
@@ -272,6 +277,8 @@ impl TerrainRenderer {
         // gbuffer_tiles records one timed draw per variant.
         let max_passes = graph.max_recorded() + variants as u32;
         let counters = counter_layout(world, &cull, build, &built);
+        let (geometry, holes, triangles) =
+            terrain_draws(ctx, options.depth, &built, build.holes, triangle.then_some(slot_capacity))?;
         let resolve = resolve(ctx, options, &decisions)?;
         Ok(TerrainRenderer {
             update: QuadtreeUpdatePass::new(ctx, build.occlusion)?,
@@ -283,8 +290,8 @@ impl TerrainRenderer {
             cull,
             occlusion,
             geometry,
-            holes: if build.holes { Some(TerrainHoles::new(ctx, depth)?) } else { None },
-            triangles: triangle_path(ctx, triangle, slot_capacity, depth)?,
+            holes,
+            triangles,
             classify: ClassifyTiles::new(ctx)?,
             gbuffer_tiles,
             resolve,
