@@ -20,15 +20,18 @@ pub enum Step {
     Sync = 1,
     /// A rename that publishes a file: "input/output error".
     Rename = 2,
+    /// A file's close after its fsync: "input/output error" (NFS reports
+    /// a deferred write error here when the fsync did not flush it all).
+    Close = 3,
 }
 
 impl Step {
     /// The errno a fault at this step reports.
     pub(super) fn errno(self) -> i32 {
         match self {
-            Step::Write => 28, // ENOSPC
-            Step::Sync => 122, // EDQUOT
-            Step::Rename => 5, // EIO
+            Step::Write => 28,               // ENOSPC
+            Step::Sync => 122,               // EDQUOT
+            Step::Rename | Step::Close => 5, // EIO
         }
     }
 }
@@ -39,14 +42,14 @@ const OFF: u64 = u64::MAX;
 /// a folder, it counts only operations under that folder, so tests writing
 /// elsewhere in the same process are not hit.
 pub struct WriteFaults {
-    ops: [AtomicU64; 3],
+    ops: [AtomicU64; 4],
     fail_at: AtomicU64,
     step: AtomicU8,
     under: Mutex<Option<PathBuf>>,
 }
 
 static FAULTS: WriteFaults = WriteFaults {
-    ops: [AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)],
+    ops: [AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)],
     fail_at: AtomicU64::new(OFF),
     step: AtomicU8::new(0),
     under: Mutex::new(None),
@@ -112,11 +115,16 @@ impl WriteFaults {
 
 /// Arms the injector from the environment (the command line's tests walk
 /// every failure path of a real run): `VISTA_FAIL_WRITE=N`,
-/// `VISTA_FAIL_SYNC=N` or `VISTA_FAIL_RENAME=N`, the Nth (from 0) such
-/// operation of the process fails. Returns the step armed, if any.
+/// `VISTA_FAIL_SYNC=N`, `VISTA_FAIL_CLOSE=N` or `VISTA_FAIL_RENAME=N`, the
+/// Nth (from 0) such operation of the process fails. Returns the step
+/// armed, if any.
 pub fn arm_from_env(var: &dyn Fn(&str) -> Option<String>) -> Option<Step> {
-    let steps =
-        [("VISTA_FAIL_WRITE", Step::Write), ("VISTA_FAIL_SYNC", Step::Sync), ("VISTA_FAIL_RENAME", Step::Rename)];
+    let steps = [
+        ("VISTA_FAIL_WRITE", Step::Write),
+        ("VISTA_FAIL_SYNC", Step::Sync),
+        ("VISTA_FAIL_CLOSE", Step::Close),
+        ("VISTA_FAIL_RENAME", Step::Rename),
+    ];
     for (name, step) in steps {
         if let Some(n) = var(name).and_then(|v| v.parse().ok()) {
             faults().fail_in(step, None, n);

@@ -8,9 +8,9 @@
 //! [`FileSet`] (a render's outputs) renames nothing until every member was
 //! written and fsynced, and puts the old files back if a rename fails.
 //!
-//! `close` is not checked (the standard library drops its result): the
-//! fsync before it is what reports a deferred write error, and a closed
-//! file with no dirty data has nothing left to fail.
+//! A file's `close` is checked too (the standard library's drop ignores
+//! what it says): the fsync before it reports a deferred write error on
+//! most disks, but NFS may still report one at `close`.
 //!
 //! Faults can be injected at each step ([`faults`]).
 
@@ -98,7 +98,8 @@ fn write_temporary(
         w.flush()?;
         let file = w.inner.into_inner().map_err(|e| e.into_error())?;
         faults().check(Step::Sync, path)?;
-        file.sync_all()
+        file.sync_all()?;
+        close(file, path)
     });
     match result {
         Ok(()) => Ok(tmp),
@@ -107,6 +108,26 @@ fn write_temporary(
             Err(OutputError::new(path, e))
         }
     }
+}
+
+/// Closes `file` and says what `close` reported. On Linux the descriptor
+/// is gone even when close reports EINTR, which carries no data error.
+fn close(file: File, path: &Path) -> io::Result<()> {
+    faults().check(Step::Close, path)?;
+    #[cfg(unix)]
+    {
+        use std::os::fd::IntoRawFd;
+        let fd = file.into_raw_fd();
+        // SAFETY: `fd` was just released by its only owner: it is open, and
+        // nothing else closes it.
+        if unsafe { libc::close(fd) } != 0 {
+            let e = io::Error::last_os_error();
+            return if e.raw_os_error() == Some(libc::EINTR) { Ok(()) } else { Err(e) };
+        }
+    }
+    #[cfg(not(unix))]
+    drop(file);
+    Ok(())
 }
 
 /// Renames `from` over `to`; `to` names the file in the error.
@@ -249,8 +270,9 @@ mod tests {
         assert_eq!(names(&out), ["x.json", "y.png"]);
 
         // A quota that only fsync reports, at each file and at the folder,
-        // and a rename failing at each member: the old set stays whole.
-        for (step, ops) in [(Step::Sync, 4), (Step::Rename, 5)] {
+        // a network disk's error at each file's close, and a rename
+        // failing at each member: the old set stays whole.
+        for (step, ops) in [(Step::Sync, 4), (Step::Close, 3), (Step::Rename, 5)] {
             for k in 0..ops {
                 faults().fail_in(step, Some(&dir), k);
                 let mut set = FileSet::new(&out);

@@ -21,7 +21,7 @@ fn vista(args: &[&str], fail_at: Option<u64>, cache: &Path) -> Run {
 }
 
 /// `vista ARGS` whose Nth operation of one kind fails (`VISTA_FAIL_WRITE`,
-/// `VISTA_FAIL_SYNC` or `VISTA_FAIL_RENAME`).
+/// `VISTA_FAIL_SYNC`, `VISTA_FAIL_CLOSE` or `VISTA_FAIL_RENAME`).
 fn vista_failing(args: &[&str], fail: Option<(&str, u64)>, cache: &Path) -> Run {
     let mut c = vista_cmd::vista_cmd();
     // This test's own error-tree cache, filled by the first (unfaulted) run,
@@ -113,8 +113,8 @@ fn a_render_writes_all_its_files_or_none() {
     let _ = std::fs::remove_dir_all(&root);
 }
 
-/// A network disk or a quota that reports only at fsync, and a rename that
-/// fails, at every such operation of a render: the previous render's files
+/// A network disk or a quota that reports only at fsync or at close, and a
+/// rename that fails, at every such operation of a render: the previous render's files
 /// stay all old (a commit that fails part-way puts back what it moved), no
 /// temporary remains, and the error names the file. Then a bake whose
 /// fsync fails names the node file and keeps every earlier one.
@@ -128,7 +128,12 @@ fn fsync_and_rename_failures_keep_the_previous_set_whole_and_name_the_file() {
     assert_eq!(first.code, Some(0), "{}", first.stderr);
     let mut before = snapshot(&out);
     let mut failed = Vec::new();
-    for (var, says) in [("VISTA_FAIL_SYNC", "Disk quota exceeded"), ("VISTA_FAIL_RENAME", "Input/output error")] {
+    let steps = [
+        ("VISTA_FAIL_SYNC", "Disk quota exceeded"),
+        ("VISTA_FAIL_CLOSE", "Input/output error"),
+        ("VISTA_FAIL_RENAME", "Input/output error"),
+    ];
+    for (var, says) in steps {
         let mut k = 0;
         loop {
             let run = vista_failing(&args, Some((var, k)), &cache);
@@ -144,8 +149,9 @@ fn fsync_and_rename_failures_keep_the_previous_set_whole_and_name_the_file() {
         }
         failed.push((var, k));
     }
-    // 8 files and the folder are fsynced; 8 old files go aside, 8 new come in.
-    assert_eq!(failed, [("VISTA_FAIL_SYNC", 9), ("VISTA_FAIL_RENAME", 16)]);
+    // 8 files and the folder are fsynced, the 8 files closed; 8 old files
+    // go aside, 8 new come in.
+    assert_eq!(failed, [("VISTA_FAIL_SYNC", 9), ("VISTA_FAIL_CLOSE", 8), ("VISTA_FAIL_RENAME", 16)]);
 
     let nodes = root.join("nodes");
     let bake = ["bake", "--out", nodes.to_str().unwrap(), "--no-progress", "--region", "0,0,64,64"];
