@@ -62,6 +62,41 @@ fn page_requests_equal_the_cpu_twin() {
         let v = low();
         rig.shot(ctx, &v, CullStages::ALL);
         let cap = rig.again(ctx, &v, CullStages::ALL);
+        requests_match_the_twin(ctx, &rig, &cap);
+    });
+}
+
+/// A render that waits to settle (`set_catch_up`): the feedback samples
+/// every pixel, so one clean frame checks what the jitter cycle's 64 do;
+/// it settles in fewer frames on the same picture, pixel for pixel, and a
+/// whole frame's requests are the CPU twin's at stride 1.
+#[test]
+fn catching_up_settles_sooner_on_the_same_picture() {
+    gpu_test(|ctx| {
+        let v = low();
+        let settle = |rig: &mut Rig, catch_up: bool| {
+            rig.renderer.set_catch_up(catch_up);
+            let s = rig.off.settle(ctx, &mut rig.renderer, &v, std::time::Duration::from_secs(300)).expect("frames");
+            assert!(s.settled, "catch_up {catch_up}: did not settle");
+            (s.frames, rig.off.capture(ctx).expect("capture"))
+        };
+        let (paced, a) = settle(&mut rig(ctx, effects(true)), false);
+        let mut fast = rig(ctx, effects(true));
+        let (caught_up, b) = settle(&mut fast, true);
+        println!("settled after {paced} frames at the jitter's pace, {caught_up} catching up");
+        assert!(caught_up < paced, "{caught_up} frames catching up, {paced} without");
+        assert!(a.rgba == b.rgba, "catching up settled on another picture");
+        let cap = fast.again(ctx, &v, CullStages::default());
+        let vt = fast.renderer.effect::<vista::effects::virtual_texture::VirtualTexture>().expect("built");
+        assert!(vt.last_push().unwrap().is_whole(), "catching up, the feedback samples every pixel");
+        requests_match_the_twin(ctx, &fast, &cap);
+    });
+}
+
+/// The page requests `rig`'s last frame listed are the CPU twin's (from
+/// the same G-buffer, depth, view, state and push).
+fn requests_match_the_twin(ctx: &Context, rig: &Rig, cap: &Capture) {
+    {
         let r = &rig.renderer;
         let vt = r.effect::<vista::effects::virtual_texture::VirtualTexture>().expect("built");
         let g = r.gbuffer.as_ref().unwrap().capture(ctx).unwrap();
@@ -101,7 +136,7 @@ fn page_requests_equal_the_cpu_twin() {
         }
         let levels: std::collections::BTreeSet<u32> = gpu.iter().map(|e| e[1] & 15).collect();
         assert!(levels.len() >= 3, "several levels in view: {levels:?}");
-    });
+    }
 }
 
 /// Runs `vt_probe` over `points` (x, y, level): per point (flags: 1 the

@@ -1,7 +1,8 @@
 #version 460
 // Page requests of the virtual texture (seed 001, at seed 000's 1/8 size):
 // one sample per VT_FEEDBACK_STRIDE^2 block of pixels, its place in the
-// block jittered over frames, at terrain pixels classified for the
+// block jittered over frames (or, while an offline render settles, every
+// pixel: stride 1, so one frame checks what the cycle checks), at terrain pixels classified for the
 // virtual-texture flavour. A sample asks for the two levels its footprint
 // falls between (what gbuffer_tiles samples) and its region's level 0 (the
 // fallback every coarser lookup ends at). Deduplicated without a clear
@@ -38,9 +39,9 @@ layout(push_constant, std430) uniform VtFeedbackPush {
     uvec2 jitter;   // sample's place in its block (pixels)
     uvec2 size;     // target size (pixels)
     uint stamp;     // this frame's status value (never 0)
+    uint stride;    // one sample per stride^2 pixels (VT_FEEDBACK_STRIDE or 1)
     uint pad0;
     uint pad1;
-    uint pad2;
 } pc;
 
 void request(VtSub s, uint level, uvec2 p) {
@@ -55,7 +56,7 @@ void request(VtSub s, uint level, uvec2 p) {
 }
 
 void main() {
-    uvec2 px = gl_GlobalInvocationID.xy * VT_FEEDBACK_STRIDE + pc.jitter;
+    uvec2 px = gl_GlobalInvocationID.xy * pc.stride + pc.jitter;
     if (any(greaterThanEqual(px, pc.size))) {
         return;
     }

@@ -162,6 +162,12 @@ pub trait FrameEffect: Any {
         None
     }
 
+    /// A render waits for the picture to settle (`on`) or goes on at its
+    /// own pace: an effect may spend more a frame to settle in fewer.
+    fn catch_up(&mut self, on: bool) {
+        let _ = on;
+    }
+
     /// Its material bindings (the material effects make them, the virtual
     /// texture adds its own for the tile shading and what follows it:
     /// `shading`; the passes before it read the materials alone).

@@ -10,8 +10,7 @@
 use crate::effects::virtual_texture::vt_feedback::VtFeedbackPush;
 use crate::scene::view::TerrainViewGpu;
 use crate::shaders::consts::{
-    FLAVOUR_VIRTUAL_TEXTURE, VT_FEEDBACK_STRIDE, VT_NONE, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT, VT_STATE_HEADER,
-    VT_SUB_K_SHIFT, VT_TILE_TEXELS,
+    FLAVOUR_VIRTUAL_TEXTURE, VT_NONE, VT_REQ_X_SHIFT, VT_REQ_Y_SHIFT, VT_STATE_HEADER, VT_SUB_K_SHIFT, VT_TILE_TEXELS,
 };
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::collections::BTreeSet;
@@ -98,10 +97,11 @@ pub fn page_requests(inp: &FeedbackInputs) -> TwinRequests {
     let region_m = f32::from_bits(w[4]);
     let camera = Vec3::from_slice(&inp.view.camera_world[..3]);
     let mut out = TwinRequests::default();
-    let cells = inp.size.map(|s| s.div_ceil(VT_FEEDBACK_STRIDE));
+    let stride = inp.push.stride;
+    let cells = inp.size.map(|s| s.div_ceil(stride));
     for cy in 0..cells[1] {
         for cx in 0..cells[0] {
-            let px = [cx * VT_FEEDBACK_STRIDE + inp.push.jitter[0], cy * VT_FEEDBACK_STRIDE + inp.push.jitter[1]];
+            let px = [cx * stride + inp.push.jitter[0], cy * stride + inp.push.jitter[1]];
             if px[0] >= inp.size[0] || px[1] >= inp.size[1] {
                 continue;
             }

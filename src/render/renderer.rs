@@ -484,6 +484,17 @@ impl TerrainRenderer {
         self.terrain.settled() && self.built.iter().all(|e| e.settled())
     }
 
+    /// A render that waits for [`Self::settled`] (`on`; an offline render)
+    /// lets the effects spend more a frame to settle in fewer frames (the
+    /// virtual texture's feedback samples every pixel, shadows take their
+    /// largest budget); off, every frame
+    /// costs what it costs at its own pace.
+    pub fn set_catch_up(&mut self, on: bool) {
+        for e in &mut self.built {
+            e.catch_up(on);
+        }
+    }
+
     /// Effect `decals`: replaces the decal list (world metres; the textures
     /// stay those given at creation). The resident virtual-texture pages
     /// an added, removed or changed decal touches, before or after, are

@@ -410,7 +410,10 @@ fn note_camera_place(view: &View, world: &LoadedWorld) {
 pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs) -> Result<()> {
     let (mut renderer, mut off) = renderer_and_target(ctx, world, view, args)?;
     let ready_s = crate::STARTED.get().map_or(0.0, |t| t.elapsed().as_secs_f64());
+    // Settling spends more a frame to need fewer; the timed frames after it do not.
+    renderer.set_catch_up(true);
     let settle = off.settle(ctx, &mut renderer, view, std::time::Duration::from_secs_f64(args.settle_seconds))?;
+    renderer.set_catch_up(false);
     let first = renderer.frames_recorded() + 1;
     // A bar on a terminal, a line every 5 s otherwise (long runs only).
     let progress = vista::world::Reporter::new(crate::progress::auto(), u64::from(args.frames), Work::Frames);

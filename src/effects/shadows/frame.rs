@@ -25,6 +25,8 @@ pub struct Shadows {
     pub schedule: ShadowSchedule,
     /// Switched off in an earlier frame and not back on yet.
     were_off: bool,
+    /// A render waiting to settle: the largest budget every frame.
+    catch_up: bool,
     /// This frame: switched on, the jobs, shown (every slot current), the
     /// sun's direction and elevation (degrees).
     on: bool,
@@ -43,6 +45,7 @@ pub fn build(b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
         pass: SunShadows::new(b.ctx, b.effects.shadows, b.slot_capacity)?,
         schedule: ShadowSchedule::default(),
         were_off: false,
+        catch_up: false,
         on: false,
         jobs: Vec::new(),
         shown: false,
@@ -67,7 +70,7 @@ impl Shadows {
                 terrain.resident_nodes().into_iter().filter_map(|n| Some((n, tree.shadow.slot_of(n)?))).collect();
             self.schedule.restart(&resident);
         }
-        if !self.schedule.ready() {
+        if !self.schedule.ready() || self.catch_up {
             budget = MAX_UPDATE_BUDGET;
         }
         let world = terrain.world;
@@ -128,6 +131,10 @@ impl FrameEffect for Shadows {
 
     fn settled(&self) -> bool {
         self.schedule.stale() == 0
+    }
+
+    fn catch_up(&mut self, on: bool) {
+        self.catch_up = on;
     }
 
     fn pipelines(&self) -> Vec<String> {

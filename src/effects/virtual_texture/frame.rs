@@ -133,6 +133,10 @@ impl FrameEffect for VirtualTexture {
         VirtualTexture::settled(self)
     }
 
+    fn catch_up(&mut self, on: bool) {
+        self.set_catch_up(on);
+    }
+
     fn pipelines(&self) -> Vec<String> {
         let mut out: Vec<String> = self.pipeline_labels().map(str::to_string).to_vec();
         out.extend(self.decal_meshes.iter().map(|p| p.pipeline_label().to_string()));

@@ -105,6 +105,8 @@ struct Slot {
     frame: u64,
     ctx_frame: u64,
     pending: bool,
+    /// Its feedback sampled every pixel.
+    whole: bool,
 }
 
 /// Where the camera is, for sizing the sub-textures.
@@ -190,6 +192,9 @@ pub struct VirtualTexture {
     writes: Vec<StateWrite>,
     /// The feedback's push constants of the newest frame (tests).
     pub(crate) last_push: Option<VtFeedbackPush>,
+    /// An offline render settling: the feedback samples every pixel
+    /// ([`VirtualTexture::set_catch_up`]).
+    catch_up: bool,
     initialized: bool,
     decals: Option<Decals>,
     /// Effect `decals` with a displacement decal: their meshes' pass.
@@ -244,7 +249,7 @@ impl VirtualTexture {
             let name = format!("vt_requests_readback[{i}]");
             let buffer =
                 buffer(ctx, &name, REQUEST_BYTES, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
-            ring.push(Slot { buffer, frame: 0, ctx_frame: 0, pending: false });
+            ring.push(Slot { buffer, frame: 0, ctx_frame: 0, pending: false, whole: false });
         }
         Ok(VirtualTexture {
             feedback: VtFeedback::new(ctx)?,
@@ -274,6 +279,7 @@ impl VirtualTexture {
             state: VtState::new(layout, params.pages_per_frame.min(VT_MAX_JOBS)),
             writes: Vec::new(),
             last_push: None,
+            catch_up: false,
             initialized: false,
             decals,
             decal_meshes: None,
@@ -305,6 +311,14 @@ impl VirtualTexture {
     #[cfg(feature = "test-hooks")]
     pub fn last_push(&self) -> Option<VtFeedbackPush> {
         self.last_push
+    }
+
+    /// While on, the feedback samples every pixel (64 times the jitter's
+    /// samples: about 35 ms a frame at 960 x 540 on lavapipe), so one clean
+    /// frame after the last change settles it, where the jitter cycle
+    /// takes VT_FEEDBACK_STRIDE^2 frames: for a render that waits to settle.
+    pub fn set_catch_up(&mut self, on: bool) {
+        self.catch_up = on;
     }
 
     pub fn layout(&self) -> &VtLayout {
@@ -436,7 +450,11 @@ impl VirtualTexture {
         camera: VtCamera,
         terrain: &crate::terrain::Terrain,
     ) -> VtFrame {
-        self.last_push = Some(VtFeedbackPush::for_frame(frame, camera.size));
+        let push = match self.catch_up {
+            true => VtFeedbackPush::whole(frame, camera.size),
+            false => VtFeedbackPush::for_frame(frame, camera.size),
+        };
+        self.last_push = Some(push);
         let (layout, at_rest) = (self.state.layout, terrain.settled());
         let done = ctx.frames_completed();
         let mut slots: Vec<&mut Slot> = self.ring.iter_mut().filter(|s| s.pending && s.ctx_frame <= done).collect();
@@ -448,7 +466,7 @@ impl VirtualTexture {
             let n = words[0].min(VT_REQUEST_CAPACITY) as usize;
             let entries: Vec<[u32; 2]> = words[4..4 + 2 * n].chunks_exact(2).map(|c| [c[0], c[1]]).collect();
             let source = |page| at_rest.then(|| page_source(terrain, layout.padded_rect(page)));
-            self.state.harvest(slot.frame, &entries, source);
+            self.state.harvest(slot.frame, &entries, slot.whole, source);
         }
         let world = terrain.world;
         // Pages are rendered from the finest resident nodes: one that
@@ -478,7 +496,7 @@ impl VirtualTexture {
         if s.pending {
             log::debug!("page requests of frame {} were not back in time and are dropped", s.frame);
         }
-        (s.frame, s.ctx_frame, s.pending) = (frame, ctx_frame, true);
+        (s.frame, s.ctx_frame, s.pending, s.whole) = (frame, ctx_frame, true, push.is_whole());
         VtFrame {
             frame,
             writes: self.writes.drain(..n).collect(),

@@ -321,7 +321,15 @@ impl VtState {
     /// (nodes left from under them; `source` gives `None` while streaming
     /// is under way: the nodes may come back, and the page with them),
     /// touches the others and remembers the rest as misses.
-    pub fn harvest(&mut self, frame: u64, requests: &[[u32; 2]], source: impl Fn(PageKey) -> Option<PageSource>) {
+    /// `whole`: the frame sampled every pixel, so a clean one checks every
+    /// phase.
+    pub fn harvest(
+        &mut self,
+        frame: u64,
+        requests: &[[u32; 2]],
+        whole: bool,
+        source: impl Fn(PageKey) -> Option<PageSource>,
+    ) {
         let mut pages: Vec<PageKey> = requests.iter().map(|&e| unpack_request(e)).collect();
         pages.sort();
         pages.dedup();
@@ -343,7 +351,7 @@ impl VtState {
         }
         self.harvested = self.harvested.max(frame);
         if frame > self.changed && self.misses.is_empty() {
-            self.clean_phases |= 1 << (frame % PHASES);
+            self.clean_phases |= if whole { PHASES_ALL } else { 1 << (frame % PHASES) };
         }
         self.counters.requested = pages.len() as u32;
         self.counters.hits = hits;
@@ -459,7 +467,7 @@ mod tests {
         assert_eq!(sub.k, 7);
         // Requests for region 0's coarsest pages.
         let req: Vec<[u32; 2]> = (0..2).map(|x| [0, pack_page(PageKey { region: 0, level: 1, x, y: 0 })]).collect();
-        s.harvest(1, &req, |_| None);
+        s.harvest(1, &req, false, |_| None);
         assert_eq!((s.counters.requested, s.counters.hits), (2, 0));
         let (jobs, writes) = s.plan(4, |_| PageSource::default());
         apply(&mut words, &writes);
@@ -543,23 +551,42 @@ mod tests {
         let key = PageKey { region: 0, level: 1, x: 0, y: 0 };
         let req = [[0, pack_page(key)]];
         let (made, moved) = (PageSource { lod: 0, nodes: 1 }, PageSource { lod: 1, nodes: 2 });
-        s.harvest(1, &req, |_| None);
+        s.harvest(1, &req, false, |_| None);
         assert_eq!(s.plan(2, |_| made).0.len(), 1);
         for f in 3..3 + PHASES {
-            s.harvest(f, &req, |_| None);
+            s.harvest(f, &req, false, |_| None);
             assert!(s.plan(f, |_| made).0.is_empty(), "kept while the nodes may come back");
         }
         assert!(s.settled());
         let f = 3 + PHASES;
-        s.harvest(f, &req, |_| Some(moved));
+        s.harvest(f, &req, false, |_| Some(moved));
         assert!(!s.settled(), "a changed page is a miss");
         assert_eq!(s.plan(f, |_| moved).0.len(), 1, "rendered again");
         assert_eq!(s.cache().source(key), Some(moved));
         for g in f + 1..f + PHASES {
-            s.harvest(g, &req, |_| Some(moved));
+            s.harvest(g, &req, false, |_| Some(moved));
             assert!(!s.settled(), "phase {} not yet checked since the change", g % PHASES);
         }
-        s.harvest(f + PHASES, &req, |_| Some(moved));
+        s.harvest(f + PHASES, &req, false, |_| Some(moved));
         assert!(s.settled());
+    }
+
+    /// A frame whose feedback sampled every pixel checks every phase: one
+    /// clean one after a change settles it; one with a miss does not.
+    #[test]
+    fn a_whole_frame_checks_every_phase_at_once() {
+        let layout = VtLayout::new([256.0, 256.0], 64.0, 256, 4, 1000.0);
+        let mut s = VtState::new(layout, 4);
+        s.place_sub_textures(1, [10.0, 10.0], 1e-3, 1000.0);
+        let key = PageKey { region: 0, level: 1, x: 0, y: 0 };
+        let req = [[0, pack_page(key)]];
+        let made = PageSource { lod: 0, nodes: 1 };
+        s.harvest(1, &req, true, |_| None);
+        assert!(!s.settled(), "a miss");
+        assert_eq!(s.plan(2, |_| made).0.len(), 1);
+        s.harvest(2, &req, true, |_| None);
+        assert!(!s.settled(), "frame 2 was recorded before the page was made");
+        s.harvest(3, &req, true, |_| None);
+        assert!(s.settled(), "one clean whole frame after the change");
     }
 }

@@ -19,7 +19,9 @@ pub struct VtFeedbackPush {
     pub jitter: [u32; 2],
     pub size: [u32; 2],
     pub stamp: u32,
-    pub pad: [u32; 3],
+    /// One sample per stride^2 pixels: VT_FEEDBACK_STRIDE, or 1 (`whole`).
+    pub stride: u32,
+    pub pad: [u32; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<VtFeedbackPush>() == structs::VT_FEEDBACK_PUSH);
@@ -35,7 +37,18 @@ impl VtFeedbackPush {
         let y = (row + 3 * x) % s;
         // Stamp 0 is the status buffer's initial value: never a frame's.
         let stamp = (frame % u64::from(u32::MAX)) as u32 + 1;
-        VtFeedbackPush { jitter: [x as u32, y as u32], size, stamp, pad: [0; 3] }
+        VtFeedbackPush { jitter: [x as u32, y as u32], size, stamp, stride: VT_FEEDBACK_STRIDE, pad: [0; 2] }
+    }
+
+    /// Frame `frame` sampling every pixel: what the whole jitter cycle
+    /// samples, in one frame (an offline render settling).
+    pub fn whole(frame: u64, size: [u32; 2]) -> VtFeedbackPush {
+        VtFeedbackPush { jitter: [0; 2], stride: 1, ..Self::for_frame(frame, size) }
+    }
+
+    /// Whether it samples every pixel.
+    pub fn is_whole(&self) -> bool {
+        self.stride == 1
     }
 }
 
@@ -98,7 +111,7 @@ impl VtFeedback {
         );
         rec.push_constants(&self.pipeline, &push);
         let [gx, gy, _] = sh::WORKGROUP_SIZE;
-        let cells = push.size.map(|s| s.div_ceil(VT_FEEDBACK_STRIDE));
+        let cells = push.size.map(|s| s.div_ceil(push.stride));
         rec.dispatch(cells[0].div_ceil(gx), cells[1].div_ceil(gy), 1);
         rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::ALL_COMMANDS);
     }
