@@ -540,16 +540,21 @@ mod tests {
         assert!(s.counters.beyond_window >= reach * reach - 17 * 17 - 4 * reach);
     }
 
+    /// A state with one sub-texture, one of its pages and a request for it.
+    fn one_page() -> (VtState, PageKey, [[u32; 2]; 1]) {
+        let layout = VtLayout::new([256.0, 256.0], 64.0, 256, 4, 1000.0);
+        let mut s = VtState::new(layout, 4);
+        s.place_sub_textures(1, [10.0, 10.0], 1e-3, 1000.0);
+        let key = PageKey { region: 0, level: 1, x: 0, y: 0 };
+        (s, key, [[0, pack_page(key)]])
+    }
+
     /// A page is rendered again when its nodes changed under it, once
     /// streaming rests (`source` gives `None` before), and settling waits
     /// for every feedback phase to come back clean after that.
     #[test]
     fn a_page_whose_nodes_changed_is_rendered_again_once_streaming_rests() {
-        let layout = VtLayout::new([256.0, 256.0], 64.0, 256, 4, 1000.0);
-        let mut s = VtState::new(layout, 4);
-        s.place_sub_textures(1, [10.0, 10.0], 1e-3, 1000.0);
-        let key = PageKey { region: 0, level: 1, x: 0, y: 0 };
-        let req = [[0, pack_page(key)]];
+        let (mut s, key, req) = one_page();
         let (made, moved) = (PageSource { lod: 0, nodes: 1 }, PageSource { lod: 1, nodes: 2 });
         s.harvest(1, &req, false, |_| None);
         assert_eq!(s.plan(2, |_| made).0.len(), 1);
@@ -575,11 +580,7 @@ mod tests {
     /// clean one after a change settles it; one with a miss does not.
     #[test]
     fn a_whole_frame_checks_every_phase_at_once() {
-        let layout = VtLayout::new([256.0, 256.0], 64.0, 256, 4, 1000.0);
-        let mut s = VtState::new(layout, 4);
-        s.place_sub_textures(1, [10.0, 10.0], 1e-3, 1000.0);
-        let key = PageKey { region: 0, level: 1, x: 0, y: 0 };
-        let req = [[0, pack_page(key)]];
+        let (mut s, _, req) = one_page();
         let made = PageSource { lod: 0, nodes: 1 };
         s.harvest(1, &req, true, |_| None);
         assert!(!s.settled(), "a miss");
