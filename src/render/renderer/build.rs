@@ -223,7 +223,9 @@ fn terrain_draws(
     holes: bool,
     triangle: Option<u32>,
 ) -> Result<(TerrainGeometry, Option<TerrainHoles>, Option<TrianglePath>)> {
-    let sink = effects.iter().any(|e| e.terrain_sink().is_some());
+    let sinks = effects.iter().filter(|e| e.terrain_sink().is_some()).count();
+    assert!(sinks <= 1, "{sinks} effects sink the height field; the terrain's draws read one sink");
+    let sink = sinks == 1;
     let holes = if holes { Some(TerrainHoles::new(ctx, depth, sink)?) } else { None };
     let triangles = match triangle {
         Some(slots) => {
