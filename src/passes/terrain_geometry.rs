@@ -150,11 +150,6 @@ impl TerrainGeometry {
         self.index_count
     }
 
-    /// Built with the sink (every terrain draw pushes sunk cells behind).
-    pub fn sinks(&self) -> bool {
-        self.sink
-    }
-
     pub fn pipeline_label(&self) -> &str {
         &self.pipeline.label
     }
