@@ -339,8 +339,11 @@ fn payload_roundtrip_and_memory_report() {
 
 #[test]
 fn procedural_world_is_deterministic_and_has_cliffs() {
+    // Terraced: the option that cuts cliffs (tests/procedural_world.rs
+    // checks the eroded default).
     let (w, src) = ProceduralSource::default_world(7);
-    let (_, same) = ProceduralSource::default_world(7);
+    let src = src.with_terraces(true);
+    let same = ProceduralSource::default_world(7).1.with_terraces(true);
     let (_, other) = ProceduralSource::default_world(8);
     assert_eq!(src.id_hash(), same.id_hash());
     assert_ne!(src.id_hash(), other.id_hash());

@@ -10,7 +10,7 @@ use super::layout::{
     NodeId, WorldDesc, CONE_BLOCKS_PER_NODE_SIDE, NODE_QUADS, NODE_SAMPLES, PATCHES_PER_NODE, PATCHES_PER_NODE_SIDE,
     PATCH_QUADS, PATCH_SAMPLES, SPLAT_RES,
 };
-use super::material_rules::MaterialRules;
+use super::material_rules::{MaterialRules, Site};
 use super::payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 use super::source::HeightSource;
 use super::texels::{pack_normal, texel_index, PayloadFormat, TexelKind, ATLAS_BORDER, ATLAS_SIDE, ATLAS_TEXELS};
@@ -189,13 +189,13 @@ fn texels(source: &dyn HeightSource, settings: &BakeSettings, g: &Grid, p: &Plac
             let len = (dx * dx + dy * dy + 1.0).sqrt();
             let nrm = [-dx / len, -dy / len, 1.0 / len];
             let slope_deg = (nrm[2].clamp(-1.0, 1.0).acos() as f32).to_degrees();
-            let mat = settings.materials.material(slope_deg, f[fj * width + fi]);
             let s = [t as i64 - ATLAS_BORDER as i64, u as i64 - ATLAS_BORDER as i64];
             let n0 = [i64::from(p.id.x), i64::from(p.id.y)].map(|c| c * i64::from(NODE_QUADS));
             let pos = [world.grid_pos(0, n0[0] + s[0], p.step), world.grid_pos(1, n0[1] + s[1], p.step)];
             let solid = !is_hole_at(world, source, p.holes.iter().copied(), pos, p.step);
-            let altitude = f[fj * width + fi];
-            let word = settings.control.as_ref().map(|c| c.word(pos[0], pos[1], slope_deg, altitude));
+            let site = Site { slope_deg, altitude_m: f[fj * width + fi], ground: source.ground(pos[0], pos[1]) };
+            let mat = settings.materials.material_at(&site);
+            let word = settings.control.as_ref().map(|c| c.word(pos[0], pos[1], &site));
             let (rgb, smooth) = match (&settings.control, word) {
                 (Some(c), Some(w)) => c.looks.look(w, slope01(nrm[2])),
                 _ => material_look(mat, slope_deg),

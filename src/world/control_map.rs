@@ -15,7 +15,7 @@ use std::path::Path;
 
 use super::error::{Result, WorldError};
 use super::hash::Fnv64;
-use super::material_rules::MaterialRules;
+use super::material_rules::{MaterialRules, Site};
 use super::payload::Material;
 use super::source::{GridSource, HeightSource as _};
 use crate::shaders::consts;
@@ -110,10 +110,10 @@ pub struct ControlRules {
 }
 
 impl ControlRules {
-    pub fn code(&self, slope_deg: f32, altitude_m: f32) -> u16 {
+    pub fn code(&self, site: &Site) -> u16 {
         use textures::*;
-        let m = self.rules.material(slope_deg, altitude_m);
-        let snowy = altitude_m > self.rules.snow_line_m;
+        let m = self.rules.material_at(site);
+        let snowy = site.altitude_m > self.rules.snow_line_m;
         let (overlay, background) = match m {
             Material::Snow => (SNOW, ROCK),
             Material::Grass => (GRASS, ROCK),
@@ -227,10 +227,10 @@ pub enum ControlSource {
 }
 
 impl ControlSource {
-    pub fn word(&self, x_m: f64, y_m: f64, slope_deg: f32, altitude_m: f32) -> u16 {
+    pub fn word(&self, x_m: f64, y_m: f64, site: &Site) -> u16 {
         match self {
             ControlSource::Map(m) => m.word(x_m, y_m),
-            ControlSource::Rules(r) => r.code(slope_deg, altitude_m),
+            ControlSource::Rules(r) => r.code(site),
         }
     }
 
@@ -319,10 +319,10 @@ pub struct ControlBake {
 
 impl ControlBake {
     /// The word at a point: a stamp's where one covers it, else the
-    /// world's (its map's, or the rules' for this slope and altitude).
-    pub fn word(&self, x_m: f64, y_m: f64, slope_deg: f32, altitude_m: f32) -> u16 {
+    /// world's (its map's, or the rules' for this site).
+    pub fn word(&self, x_m: f64, y_m: f64, site: &Site) -> u16 {
         let stamped = self.stamps.iter().rev().find_map(|s| s.word(x_m, y_m));
-        stamped.unwrap_or_else(|| self.source.word(x_m, y_m, slope_deg, altitude_m))
+        stamped.unwrap_or_else(|| self.source.word(x_m, y_m, site))
     }
 
     /// Part of a node's key over `bounds_m`: the source's, and the stamps'

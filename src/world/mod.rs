@@ -10,6 +10,7 @@ pub mod bintree_dense;
 mod cache;
 mod cones;
 mod control_map;
+mod erosion;
 mod error;
 mod error_quantile;
 mod error_tile;
@@ -24,6 +25,7 @@ mod loader;
 mod manifest;
 mod material_rules;
 mod memory;
+mod noise;
 mod payload;
 mod plan;
 mod plan_display;
@@ -72,7 +74,7 @@ pub use loader::{LoadFn, Loader};
 pub use manifest::{
     manifest_path, verify, ForeignManifest, ShardManifest, ShardVerdict, VerifyReport, MANIFEST_VERSION,
 };
-pub use material_rules::MaterialRules;
+pub use material_rules::{MaterialRules, Site};
 pub use memory::{node_cpu_bytes, MemoryReport, PayloadSize};
 pub use payload::{BakedNode, Material, PATCH_HOLE_ALL, PATCH_HOLE_NONE, PATCH_HOLE_SOME};
 pub use plan::{
@@ -81,12 +83,12 @@ pub use plan::{
 };
 pub use plan_display::{ErrorMemory, LARGE_ERROR_MEMORY};
 pub use png16::Png16Source;
-pub use procedural::ProceduralSource;
+pub use procedural::{FlowNetwork, ProceduralSource, SHAPE_NODES};
 pub use progress::{Progress, ProgressEvent, ProgressFn, Reporter, Work};
 pub use projection::TraverseCamera;
 pub use resample_bound::RangeFit;
 pub use shard::{ShardError, ShardPlan, ShardSplit, MAX_SHARDS, UNITS_PER_SHARD};
-pub use source::{GridSource, HeightSource};
+pub use source::{GridSource, Ground, HeightSource};
 pub use stamps::{load_stamp_map, Stamp, StampBlend, StampPlacement, StampedSource};
 pub use streamer::{StreamFrame, Streamer};
 pub use streaming::{

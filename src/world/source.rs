@@ -48,6 +48,13 @@ pub trait HeightSource: Send + Sync {
         None
     }
 
+    /// What shaped the ground at a point, for the materials: a source that
+    /// knows its water and rockfall says so (the procedural generator's
+    /// erosion); the default knows nothing.
+    fn ground(&self, _x_m: f64, _y_m: f64) -> Ground {
+        Ground::default()
+    }
+
     /// `out[i] = sample(xs[i], y_m)`, bit for bit; a source may share work
     /// between the neighbouring points of a row.
     fn sample_row(&self, xs: &[f64], y_m: f64, out: &mut [f32]) {
@@ -55,6 +62,16 @@ pub trait HeightSource: Send + Sync {
             *o = self.sample(*x, y_m);
         }
     }
+}
+
+/// What water and gravity left at a point, each 0..1.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Ground {
+    /// How much ground drains through here: 0 on a ridge, 1 on a valley's
+    /// floor.
+    pub wet: f32,
+    /// How much rock slid here from steeper ground above (scree).
+    pub talus: f32,
 }
 
 /// A grid of heights covering a world rectangle, sampled with Catmull-Rom

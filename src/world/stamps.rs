@@ -366,6 +366,12 @@ impl HeightSource for StampedSource {
         self.base.has_holes()
     }
 
+    /// The base's water and rockfall: a stamp reshapes heights, not where
+    /// the ground's material came from.
+    fn ground(&self, x_m: f64, y_m: f64) -> super::source::Ground {
+        self.base.ground(x_m, y_m)
+    }
+
     /// The base's region and the stamps whose box touches it, in order;
     /// the base's own where none does (an untouched region keeps its key).
     fn region_hash(&self, bounds_m: [f64; 4]) -> u64 {

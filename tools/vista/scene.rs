@@ -10,6 +10,7 @@
 //! spacing = 0.5
 //! lods = 6
 //! seed = 1
+//! terraces = false             # procedural only: terraced cliffs over the eroded ground
 //! origin = [340000, 5080000]   # where the south-west corner lies (e.g. UTM E, N);
 //!                              # cameras and holes are then given in these coordinates
 //!
@@ -118,6 +119,9 @@ pub struct SceneWorld {
     pub spacing: Option<f64>,
     pub lods: Option<u32>,
     pub seed: Option<u64>,
+    /// The procedural world's terraced cliffs (off: only what erosion shapes).
+    #[serde(default)]
+    pub terraces: bool,
     /// Where the world's south-west corner lies in the coordinates cameras
     /// and holes are given in.
     pub origin: Option<[f64; 2]>,

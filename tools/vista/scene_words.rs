@@ -3,7 +3,7 @@
 //! Extent"); a scene's author needs the key and what it takes.
 
 /// What each scene key takes, in words.
-const KEYS: [(&str, &str); 10] = [
+const KEYS: [(&str, &str); 11] = [
     ("source", "a height map path (PNG16 or EXR) or \"procedural\""),
     ("extent", "metres: one positive number, or [x, y]"),
     ("height_range", "[lo, hi] in metres"),
@@ -11,6 +11,7 @@ const KEYS: [(&str, &str); 10] = [
     ("spacing", "a positive number of metres"),
     ("lods", "a whole number 1 to 10"),
     ("seed", "a whole number 0 or more"),
+    ("terraces", "true or false"),
     ("origin", "[east, north] in metres"),
     ("circle", "[x, y, radius] in metres"),
     ("polygon", "[[x, y], ...] in metres, at least 3 corners"),

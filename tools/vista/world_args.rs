@@ -255,8 +255,14 @@ impl WorldArgs {
             clamp,
             clamp_name,
         };
+        if let (true, Some((path, _))) = (w.terraces, &heightmap) {
+            bail!(
+                "the scene's terraces shape the procedural world; {} has its own ground: drop terraces",
+                path.display()
+            );
+        }
         let (desc, source) = match heightmap {
-            None => given.procedural(seed)?,
+            None => given.procedural(seed, w.terraces)?,
             Some((path, what)) => given.heightmap(path, what, geotiff.is_some())?,
         };
         let origin_name = if self.origin.is_some() { "--origin" } else { "the scene's origin" };
@@ -342,7 +348,7 @@ impl DescInputs<'_> {
     }
 
     /// The default procedural world's geometry.
-    fn procedural(&self, seed: u64) -> Result<(WorldDesc, SpecSource)> {
+    fn procedural(&self, seed: u64, terraces: bool) -> Result<(WorldDesc, SpecSource)> {
         let defaults = WorldDesc::default();
         let (extent, height_range, spacing_m, clamp_name) =
             (self.extent, self.height_range, self.spacing_m, self.clamp_name);
@@ -354,7 +360,7 @@ impl DescInputs<'_> {
         if self.clamp {
             bail!("{clamp_name} clamps an EXR or GeoTIFF height map's data; the procedural world has none: drop it");
         }
-        Ok((desc, SpecSource::Procedural { seed }))
+        Ok((desc, SpecSource::Procedural { seed, terraces }))
     }
 
     /// A height map's geometry, checked before the file is opened.

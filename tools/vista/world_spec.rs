@@ -33,7 +33,7 @@ pub struct WorldSpec {
 }
 
 pub(crate) enum SpecSource {
-    Procedural { seed: u64 },
+    Procedural { seed: u64, terraces: bool },
     Heightmap { path: PathBuf, kind: MapKind, height_range: Option<GivenRange>, clamp: bool },
 }
 
@@ -65,7 +65,7 @@ impl WorldSpec {
     /// What the terrain comes from, before it is read.
     pub fn label(&self) -> String {
         match &self.source {
-            SpecSource::Procedural { seed } => format!("procedural (seed {seed})"),
+            SpecSource::Procedural { seed, terraces } => procedural_label(*seed, *terraces),
             SpecSource::Heightmap { path, .. } => path.display().to_string(),
         }
     }
@@ -186,10 +186,10 @@ impl WorldSpec {
     /// Reads the height map (or makes the procedural source).
     pub fn open(self) -> Result<LoadedWorld> {
         let (desc, source, mut label): (WorldDesc, Arc<dyn HeightSource>, String) = match &self.source {
-            SpecSource::Procedural { seed } => {
+            SpecSource::Procedural { seed, terraces } => {
                 let d = self.desc;
                 let source = ProceduralSource::new(*seed, d.extent_m, d.height_range_m).map_err(input_error)?;
-                (d, Arc::new(source), format!("procedural (seed {seed})"))
+                (d, Arc::new(source.with_terraces(*terraces)), procedural_label(*seed, *terraces))
             }
             SpecSource::Heightmap { path, kind, height_range, clamp } => {
                 let (desc, source) =
@@ -221,4 +221,10 @@ pub(crate) fn load_decals(d: &crate::scene::SceneDecals) -> Result<vista::effect
     let set = DecalSet { textures: textures.into(), decals: d.decals.clone() };
     set.check()?;
     Ok(set)
+}
+
+/// How a procedural world names itself in what vista prints.
+fn procedural_label(seed: u64, terraces: bool) -> String {
+    let terraced = if terraces { ", terraced" } else { "" };
+    format!("procedural (seed {seed}{terraced})")
 }

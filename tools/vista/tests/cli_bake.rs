@@ -122,6 +122,18 @@ fn scene_with_holes_parses_and_bakes() {
 }
 
 #[test]
+fn a_scene_asks_for_the_procedural_worlds_terraces() {
+    let dir = temp_dir("terraces");
+    let scene = dir.join("terraced.toml");
+    std::fs::write(&scene, "[world]\nextent = 1024\nheight_range = [0, 400]\nspacing = 2\nterraces = true\n").unwrap();
+    let out = dir.join("nodes");
+    let (ok, text, err) = vista(&["bake", "--scene", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(text.contains("procedural (seed 1, terraced)"), "{text}");
+    assert!(node_files(&out) > 0, "{text}");
+}
+
+#[test]
 fn memory_prints_totals() {
     let (ok, text, err) = vista(&["memory", "--slots", "512"]);
     assert!(ok, "{err}");
@@ -168,6 +180,14 @@ fn bad_inputs_fail_with_one_line_naming_the_problem() {
         &["bake", "--out", o, "--scene", bad_scene.to_str().unwrap(), "--heightmap", MONTBLANC],
         &["--scene", "--heightmap"],
     );
+    // Terraces shape the procedural world only.
+    let terraced_map = dir.join("terraced.toml");
+    std::fs::write(
+        &terraced_map,
+        format!("[world]\nsource = \"{MONTBLANC}\"\nextent = 60000\nheight_range = [454, 4810]\nterraces = true\n"),
+    )
+    .unwrap();
+    assert_fails_naming(&["bake", "--out", o, "--scene", terraced_map.to_str().unwrap()], &["terraces"]);
     let not_image = dir.join("heights.png");
     std::fs::write(&not_image, "definitely not a png").unwrap();
     assert_fails_naming(
