@@ -255,12 +255,6 @@ impl WorldArgs {
             clamp,
             clamp_name,
         };
-        if let (true, Some((path, _))) = (w.terraces, &heightmap) {
-            bail!(
-                "the scene's terraces shape the procedural world; {} has its own ground: drop terraces",
-                path.display()
-            );
-        }
         let (desc, source) = match heightmap {
             None => given.procedural(seed, w.terraces)?,
             Some((path, what)) => given.heightmap(path, what, geotiff.is_some())?,
@@ -290,6 +284,10 @@ impl WorldArgs {
             (None, SceneSource::Path(p)) => Some((p.clone(), "the scene's source")),
             (None, SceneSource::Procedural) => None,
         };
+        if let (true, Some((path, _))) = (w.terraces, &heightmap) {
+            let path = path.display();
+            bail!("the scene's terraces shape the procedural world; {path} has its own ground: drop terraces");
+        }
         // A GeoTIFF places itself: extent and origin from its tags unless given.
         let geotiff = match &heightmap {
             Some((p, _)) if magic(p).is_some_and(|m| TIFF_MAGIC.contains(&m)) => Some(GeoTiffSource::read_header(p)?),
