@@ -39,7 +39,10 @@ impl Rig {
     /// nodes (few make streaming churn under motion).
     pub fn new(ctx: &Context, size: [u32; 2], slots: u32, options: RendererOptions, holes: Vec<Hole>) -> Result<Rig> {
         let world = small_world();
-        let source: Arc<dyn HeightSource> = Arc::new(ProceduralSource::new(7, world.extent_m, world.height_range_m)?);
+        // Terraced: risers past 60 degrees are the hard case these checks
+        // want (the eroded default is gentler).
+        let source = ProceduralSource::new(7, world.extent_m, world.height_range_m)?.with_terraces(true);
+        let source: Arc<dyn HeightSource> = Arc::new(source);
         let options = RendererOptions {
             terrain: TerrainOptions { slots, loader_threads: 2, ..TerrainOptions::default() },
             ..options
