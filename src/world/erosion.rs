@@ -4,8 +4,8 @@
 //! Each round routes water (a priority flood from the border: every node
 //! drains to the border, a closed basin fills to its spill level and
 //! becomes a flat floor), cuts along the flow (the stream-power law, solved
-//! implicitly from the outlets up, so any step is stable), then lets
-//! ground steeper than its angle of repose slide to the node below it
+//! implicitly from the lowest node up, so any step is stable), then lets
+//! ground steeper than its angle of repose slide to the nodes below it
 //! (talus). Every loop runs in a fixed order: the same heights give the
 //! same result, bit for bit, in any process.
 
@@ -14,9 +14,10 @@ use std::collections::BinaryHeap;
 
 /// Rounds of flow, cutting and sliding.
 const ROUNDS: usize = 24;
-/// Stream-power coefficient per round (1/m^(2M-1) with `M` = 0.5: a node
-/// draining `n` grid cells moves `K * sqrt(n)` of the way to its receiver's
-/// height per round, whatever the grid spacing).
+/// Stream-power coefficient per round, with the drained area in grid cells
+/// and distances in spacings (so the same whatever the spacing): a node
+/// draining `n` cells closes `f / (1 + f)` of its height above its
+/// receiver per round, `f = K * n^M` (over a diagonal's `sqrt 2`).
 const K: f64 = 0.04;
 /// Exponent of the drained area in the stream-power law.
 const M: f64 = 0.5;

@@ -104,7 +104,7 @@ pub struct FlowNetwork {
 
 impl ProceduralSource {
     /// Fails on a non-finite or empty extent or height range. Erodes the
-    /// coarse grid (a fraction of a second on one core).
+    /// coarse grid first (about 2 s for 513 x 513 nodes on 2 cores).
     pub fn new(seed: u64, extent_m: [f64; 2], height_range_m: [f32; 2]) -> Result<Self> {
         check_params(extent_m, height_range_m)?;
         Ok(Self::build(seed, extent_m, height_range_m))
