@@ -141,7 +141,7 @@ impl Terrain {
     fn drops(&self, k: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
         NEIGHBOURS.into_iter().filter_map(move |d| {
             let j = self.neighbour(k, d)?;
-            let dist = if d.0 != 0 && d.1 != 0 { std::f64::consts::SQRT_2 } else { 1.0 };
+            let dist = spacings(d);
             let drop = (self.heights_m[k] - self.heights_m[j]) / dist;
             (drop > 0.0).then_some((j, drop))
         })
@@ -177,9 +177,9 @@ impl Terrain {
             if r == k || lake[k] {
                 continue;
             }
-            let diagonal = k % self.nx != r % self.nx && k / self.nx != r / self.nx;
-            let d = if diagonal { std::f64::consts::SQRT_2 } else { 1.0 };
-            let f = K * drained[k].powf(M) / d;
+            let d =
+                (((r % self.nx) as isize - (k % self.nx) as isize), ((r / self.nx) as isize - (k / self.nx) as isize));
+            let f = K * drained[k].powf(M) / spacings(d);
             self.heights_m[k] = (self.heights_m[k] + f * self.heights_m[r]) / (1.0 + f);
         }
     }
@@ -195,7 +195,7 @@ impl Terrain {
             over.clear();
             for d in NEIGHBOURS {
                 let Some(j) = self.neighbour(k, d) else { continue };
-                let dist = self.spacing_m * if d.0 != 0 && d.1 != 0 { std::f64::consts::SQRT_2 } else { 1.0 };
+                let dist = self.spacing_m * spacings(d);
                 let excess = self.heights_m[k] - self.heights_m[j] - TALUS_GRADIENT * dist;
                 if excess > 0.0 {
                     over.push((j, excess));
@@ -213,6 +213,15 @@ impl Terrain {
         for (h, d) in self.heights_m.iter_mut().zip(delta) {
             *h += d;
         }
+    }
+}
+
+/// How many grid spacings a step to neighbour `d` spans.
+fn spacings((dx, dy): (isize, isize)) -> f64 {
+    if dx != 0 && dy != 0 {
+        std::f64::consts::SQRT_2
+    } else {
+        1.0
     }
 }
 

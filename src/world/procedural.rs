@@ -138,7 +138,7 @@ impl ProceduralSource {
 
     /// Normalised height in 0..1 before mapping to the height range.
     fn height01(&self, x: f64, y: f64, c: &mut Lattices) -> f64 {
-        let g = self.shape.at(x, y);
+        let g = self.shape.at::<{ DETAIL + 1 }>(x, y);
         let (weight, detail) = (g[WEIGHT].clamp(0.0, 1.0), g[DETAIL].max(0.0));
         let mut h = g[H];
         let fine_octaves = (MOUNTAIN_OCTAVES - self.shape.coarse_octaves) as usize;
@@ -208,15 +208,16 @@ impl Shape {
         Shape { nx, ny, spacing_m, coarse_octaves, nodes, receivers: shaped.receivers }
     }
 
-    /// Every channel at a point, Catmull-Rom between the nodes (indices
-    /// clamp at the grid's edge).
-    fn at(&self, x: f64, y: f64) -> [f64; CHANNELS] {
+    /// The first `N` channels at a point, Catmull-Rom between the nodes
+    /// (indices clamp at the grid's edge): a height needs those up to
+    /// [`DETAIL`], the materials also [`WET`] and [`TALUS`].
+    fn at<const N: usize>(&self, x: f64, y: f64) -> [f64; N] {
         let (u, v) = (x / self.spacing_m, y / self.spacing_m);
         let (u0, v0) = (u.floor(), v.floor());
         let (wu, wv) = (catmull_rom(u - u0), catmull_rom(v - v0));
         let (iu, iv) = (u0 as isize, v0 as isize);
         let clamp = |i: isize, n: usize| i.clamp(0, n as isize - 1) as usize;
-        let mut out = [0.0; CHANNELS];
+        let mut out = [0.0; N];
         for (b, wy) in wv.iter().enumerate() {
             let row = clamp(iv + b as isize - 1, self.ny) * self.nx;
             for (a, wx) in wu.iter().enumerate() {
@@ -292,7 +293,7 @@ impl HeightSource for ProceduralSource {
         if !(x.is_finite() && y.is_finite()) {
             return Ground::default();
         }
-        let g = self.shape.at(x, y);
+        let g = self.shape.at::<{ TALUS + 1 }>(x, y);
         Ground { wet: g[WET].clamp(0.0, 1.0) as f32, talus: g[TALUS].clamp(0.0, 1.0) as f32 }
     }
 
