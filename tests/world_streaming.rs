@@ -165,6 +165,43 @@ fn error_criterion_wants_the_families_the_camera_refines() {
 }
 
 #[test]
+fn a_root_with_pending_errors_wants_its_family_only_in_view_nearest_first() {
+    // Roots made on demand load with an unknown (infinite) error: their
+    // families are wanted where the view holds the root, nearest first, and
+    // never out of view (their tiles are what the family's load computes).
+    let world = small_world();
+    let mut r = Residency::new(&world, ResidencyConfig::default()).unwrap();
+    let cam = [900.0, 300.0, 500.0];
+    // A view of the half-space x <= 1100 (every plane the same), looking -x.
+    let camera = TraverseCamera {
+        position_m: cam,
+        pixels_per_tan: 1000.0,
+        forward: [-1.0, 0.0, 0.0],
+        widest: 2.0,
+        frustum: Some([[-1.0, 0.0, 0.0, 1100.0]; 5]),
+    };
+    let want = RefineWant { camera, target_error_px: 1.0, prefetch: 1.0, ring_factor: 0.0 };
+    for id in r.update_with(cam, Some(&want)).adds {
+        assert_eq!(r.on_loaded(id), Arrival::Accept);
+    }
+    for root in world.roots() {
+        r.note_bounds(root, f32::INFINITY, [0.0, 100.0]);
+    }
+    let adds = r.update_with(cam, Some(&want)).adds;
+    let seen: Vec<NodeId> = world.roots().into_iter().filter(|root| world.bounds_m(*root)[0] <= 1100.0).collect();
+    assert!(!seen.is_empty() && seen.len() < world.roots().len());
+    let expected: HashSet<NodeId> = seen.iter().flat_map(|root| world.valid_children(*root)).collect();
+    assert_eq!(adds.iter().copied().collect::<HashSet<_>>(), expected, "the families of the roots in view");
+    let distance = |id: &NodeId| {
+        let b = world.bounds_m(id.parent());
+        let (dx, dy) = ((b[0] - cam[0]).max(cam[0] - b[2]).max(0.0), (b[1] - cam[1]).max(cam[1] - b[3]).max(0.0));
+        (dx * dx + dy * dy).sqrt()
+    };
+    let order: Vec<f64> = adds.iter().map(distance).collect();
+    assert!(order.windows(2).all(|w| w[0] <= w[1]), "nearest root first: {order:?}");
+}
+
+#[test]
 fn oscillating_camera_causes_no_churn() {
     let world = WorldDesc::default();
     let node = NodeId::new(0, 80, 80);

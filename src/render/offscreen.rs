@@ -18,6 +18,10 @@ use crate::targets::gbuffer_layout::texel_bytes;
 use crate::targets::Output;
 use std::time::{Duration, Instant};
 
+/// Longest wait for a load between two frames of [`Offscreen::settle`]
+/// when nothing else is under way (a frame then still comes this often).
+pub const SETTLE_WAIT: Duration = Duration::from_millis(500);
+
 /// Frames in a row the renderer reports settled before a picture counts as
 /// final: the first draws the last set streamed, the second culls against
 /// that frame's depth (occlusion culling sees the previous frame).
@@ -262,8 +266,13 @@ impl Offscreen {
             if start.elapsed() >= timeout {
                 return Ok(Settle { frames, seconds: start.elapsed().as_secs_f64(), settled: false });
             }
-            // Give the loader threads the cores while nodes are baking.
-            if calm == 0 {
+            // Give the loader threads the cores while nodes are baking; where
+            // only loads are under way, the next frame would draw this one
+            // again: wait for a load instead (a root's error tile takes
+            // seconds, and lavapipe's frames take the same cores).
+            if renderer.only_loading() {
+                renderer.terrain.wait_for_load(SETTLE_WAIT);
+            } else if calm == 0 {
                 std::thread::sleep(Duration::from_millis(10));
             }
         }

@@ -484,6 +484,12 @@ impl TerrainRenderer {
         self.terrain.settled() && self.built.iter().all(|e| e.settled())
     }
 
+    /// Only the terrain's loads are under way ([`Terrain::only_loading`])
+    /// and every effect has settled: the next frame would draw this one.
+    pub fn only_loading(&self) -> bool {
+        self.terrain.only_loading() && self.built.iter().all(|e| e.settled())
+    }
+
     /// A render that waits for [`Self::settled`] (`on`; an offline render)
     /// lets the effects spend more a frame to settle in fewer frames (the
     /// virtual texture's feedback samples every pixel, shadows take their

@@ -22,10 +22,12 @@ use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
 use crate::world::vertex_bounds::VertexBoundsTree;
 use crate::world::{
-    bake_node_with, BakeSettings, ErrorTree, HeightSource, Hole, Limits, LoadFate, LoadFn, Loader, MemoryReport,
-    NodeCache, NodeId, RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError, WorldPlan,
+    bake_node_with, BakeSettings, BakedNode, ErrorTree, HeightSource, Hole, Limits, LoadFate, LoadFn, Loader,
+    MemoryReport, NodeCache, NodeId, RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError,
+    WorldPlan,
 };
 use serde::Serialize;
+use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -176,6 +178,9 @@ pub struct Terrain {
     unweighed: bool,
     /// A root given up: every later frame reports it.
     root_failure: Option<(NodeId, u32, String)>,
+    /// Resident roots loaded with pending errors (roots made on demand),
+    /// kept to attach their numbers once a child's load has made the tile.
+    pending_roots: HashMap<NodeId, BakedNode>,
 }
 
 impl Terrain {
@@ -209,6 +214,13 @@ impl Terrain {
                     e.is_for(world, source.as_ref()),
                     "TerrainOptions::errors: the tree of another world or source"
                 );
+                // The rule's bounds are made for the whole world at once,
+                // and a pending root would be drawn without them.
+                if options.vertex_bounds && e.roots_on_demand() {
+                    return Err(crate::error::Error::BadInput(
+                        "TerrainOptions: the per-triangle rule needs the whole error tree (not roots on demand)".into(),
+                    ));
+                }
                 Arc::clone(e)
             }
             None => Arc::new(ErrorTree::new(world, Arc::clone(&source), options.cache_dir.as_deref())?),
@@ -235,6 +247,7 @@ impl Terrain {
             paused: false,
             unweighed: false,
             root_failure: None,
+            pending_roots: HashMap::new(),
         })
     }
 
@@ -277,11 +290,14 @@ impl Terrain {
         self.stats.arrived_total += s.arrived.len();
         self.unweighed = !s.arrived.is_empty() || !s.reloaded.is_empty();
         for node in s.arrived {
+            self.note_pending(&node);
             self.tree.add(node, 0);
         }
         for node in s.reloaded {
+            self.note_pending(&node);
             self.tree.reload(node, 0);
         }
+        self.attach_made_roots()?;
         let root_lod = self.world.root_lod();
         for ((id, e), fate) in s.failed.iter().zip(&s.fates) {
             log::error!("node {id} failed to load ({fate:?}): {e}");
@@ -305,6 +321,40 @@ impl Terrain {
             }
             None => Ok(()),
         }
+    }
+
+    /// Keeps a root that came with pending errors until its tile is made.
+    fn note_pending(&mut self, node: &BakedNode) {
+        if node.id.lod == self.world.root_lod() && node.errors_pending() {
+            self.pending_roots.insert(node.id, node.clone());
+        } else {
+            self.pending_roots.remove(&node.id);
+        }
+    }
+
+    /// Pending roots whose tile a child's load has made get their numbers
+    /// (read from the tile, no load) and replace their resident payload.
+    fn attach_made_roots(&mut self) -> Result<(), WorldError> {
+        let made: Vec<NodeId> = self.pending_roots.keys().copied().filter(|r| self.errors.root_at_hand(*r)).collect();
+        for id in made {
+            let mut node = self.pending_roots.remove(&id).expect("listed");
+            self.errors.attach(&mut node)?;
+            self.streamer.renew_bounds(&node);
+            self.tree.reload(node, 0);
+            self.unweighed = true;
+        }
+        Ok(())
+    }
+
+    /// Roots resident with pending errors ([`ErrorTree::with_roots_on_demand`]):
+    /// the ones no view has refined into yet.
+    pub fn pending_roots(&self) -> usize {
+        self.pending_roots.len()
+    }
+
+    /// The world's error tree (shared with [`TerrainOptions::errors`]).
+    pub fn errors(&self) -> &ErrorTree {
+        &self.errors
     }
 
     /// Loads every resident node whose bake reads `region` ([min x, min
@@ -374,6 +424,24 @@ impl Terrain {
             && self.stats.retry_waiting == 0
             && self.tree.waiting() == 0
             && self.root_failure.is_none()
+    }
+
+    /// Only loads are under way: nothing waits for upload, a reload, a
+    /// retry or a residency update. A frame drawn now draws the last one
+    /// again, so an offline render may [`Self::wait_for_load`] instead.
+    pub fn only_loading(&self) -> bool {
+        self.stats.loading > 0
+            && !self.unweighed
+            && self.streamer.reloading() == 0
+            && self.stats.retry_waiting == 0
+            && self.tree.waiting() == 0
+            && self.root_failure.is_none()
+    }
+
+    /// Blocks until a load finishes or `timeout` passes: the cores go to
+    /// the loader threads (a payload's bake, a root's error tile).
+    pub fn wait_for_load(&self, timeout: std::time::Duration) -> bool {
+        self.streamer.wait_for_load(timeout)
     }
 
     /// Memory of the resident payloads, CPU and GPU side; payload kinds no

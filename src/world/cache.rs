@@ -296,7 +296,7 @@ impl NodeCache {
                 }
                 let mut node = bake_node_with(self.source.as_ref(), &self.world, &self.holes, &self.settings, id);
                 self.errors.attach(&mut node)?;
-                if !self.unwritable.load(Ordering::Relaxed) {
+                if !node.errors_pending() && !self.unwritable.load(Ordering::Relaxed) {
                     match self.write(&node) {
                         Ok(_) => {}
                         Err(e) if must_write => return Err(e),

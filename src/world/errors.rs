@@ -26,7 +26,7 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
@@ -94,6 +94,18 @@ pub struct NodeErrors {
     pub repr_m: f32,
 }
 
+/// What an [`ErrorTree`] has done ([`ErrorTree::counts`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TreeCounts {
+    /// Tiles computed (roots', and any below them).
+    pub computed: usize,
+    /// Root tiles read from the cache folder.
+    pub read: usize,
+    /// Thread time spent computing them (each tile's own parallel work
+    /// counted once, as wall time of the thread that made it).
+    pub compute_seconds: f64,
+}
+
 /// Per-root error data of one world, computed on first use.
 pub struct ErrorTree {
     world: WorldDesc,
@@ -111,6 +123,12 @@ pub struct ErrorTree {
     /// bytes they may take together.
     held: Mutex<Held>,
     held_budget: u64,
+    /// A root whose tile is not at hand loads with pending numbers
+    /// ([`Self::with_roots_on_demand`]).
+    on_demand: bool,
+    /// Root tiles read from the folder, and the time spent computing tiles.
+    read: AtomicUsize,
+    compute_nanos: AtomicU64,
 }
 
 impl std::fmt::Debug for ErrorTree {
@@ -151,7 +169,37 @@ impl ErrorTree {
             unwritable: AtomicBool::new(false),
             held: Mutex::new(Held::default()),
             held_budget: DEFAULT_HELD_TILE_BYTES,
+            on_demand: false,
+            read: AtomicUsize::new(0),
+            compute_nanos: AtomicU64::new(0),
         })
+    }
+
+    /// The same tree, making a root's tile only when a node below the root
+    /// asks for it: a root whose tile is neither in memory nor in the
+    /// folder is attached *pending* numbers ([`Self::attach`]): an unknown
+    /// (infinite) error and the world's whole height range. Roots are
+    /// always resident, so without this the first frame waits for every
+    /// root's tile; with it, only the roots a view refines into are made
+    /// (streaming wants a pending root's children only in view), and the
+    /// renderer reloads a pending root once its tile is made.
+    pub fn with_roots_on_demand(mut self) -> Self {
+        self.on_demand = self.world.root_lod() > 0;
+        self
+    }
+
+    /// Whether roots are made on demand ([`Self::with_roots_on_demand`]).
+    pub fn roots_on_demand(&self) -> bool {
+        self.on_demand
+    }
+
+    /// What the tree has done so far.
+    pub fn counts(&self) -> TreeCounts {
+        TreeCounts {
+            computed: self.computed.load(Ordering::Relaxed),
+            read: self.read.load(Ordering::Relaxed),
+            compute_seconds: self.compute_nanos.load(Ordering::Relaxed) as f64 * 1e-9,
+        }
     }
 
     /// The same tree keeping at most `bytes` of cached root tiles in memory
@@ -186,7 +234,8 @@ impl ErrorTree {
     /// along, the others are made again when asked for (or read from the
     /// folder, where an earlier run left them).
     pub fn edited(&self, source: Arc<dyn HeightSource>, cache_dir: Option<&Path>) -> Result<ErrorTree> {
-        let tree = ErrorTree::new(&self.world, source, cache_dir)?.with_held_bytes(self.held_budget);
+        let mut tree = ErrorTree::new(&self.world, source, cache_dir)?.with_held_bytes(self.held_budget);
+        tree.on_demand = self.on_demand;
         let root_lod = self.world.root_lod();
         let old = self.roots.lock().unwrap_or_else(|e| e.into_inner());
         let mut kept = tree.roots.lock().unwrap_or_else(|e| e.into_inner());
@@ -269,9 +318,14 @@ impl ErrorTree {
     /// Roots whose tile is neither in memory nor a file of the cache folder
     /// (a file is not read here: an estimate of the work `prepare` does).
     pub fn uncached_roots(&self) -> usize {
-        let tiles = self.roots.lock().unwrap_or_else(|e| e.into_inner());
-        let made = |r: &NodeId| tiles.get(r).is_some_and(|c| c.get().is_some());
-        self.world.roots().iter().filter(|r| !made(r) && !self.path(**r).is_some_and(|p| p.is_file())).count()
+        self.world.roots().iter().filter(|r| !self.root_at_hand(**r)).count()
+    }
+
+    /// Whether `root`'s tile is in memory or a file of the cache folder:
+    /// a node below it gets its numbers without a computation.
+    pub fn root_at_hand(&self, root: NodeId) -> bool {
+        let made = self.roots.lock().unwrap_or_else(|e| e.into_inner()).get(&root).is_some_and(|c| c.get().is_some());
+        made || self.path(root).is_some_and(|p| p.is_file())
     }
 
     /// The numbers of node `id` (valid in the world); the first call for a
@@ -306,7 +360,13 @@ impl ErrorTree {
     /// Writes `node`'s errors and bounds into it: `max_error_m`,
     /// `patch_errors`, `patch_min_max`, `min_height` / `max_height` (the
     /// union of the patch ranges) and `repr_error_m`.
+    /// With roots on demand, a root whose tile is not at hand gets pending
+    /// numbers instead ([`BakedNode::errors_pending`]).
     pub fn attach(&self, node: &mut BakedNode) -> Result<()> {
+        if self.on_demand && node.id.lod == self.world.root_lod() && !self.root_at_hand(node.id) {
+            attach_pending(node);
+            return Ok(());
+        }
         let e = self.node(node.id)?;
         node.max_error_m = e.node_m;
         node.repr_error_m = e.repr_m;
@@ -372,9 +432,12 @@ impl ErrorTree {
         let tile = Arc::clone(cell.get_or_init(|| {
             if let Some(tile) = is_root.then(|| self.read(root)).flatten() {
                 in_file = Some(true);
+                self.read.fetch_add(1, Ordering::Relaxed);
                 return Arc::new(tile);
             }
+            let start = Instant::now();
             let tile = compute_root(&self.world, self.source.as_ref(), root);
+            self.compute_nanos.fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
             self.computed.fetch_add(1, Ordering::Relaxed);
             in_file = Some(is_root && self.dir.is_some() && !self.unwritable.load(Ordering::Relaxed));
             if in_file == Some(true) {
@@ -437,6 +500,19 @@ impl ErrorTree {
         out.extend_from_slice(&crc32fast::hash(&out).to_le_bytes());
         crate::output::write(&path, &out).map_err(|e| WorldError::io_write(&path, e.error))
     }
+}
+
+/// A root's numbers before its tile is made: an unknown error (infinite,
+/// so the traversal refines it wherever its children are resident and the
+/// frame's bound says it is unknown where it is drawn) and the world's
+/// whole height range (so culling stays conservative).
+fn attach_pending(node: &mut BakedNode) {
+    node.max_error_m = f32::INFINITY;
+    node.repr_error_m = f32::INFINITY;
+    node.patch_errors = vec![[f32::INFINITY, 0.0]; PATCHES_PER_NODE];
+    node.patch_min_max = vec![[0, u16::MAX]; PATCHES_PER_NODE];
+    node.min_height = 0;
+    node.max_height = u16::MAX;
 }
 
 fn node_key(id: NodeId) -> u64 {

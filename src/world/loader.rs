@@ -21,6 +21,8 @@ type Loaded = (NodeId, Result<BakedNode>);
 pub struct Loader {
     jobs: Option<Sender<NodeId>>,
     results: Receiver<Loaded>,
+    /// A result [`Self::wait`] received, for the next poll.
+    early: Mutex<Vec<Loaded>>,
     /// Without workers: `request` loads at once, on the caller's thread.
     inline: Option<(Arc<LoadFn>, Sender<Loaded>)>,
     cancelled: Arc<Mutex<HashSet<NodeId>>>,
@@ -42,6 +44,7 @@ impl Loader {
         let mut loader = Loader {
             jobs: Some(job_tx),
             results: res_rx,
+            early: Mutex::new(Vec::new()),
             inline: (workers == 0).then(|| (Arc::clone(&load), res_tx.clone())),
             cancelled: Arc::clone(&cancelled),
             shutdown: Arc::clone(&shutdown),
@@ -89,7 +92,24 @@ impl Loader {
 
     /// Everything finished since the last poll; never blocks.
     pub fn poll(&self) -> Vec<(NodeId, Result<BakedNode>)> {
-        self.results.try_iter().collect()
+        let mut out = std::mem::take(&mut *lock(&self.early));
+        out.extend(self.results.try_iter());
+        out
+    }
+
+    /// Blocks until a load finishes (kept for the next [`Self::poll`]) or
+    /// `timeout` passes; whether one did.
+    pub fn wait(&self, timeout: std::time::Duration) -> bool {
+        if !lock(&self.early).is_empty() {
+            return true;
+        }
+        match self.results.recv_timeout(timeout) {
+            Ok(loaded) => {
+                lock(&self.early).push(loaded);
+                true
+            }
+            Err(_) => false,
+        }
     }
 }
 

@@ -59,7 +59,7 @@ pub use control_map::{
 pub use error::{Result, WorldError};
 pub use error_tile::diamond;
 pub use errors::{
-    selection_error, ErrorTree, NodeErrors, PreparedErrors, DEFAULT_HELD_TILE_BYTES, TILE_BYTES_PER_PATCH,
+    selection_error, ErrorTree, NodeErrors, PreparedErrors, TreeCounts, DEFAULT_HELD_TILE_BYTES, TILE_BYTES_PER_PATCH,
 };
 pub use exr_source::{write_height_exr, ExrSource};
 pub use geotiff::{GeoTiffInfo, GeoTiffSource};

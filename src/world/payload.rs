@@ -82,6 +82,14 @@ const HEIGHT_TEXELS: usize = ATLAS_TEXELS;
 const SPLATS: usize = SPLAT_RES * SPLAT_RES;
 
 impl BakedNode {
+    /// Its errors are not known yet: never attached, or a root attached
+    /// pending numbers by a tree making roots on demand
+    /// ([`super::ErrorTree::with_roots_on_demand`]). Such a node is not
+    /// written to a cache folder.
+    pub fn errors_pending(&self) -> bool {
+        self.max_error_m.is_infinite()
+    }
+
     /// Size of [`Self::to_bytes`]' output; payloads of one format, with or
     /// without control words, are fixed-size.
     pub fn serialized_bytes(format: PayloadFormat, control: bool) -> usize {

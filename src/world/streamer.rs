@@ -80,6 +80,18 @@ impl Streamer {
         true
     }
 
+    /// A resident node's payload was replaced outside the loader (a root's
+    /// errors attached once made): streaming weighs its new bounds.
+    pub fn renew_bounds(&mut self, node: &BakedNode) {
+        note_bounds(&mut self.residency, node);
+    }
+
+    /// Blocks until a load finishes or `timeout` passes (a caller with
+    /// nothing to do until one does: [`Loader::wait`]).
+    pub fn wait_for_load(&self, timeout: std::time::Duration) -> bool {
+        self.loader.wait(timeout)
+    }
+
     /// Reloads not handed over yet.
     pub fn reloading(&self) -> usize {
         self.reloading.len()

@@ -112,6 +112,9 @@ struct Candidate {
     /// Higher first: the parent's projected error (px), or minus its
     /// distance without a criterion.
     score: f64,
+    /// The parent's distance from the camera (m, horizontal): nearer first
+    /// on ties.
+    near: f64,
     parent: NodeId,
     family: Vec<NodeId>,
 }
@@ -316,6 +319,10 @@ impl Residency {
                 Some(w) => self.projected(n, w),
                 None => (0.0, true),
             };
+            // A parent whose error is not known yet (a root made on demand,
+            // [`super::ErrorTree::with_roots_on_demand`]) wants its family
+            // only in view: its tile is made when the family loads.
+            let known_or_seen = error_px.is_finite() || in_view;
             // The families right around the camera count as in view: those
             // behind it are drawn at the edges of the view and cap, through
             // the seams, how finely the patches at the camera's feet may be
@@ -324,7 +331,7 @@ impl Residency {
             let wanted = want.is_some_and(|w| {
                 // Held families stay until their error falls well below the target.
                 let threshold = w.target_error_px * w.prefetch / if held { self.config.hysteresis } else { 1.0 };
-                error_px > threshold
+                error_px > threshold && known_or_seen
             });
             if in_ring || wanted {
                 let score = match want {
@@ -332,15 +339,21 @@ impl Residency {
                     // Nearest first.
                     None => -dist_to_box(cam, self.world.bounds_m(n)),
                 };
-                out.push(Candidate { in_view, score, parent: n, family: family.clone() });
+                let near = dist_to_box(cam, self.world.bounds_m(n));
+                out.push(Candidate { in_view, score, near, parent: n, family: family.clone() });
                 stack.extend(family);
             }
         }
         // A child's projected error never exceeds its parent's (monotone
         // errors, nested boxes), and the view holds a child only if it holds
-        // the parent: a family sorts after its parent's. Coarser first on ties.
+        // the parent: a family sorts after its parent's. Coarser first on
+        // ties, then nearer (pending roots' errors tie at infinity).
         out.sort_by(|a, b| {
-            b.in_view.cmp(&a.in_view).then(b.score.total_cmp(&a.score)).then(b.parent.lod.cmp(&a.parent.lod))
+            b.in_view
+                .cmp(&a.in_view)
+                .then(b.score.total_cmp(&a.score))
+                .then(b.parent.lod.cmp(&a.parent.lod))
+                .then(a.near.total_cmp(&b.near))
         });
         out
     }

@@ -225,7 +225,7 @@ impl Rig {
     }
 
     /// As `with_options`, for any height source; `options.terrain.slots`
-    /// is kept when it is not the default.
+    /// is kept when it is not the default, and its error tree if given.
     pub fn with_source(
         ctx: &Context,
         world: WorldDesc,
@@ -240,7 +240,13 @@ impl Rig {
             s => s,
         };
         let options = RendererOptions {
-            terrain: TerrainOptions { slots, loader_threads: 2, ring_prefetch: rings, ..TerrainOptions::default() },
+            terrain: TerrainOptions {
+                slots,
+                loader_threads: 2,
+                ring_prefetch: rings,
+                errors: options.terrain.errors.clone(),
+                ..TerrainOptions::default()
+            },
             ..options
         };
         let renderer = TerrainRenderer::new(ctx, &world, source, holes, &options).expect("renderer");

@@ -106,7 +106,10 @@ fn main() {
     // Tests walk every write-failure path: the Nth write, fsync or rename
     // (from 0) fails (`VISTA_FAIL_WRITE`, `_SYNC`, `_RENAME`).
     vista::output::arm_from_env(&|name| std::env::var(name).ok());
-    let result = run(cli);
+    let result = match std::env::var_os("VISTA_CHECK_ONLY") {
+        Some(_) => check_only(&cli),
+        None => run(cli),
+    };
     write_peak_rss();
     if let Err(e) = result {
         eprintln!("error: {e:#}");
@@ -222,6 +225,37 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Stability(args) => stability_cmd::stability(cli.device.clone(), &args),
     }
+}
+
+/// `VISTA_CHECK_ONLY=1 vista ...`: the command's arguments and inputs
+/// (scene, height map, view, paths) checked as the command checks them
+/// before it starts a device or any long work, then nothing more. The
+/// docs' commands are tested this way (`tools/vista/tests/doc_commands.rs`).
+fn check_only(cli: &Cli) -> Result<()> {
+    match &cli.command {
+        Command::Info { .. } | Command::Stability(_) => {}
+        Command::Render(args) => {
+            let world = args.world.load()?;
+            budget::check(&args.viewpoint, &world)?;
+            render_cmd::view_of(args, &world).map_err(|e| InputError(format!("{e:#}")))?;
+            render_cmd::check_paths(args)?;
+        }
+        Command::Bake(args) => {
+            let spec = args.world.resolve()?;
+            spec.check(&spec.plan(args.region), &spec.limits)?;
+        }
+        Command::Memory(args) => {
+            args.world.resolve()?;
+        }
+        Command::Bench(args) => bench_cmd::check(args)?,
+        Command::Golden(args) => golden_cmd::check(args)?,
+        #[cfg(feature = "view")]
+        Command::View(args) => {
+            view::check(args).map_err(|e| InputError(format!("{e:#}")))?;
+        }
+    }
+    println!("checked: the arguments and inputs are valid (VISTA_CHECK_ONLY: nothing run)");
+    Ok(())
 }
 
 /// Runs `f` on a fresh context and fails if the validation layer reported

@@ -444,11 +444,14 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     print_device_and_world(ctx, world, view, args, timed.len(), warmup);
     let budget = crate::budget::NodeBudget::of(&args.viewpoint, world, &ctx.info().limits)?;
     print_stream_and_queues(ctx, &renderer, args, (&settle, &budget), timed);
+    let on_demand = renderer.terrain.errors().roots_on_demand();
     println!(
-        "time: {ready_s:.1} s from start to the first frame (world, error tree, renderer), then {:.1} s streaming to {}",
+        "time: {ready_s:.1} s from start to the first frame ({}), then {:.1} s streaming to {}",
+        if on_demand { "world, the error tree of the roots in view, renderer" } else { "world, error tree, renderer" },
         settle.seconds,
         if settle.settled { "settled" } else { "the --settle-seconds limit" }
     );
+    crate::render_print::print_error_tree(&renderer.terrain);
     let stats = vista::render::stats::collect(ctx, &renderer, view)?;
     let built = built_stages(args, &renderer);
     if let Some(m) = args.fly {
@@ -484,7 +487,15 @@ fn renderer_and_target(
     view: &View,
     args: &RenderArgs,
 ) -> Result<(TerrainRenderer, Offscreen)> {
-    let errors = world.errors(ctx, args.cache.as_deref())?;
+    // The per-triangle rule's bounds are made whole anyway: so is the tree.
+    let errors = match args.viewpoint.lod_rule {
+        LodRule::Patch => {
+            let tree = world.errors_on_demand(ctx, args.cache.as_deref())?;
+            world.prepare_roots_in_view(&tree, view);
+            tree
+        }
+        LodRule::Triangle => world.errors(ctx, args.cache.as_deref())?,
+    };
     let mut options = args.viewpoint.renderer_options(ctx, world, args.cache.as_deref(), errors)?;
     options.output = args.output.clone();
     let d = &world.desc;

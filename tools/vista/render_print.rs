@@ -34,6 +34,15 @@ pub fn print_fly(m: f64, frames: u32, pages: &[VtCounters], budget: Option<u32>)
     );
 }
 
+/// The frame's bound: infinite where a root whose errors are pending is
+/// drawn (roots made on demand, before a view refines into it).
+pub fn bound_words(px: f32) -> String {
+    match px.is_finite() {
+        true => format!("{px:.2} px"),
+        false => "unknown (a root whose error tree is not made yet is drawn)".to_string(),
+    }
+}
+
 /// The per-triangle rule's lines (instead of the patches' and selection's).
 fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleListHeader) {
     println!(
@@ -46,9 +55,9 @@ fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleL
         t.forced
     );
     println!(
-        "lod:     error bound {:.2} px (target {} px): unsplit vertices {:.2} px, grid cells (the node's own \
+        "lod:     error bound {} (target {} px): unsplit vertices {:.2} px, grid cells (the node's own \
          error) {:.2} px; {} vertices the rule splits drawn unsplit (a coarser node across lacks them)",
-        s.bound_px,
+        bound_words(s.bound_px),
         s.target_px,
         f32::from_bits(t.bound_bits),
         f32::from_bits(t.grid_bound_bits),
@@ -86,9 +95,9 @@ pub fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {
     }
     let sel = &s.select;
     println!(
-        "lod:     error bound {:.2} px (target {} px); {} listed patches drawn from an ancestor, {} LOD-0 patches \
+        "lod:     error bound {} (target {} px); {} listed patches drawn from an ancestor, {} LOD-0 patches \
          refined below the samples ({} refused by the per-frame budget), {} seam conflicts, {} edges clamped",
-        s.bound_px,
+        bound_words(s.bound_px),
         s.target_px,
         sel.coarsened,
         sel.refined - sel.refine_capped,
@@ -126,6 +135,25 @@ fn print_nodes(s: &RenderStats) {
              (the tightened blend)"
         );
     }
+}
+
+/// What the error tree did while streaming (roots made on demand).
+pub fn print_error_tree(terrain: &vista::terrain::Terrain) {
+    let tree = terrain.errors();
+    if !tree.roots_on_demand() {
+        return;
+    }
+    let c = tree.counts();
+    let roots = terrain.world.roots().len();
+    println!(
+        "error tree: {} of {roots} roots' tiles computed in this run ({:.1} s of thread time, before the first \
+         frame and while streaming), {} tile reads from the cache folder; {} roots no view refined into were never \
+         made (their errors stay unknown)",
+        c.computed,
+        c.compute_seconds,
+        c.read,
+        terrain.pending_roots()
+    );
 }
 
 pub fn print_timings(timed: &[FrameTimings]) {

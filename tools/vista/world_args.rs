@@ -168,6 +168,59 @@ impl LoadedWorld {
         Ok(Arc::new(tree))
     }
 
+    /// The world's error tree with roots made on demand
+    /// ([`ErrorTree::with_roots_on_demand`]): no root's tile before the
+    /// first frame; a root's tile is read from `cache/errors` or computed
+    /// in the loader threads when a view first refines into that root, so
+    /// ground no view reaches is never computed. For `vista render` and
+    /// `vista view` (benchmarks and goldens prepare the whole tree, so
+    /// their timings hold none of it). The world is checked against the
+    /// device first, as for [`Self::errors`].
+    pub fn errors_on_demand(&self, ctx: &vista::gpu::Context, cache: Option<&Path>) -> Result<Arc<ErrorTree>> {
+        let terrain = vista::terrain::TerrainOptions {
+            bake: self.bake.clone(),
+            limits: self.limits.clone(),
+            ..vista::terrain::TerrainOptions::default()
+        };
+        vista::terrain::check_plan(ctx, &self.desc, &terrain).map_err(plan_error_is_input)?;
+        let dir = cache.map(Path::to_path_buf).or_else(vista::world::default_cache_dir);
+        let tree = ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?.with_roots_on_demand();
+        let roots = self.desc.roots().len();
+        let cached = roots - tree.uncached_roots();
+        let place = match tree.dir() {
+            Some(d) => format!("cached in {}", d.display()),
+            None => "in memory only ($VISTA_CACHE is empty)".to_string(),
+        };
+        eprintln!(
+            "error tree: {cached} of {roots} roots' tiles at hand; the others are made while streaming, when a view \
+             first refines into their root ({place})"
+        );
+        Ok(Arc::new(tree))
+    }
+
+    /// Makes now, on every core, the tiles of the roots `view` sees (boxes
+    /// over the world's whole height range: what streaming sees of a
+    /// pending root). A render from one camera refines into each of them
+    /// anyway; made before the first frame they do not take the cores from
+    /// the frames that upload the nodes. The other roots stay on demand.
+    pub fn prepare_roots_in_view(&self, tree: &ErrorTree, view: &vista::render::View) {
+        let camera = view.relative_to(self.origin_m).traverse_camera();
+        let [lo, hi] = self.desc.height_range_m.map(f64::from);
+        let seen = |r: &vista::world::NodeId| {
+            let b = self.desc.bounds_m(*r);
+            camera.sees([b[0], b[1], lo], [b[2], b[3], hi])
+        };
+        let roots: Vec<_> = self.desc.roots().into_iter().filter(seen).collect();
+        let p = tree.prepare_roots(roots, crate::progress::auto());
+        eprintln!(
+            "error tree: the {} roots the first view sees made before the first frame ({} read, {} computed in {:.1} s)",
+            p.roots,
+            p.read,
+            p.roots - p.read,
+            p.seconds
+        );
+    }
+
     /// Commands whose views are chosen in world metres (benchmarks, golden)
     /// refuse a placed world rather than silently ignoring the placement.
     pub fn require_unplaced(&self, command: &str) -> Result<()> {

@@ -228,7 +228,10 @@ impl App {
         let display = window.display_handle().context("the window's display")?.as_raw();
         let options = ContextOptions { display: Some(display), ..self.options.clone() };
         let ctx = Context::headless(&options).context("creating the Vulkan context")?;
-        let errors = self.world.errors(&ctx, self.args.cache.as_deref())?;
+        let errors = match self.args.viewpoint.lod_rule {
+            vista::render::LodRule::Patch => self.world.errors_on_demand(&ctx, self.args.cache.as_deref())?,
+            vista::render::LodRule::Triangle => self.world.errors(&ctx, self.args.cache.as_deref())?,
+        };
         let ropts = self.args.viewpoint.renderer_options(&ctx, &self.world, self.args.cache.as_deref(), errors)?;
         let d = &self.world.desc;
         let renderer = TerrainRenderer::new(&ctx, d, self.world.source.clone(), self.world.holes.clone(), &ropts)

@@ -175,7 +175,8 @@ fn counters(ui: &mut egui::Ui, shown: &Shown) {
     }
     let tri_per_px = c.triangles as f64 / f64::from(shown.size[0] * shown.size[1]);
     ui.label(format!("triangles {} ({tri_per_px:.2} per pixel)", c.triangles));
-    ui.label(format!("error bound {:.2} px (the largest projected error of any drawn patch)", p.bound_px));
+    let bound = crate::render_print::bound_words(p.bound_px);
+    ui.label(format!("error bound {bound} (the largest projected error of any drawn patch)"));
     let lods: Vec<String> = c
         .traverse
         .nodes_per_lod
