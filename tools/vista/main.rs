@@ -26,6 +26,7 @@ mod stability_cmd;
 #[cfg(feature = "view")]
 mod view;
 mod world_args;
+mod world_errors;
 mod world_notes;
 mod world_spec;
 
