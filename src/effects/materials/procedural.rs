@@ -74,34 +74,7 @@ pub(super) fn sample(kind: ProceduralKind, u: f32, v: f32, n: &Noise) -> Sample 
             rgb = mix(rgb, [0.50, 0.48, 0.24], 0.4 * smoothstep(0.55, 0.9, patch));
             Sample { rgb, height: 0.3 * patch + 0.7 * blades, roughness: 0.9 - 0.15 * blades }
         }
-        ProceduralKind::Rock => {
-            let warp = n.fbm(u, v, [3, 3], 3, 0.5, 10);
-            let warp2 = n.fbm(u, v, [6, 6], 3, 0.5, 14);
-            // Strata: bands along v bent by the warp, each with its own
-            // tone and a sharp ledge at its base. Band indices wrap with
-            // the tile (15 per repeat). Warped hard along both axes, so that
-            // far cliffs (the coarse tiling) show bands that swell and pinch
-            // out rather than a regular ruling of parallel lines.
-            let t = (v * 5.0 + 0.8 * warp + 0.45 * warp2) * 3.0;
-            let stratum = unit(hash((t.floor() as i64).rem_euclid(15) as u32, 7, n.seed));
-            let band = 0.5 + 0.5 * (t * TAU / 3.0).sin();
-            let ledge = smoothstep(0.0, 0.25, t.rem_euclid(1.0));
-            let grain = n.fbm(u, v, [8, 8], 5, 0.55, 11);
-            // Cracks: warped cell borders, only where a mask lets them
-            // through (all borders would read as paving), plus finer ones.
-            let (f1, f2, _) = worley(u + 0.08 * warp2, v + 0.08 * warp, 4, n.seed ^ 12);
-            let major =
-                (1.0 - smoothstep(0.0, 0.04, f2 - f1)) * smoothstep(-0.15, 0.2, n.fbm(u, v, [5, 5], 2, 0.5, 15));
-            let (g1, g2, _) = worley(u + 0.05 * warp, v + 0.05 * warp2, 12, n.seed ^ 16);
-            let minor = (1.0 - smoothstep(0.0, 0.05, g2 - g1)) * smoothstep(0.1, 0.4, n.fbm(u, v, [7, 7], 2, 0.5, 17));
-            let crack = major.max(0.6 * minor);
-            let height = 0.45 + 0.2 * grain + 0.05 * band + 0.03 * ledge - 0.35 * crack;
-            let mut rgb = mix([0.33, 0.32, 0.30], [0.60, 0.58, 0.54], 0.5 + 0.6 * grain + 0.3 * (stratum - 0.5));
-            rgb = add(rgb, [0.03 * band, 0.02 * band, 0.0]);
-            rgb = rgb.map(|c| c * (1.0 - 0.55 * crack));
-            let roughness = 0.62 + 0.15 * (0.5 + 0.5 * n.fbm(u, v, [16, 16], 2, 0.5, 13)) + 0.2 * crack;
-            Sample { rgb, height, roughness }
-        }
+        ProceduralKind::Rock => rock(u, v, n),
         ProceduralKind::Snow => {
             let dunes = n.fbm(u, v, [2, 2], 5, 0.45, 20);
             let fine = n.fbm(u, v, [32, 32], 2, 0.5, 21);
@@ -139,6 +112,35 @@ pub(super) fn sample(kind: ProceduralKind, u: f32, v: f32, n: &Noise) -> Sample 
             Sample { rgb, height, roughness: 0.92 - 0.2 * pebble }
         }
     }
+}
+
+/// Rock: strata, grain and cracks.
+fn rock(u: f32, v: f32, n: &Noise) -> Sample {
+    let warp = n.fbm(u, v, [3, 3], 3, 0.5, 10);
+    let warp2 = n.fbm(u, v, [6, 6], 3, 0.5, 14);
+    // Strata: bands along v bent by the warp, each with its own
+    // tone and a sharp ledge at its base. Band indices wrap with
+    // the tile (15 per repeat). Warped hard along both axes, so that
+    // far cliffs (the coarse tiling) show bands that swell and pinch
+    // out rather than a regular ruling of parallel lines.
+    let t = (v * 5.0 + 0.8 * warp + 0.45 * warp2) * 3.0;
+    let stratum = unit(hash((t.floor() as i64).rem_euclid(15) as u32, 7, n.seed));
+    let band = 0.5 + 0.5 * (t * TAU / 3.0).sin();
+    let ledge = smoothstep(0.0, 0.25, t.rem_euclid(1.0));
+    let grain = n.fbm(u, v, [8, 8], 5, 0.55, 11);
+    // Cracks: warped cell borders, only where a mask lets them
+    // through (all borders would read as paving), plus finer ones.
+    let (f1, f2, _) = worley(u + 0.08 * warp2, v + 0.08 * warp, 4, n.seed ^ 12);
+    let major = (1.0 - smoothstep(0.0, 0.04, f2 - f1)) * smoothstep(-0.15, 0.2, n.fbm(u, v, [5, 5], 2, 0.5, 15));
+    let (g1, g2, _) = worley(u + 0.05 * warp, v + 0.05 * warp2, 12, n.seed ^ 16);
+    let minor = (1.0 - smoothstep(0.0, 0.05, g2 - g1)) * smoothstep(0.1, 0.4, n.fbm(u, v, [7, 7], 2, 0.5, 17));
+    let crack = major.max(0.6 * minor);
+    let height = 0.45 + 0.2 * grain + 0.05 * band + 0.03 * ledge - 0.35 * crack;
+    let mut rgb = mix([0.33, 0.32, 0.30], [0.60, 0.58, 0.54], 0.5 + 0.6 * grain + 0.3 * (stratum - 0.5));
+    rgb = add(rgb, [0.03 * band, 0.02 * band, 0.0]);
+    rgb = rgb.map(|c| c * (1.0 - 0.55 * crack));
+    let roughness = 0.62 + 0.15 * (0.5 + 0.5 * n.fbm(u, v, [16, 16], 2, 0.5, 13)) + 0.2 * crack;
+    Sample { rgb, height, roughness }
 }
 
 pub(super) fn mix(a: [f32; 3], b: [f32; 3], t: f32) -> [f32; 3] {
