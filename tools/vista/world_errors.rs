@@ -19,20 +19,10 @@ impl LoadedWorld {
     /// `TerrainRenderer::new` would), so a world no renderer can hold is
     /// refused before its tree is made.
     pub fn errors(&self, ctx: &vista::gpu::Context, cache: Option<&Path>) -> Result<Arc<ErrorTree>> {
-        let terrain = vista::terrain::TerrainOptions {
-            bake: self.bake.clone(),
-            limits: self.limits.clone(),
-            ..vista::terrain::TerrainOptions::default()
-        };
-        vista::terrain::check_plan(ctx, &self.desc, &terrain).map_err(plan_error_is_input)?;
-        let dir = cache.map(Path::to_path_buf).or_else(vista::world::default_cache_dir);
-        let tree = ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?;
+        let tree = self.checked_tree(ctx, cache)?;
         crate::world_notes::note_error_tree_time(&self.desc, tree.uncached_roots());
         let p = tree.prepare(crate::progress::auto());
-        let place = match tree.dir() {
-            Some(d) => format!("cached in {}", d.display()),
-            None => "in memory only ($VISTA_CACHE is empty)".to_string(),
-        };
+        let place = place(&tree);
         let mib = |b: u64| b as f64 / f64::from(1 << 20);
         eprintln!(
             "error tree: {} roots, {} read, {} computed in {:.1} s; {place}; {:.0} MiB in memory of {:.0} MiB for the whole tree{}",
@@ -56,20 +46,10 @@ impl LoadedWorld {
     /// their timings hold none of it). The world is checked against the
     /// device first, as for [`Self::errors`].
     pub fn errors_on_demand(&self, ctx: &vista::gpu::Context, cache: Option<&Path>) -> Result<Arc<ErrorTree>> {
-        let terrain = vista::terrain::TerrainOptions {
-            bake: self.bake.clone(),
-            limits: self.limits.clone(),
-            ..vista::terrain::TerrainOptions::default()
-        };
-        vista::terrain::check_plan(ctx, &self.desc, &terrain).map_err(plan_error_is_input)?;
-        let dir = cache.map(Path::to_path_buf).or_else(vista::world::default_cache_dir);
-        let tree = ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?.with_roots_on_demand();
+        let tree = self.checked_tree(ctx, cache)?.with_roots_on_demand();
         let roots = self.desc.roots().len();
         let cached = roots - tree.uncached_roots();
-        let place = match tree.dir() {
-            Some(d) => format!("cached in {}", d.display()),
-            None => "in memory only ($VISTA_CACHE is empty)".to_string(),
-        };
+        let place = place(&tree);
         eprintln!(
             "error tree: {cached} of {roots} roots' tiles at hand; the others are made while streaming, when a view \
              first refines into their root ({place})"
@@ -98,5 +78,28 @@ impl LoadedWorld {
             p.roots - p.read,
             p.seconds
         );
+    }
+
+    /// An empty tree of this world, cached under `cache` (else the user's
+    /// cache folder), once the world is checked against the device (as
+    /// `TerrainRenderer::new` would): a world no renderer can hold is
+    /// refused before any of its tree is made.
+    fn checked_tree(&self, ctx: &vista::gpu::Context, cache: Option<&Path>) -> Result<ErrorTree> {
+        let terrain = vista::terrain::TerrainOptions {
+            bake: self.bake.clone(),
+            limits: self.limits.clone(),
+            ..vista::terrain::TerrainOptions::default()
+        };
+        vista::terrain::check_plan(ctx, &self.desc, &terrain).map_err(plan_error_is_input)?;
+        let dir = cache.map(Path::to_path_buf).or_else(vista::world::default_cache_dir);
+        Ok(ErrorTree::new(&self.desc, Arc::clone(&self.source), dir.as_deref())?)
+    }
+}
+
+/// Where a tree's tiles go, in the `error tree:` lines' words.
+fn place(tree: &ErrorTree) -> String {
+    match tree.dir() {
+        Some(d) => format!("cached in {}", d.display()),
+        None => "in memory only ($VISTA_CACHE is empty)".to_string(),
     }
 }
