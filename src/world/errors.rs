@@ -182,7 +182,7 @@ impl ErrorTree {
     /// always resident, so without this the first frame waits for every
     /// root's tile; with it, only the roots a view refines into are made
     /// (streaming wants a pending root's children only in view), and the
-    /// renderer reloads a pending root once its tile is made.
+    /// terrain attaches a pending root's numbers once its tile is made.
     pub fn with_roots_on_demand(mut self) -> Self {
         self.on_demand = self.world.root_lod() > 0;
         self
