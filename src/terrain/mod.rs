@@ -418,8 +418,13 @@ impl Terrain {
     /// in the next). Nodes given up do not hold it back; a root given up
     /// is an error from [`Terrain::stream`], and never settles.
     pub fn settled(&self) -> bool {
+        self.stats.loading == 0 && self.idle_but_loads()
+    }
+
+    /// Nothing but loads may be under way: no reload, retry or upload
+    /// waits, and the last stream's payloads are weighed.
+    fn idle_but_loads(&self) -> bool {
         !self.unweighed
-            && self.stats.loading == 0
             && self.streamer.reloading() == 0
             && self.stats.retry_waiting == 0
             && self.tree.waiting() == 0
@@ -430,12 +435,7 @@ impl Terrain {
     /// retry or a residency update. A frame drawn now draws the last one
     /// again, so an offline render may [`Self::wait_for_load`] instead.
     pub fn only_loading(&self) -> bool {
-        self.stats.loading > 0
-            && !self.unweighed
-            && self.streamer.reloading() == 0
-            && self.stats.retry_waiting == 0
-            && self.tree.waiting() == 0
-            && self.root_failure.is_none()
+        self.stats.loading > 0 && self.idle_but_loads()
     }
 
     /// Blocks until a load finishes or `timeout` passes: the cores go to
