@@ -9,6 +9,9 @@ use super::layout::NodeId;
 pub enum WorldError {
     #[error("invalid world description: {0}")]
     InvalidDesc(String),
+    /// The scene's `[vegetation]` table or the generator's folder.
+    #[error("vegetation: {0}")]
+    Vegetation(String),
     /// A stamp's placement, or what it does to the world's heights.
     #[error("{0}")]
     InvalidStamp(String),

@@ -40,6 +40,7 @@ mod stamps;
 mod streamer;
 mod streaming;
 mod texels;
+pub mod vegetation;
 pub mod vertex_bounds;
 pub(crate) mod vertex_bounds_exact;
 mod vertex_bounds_fine;

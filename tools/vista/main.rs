@@ -23,6 +23,7 @@ mod render_print;
 mod scene;
 mod scene_words;
 mod stability_cmd;
+mod vegetate_cmd;
 #[cfg(feature = "view")]
 mod view;
 mod world_args;
@@ -78,6 +79,10 @@ enum Command {
     /// soak) under the validation layer and print the table; exits 1 when a
     /// case fails.
     Stability(stability_cmd::StabilityArgs),
+    /// Grow vegetation over the world (REDengine 3's offline generator):
+    /// resource flowing downhill, the day's sun, the scene's brushes; writes
+    /// instances, occurrence maps and the maps' pictures.
+    Vegetate(vegetate_cmd::VegetateArgs),
 }
 
 /// When the process started: `vista render` says how long the first frame
@@ -225,6 +230,8 @@ fn run(cli: Cli) -> Result<()> {
             view::view(options, args, world, path)
         }
         Command::Stability(args) => stability_cmd::stability(cli.device.clone(), &args),
+        // CPU-only, like baking.
+        Command::Vegetate(args) => vegetate_cmd::vegetate(&args),
     }
 }
 
@@ -250,6 +257,7 @@ fn check_only(cli: &Cli) -> Result<()> {
         }
         Command::Bench(args) => bench_cmd::check(args)?,
         Command::Golden(args) => golden_cmd::check(args)?,
+        Command::Vegetate(args) => vegetate_cmd::check(args)?,
         #[cfg(feature = "view")]
         Command::View(args) => {
             view::check(args).map_err(|e| InputError(format!("{e:#}")))?;

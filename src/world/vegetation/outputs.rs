@@ -1,0 +1,126 @@
+//! The generator's files: the instances (32 bytes each, [`Instance`]'s
+//! layout), an occurrence map per grass type (a bit per occurrence cell:
+//! seed 004's "skip the cell if the bit is not set"), and
+//! `vegetation.json` saying what each holds, with the maps' pictures, as
+//! one set of files (all new or all old). Written only from a whole grid,
+//! so two runs that agree on it write the same bytes.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::params::{VegetationKind, VegetationParams};
+use super::spawn::Instance;
+use super::Generated;
+use crate::output::FileSet;
+use crate::world::error::{Result, WorldError};
+use image::ExtendedColorType::Rgb8;
+
+/// The files every run writes (one `occurrence-NAME.bin` per grass type
+/// besides).
+pub const OUTPUT_FILES: [&str; 5] = ["instances.bin", "vegetation.json", "resource.png", "sun.png", "vegetation.png"];
+
+/// A grass type's occurrence map: rows of bits, south row first, a row
+/// `(size[0] + 7) / 8` bytes, bit `i % 8` of byte `i / 8` the cell `i`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Occurrence {
+    pub ty: usize,
+    pub size: [usize; 2],
+    pub bits: Vec<u8>,
+}
+
+impl Occurrence {
+    /// Type `ty`'s map over `g`: a cell's bit is set when the type may
+    /// grow anywhere in its `ratio` x `ratio` generator cells.
+    pub fn of(g: &Generated, ty: usize, ratio: usize) -> Self {
+        let size = g.size.map(|s| s.div_ceil(ratio));
+        let stride = size[0].div_ceil(8);
+        let mut bits = vec![0u8; stride * size[1]];
+        for j in 0..g.size[1] {
+            for i in 0..g.size[0] {
+                if g.grass[j * g.size[0] + i] & (1 << ty) != 0 {
+                    let (oi, oj) = (i / ratio, j / ratio);
+                    bits[oj * stride + oi / 8] |= 1 << (oi % 8);
+                }
+            }
+        }
+        Occurrence { ty, size, bits }
+    }
+
+    pub fn get(&self, i: usize, j: usize) -> bool {
+        self.bits[j * self.size[0].div_ceil(8) + i / 8] & (1 << (i % 8)) != 0
+    }
+
+    pub fn set_cells(&self) -> usize {
+        self.bits.iter().map(|b| b.count_ones() as usize).sum()
+    }
+}
+
+#[derive(Serialize)]
+struct Summary<'a> {
+    cell_m: f64,
+    cells: [usize; 2],
+    occurrence_cell_m: f64,
+    occurrence_cells: [usize; 2],
+    instances_file: &'static str,
+    instance_bytes: usize,
+    instance_layout: &'static str,
+    instances: usize,
+    types: Vec<TypeSummary<'a>>,
+}
+
+#[derive(Serialize)]
+struct TypeSummary<'a> {
+    name: &'a str,
+    kind: VegetationKind,
+    instances: usize,
+    occurrence_file: Option<String>,
+    occurrence_set: Option<usize>,
+}
+
+/// Writes the instances, the occurrence maps, the summary and the maps'
+/// pictures into `dir`, as one set; gives the occurrence maps.
+pub fn write_outputs(dir: &Path, params: &VegetationParams, g: &Generated) -> Result<Vec<Occurrence>> {
+    let mut set = FileSet::new(dir);
+    let mut put = |name: &str, bytes: &[u8]| set.add(name, bytes).map_err(|e| WorldError::io_write(&e.path, e.error));
+    put("instances.bin", bytemuck::cast_slice(&g.instances))?;
+    let ratio = params.occurrence_ratio();
+    let mut maps = Vec::new();
+    let mut types = Vec::new();
+    for (ty, t) in params.types.iter().enumerate() {
+        let mut s = TypeSummary {
+            name: &t.name,
+            kind: t.kind,
+            instances: g.instances.iter().filter(|i| i.ty as usize == ty).count(),
+            occurrence_file: None,
+            occurrence_set: None,
+        };
+        if t.kind == VegetationKind::Grass {
+            let m = Occurrence::of(g, ty, ratio);
+            let file = format!("occurrence-{}.bin", t.name);
+            put(&file, &m.bits)?;
+            (s.occurrence_file, s.occurrence_set) = (Some(file), Some(m.set_cells()));
+            maps.push(m);
+        }
+        types.push(s);
+    }
+    let summary = Summary {
+        cell_m: g.cell_m,
+        cells: g.size,
+        occurrence_cell_m: params.occurrence_cell_m,
+        occurrence_cells: g.size.map(|s| s.div_ceil(ratio)),
+        instances_file: "instances.bin",
+        instance_bytes: std::mem::size_of::<Instance>(),
+        instance_layout: "x, y, z (f32 m), yaw (f32 rad), scale (f32), type (u32), tint (RGBA8), cell (u32)",
+        instances: g.instances.len(),
+        types,
+    };
+    let json = serde_json::to_string_pretty(&summary).expect("the summary serializes");
+    put("vegetation.json", json.as_bytes())?;
+    for (name, img) in super::maps::pictures(params, g) {
+        set.add_with(name, |w| crate::output::encode_png(w, img.as_raw(), [img.width(), img.height()], Rgb8))
+            .map_err(|e| WorldError::io_write(&e.path, e.error))?;
+    }
+    set.commit().map_err(|e| WorldError::io_write(&e.path, e.error))?;
+    Ok(maps)
+}

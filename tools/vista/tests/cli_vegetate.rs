@@ -1,0 +1,126 @@
+//! `vista vegetate` as users and schedulers run it: two processes write
+//! the same bytes; shards run at once into one folder write what one run
+//! writes; moving a stamp remakes only the tiles within reach of it and
+//! gives a fresh run's outputs; mistakes are one line. No GPU.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+mod vista_cmd;
+
+use vista_cmd::vista_cmd;
+
+const OUTPUTS: [&str; 6] =
+    ["instances.bin", "vegetation.json", "occurrence-meadow.bin", "resource.png", "sun.png", "vegetation.png"];
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vista-cli-vegetate-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+/// A 1 024 m procedural world whose vegetation reaches 150 m, with a
+/// crater stamped at `stamp_x` (metres east) in the south-west.
+fn scene(dir: &Path, stamp_x: f64) -> PathBuf {
+    let crater = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/stamps/crater.png");
+    let text = format!(
+        "[world]\nextent = 1024\nheight_range = [0, 500]\nspacing = 1\nlods = 3\n\n\
+         [vegetation]\ncell_m = 4\nreach_m = 150\noccurrence_cell_m = 8\n\n\
+         [[stamps]]\nsource = \"{}\"\ncenter = [{stamp_x}, 150]\nsize = 120\nheight = 40\noffset = 100\n",
+        crater.display()
+    );
+    let path = dir.join(format!("scene-{stamp_x}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn vegetate(scene: &Path, out: &Path, extra: &[&str]) -> Command {
+    let mut c = vista_cmd();
+    c.arg("vegetate").arg("--scene").arg(scene).arg("--out").arg(out).args(extra);
+    c
+}
+
+fn run(mut c: Command) -> (bool, String, String) {
+    let out = c.output().expect("run vista");
+    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+}
+
+fn outputs(dir: &Path) -> Vec<(&'static str, Vec<u8>)> {
+    OUTPUTS.iter().map(|f| (*f, std::fs::read(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}")))).collect()
+}
+
+/// "tiles...: C computed, R reused" of a run's output.
+fn tiles(stdout: &str) -> (usize, usize) {
+    let line = stdout.lines().find(|l| l.starts_with("tiles")).expect("a tiles line");
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let at = |w: &str| words[words.iter().position(|x| *x == w).unwrap() - 1].parse().unwrap();
+    (at("computed,"), at("reused"))
+}
+
+#[test]
+fn processes_shards_and_a_moved_stamp_write_what_one_run_writes() {
+    let dir = temp_dir("runs");
+    let first = scene(&dir, 150.0);
+    let (a, b, shards) = (dir.join("a"), dir.join("b"), dir.join("shards"));
+    let (ok, out, err) = run(vegetate(&first, &a, &[]));
+    assert!(ok, "{err}");
+    assert_eq!(tiles(&out), (16, 0), "{out}");
+    assert!(out.contains("instances.bin (") && out.contains("meadow"), "{out}");
+    assert!(run(vegetate(&first, &b, &[])).0);
+    assert_eq!(outputs(&a), outputs(&b), "two processes, the same bytes");
+    // Two shards at once into one folder.
+    let mut kids: Vec<_> =
+        ["0/2", "1/2"].iter().map(|s| vegetate(&first, &shards, &["--shard", s]).output().unwrap()).collect();
+    kids.retain(|k| !k.status.success());
+    assert!(kids.is_empty(), "a shard failed");
+    assert_eq!(outputs(&a), outputs(&shards), "two shards write what one run writes");
+    // Move the stamp 80 m east: the tiles within 150 m of either place
+    // are made again (the south-west's), the others are kept.
+    let moved = scene(&dir, 230.0);
+    let (ok, out, err) = run(vegetate(&moved, &a, &[]));
+    assert!(ok, "{err}");
+    let (computed, reused) = tiles(&out);
+    eprintln!("the moved stamp: {computed} tiles made again, {reused} kept");
+    assert!(computed > 0 && reused > 0 && computed + reused == 16, "{out}");
+    let fresh = dir.join("fresh");
+    assert!(run(vegetate(&moved, &fresh, &[])).0);
+    assert_eq!(outputs(&a), outputs(&fresh), "the incremental run writes what a full one does");
+    assert_ne!(outputs(&a), outputs(&b), "the stamp moved the vegetation");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn mistakes_are_one_line_before_any_work() {
+    let dir = temp_dir("mistakes");
+    let good = scene(&dir, 150.0);
+    let text = std::fs::read_to_string(&good).unwrap();
+    let cases = [
+        (text.replace("cell_m = 4", "cel_m = 4"), "unknown field `cel_m`"),
+        (text.replace("reach_m = 150", "reach_m = 150\nflow = 2"), "flow must be in 0..=1"),
+        (
+            text.replace("occurrence_cell_m = 8", "occurrence_cell_m = 8\n[[vegetation.brushes]]\nname = \"b\"\nmaterials = [\"grass\"]\ntypes = [{ type = \"oak\", density = 0.1, scale = [1, 2] }]"),
+            "type \"oak\" is not one of",
+        ),
+    ];
+    for (i, (scene_text, want)) in cases.iter().enumerate() {
+        let path = dir.join(format!("bad{i}.toml"));
+        std::fs::write(&path, scene_text).unwrap();
+        let out = vegetate(&path, &dir.join("out"), &[]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{want}: {err}");
+        assert!(err.contains(want) && err.trim().lines().count() == 1, "{want}: {err}");
+    }
+    for (args, want) in [
+        (&["--cell", "0.01"][..], "raise cell_m"),
+        (&["--shard", "2/2"][..], "--shard"),
+        (&["--shard", "all/2"][..], "give I/2"),
+    ] {
+        let out = vegetate(&good, &dir.join("out"), args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(want) && err.trim().lines().count() == 1, "{args:?}: {err}");
+    }
+    assert!(!dir.join("out").exists(), "nothing written for a refused run");
+    let _ = std::fs::remove_dir_all(dir);
+}

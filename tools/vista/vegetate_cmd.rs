@@ -1,0 +1,162 @@
+//! `vista vegetate`: REDengine 3's offline vegetation generator over a
+//! world (the scene's `[vegetation]` table, else its defaults), its tiles
+//! kept in the output folder for reruns and shards, its outputs (instances,
+//! occurrence maps, the maps' pictures) written once every tile is there.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context as _, Result};
+use clap::Args;
+use vista::world::vegetation::{
+    generate, write_outputs, Generated, Occurrence, Request, VegetationParams, MATERIAL_NAMES, TILE_CELLS,
+};
+
+use crate::bake_shard::ShardArg;
+use crate::world_args::WorldArgs;
+use crate::InputError;
+
+#[derive(Args)]
+pub struct VegetateArgs {
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// Output folder: tiles/ (reused by a rerun whose inputs still match),
+    /// then instances.bin, occurrence-NAME.bin per grass type,
+    /// vegetation.json, resource.png, sun.png and vegetation.png.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Generate shard I of N (0-based): every N-th tile. N shards writing
+    /// into one folder (at once or not) make the whole run; the one that
+    /// completes the tiles writes the outputs. `auto/N` reads the index
+    /// from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX.
+    #[arg(long, value_name = "I/N", value_parser = crate::bake_shard::parse_shard, allow_hyphen_values = true)]
+    pub shard: Option<ShardArg>,
+    /// Side of a generator cell in metres (replaces the scene's cell_m).
+    #[arg(long, value_name = "METRES", value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
+    pub cell: Option<f64>,
+}
+
+/// The parameters: the scene's table (else the defaults) with `--cell`.
+pub fn params(args: &VegetateArgs) -> Result<VegetationParams> {
+    let scene = match &args.world.scene {
+        Some(path) => crate::scene::Scene::load(path).map_err(|e| InputError(format!("{e:#}")))?.vegetation,
+        None => None,
+    };
+    let mut p = scene.unwrap_or_default();
+    if let Some(c) = args.cell {
+        p.cell_m = c;
+        // An occurrence cell of the default 10 m stays whole where it can.
+        if (p.occurrence_cell_m / c).fract() != 0.0 {
+            p.occurrence_cell_m = c * (p.occurrence_cell_m / c).round().max(1.0);
+        }
+    }
+    p.validate().map_err(|e| InputError(e.to_string()))?;
+    Ok(p)
+}
+
+fn shard(args: &VegetateArgs) -> Result<Option<(u32, u32)>> {
+    match args.shard {
+        None => Ok(None),
+        Some(ShardArg::All { count }) => {
+            Err(InputError(format!("--shard all/{count} is for `vista bake --dry-run`; give I/{count}")).into())
+        }
+        Some(s) => Ok(s.index()?.map(|i| (i, s.count()))),
+    }
+}
+
+/// Checks everything `vegetate` reads before it starts.
+pub fn check(args: &VegetateArgs) -> Result<()> {
+    args.world.resolve()?;
+    params(args)?;
+    shard(args)?;
+    Ok(())
+}
+
+pub fn vegetate(args: &VegetateArgs) -> Result<()> {
+    let params = params(args)?;
+    let shard = shard(args)?;
+    let world = args.world.load()?;
+    let request = Request {
+        world: &world.desc,
+        source: world.source.as_ref(),
+        holes: &world.holes,
+        rules: &world.bake.materials,
+        params: &params,
+        shard,
+    };
+    let size = vista::world::vegetation::check(&request).map_err(|e| InputError(e.to_string()))?;
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    println!(
+        "vegetation: {} over {} x {} cells of {} m ({} tiles of {TILE_CELLS} x {TILE_CELLS}); sun: {} samples of day \
+         {} at latitude {}; {} resource iterations",
+        world.label,
+        size[0],
+        size[1],
+        params.cell_m,
+        size[0].div_ceil(TILE_CELLS) * size[1].div_ceil(TILE_CELLS),
+        params.sun_samples,
+        params.day_of_year,
+        params.latitude_deg,
+        params.iterations
+    );
+    let start = Instant::now();
+    let report = generate(&request, &args.out)?;
+    let which = shard.map(|(i, n)| format!(" (shard {i}/{n})")).unwrap_or_default();
+    println!("field: {:.1} s (heights, slopes, materials of every cell)", report.field_s);
+    println!(
+        "tiles{which}: {} computed, {} reused (inputs unchanged) in {:.1} s",
+        report.computed, report.reused, report.tiles_s
+    );
+    let Some(g) = &report.result else {
+        println!(
+            "outputs: not written: {} of {} tiles (other shards') are not in {} yet; the run that completes them \
+             writes them",
+            report.missing,
+            report.tiles,
+            args.out.display()
+        );
+        return Ok(());
+    };
+    let maps = print_and_write(args, &params, g)?;
+    println!(
+        "wrote {}: instances.bin ({} instances), {} occurrence map(s), vegetation.json, resource.png, sun.png, \
+         vegetation.png; {:.1} s in all",
+        args.out.display(),
+        g.instances.len(),
+        maps.len(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Prints the ground and what grew, writes the outputs; gives the
+/// occurrence maps.
+fn print_and_write(args: &VegetateArgs, params: &VegetationParams, g: &Generated) -> Result<Vec<Occurrence>> {
+    let ground: Vec<String> = (0..5u8)
+        .map(|m| {
+            let n = g.material.iter().zip(&g.hole).filter(|(c, h)| **c == m && !**h).count();
+            format!("{} {:.1} %", MATERIAL_NAMES[usize::from(m)], 100.0 * n as f64 / g.material.len() as f64)
+        })
+        .collect();
+    println!("ground (the bake's material rules): {}", ground.join(", "));
+    let maps = write_outputs(&args.out, params, g)?;
+    for (ty, t) in params.types.iter().enumerate() {
+        match maps.iter().find(|m| m.ty == ty) {
+            Some(m) => {
+                let all = m.size[0] * m.size[1];
+                let set = m.set_cells();
+                println!(
+                    "  {:<10} grass: occurrence bit set in {set} of {all} cells of {} m ({:.1} %)",
+                    t.name,
+                    params.occurrence_cell_m,
+                    100.0 * set as f64 / all.max(1) as f64
+                );
+            }
+            None => {
+                let n = g.instances.iter().filter(|i| i.ty as usize == ty).count();
+                println!("  {:<10} {:?}: {n} instances", t.name, t.kind);
+            }
+        }
+    }
+    Ok(maps)
+}
