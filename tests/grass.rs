@@ -358,3 +358,57 @@ fn no_grass_grows_under_an_opaque_decal() {
         }
     });
 }
+
+/// Seed 004's occurrence maps: with a vegetation folder (a 10 m
+/// checkerboard, the brushes' density 0.5 on grass), no tuft stands in a
+/// cell whose bit is off, the cells skipped are counted, and the placement
+/// is still its CPU twin's (densities times the brushes').
+#[test]
+fn grass_grows_only_where_the_occurrence_map_lets_it() {
+    gpu_test(|ctx| {
+        let dir = std::env::temp_dir().join(format!("vista-grass-occurrence-{}", std::process::id()));
+        let mut fx = effects(true);
+        fx.grass.occurrence =
+            Some(common::occurrence::checkerboard(&dir, world().extent_m, 10.0, [0.5, 0.0, 0.0, 1.0, 0.0]));
+        let mut rig = rig(ctx, fx);
+        let grass = rig.renderer.effect_mut::<vista::effects::grass::gpu::Grass>().unwrap();
+        grass.no_culling = true;
+        rig.shot(ctx, &low(0.0, 0.0), CullStages::default());
+        let grass = rig.renderer.effect::<vista::effects::grass::gpu::Grass>().unwrap();
+        let header: vista::effects::grass::gpu::GrassHeaderGpu = bytemuck::pod_read_unaligned(
+            &ctx.read_buffer(grass.header()).unwrap()[..vista::effects::grass::gpu::GrassHeaderGpu::BYTES as usize],
+        );
+        let params = grass.params.clone();
+        let occurrence = params.occurrence.as_ref().unwrap();
+        let gpu = tufts(ctx, &rig);
+        assert!(gpu.values().all(|t| occurrence.bit([t.position[0], t.position[1]])), "a tuft in a cell that is off");
+        let cam = camera(ctx, &rig);
+        // The cells in range whose bit is off, counted as the twin walks them.
+        let grid = params.grid([cam[0], cam[1]]);
+        let (mut off, mut borderline) = (0u32, 0u32);
+        for y in 0..grid.side as i32 {
+            for x in 0..grid.side as i32 {
+                let p = vista::reference::grass::cell_point(
+                    [grid.cell0[0] + x, grid.cell0[1] + y],
+                    params.cell_m,
+                    params.seed,
+                );
+                let d = f64::from(p[0] - cam[0]).hypot(f64::from(p[1] - cam[1]));
+                if (d - f64::from(params.radius_m)).abs() < 1e-3 {
+                    borderline += 1;
+                } else if d < f64::from(params.radius_m) && !occurrence.bit(p) {
+                    off += 1;
+                }
+            }
+        }
+        let skipped = header.skipped_occurrence;
+        println!("{} tufts; {skipped} of {} cells in range skipped (the twin: {off})", gpu.len(), header.in_range);
+        assert!(skipped.abs_diff(off) <= borderline && off > header.in_range / 3, "{skipped} against {off}");
+        let ground = candidate_ground(ctx, &rig, &params, cam);
+        let cpu = place_cpu(&params, [cam[0], cam[1]], true, |p| ground.get(&p.map(f32::to_bits)).copied());
+        let without_holes = place_cpu(&params, [cam[0], cam[1]], false, |p| ground.get(&p.map(f32::to_bits)).copied());
+        let (compared, _) = compare_with_the_twin(&rig, &gpu, &cpu, &without_holes);
+        assert!(compared > 300, "{compared} tufts compared");
+        let _ = std::fs::remove_dir_all(dir);
+    });
+}

@@ -52,6 +52,9 @@ fn effects() -> Effects {
     }
     // Scaled to the test world (as each effect's own tests do).
     fx.grass = GrassParams { radius_m: 20.0, fade_m: 4.0, ..GrassParams::default() };
+    // The vegetation's occurrence map too (grass_place's OCCURRENCE variant).
+    let dir = std::env::temp_dir().join(format!("vista-syncval-occurrence-{}", std::process::id()));
+    fx.grass.occurrence = Some(common::occurrence::checkerboard(&dir, world().extent_m, 4.0, [1.0; 5]));
     fx.cliff_meshes = CliffMeshParams { radius_m: 24.0, ..CliffMeshParams::default() };
     fx.virtual_texture.cache_mb = 16;
     fx.virtual_texture.indirection = 512;

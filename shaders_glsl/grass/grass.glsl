@@ -33,6 +33,7 @@ struct GrassHeader {
     uint placed;          // tufts standing on terrain (before culling)
     uint culled_frustum;
     uint culled_hiz;
+    uint skipped_occurrence;  // cells in range whose occurrence bit is off
 };
 
 // Two 32-bit random words of a cell: its jitter, and its keep, rotation

@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// variants: HIZ DECALS
+// variants: HIZ DECALS OCCURRENCE
 // Grass placement (effect grass, seed 004's procedural distribution by
 // material): one thread per world cell of the square around the camera.
 // A cell within the radius keeps one tuft with its material's probability
@@ -12,7 +12,9 @@
 // after frustum and (HIZ) depth-pyramid culling are appended to the one
 // indirect draw of grass_draw; the header counts each fate. DECALS (effect
 // decals): a decal's coverage at the tuft thins its material's
-// probability in proportion, so nothing grows on a road.
+// probability in proportion, so nothing grows on a road. OCCURRENCE
+// (`vista vegetate`'s maps, seed 004): a cell whose occurrence bit is off
+// is skipped before any terrain is read, and counted.
 #include "constants.glsl"
 #include "terrain_view.glsl"
 #include "octahedral.glsl"
@@ -45,6 +47,10 @@ layout(set = 0, binding = 15) uniform sampler decal_repeat;
 layout(set = 0, binding = 16, std430) readonly buffer GrassDecals { uint i[]; } grass_decals;
 #include "virtual_texture/decal_shapes.glsl"
 #endif
+#ifdef OCCURRENCE
+// Rows of bits, south first, (occ_width + 31) / 32 words a row.
+layout(set = 0, binding = 17, std430) readonly buffer Occurrence { uint words[]; } occurrence;
+#endif
 
 #define VISTA_SECTOR_WORD(i) sector_data.words[i]
 #define VISTA_HEIGHT_ATLAS height_atlas
@@ -68,9 +74,10 @@ layout(push_constant, std430) uniform GrassPlacePush {
     uint seed;
     float reach_m;       // how far a blade reaches sideways, per metre of height
     uint decal_count;    // DECALS: the decals touching the square (grass_decals)
-    uint pad0;
-    uint pad1;
-    uint pad2;
+    float occ_per_m;     // OCCURRENCE: 1 / an occurrence cell's side (a product rounds
+                         // exactly, a quotient need not: the CPU twin's bits), the map's cells
+    uint occ_width;
+    uint occ_height;
 } pc;
 
 #undef VISTA_TERRAIN_DECLARE_ONLY
@@ -82,6 +89,19 @@ bool in_hole(vec2 p) {
     ivec2 t = atlas_texel(ivec2(round(h.local)));
     return texelFetch(sampler2DArray(albedo_atlas, nearest), ivec3(t, int(h.slot)), 0).a < 0.5;
 }
+
+#ifdef OCCURRENCE
+// Whether the occurrence map lets grass grow at `p` (outside it: no).
+bool occurs(vec2 p) {
+    vec2 c = floor(p * pc.occ_per_m);
+    if (c.x < 0.0 || c.y < 0.0 || c.x >= float(pc.occ_width) || c.y >= float(pc.occ_height)) {
+        return false;
+    }
+    uint i = uint(c.x);
+    uint word = occurrence.words[uint(c.y) * ((pc.occ_width + 31u) / 32u) + i / 32u];
+    return ((word >> (i % 32u)) & 1u) != 0u;
+}
+#endif
 
 // Whether the camera-relative box lies outside a frustum plane.
 bool outside_frustum(vec3 lo, vec3 hi) {
@@ -109,6 +129,12 @@ void main() {
         return;
     }
     atomicAdd(header.h.in_range, 1u);
+#ifdef OCCURRENCE
+    if (!occurs(p)) {
+        atomicAdd(header.h.skipped_occurrence, 1u);
+        return;
+    }
+#endif
     uint material;
     float z;
     vec3 n;

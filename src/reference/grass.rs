@@ -56,6 +56,8 @@ pub fn cell_point(cell: [i32; 2], cell_m: f32, seed: u32) -> [f32; 2] {
 /// culling, for the camera at `camera_xy` (the GPU's f32). `ground(p)`
 /// says the material at `p` and whether it is a hole, or None where no
 /// terrain is found; `holes`: whether holes cut (the frame's switch).
+/// The vegetation's occurrence map, when the params hold one, skips cells
+/// as `grass_place` does.
 pub fn place_cpu(
     params: &GrassParams,
     camera_xy: [f32; 2],
@@ -72,6 +74,9 @@ pub fn place_cpu(
             let d = f64::from(p[0] - camera_xy[0]).hypot(f64::from(p[1] - camera_xy[1]));
             let borderline = (d - f64::from(params.radius_m)).abs() < 1e-3;
             if d >= f64::from(params.radius_m) && !borderline {
+                continue;
+            }
+            if params.occurrence.as_ref().is_some_and(|o| !o.bit(p)) {
                 continue;
             }
             let Some(g) = ground(p) else { continue };

@@ -89,6 +89,7 @@ pub fn fake_node(id: NodeId, salt: u16) -> BakedNode {
 }
 pub mod diamond_patch;
 pub mod finest;
+pub mod occurrence;
 pub mod smoke;
 pub mod smoke_triangle;
 pub mod terrain;

@@ -134,9 +134,15 @@ impl FrameEffect for Grass {
         let Some(counters) = counters_of(c) else { return Ok(None) };
         let triangles = u64::from(counters.drawn) * TUFT_TRIANGLES;
         let memory_bytes: u64 = Grass::memory(self).iter().map(|(_, b)| b).sum();
+        let skipped = match &self.params.occurrence {
+            Some(o) => {
+                format!(" ({} skipped by the occurrence map of {})", counters.skipped_occurrence, o.folder.display())
+            }
+            None => String::new(),
+        };
         let line = format!(
-            "grass: {} cells in range, {} tufts placed, {} culled by the frustum, {} by the depth pyramid, {} drawn \
-             ({triangles} triangles); {:.2} MiB",
+            "grass: {} cells in range{skipped}, {} tufts placed, {} culled by the frustum, {} by the depth pyramid, \
+             {} drawn ({triangles} triangles); {:.2} MiB",
             counters.in_range,
             counters.placed,
             counters.culled_frustum,

@@ -48,6 +48,7 @@ pub struct GrassHeaderGpu {
     pub placed: u32,
     pub culled_frustum: u32,
     pub culled_hiz: u32,
+    pub skipped_occurrence: u32,
 }
 
 impl GrassHeaderGpu {
@@ -63,6 +64,7 @@ impl GrassHeaderGpu {
             placed: self.placed,
             culled_frustum: self.culled_frustum,
             culled_hiz: self.culled_hiz,
+            skipped_occurrence: self.skipped_occurrence,
             drawn: self.instance_count,
         }
     }
@@ -105,6 +107,8 @@ pub struct Grass {
     rules: Buffer,
     header: Buffer,
     instances: Buffer,
+    /// The vegetation folder's occurrence words (scene key `vegetation`).
+    occurrence: Option<Buffer>,
     pigment: Image,
     /// The pigment map's corner as last rendered.
     pigment_at: Option<[f32; 2]>,
@@ -138,14 +142,23 @@ impl Grass {
         let rules = buffer("grass_rules", u64::from(GRASS_RULES) * structs::GRASS_RULE as u64, storage)?;
         ctx.upload(&rules, bytemuck::cast_slice(&params.rules_gpu()))?;
         let readable = storage | vk::BufferUsageFlags::TRANSFER_SRC;
+        let occurrence = match &params.occurrence {
+            Some(o) => {
+                let words = buffer("grass_occurrence", 4 * o.words.len() as u64, storage)?;
+                ctx.upload(&words, bytemuck::cast_slice(&o.words))?;
+                Some(words)
+            }
+            None => None,
+        };
         Ok(Grass {
             params: params.clone(),
             pigment_pass: GrassPigment::new(ctx, decals)?,
-            place: GrassPlace::new(ctx, hiz, decals)?,
+            place: GrassPlace::new(ctx, hiz, decals, occurrence.is_some())?,
             draw: GrassDraw::new(ctx, depth_format, layout)?,
             rules,
             header: buffer("grass_header", GrassHeaderGpu::BYTES, readable | vk::BufferUsageFlags::INDIRECT_BUFFER)?,
             instances: buffer("grass_instances", cells * structs::GRASS_INSTANCE as u64, readable)?,
+            occurrence,
             pigment: Image::new(
                 ctx,
                 &ImageDesc {
@@ -231,7 +244,8 @@ impl Grass {
             // The vertex shader's widest lean (0.5 of the height) plus half a root width.
             reach_m: 0.5 + 0.5 * p.blade_width_m / p.blade_height_m,
             decal_count: 0,
-            pad: [0; 3],
+            occ_per_m: p.occurrence.as_ref().map_or(0.0, |o| o.per_m()),
+            occ_size: p.occurrence.as_ref().map_or([0; 2], |o| o.size),
         };
         let texel = self.pigment_texel_m();
         let origin = self.pigment_origin([f.camera_world[0], f.camera_world[1]]);
@@ -307,7 +321,8 @@ impl Grass {
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         let hiz = hiz.filter(|_| f.place.flags & GRASS_FLAG_HIZ != 0);
         let (rules, header, instances) = (&self.rules, &self.header, &self.instances);
-        let out = PlaceBuffers { view, rules, header, instances, hiz, decals };
+        let occurrence = self.occurrence.as_ref();
+        let out = PlaceBuffers { view, rules, header, instances, hiz, decals, occurrence };
         self.place.record(rec, &out, &f.place, sector_data, tree);
     }
 
@@ -361,8 +376,10 @@ impl Grass {
     }
 
     pub fn memory(&self) -> Vec<(String, u64)> {
-        let buffers =
-            [&self.rules, &self.header, &self.instances].into_iter().chain(self.decals.as_ref().map(|d| &d.1));
+        let buffers = [&self.rules, &self.header, &self.instances]
+            .into_iter()
+            .chain(self.decals.as_ref().map(|d| &d.1))
+            .chain(self.occurrence.as_ref());
         buffers
             .map(|b| (b.name.clone(), b.memory_bytes()))
             .chain([(self.pigment.name.clone(), self.pigment.memory_bytes())])

@@ -3,8 +3,10 @@
 //! rules, holes, the cell's hash, and with variant `DECALS` the decals'
 //! coverage), culls it by the frustum and, variant `HIZ` (effect
 //! `occlusion`, on this frame), the depth pyramid, and appends it to
-//! `grass_draw`'s one indirect draw. Its header holds the draw's arguments
-//! and the frame's counters.
+//! `grass_draw`'s one indirect draw; with variant `OCCURRENCE` (a
+//! vegetation folder's maps) it skips the cells whose bit is off before
+//! reading the terrain. Its header holds the draw's arguments and the
+//! frame's counters.
 
 use crate::effects::virtual_texture::decal_gpu::DecalResources;
 use crate::error::Result;
@@ -33,7 +35,9 @@ pub struct GrassPlacePush {
     pub reach_m: f32,
     /// DECALS: the decals touching the square (the grass decal list's first).
     pub decal_count: u32,
-    pub pad: [u32; 3],
+    /// OCCURRENCE: 1 / an occurrence cell's side, and the map's cells.
+    pub occ_per_m: f32,
+    pub occ_size: [u32; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<GrassPlacePush>() == structs::GRASS_PLACE_PUSH);
@@ -49,6 +53,8 @@ pub struct PlaceBuffers<'a> {
     pub hiz: Option<&'a Image>,
     /// The decals and the grass decal list, for the DECALS variant.
     pub decals: Option<GrassDecals<'a>>,
+    /// The occurrence words, for the OCCURRENCE variant.
+    pub occurrence: Option<&'a Buffer>,
 }
 
 /// The decals grass reads (effect `decals`): their GPU objects and the
@@ -83,10 +89,10 @@ pub struct GrassPlace {
 impl GrassPlace {
     pub const NAME: &'static str = sh::PASS;
 
-    /// `hiz`: also the variant that culls by the depth pyramid; `decals`:
-    /// every variant reads the decals.
-    pub fn new(ctx: &Context, hiz: bool, decals: bool) -> Result<Self> {
-        let base = if decals { sh::VARIANT_DECALS } else { 0 };
+    /// `hiz`: also the variant that culls by the depth pyramid; `decals`,
+    /// `occurrence`: every variant reads the decals, the occurrence map.
+    pub fn new(ctx: &Context, hiz: bool, decals: bool, occurrence: bool) -> Result<Self> {
+        let base = if decals { sh::VARIANT_DECALS } else { 0 } | if occurrence { sh::VARIANT_OCCURRENCE } else { 0 };
         let variants = if hiz { vec![base, base | sh::VARIANT_HIZ] } else { vec![base] };
         let pipelines = variants
             .into_iter()
@@ -111,12 +117,13 @@ impl GrassPlace {
         tree: &GpuQuadtree,
     ) {
         let want = if out.hiz.is_some() { sh::VARIANT_HIZ } else { 0 }
-            | if out.decals.is_some() { sh::VARIANT_DECALS } else { 0 };
+            | if out.decals.is_some() { sh::VARIANT_DECALS } else { 0 }
+            | if out.occurrence.is_some() { sh::VARIANT_OCCURRENCE } else { 0 };
         let (_, pipeline) = self
             .pipelines
             .iter()
             .find(|(v, _)| *v == want)
-            .expect("grass_place built for the frame's pyramid and decals");
+            .expect("grass_place built for the frame's pyramid, decals and occurrence map");
         rec.bind_pipeline(pipeline);
         let mut bindings = vec![
             (sh::VIEW, Resource::Buffer(out.view)),
@@ -135,6 +142,9 @@ impl GrassPlace {
         }
         if let Some(d) = &out.decals {
             bindings.extend(d.bindings());
+        }
+        if let Some(o) = out.occurrence {
+            bindings.push((sh::OCCURRENCE, Resource::Buffer(o)));
         }
         rec.push_descriptors(pipeline, &bindings);
         rec.push_constants(pipeline, push);

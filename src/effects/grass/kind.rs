@@ -32,8 +32,8 @@ impl EffectKind for GrassKind {
         &super::GrassParams::PARAMETERS
     }
 
-    fn read(&self, fx: &mut Effects, key: &str, name: &str, v: &toml::Value, _: &Path) -> Result<()> {
-        fx.grass.read(key, name, v)
+    fn read(&self, fx: &mut Effects, key: &str, name: &str, v: &toml::Value, base: &Path) -> Result<()> {
+        fx.grass.read(key, name, v, base)
     }
 
     fn validate(&self, fx: &Effects) -> Result<()> {

@@ -15,12 +15,15 @@
 //! density = { grass = 3.0, scree = 0.3 }  # tufts per m^2 by material
 //! height = { scree = 0.6 }                # height scale by material
 //! tint = { scree = [1.0, 0.9, 0.7] }      # pigment multiplier by material
+//! vegetation = "veg"   # a `vista vegetate` folder: grass only where its occurrence
+//!                      # maps let it, densities times its brushes' (seed 004)
 //! ```
 
 pub mod grass_draw;
 pub mod grass_pigment;
 pub mod grass_place;
 pub mod kind;
+pub mod occurrence;
 
 pub mod frame;
 pub mod gpu;
@@ -28,7 +31,9 @@ pub mod gpu;
 use crate::error::{Error, Result};
 use crate::shaders::consts::{GRASS_MAX_SIDE, GRASS_RULES};
 use crate::world::Material;
+use occurrence::GrassOccurrence;
 use serde::Serialize;
+use std::path::Path;
 
 /// The bake's materials by their scene names.
 pub const MATERIAL_NAMES: [(&str, Material); 5] = [
@@ -70,6 +75,9 @@ pub struct GrassParams {
     pub seed: u32,
     /// Per material, in [`MATERIAL_NAMES`] order.
     pub rules: [GrassRule; 5],
+    /// A `vista vegetate` folder's occurrence maps and brush densities
+    /// (scene key `vegetation`): grass grows only where a bit is set.
+    pub occurrence: Option<GrassOccurrence>,
 }
 
 impl Default for GrassParams {
@@ -85,6 +93,7 @@ impl Default for GrassParams {
             blade_width_m: 0.06,
             seed: 1,
             rules,
+            occurrence: None,
         }
     }
 }
@@ -109,8 +118,18 @@ pub struct GrassRuleGpu {
 
 impl GrassParams {
     /// Parameter names of `[effects.grass]` besides `enabled`.
-    pub const PARAMETERS: [&'static str; 9] =
-        ["radius_m", "cell_m", "fade_m", "blade_height_m", "blade_width_m", "hash_seed", "density", "height", "tint"];
+    pub const PARAMETERS: [&'static str; 10] = [
+        "radius_m",
+        "cell_m",
+        "fade_m",
+        "blade_height_m",
+        "blade_width_m",
+        "hash_seed",
+        "density",
+        "height",
+        "tint",
+        "vegetation",
+    ];
 
     /// Cells a side of the square around the camera.
     pub fn side(&self) -> u32 {
@@ -147,7 +166,13 @@ impl GrassParams {
 
     /// Whether any material grows grass.
     pub fn grows(&self) -> bool {
-        self.rules.iter().any(|r| r.density > 0.0)
+        (0..5).any(|m| self.density(m) > 0.0)
+    }
+
+    /// Tufts per m^2 on material `m` (in [`MATERIAL_NAMES`] order): the
+    /// rule's, times the vegetation's brushes' density when it has one.
+    pub fn density(&self, m: usize) -> f32 {
+        self.rules[m].density * self.occurrence.as_ref().map_or(1.0, |o| o.density[MATERIAL_NAMES[m].1 as usize])
     }
 
     /// The cells around the camera (world-relative metres, the f32 the GPU
@@ -163,16 +188,17 @@ impl GrassParams {
         let area = self.cell_m * self.cell_m;
         let mut out =
             vec![GrassRuleGpu { height: 1.0, tint: [1.0; 4], ..GrassRuleGpu::default() }; GRASS_RULES as usize];
-        for ((_, m), r) in MATERIAL_NAMES.iter().zip(&self.rules) {
+        for (k, ((_, m), r)) in MATERIAL_NAMES.iter().zip(&self.rules).enumerate() {
             let [tr, tg, tb] = r.tint;
-            out[*m as usize] =
-                GrassRuleGpu { density: r.density * area, height: r.height, pad: [0.0; 2], tint: [tr, tg, tb, 1.0] };
+            let density = self.density(k) * area;
+            out[*m as usize] = GrassRuleGpu { density, height: r.height, pad: [0.0; 2], tint: [tr, tg, tb, 1.0] };
         }
         out
     }
 
-    /// Reads one `[effects.grass]` parameter (`key`: its full name).
-    pub(crate) fn read(&mut self, key: &str, name: &str, v: &toml::Value) -> Result<()> {
+    /// Reads one `[effects.grass]` parameter (`key`: its full name; a
+    /// folder relative to `base`, the scene's).
+    pub(crate) fn read(&mut self, key: &str, name: &str, v: &toml::Value, base: &Path) -> Result<()> {
         use crate::scene::params::{colour, number, seed, wrong};
         match name {
             "radius_m" => self.radius_m = number(key, v, 1.0, 1000.0)? as f32,
@@ -182,6 +208,10 @@ impl GrassParams {
             "blade_width_m" => self.blade_width_m = number(key, v, 0.001, 1.0)? as f32,
             "hash_seed" => {
                 self.seed = seed(key, v)?;
+            }
+            "vegetation" => {
+                let dir = v.as_str().ok_or_else(|| wrong(key, "a folder written by `vista vegetate`", v))?;
+                self.occurrence = Some(GrassOccurrence::load(&crate::world::resolve_relative(base, Path::new(dir)))?);
             }
             "density" | "height" | "tint" => {
                 let t = v.as_table().ok_or_else(|| wrong(key, "a table by material name", v))?;
@@ -214,6 +244,8 @@ pub struct GrassCounters {
     pub placed: u32,
     pub culled_frustum: u32,
     pub culled_hiz: u32,
+    /// Cells in range the occurrence map skipped (no terrain read there).
+    pub skipped_occurrence: u32,
     /// Tufts in the draw.
     pub drawn: u32,
 }

@@ -76,6 +76,10 @@ struct TypeSummary<'a> {
     instances: usize,
     occurrence_file: Option<String>,
     occurrence_set: Option<usize>,
+    /// Grass: its brushes' density on each material (grass, rock, snow,
+    /// scree, sand; the largest where several brushes offer it), which
+    /// effect grass multiplies its own densities by.
+    material_density: Option<[f64; 5]>,
 }
 
 /// Writes the instances, the occurrence maps, the summary and the maps'
@@ -85,6 +89,7 @@ pub fn write_outputs(dir: &Path, params: &VegetationParams, g: &Generated) -> Re
     let mut put = |name: &str, bytes: &[u8]| set.add(name, bytes).map_err(|e| WorldError::io_write(&e.path, e.error));
     put("instances.bin", bytemuck::cast_slice(&g.instances))?;
     let ratio = params.occurrence_ratio();
+    let entries = params.brush_entries()?;
     let mut maps = Vec::new();
     let mut types = Vec::new();
     for (ty, t) in params.types.iter().enumerate() {
@@ -94,12 +99,17 @@ pub fn write_outputs(dir: &Path, params: &VegetationParams, g: &Generated) -> Re
             instances: g.instances.iter().filter(|i| i.ty as usize == ty).count(),
             occurrence_file: None,
             occurrence_set: None,
+            material_density: None,
         };
         if t.kind == VegetationKind::Grass {
             let m = Occurrence::of(g, ty, ratio);
             let file = format!("occurrence-{}.bin", t.name);
             put(&file, &m.bits)?;
             (s.occurrence_file, s.occurrence_set) = (Some(file), Some(m.set_cells()));
+            let on = |es: &Vec<super::params::Entry>| {
+                es.iter().filter(|e| e.ty == ty).map(|e| e.density).fold(0.0, f64::max)
+            };
+            s.material_density = Some([0, 1, 2, 3, 4].map(|m| on(&entries[m])));
             maps.push(m);
         }
         types.push(s);
