@@ -1,16 +1,17 @@
 //! The vegetation generator (`vista::world::vegetation`): resource flow and
 //! sun exposure against independent twins on analytic surfaces, tiles
 //! equal to the whole grid, reruns and shards equal to one run, the
-//! occurrence maps equal to the cells they summarise.
+//! occurrence maps equal to the cells they summarise, masks removing what
+//! grows and nothing else.
 
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use vista::world::vegetation::{
-    flow, generate, lit_share, trajectory, write_outputs, Flow, HeightField, Occurrence, Request, VegetationParams,
-    Window,
+    flow, generate, lit_share, trajectory, write_outputs, Flow, HeightField, MaskMap, Masks, Occurrence, Request,
+    VegetationParams, Window,
 };
-use vista::world::{GridSource, MaterialRules, WorldDesc};
+use vista::world::{GridSource, Hole, MaterialRules, WorldDesc};
 
 fn field_of(size: [usize; 2], cell_m: f64, f: impl Fn(f64, f64) -> f64) -> HeightField {
     let z = (0..size[0] * size[1])
@@ -219,7 +220,9 @@ fn run(dir: &Path, bump: bool, shard: Option<(u32, u32)>) -> vista::world::veget
     let (world, source) = grid_world(bump);
     let params = VegetationParams { cell_m: 4.0, reach_m: 150.0, occurrence_cell_m: 8.0, ..Default::default() };
     let rules = MaterialRules::default();
-    let req = Request { world: &world, source: &source, holes: &[], rules: &rules, params: &params, shard };
+    let masks = Masks::default();
+    let req =
+        Request { world: &world, source: &source, holes: &[], rules: &rules, params: &params, masks: &masks, shard };
     let report = generate(&req, dir).unwrap();
     if let Some(g) = &report.result {
         write_outputs(dir, &params, g).unwrap();
@@ -286,4 +289,50 @@ fn occurrence_bits_say_exactly_where_a_grass_may_grow() {
     }
     assert!(map.set_cells() > 0 && map.set_cells() < 128 * 128, "{} set", map.set_cells());
     let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn masks_remove_what_grows_and_leave_water_and_sun() {
+    let (world, source) = grid_world(false);
+    let params = VegetationParams { cell_m: 4.0, reach_m: 150.0, occurrence_cell_m: 8.0, ..Default::default() };
+    let rules = MaterialRules::default();
+    // A mask map whose west half (x < 256 m) is white, a disc and a polygon.
+    let png = temp("mask").with_extension("png");
+    image::GrayImage::from_fn(64, 64, |x, _| image::Luma([if x < 16 { 255 } else { 0 }])).save(&png).unwrap();
+    let masks = Masks {
+        shapes: vec![
+            Hole::Circle { center_m: [600.0, 600.0], radius_m: 60.0 },
+            Hole::Polygon(vec![[700.0, 100.0], [900.0, 120.0], [800.0, 300.0]]),
+        ],
+        map: Some(MaskMap::load(&png, world.extent_m).unwrap()),
+    };
+    let none = Masks::default();
+    let gen = |masks: &Masks, name: &str| {
+        let req =
+            Request { world: &world, source: &source, holes: &[], rules: &rules, params: &params, masks, shard: None };
+        generate(&req, &temp(name)).unwrap().result.unwrap()
+    };
+    let (open, masked) = (gen(&none, "open"), gen(&masks, "masked"));
+    let inside =
+        |p: [f64; 2]| p[0] < 256.0 || (p[0] - 600.0).hypot(p[1] - 600.0) < 60.0 || masks.shapes[1].contains(p[0], p[1]);
+    let at = |t: &vista::world::vegetation::Instance| [f64::from(t.position[0]), f64::from(t.position[1])];
+    assert!(masked.instances.iter().all(|t| !inside(at(t))), "an instance inside a mask");
+    // A cell whose centre a mask holds grows nothing either.
+    let centre = |t: &vista::world::vegetation::Instance| {
+        let c = t.cell as usize;
+        [((c % 256) as f64 + 0.5) * 4.0, ((c / 256) as f64 + 0.5) * 4.0]
+    };
+    let kept: Vec<_> = open.instances.iter().filter(|t| !inside(at(t)) && !inside(centre(t))).copied().collect();
+    assert!(
+        masked.instances == kept,
+        "outside the masks, what grows is unchanged ({} against {})",
+        masked.instances.len(),
+        kept.len()
+    );
+    assert!(open.instances.len() > kept.len() + 100, "the masks removed something");
+    for k in 0..masked.grass.len() {
+        let c = [((k % 256) as f64 + 0.5) * 4.0, ((k / 256) as f64 + 0.5) * 4.0];
+        assert_eq!(masked.grass[k], if inside(c) { 0 } else { open.grass[k] }, "cell {c:?}");
+    }
+    assert!(masked.resource == open.resource && masked.sun == open.sun, "water and sun pass through a mask");
 }

@@ -79,6 +79,9 @@
 //! name = "forest"
 //! materials = ["grass"]
 //! types = [{ type = "pine", density = 0.3, scale = [0.6, 1.2], scale_var = 0.15 }]
+//! mask_map = "mask.png"        # (in [vegetation]) grey over the world: white keeps it out
+//! [[vegetation_masks]]         # shapes nothing grows in (as holes); and decals with
+//! circle = [5120, 3300, 40]    # clear_vegetation = true keep their footprint clear
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -100,8 +103,10 @@ pub struct Scene {
     assets: Vec<SceneAsset>,
     pub effects: Effects,
     pub material_rules: MaterialRules,
-    /// The `[vegetation]` table (`vista vegetate`), checked.
+    /// The `[vegetation]` table (`vista vegetate`), checked; its mask map
+    /// resolved against the scene's folder.
     pub vegetation: Option<VegetationParams>,
+    vegetation_masks: Vec<SceneHole>,
     /// For error messages.
     path: PathBuf,
 }
@@ -127,6 +132,8 @@ struct RawScene {
     #[serde(default)]
     material_rules: MaterialRules,
     vegetation: Option<VegetationParams>,
+    #[serde(default)]
+    vegetation_masks: Vec<SceneHole>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -222,6 +229,9 @@ struct SceneDecal {
     /// A displacement decal (quads): its mesh is raised this much where
     /// the texture's alpha is 1.
     displace_m: Option<f32>,
+    /// `vista vegetate` grows nothing on its footprint (a road, a helipad).
+    #[serde(default)]
+    clear_vegetation: bool,
 }
 
 fn full() -> f32 {
@@ -255,6 +265,8 @@ struct SceneRoad {
 pub struct SceneDecals {
     pub textures: Vec<PathBuf>,
     pub decals: Vec<Decal>,
+    /// Per decal: `clear_vegetation`.
+    pub clear_vegetation: Vec<bool>,
 }
 
 /// One `[[assets]]` entry (effect assets).
@@ -317,8 +329,10 @@ impl Scene {
             .read_materials(&raw.materials, dir)
             .map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
         raw.material_rules.validate().map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
-        if let Some(v) = &raw.vegetation {
+        let mut vegetation = raw.vegetation;
+        if let Some(v) = &mut vegetation {
             v.validate().map_err(|e| anyhow::anyhow!("scene file {}: {e}", path.display()))?;
+            v.mask_map = v.mask_map.as_ref().map(|m| vista::world::resolve_relative(dir, m));
         }
         let mut decals = raw.decals;
         for d in &mut decals {
@@ -337,7 +351,8 @@ impl Scene {
             assets: raw.assets,
             effects,
             material_rules: raw.material_rules,
-            vegetation: raw.vegetation,
+            vegetation,
+            vegetation_masks: raw.vegetation_masks,
             path: path.to_path_buf(),
         })
     }
@@ -400,6 +415,7 @@ impl Scene {
             let decal = Decal { shape, texture: texture as u32, opacity, roughness, displace_m };
             decal.check(out.textures.len()).map_err(|why| anyhow::anyhow!("{at}: {why}"))?;
             out.decals.push(decal.translated(-glam::DVec2::from(origin_m)));
+            out.clear_vegetation.push(d.clear_vegetation);
         }
         Ok(out)
     }
@@ -424,28 +440,40 @@ impl Scene {
     /// The holes, each checked: exactly one shape, finite numbers, a
     /// positive radius, at least three polygon corners.
     pub fn holes(&self) -> Result<Vec<Hole>> {
-        let at = |i: usize| format!("scene file {}: hole {}", self.path.display(), i + 1);
-        let mut out = Vec::with_capacity(self.holes.len());
-        for (i, h) in self.holes.iter().enumerate() {
-            let hole = match (&h.circle, &h.polygon) {
-                (Some([x, y, r]), None) => {
-                    if ![*x, *y, *r].iter().all(|v| v.is_finite()) || *r <= 0.0 {
-                        bail!("{}: circle needs finite x, y and a positive radius", at(i));
-                    }
-                    Hole::Circle { center_m: [*x, *y], radius_m: *r }
-                }
-                (None, Some(pts)) => {
-                    if pts.len() < 3 || pts.iter().flatten().any(|v| !v.is_finite()) {
-                        bail!("{}: polygon needs at least 3 corners of finite numbers", at(i));
-                    }
-                    Hole::Polygon(pts.clone())
-                }
-                _ => bail!("{}: give exactly one of circle = [x, y, r] or polygon = [[x, y], ...]", at(i)),
-            };
-            out.push(hole);
-        }
-        Ok(out)
+        shapes(&self.holes, &format!("scene file {}: hole", self.path.display()))
     }
+
+    /// The `[[vegetation_masks]]` (checked as holes are), in the user's
+    /// coordinates.
+    pub fn vegetation_masks(&self) -> Result<Vec<Hole>> {
+        shapes(&self.vegetation_masks, &format!("scene file {}: vegetation mask", self.path.display()))
+    }
+}
+
+/// Circles and polygons (holes, vegetation masks), each checked; `what`
+/// names them in an error ("... hole 2: ...").
+fn shapes(list: &[SceneHole], what: &str) -> Result<Vec<Hole>> {
+    let at = |i: usize| format!("{what} {}", i + 1);
+    let mut out = Vec::with_capacity(list.len());
+    for (i, h) in list.iter().enumerate() {
+        let hole = match (&h.circle, &h.polygon) {
+            (Some([x, y, r]), None) => {
+                if ![*x, *y, *r].iter().all(|v| v.is_finite()) || *r <= 0.0 {
+                    bail!("{}: circle needs finite x, y and a positive radius", at(i));
+                }
+                Hole::Circle { center_m: [*x, *y], radius_m: *r }
+            }
+            (None, Some(pts)) => {
+                if pts.len() < 3 || pts.iter().flatten().any(|v| !v.is_finite()) {
+                    bail!("{}: polygon needs at least 3 corners of finite numbers", at(i));
+                }
+                Hole::Polygon(pts.clone())
+            }
+            _ => bail!("{}: give exactly one of circle = [x, y, r] or polygon = [[x, y], ...]", at(i)),
+        };
+        out.push(hole);
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -9,11 +9,14 @@ use std::time::Instant;
 use anyhow::{Context as _, Result};
 use clap::Args;
 use vista::world::vegetation::{
-    generate, write_outputs, Generated, Occurrence, Request, VegetationParams, MATERIAL_NAMES, TILE_CELLS,
+    generate, write_outputs, Generated, MaskMap, Masks, Occurrence, Request, VegetationParams, MATERIAL_NAMES,
+    TILE_CELLS,
 };
+use vista::world::Hole;
 
 use crate::bake_shard::ShardArg;
-use crate::world_args::WorldArgs;
+use crate::scene::Scene;
+use crate::world_args::{LoadedWorld, WorldArgs};
 use crate::InputError;
 
 #[derive(Args)]
@@ -36,13 +39,16 @@ pub struct VegetateArgs {
     pub cell: Option<f64>,
 }
 
+fn scene(args: &VegetateArgs) -> Result<Option<Scene>> {
+    match &args.world.scene {
+        Some(path) => Ok(Some(Scene::load(path).map_err(|e| InputError(format!("{e:#}")))?)),
+        None => Ok(None),
+    }
+}
+
 /// The parameters: the scene's table (else the defaults) with `--cell`.
 pub fn params(args: &VegetateArgs) -> Result<VegetationParams> {
-    let scene = match &args.world.scene {
-        Some(path) => crate::scene::Scene::load(path).map_err(|e| InputError(format!("{e:#}")))?.vegetation,
-        None => None,
-    };
-    let mut p = scene.unwrap_or_default();
+    let mut p = scene(args)?.and_then(|s| s.vegetation).unwrap_or_default();
     if let Some(c) = args.cell {
         p.cell_m = c;
         // An occurrence cell of the default 10 m stays whole where it can.
@@ -64,11 +70,31 @@ fn shard(args: &VegetateArgs) -> Result<Option<(u32, u32)>> {
     }
 }
 
+/// What keeps vegetation out: the scene's `[[vegetation_masks]]`, its
+/// decals with `clear_vegetation`, the mask map (world metres).
+fn masks(args: &VegetateArgs, params: &VegetationParams, world: &LoadedWorld) -> Result<Masks> {
+    let Some(scene) = scene(args)? else { return Ok(Masks::default()) };
+    let input = |e: anyhow::Error| InputError(format!("{e:#}"));
+    let mut shapes: Vec<Hole> =
+        scene.vegetation_masks().map_err(input)?.iter().map(|h| h.relative_to(world.origin_m)).collect();
+    let decals = scene.decals(world.origin_m).map_err(input)?;
+    for (d, clear) in decals.decals.iter().zip(&decals.clear_vegetation) {
+        if *clear {
+            shapes.extend(d.outline());
+        }
+    }
+    let map = match &params.mask_map {
+        Some(path) => Some(MaskMap::load(path, world.desc.extent_m).map_err(|e| InputError(e.to_string()))?),
+        None => None,
+    };
+    Ok(Masks { shapes, map })
+}
+
 /// Checks everything `vegetate` reads before it starts.
 pub fn check(args: &VegetateArgs) -> Result<()> {
-    args.world.resolve()?;
-    params(args)?;
+    let params = params(args)?;
     shard(args)?;
+    masks(args, &params, &args.world.load()?)?;
     Ok(())
 }
 
@@ -76,12 +102,14 @@ pub fn vegetate(args: &VegetateArgs) -> Result<()> {
     let params = params(args)?;
     let shard = shard(args)?;
     let world = args.world.load()?;
+    let masks = masks(args, &params, &world)?;
     let request = Request {
         world: &world.desc,
         source: world.source.as_ref(),
         holes: &world.holes,
         rules: &world.bake.materials,
         params: &params,
+        masks: &masks,
         shard,
     };
     let size = vista::world::vegetation::check(&request).map_err(|e| InputError(e.to_string()))?;

@@ -96,6 +96,33 @@ impl Decal {
         }
     }
 
+    /// Its footprint as shapes (a quad's rectangle; a road's rectangle per
+    /// segment and disc per bend): what `clear_vegetation` keeps clear.
+    pub fn outline(&self) -> Vec<crate::world::Hole> {
+        use crate::world::Hole;
+        let rect = |c: DVec2, u: DVec2, half: DVec2| {
+            let v = u.perp();
+            let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+            Hole::Polygon(corners.iter().map(|(a, b)| (c + u * half.x * *a + v * half.y * *b).to_array()).collect())
+        };
+        match &self.shape {
+            DecalShape::Quad { center_m, size_m, rotation_deg } => {
+                vec![rect(*center_m, DVec2::from_angle(rotation_deg.to_radians()), *size_m * 0.5)]
+            }
+            DecalShape::Road { points_m, width_m, .. } => {
+                let half = width_m * 0.5;
+                let segments = points_m.windows(2).map(|s| {
+                    let along = s[1] - s[0];
+                    rect((s[0] + s[1]) * 0.5, along.normalize(), DVec2::new(along.length() * 0.5, half))
+                });
+                let bends = points_m[1..points_m.len() - 1]
+                    .iter()
+                    .map(|p| Hole::Circle { center_m: p.to_array(), radius_m: half });
+                segments.chain(bends).collect()
+            }
+        }
+    }
+
     /// Moved by `by` m (a caller's coordinates into the world's).
     pub fn translated(&self, by: DVec2) -> Decal {
         let shape = match &self.shape {

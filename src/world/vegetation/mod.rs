@@ -15,6 +15,7 @@
 
 mod field;
 mod maps;
+mod masks;
 mod outputs;
 mod params;
 mod resource;
@@ -29,6 +30,7 @@ use rayon::prelude::*;
 
 pub use field::HeightField;
 pub use maps::{hillshade, pictures};
+pub use masks::{MaskMap, Masks};
 pub use outputs::{write_outputs, Occurrence, OUTPUT_FILES};
 pub use params::{
     Brush, BrushEntry, VegetationKind, VegetationParams, VegetationType, MATERIAL_NAMES, MAX_CELLS, MAX_TYPES,
@@ -51,6 +53,8 @@ pub struct Request<'a> {
     pub holes: &'a [Hole],
     pub rules: &'a MaterialRules,
     pub params: &'a VegetationParams,
+    /// Where nothing may grow.
+    pub masks: &'a Masks,
     /// Shard `index` of `count`: the tiles whose row-major number is
     /// `index` modulo `count`.
     pub shard: Option<(u32, u32)>,
@@ -121,6 +125,7 @@ pub fn generate(req: &Request, dir: &Path) -> Result<RunReport> {
         holes: req.holes,
         rules: req.rules,
         params: p,
+        masks: req.masks,
         entries: &entries,
         sun_path: &sun_path,
     };

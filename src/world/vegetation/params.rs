@@ -41,6 +41,8 @@ pub struct VegetationParams {
     pub seed: u32,
     pub types: Vec<VegetationType>,
     pub brushes: Vec<Brush>,
+    /// A grey image over the world: white keeps vegetation out ([`super::MaskMap`]).
+    pub mask_map: Option<std::path::PathBuf>,
 }
 
 /// What a vegetation type tolerates and likes.
@@ -155,6 +157,7 @@ impl Default for VegetationParams {
                     types: vec![entry("juniper", 0.15, [0.4, 0.9]), entry("pine", 0.05, [0.4, 0.8])],
                 },
             ],
+            mask_map: None,
         }
     }
 }

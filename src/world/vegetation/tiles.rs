@@ -23,7 +23,7 @@ use crate::world::source::HeightSource;
 pub const TILE_CELLS: usize = 64;
 const MAGIC: &[u8; 4] = b"VVEG";
 /// Bumped when what a tile holds or how it is computed changes.
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// One tile's results, row-major over its cells (south row first).
 #[derive(Clone, Debug, PartialEq)]
@@ -44,6 +44,7 @@ pub struct Inputs<'a> {
     pub holes: &'a [Hole],
     pub rules: &'a MaterialRules,
     pub params: &'a VegetationParams,
+    pub masks: &'a super::masks::Masks,
     pub entries: &'a [Vec<Entry>; 5],
     pub sun_path: &'a [glam::DVec3],
 }
@@ -81,6 +82,7 @@ pub fn key(inputs: &Inputs, field: &HeightField, tile: Window) -> u64 {
         .u64(inputs.rules.hash())
         .u64(holes_hash(&near))
         .u64(inputs.source.region_hash(bounds))
+        .u64(inputs.masks.region_hash(bounds))
         .u64(tile.lo[0] as u64)
         .u64(tile.lo[1] as u64)
         .finish()
@@ -119,8 +121,16 @@ pub fn compute(inputs: &Inputs, field: &HeightField, tile: Window) -> Tile {
             let entries = &inputs.entries[field.material[k] as usize];
             out.resource.push(r as f32);
             out.sun.push(sun);
+            // A mask removes what grows, not the water or the sun.
+            let centre = [(i as f64 + 0.5) * field.cell_m, (j as f64 + 0.5) * field.cell_m];
+            if inputs.masks.masked(centre) {
+                out.grass.push(0);
+                continue;
+            }
             out.grass.push(grass_bits(p, entries, &c));
-            if let Some(mut t) = instance(p, field, entries, (i, j), &c) {
+            let grown = instance(p, field, entries, (i, j), &c);
+            let at = |t: &Instance| [f64::from(t.position[0]), f64::from(t.position[1])];
+            if let Some(mut t) = grown.filter(|t| !inputs.masks.masked(at(t))) {
                 t.position[2] = inputs.source.sample(f64::from(t.position[0]), f64::from(t.position[1]));
                 out.instances.push(t);
             }

@@ -124,3 +124,49 @@ fn mistakes_are_one_line_before_any_work() {
     assert!(!dir.join("out").exists(), "nothing written for a refused run");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Seed 004's masks: a road decal with `clear_vegetation` and a
+/// `[[vegetation_masks]]` disc keep every tree and bush off their
+/// footprints (checked with the test's own geometry), and only there.
+#[test]
+fn a_cleared_road_and_a_mask_grow_nothing() {
+    let dir = temp_dir("masks");
+    let road = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/decals/road.png");
+    let text = format!(
+        "[world]\nextent = 1024\nheight_range = [0, 500]\nspacing = 1\nlods = 3\n\n\
+         [vegetation]\ncell_m = 4\nreach_m = 150\noccurrence_cell_m = 8\n\n\
+         [[vegetation_masks]]\ncircle = [500, 800, 50]\n\n\
+         [[decals]]\ntexture = \"{}\"\nroad = {{ points = [[100, 500], [900, 520]], width = 12, repeat = 20 }}\n\
+         clear_vegetation = true\n",
+        road.display()
+    );
+    let scene = dir.join("masks.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let (ok, stdout, err) = run(vegetate(&scene, &out, &[]));
+    assert!(ok, "{err}");
+    let bytes = std::fs::read(out.join("instances.bin")).unwrap();
+    let xy: Vec<[f64; 2]> = bytes
+        .chunks_exact(32)
+        .map(|c| [0, 4].map(|o| f64::from(f32::from_le_bytes(c[o..o + 4].try_into().unwrap()))))
+        .collect();
+    // Distance to the road's centre line (one segment, square at its
+    // ends: nothing past them) and to the disc's centre.
+    let to_road = |p: [f64; 2]| {
+        let (a, b) = ([100.0, 500.0], [900.0, 520.0]);
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let t = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy);
+        if (0.0..=1.0).contains(&t) {
+            (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+        } else {
+            f64::INFINITY
+        }
+    };
+    let to_disc = |p: [f64; 2]| (p[0] - 500.0).hypot(p[1] - 800.0);
+    let bad: Vec<_> = xy.iter().filter(|p| to_road(**p) <= 6.0 || to_disc(**p) <= 50.0).take(5).collect();
+    assert!(bad.is_empty(), "instances on the road or in the mask: {bad:?} ({} in all)", xy.len());
+    let beside = xy.iter().filter(|p| to_road(**p) < 20.0 || (to_disc(**p) < 70.0)).count();
+    println!("{} instances, {beside} within 14 m of the road or 20 m of the disc; {stdout}", xy.len());
+    assert!(beside > 20, "vegetation grows right beside them ({beside})");
+    let _ = std::fs::remove_dir_all(dir);
+}
