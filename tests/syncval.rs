@@ -47,6 +47,7 @@ fn effects() -> Effects {
         Effect::CliffMeshes,
         Effect::Shadows,
         Effect::Atmosphere,
+        Effect::Vegetation,
     ] {
         fx.set(e, true);
     }
@@ -55,6 +56,14 @@ fn effects() -> Effects {
     // The vegetation's occurrence map too (grass_place's OCCURRENCE variant).
     let dir = std::env::temp_dir().join(format!("vista-syncval-occurrence-{}", std::process::id()));
     fx.grass.occurrence = Some(common::occurrence::checkerboard(&dir, world().extent_m, 4.0, [1.0; 5]));
+    // Trees and bushes along the walk, near and far (every LOD's draw).
+    let at = |x: f64, y: f64| [x as f32, y as f32, GROUND.height(x, y) as f32];
+    let trees: Vec<[f32; 3]> = (0..40).map(|k| at(480.0 + 7.0 * (k % 6) as f64, 200.0 + 9.0 * k as f64)).collect();
+    let bushes: Vec<[f32; 3]> = (0..12).map(|k| at(505.0 + 2.0 * k as f64, 205.0 + 1.5 * k as f64)).collect();
+    let forest = dir.join("forest");
+    fx.vegetation.set = Some(std::sync::Arc::new(common::occurrence::forest(&forest, &trees, &bushes)));
+    fx.vegetation.folder = Some(forest);
+    fx.vegetation.lod_m = [15.0, 60.0];
     fx.cliff_meshes = CliffMeshParams { radius_m: 24.0, ..CliffMeshParams::default() };
     fx.virtual_texture.cache_mb = 16;
     fx.virtual_texture.indirection = 512;
@@ -177,6 +186,9 @@ fn every_pass_of_every_effect_is_clean_under_synchronization_validation() {
             }
             for p in ["cliff_mesh_build", "cliff_meshes", "decal_meshes", "sun_shadows", "debug_view", "terrain_holes"]
             {
+                assert!(ran.contains(p), "{mode:?}: {p} did not run: {ran:?}");
+            }
+            for p in ["vegetation_cull", "vegetation_draw"] {
                 assert!(ran.contains(p), "{mode:?}: {p} did not run: {ran:?}");
             }
         }

@@ -235,6 +235,16 @@
 #define GRASS_FLAG_HOLES 1u
 #define GRASS_FLAG_FRUSTUM 2u
 #define GRASS_FLAG_HIZ 4u
+// Trees and bushes (effect vegetation, effects/vegetation): VEG_KINDS mesh
+// kinds (tree, bush) of VEG_LODS levels each (the last two crossed quads),
+// one indexed indirect draw each; at most VEG_TYPES types. vegetation_cull's
+// flags: distance, frustum and Hi-Z culling (the HIZ variant).
+#define VEG_KINDS 2u
+#define VEG_LODS 3u
+#define VEG_TYPES 16u
+#define VEG_FLAG_DISTANCE 1u
+#define VEG_FLAG_FRUSTUM 2u
+#define VEG_FLAG_HIZ 4u
 // Procedural cliff meshes (effect cliff_meshes): quads a side of one cell's patch.
 #define CLIFF_CELL_QUADS 4u
 

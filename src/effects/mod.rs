@@ -31,6 +31,7 @@ mod parse;
 pub mod registry;
 mod requested;
 pub mod shadows;
+pub mod vegetation;
 pub mod virtual_texture;
 
 pub use crate::scene::effect::{Effect, EffectDecision, FrameSwitches, MaterialsMode};
@@ -57,6 +58,7 @@ pub(crate) static KINDS: [&dyn EffectKind; Effect::ALL.len()] = [
     &grass::kind::GrassKind,
     &shadows::kind::ShadowsKind,
     &atmosphere::kind::AtmosphereKind,
+    &vegetation::kind::VegetationKindOf,
 ];
 
 #[cfg(test)]

@@ -38,6 +38,7 @@ pub struct Effects {
     pub grass: GrassParams,
     pub assets: AssetParams,
     pub cliff_meshes: CliffMeshParams,
+    pub vegetation: crate::effects::vegetation::VegetationDrawParams,
 }
 
 impl Default for Effects {
@@ -57,6 +58,7 @@ impl Default for Effects {
             grass: GrassParams::default(),
             assets: AssetParams::default(),
             cliff_meshes: CliffMeshParams::default(),
+            vegetation: Default::default(),
         }
     }
 }

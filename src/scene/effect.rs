@@ -76,6 +76,10 @@ effects! {
     /// Aerial perspective and sky: `lighting_resolve`'s ATMOSPHERE variant
     /// (needs `lighting`).
     Atmosphere = "atmosphere",
+    /// Trees and bushes of a `vista vegetate` folder (effects/vegetation):
+    /// `vegetation_cull` into six indexed indirect draws, `vegetation_draw`
+    /// into the G-buffer.
+    Vegetation = "vegetation",
 }
 
 impl Effect {

@@ -28,3 +28,35 @@ pub fn checkerboard(dir: &Path, extent_m: [f64; 2], cell_m: f64, density: [f64; 
     std::fs::write(dir.join("vegetation.json"), json).unwrap();
     GrassOccurrence::load(dir).unwrap()
 }
+
+/// Writes into `dir` a vegetation folder of trees (type 0, "spruce") and
+/// bushes (type 1, "juniper") at `trees` and `bushes` (x, y, ground z),
+/// turned and scaled by their index, and loads it as effect vegetation's
+/// folder.
+pub fn forest(dir: &Path, trees: &[[f32; 3]], bushes: &[[f32; 3]]) -> vista::effects::vegetation::VegetationSet {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut bytes = Vec::new();
+    for (ty, list) in [(0u32, trees), (1, bushes)] {
+        for (k, p) in list.iter().enumerate() {
+            let words: [u32; 8] = [
+                p[0].to_bits(),
+                p[1].to_bits(),
+                p[2].to_bits(),
+                (k as f32 * 0.7).to_bits(),
+                (0.8 + 0.05 * (k % 5) as f32).to_bits(),
+                ty,
+                0xFFD8_E8D8,
+                k as u32,
+            ];
+            bytes.extend(words.iter().flat_map(|w| w.to_le_bytes()));
+        }
+    }
+    std::fs::write(dir.join("instances.bin"), &bytes).unwrap();
+    let json = format!(
+        "{{\"instance_bytes\": 32, \"instances\": {}, \"types\": [{{\"name\": \"spruce\", \"kind\": \"tree\"}}, \
+         {{\"name\": \"juniper\", \"kind\": \"bush\"}}]}}",
+        trees.len() + bushes.len()
+    );
+    std::fs::write(dir.join("vegetation.json"), json).unwrap();
+    vista::effects::vegetation::VegetationSet::load(dir).unwrap()
+}

@@ -1,0 +1,86 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// variants: HIZ
+// Trees and bushes (effect vegetation): one thread per instance. An
+// instance is culled by its type's draw distance, by the frustum and (HIZ,
+// effect occlusion, on this frame) by the depth pyramid, each test on the
+// box around its bounding sphere (conservative: a culled instance covers
+// no pixel); the rest go to the draw of their mesh kind at the LOD their
+// distance picks (LOD 0 within lod0_m, 1 within lod1_m, 2 beyond: the
+// crossed quads). The draws' first instances (set by the host) mark each
+// draw's region of the visible list.
+#include "constants.glsl"
+#include "terrain_view.glsl"
+#include "vegetation.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(set = 0, binding = 0, std430) readonly buffer View { TerrainView v; } view;
+layout(set = 0, binding = 1, std430) readonly buffer VegInstances { VegetationInstance i[]; } instances;
+layout(set = 0, binding = 2, std430) readonly buffer VegTypes { VegetationType t[]; } types;
+layout(set = 0, binding = 3, std430) buffer VegHeader { VegetationHeader h; } header;
+layout(set = 0, binding = 4, std430) buffer VegVisible { uint i[]; } visible;
+#ifdef HIZ
+layout(set = 0, binding = 5) uniform texture2D hiz;
+layout(set = 0, binding = 6) uniform sampler nearest;
+#include "hiz_test.glsl"
+#endif
+
+layout(push_constant, std430) uniform VegetationCullPush {
+    uint count;        // instances
+    uint flags;        // VEG_FLAG_*
+    float lod0_m;      // LOD 0 within this distance of the camera
+    float lod1_m;      // LOD 1 within this one
+    uvec2 depth_size;  // the depth target the pyramid was built from
+    uint pad0;
+    uint pad1;
+} pc;
+
+// Whether the camera-relative box lies outside a frustum plane.
+bool outside_frustum(vec3 lo, vec3 hi) {
+    for (int k = 0; k < 5; ++k) {
+        vec4 pl = view.v.frustum[k];
+        vec3 far_corner = mix(lo, hi, step(vec3(0.0), pl.xyz));
+        if (dot(pl.xyz, far_corner) + pl.w < 0.0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count) {
+        return;
+    }
+    atomicAdd(header.h.considered, 1u);
+    // Member by member: a whole-struct load is OpCopyLogical, which naga cannot parse.
+    uint ty = instances.i[i].type_id;
+    float h = types.t[ty].height_m * instances.i[i].scale;
+    // The sphere about the mesh's middle holds the crown (0.3 h across at
+    // most) and the trunk's foot (0.05 h below the ground).
+    vec3 foot = vec3(instances.i[i].x, instances.i[i].y, instances.i[i].z);
+    vec3 centre = foot + vec3(0.0, 0.0, 0.45 * h) - view.v.camera_world.xyz;
+    float r = 0.56 * h;
+    float d = length(centre);
+    if ((pc.flags & VEG_FLAG_DISTANCE) != 0u && d - r > types.t[ty].draw_m) {
+        atomicAdd(header.h.culled_distance, 1u);
+        return;
+    }
+    vec3 lo = centre - vec3(r), hi = centre + vec3(r);
+    if ((pc.flags & VEG_FLAG_FRUSTUM) != 0u && outside_frustum(lo, hi)) {
+        atomicAdd(header.h.culled_frustum, 1u);
+        return;
+    }
+#ifdef HIZ
+    uint level;
+    if ((pc.flags & VEG_FLAG_HIZ) != 0u && !hiz_box_visible(lo, hi, view.v.view_proj, pc.depth_size, level)) {
+        atomicAdd(header.h.culled_hiz, 1u);
+        return;
+    }
+#endif
+    uint lod = d < pc.lod0_m ? 0u : (d < pc.lod1_m ? 1u : 2u);
+    uint draw = (types.t[ty].kind * VEG_LODS + lod) * 5u;
+    uint slot = header.h.draws[draw + 4u] + atomicAdd(header.h.draws[draw + 1u], 1u);
+    visible.i[slot] = i;
+}
