@@ -103,17 +103,7 @@ bool occurs(vec2 p) {
 }
 #endif
 
-// Whether the camera-relative box lies outside a frustum plane.
-bool outside_frustum(vec3 lo, vec3 hi) {
-    for (int k = 0; k < 5; ++k) {
-        vec4 pl = view.v.frustum[k];
-        vec3 far_corner = mix(lo, hi, step(vec3(0.0), pl.xyz));
-        if (dot(pl.xyz, far_corner) + pl.w < 0.0) {
-            return true;
-        }
-    }
-    return false;
-}
+#include "frustum_box.glsl"
 
 void main() {
     uvec2 g = gl_GlobalInvocationID.xy;
@@ -165,7 +155,7 @@ void main() {
     float reach = height * pc.reach_m;
     vec3 lo = rel - vec3(reach, reach, 0.0);
     vec3 hi = rel + vec3(reach, reach, height);
-    if ((pc.flags & GRASS_FLAG_FRUSTUM) != 0u && outside_frustum(lo, hi)) {
+    if ((pc.flags & GRASS_FLAG_FRUSTUM) != 0u && box_outside_frustum(lo, hi)) {
         atomicAdd(header.h.culled_frustum, 1u);
         return;
     }

@@ -36,17 +36,7 @@ layout(push_constant, std430) uniform VegetationCullPush {
     uint pad1;
 } pc;
 
-// Whether the camera-relative box lies outside a frustum plane.
-bool outside_frustum(vec3 lo, vec3 hi) {
-    for (int k = 0; k < 5; ++k) {
-        vec4 pl = view.v.frustum[k];
-        vec3 far_corner = mix(lo, hi, step(vec3(0.0), pl.xyz));
-        if (dot(pl.xyz, far_corner) + pl.w < 0.0) {
-            return true;
-        }
-    }
-    return false;
-}
+#include "frustum_box.glsl"
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
@@ -68,7 +58,7 @@ void main() {
         return;
     }
     vec3 lo = centre - vec3(r), hi = centre + vec3(r);
-    if ((pc.flags & VEG_FLAG_FRUSTUM) != 0u && outside_frustum(lo, hi)) {
+    if ((pc.flags & VEG_FLAG_FRUSTUM) != 0u && box_outside_frustum(lo, hi)) {
         atomicAdd(header.h.culled_frustum, 1u);
         return;
     }

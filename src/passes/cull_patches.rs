@@ -370,6 +370,15 @@ pub(crate) fn nearest_sampler(ctx: &Context, name: &str) -> Result<Sampler> {
     )
 }
 
+/// Bilinear, clamped: the terrain's colour under an overlay's vertex
+/// (terrain_blend.glsl), a pigment map.
+pub(crate) fn linear_clamp_sampler(ctx: &Context, name: &str) -> Result<Sampler> {
+    Sampler::new(
+        ctx,
+        &SamplerDesc { name, filter: vk::Filter::LINEAR, address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE },
+    )
+}
+
 pub(crate) fn spec_constants() -> [(u32, u32); 2] {
     [(sh::SPEC_PATCHES_PER_SIDE, PATCHES_PER_NODE_SIDE), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)]
 }

@@ -8,7 +8,7 @@
 
 use crate::effects::assets::AssetResources;
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, Context, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
+use crate::gpu::{vk, Buffer, Context, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::gbuffer_tiles::MaterialBindings;
@@ -50,11 +50,6 @@ impl AssetDraw {
         materials: bool,
         layout: Option<&GbufferLayout>,
     ) -> Result<Self> {
-        let linear = SamplerDesc {
-            name: "asset_draw_linear",
-            filter: vk::Filter::LINEAR,
-            address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
-        };
         Ok(AssetDraw {
             pipeline: GbufferTiles::overlay_pipeline(
                 ctx,
@@ -70,7 +65,7 @@ impl AssetDraw {
             materials,
             detail: crate::passes::gbuffer_tiles::detail_sampler(ctx, "asset_draw_detail")?,
             nearest: nearest_sampler(ctx, "asset_draw_nearest")?,
-            linear: Sampler::new(ctx, &linear)?,
+            linear: crate::passes::cull_patches::linear_clamp_sampler(ctx, "asset_draw_linear")?,
         })
     }
 

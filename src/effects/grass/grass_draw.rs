@@ -6,7 +6,7 @@
 //! or index buffer.
 
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, Context, Image, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
+use crate::gpu::{vk, Buffer, Context, Image, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::terrain_geometry::RenderTargets;
 use crate::shaders::{grass_draw_frag as fs, grass_draw_vert as vs, structs};
@@ -44,11 +44,6 @@ impl GrassDraw {
 
     /// `layout`: the engine's G-buffer (output `gbuffer`), else vista's.
     pub fn new(ctx: &Context, depth_format: vk::Format, layout: Option<&GbufferLayout>) -> Result<Self> {
-        let linear = SamplerDesc {
-            name: "grass_draw_linear",
-            filter: vk::Filter::LINEAR,
-            address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
-        };
         Ok(GrassDraw {
             pipeline: GbufferTiles::overlay_pipeline(
                 ctx,
@@ -59,7 +54,7 @@ impl GrassDraw {
                 vk::CullModeFlags::NONE,
                 layout,
             )?,
-            linear: Sampler::new(ctx, &linear)?,
+            linear: crate::passes::cull_patches::linear_clamp_sampler(ctx, "grass_draw_linear")?,
         })
     }
 

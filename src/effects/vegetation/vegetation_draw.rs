@@ -5,7 +5,7 @@
 //! ground the vertices blend into the terrain's normal and colour.
 
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, Context, Pipeline, Recorder, Resource, Sampler, SamplerDesc};
+use crate::gpu::{vk, Buffer, Context, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::terrain_geometry::RenderTargets;
@@ -51,11 +51,6 @@ impl VegetationDraw {
 
     /// `layout`: the engine's G-buffer (output `gbuffer`), else vista's.
     pub fn new(ctx: &Context, depth_format: vk::Format, layout: Option<&GbufferLayout>) -> Result<Self> {
-        let linear = SamplerDesc {
-            name: "vegetation_draw_linear",
-            filter: vk::Filter::LINEAR,
-            address_mode: vk::SamplerAddressMode::CLAMP_TO_EDGE,
-        };
         let fragment = fs::variant(if layout.is_some() { fs::VARIANT_ENGINE_GBUFFER } else { 0 });
         Ok(VegetationDraw {
             pipeline: GbufferTiles::overlay_pipeline(
@@ -67,7 +62,7 @@ impl VegetationDraw {
                 layout,
             )?,
             nearest: nearest_sampler(ctx, "vegetation_draw_nearest")?,
-            linear: Sampler::new(ctx, &linear)?,
+            linear: crate::passes::cull_patches::linear_clamp_sampler(ctx, "vegetation_draw_linear")?,
         })
     }
 

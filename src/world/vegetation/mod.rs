@@ -119,16 +119,7 @@ pub fn generate(req: &Request, dir: &Path) -> Result<RunReport> {
     let field = HeightField::sample(req.world, req.source, req.holes, req.rules, p.cell_m);
     let field_s = start.elapsed().as_secs_f64();
     let sun_path = trajectory(p.latitude_deg, p.day_of_year, p.sun_samples);
-    let inputs = tiles::Inputs {
-        world: req.world,
-        source: req.source,
-        holes: req.holes,
-        rules: req.rules,
-        params: p,
-        masks: req.masks,
-        entries: &entries,
-        sun_path: &sun_path,
-    };
+    let inputs = tiles::Inputs { req, entries: &entries, sun_path: &sun_path };
     let all = tiles::tiles(&field);
     let (index, count) = req.shard.unwrap_or((0, 1));
     let mine: Vec<usize> = (0..all.len()).filter(|k| *k as u32 % count == index).collect();

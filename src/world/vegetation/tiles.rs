@@ -8,16 +8,13 @@
 use std::path::{Path, PathBuf};
 
 use super::field::HeightField;
-use super::params::{Entry, VegetationParams};
+use super::params::Entry;
 use super::resource::{flow, Window};
 use super::spawn::{grass_bits, instance, Conditions, Instance};
 use super::sun::lit_share;
 use crate::world::error::{Result, WorldError};
 use crate::world::hash::Fnv64;
 use crate::world::holes::{holes_hash, Hole};
-use crate::world::layout::WorldDesc;
-use crate::world::material_rules::MaterialRules;
-use crate::world::source::HeightSource;
 
 /// Cells a tile side.
 pub const TILE_CELLS: usize = 64;
@@ -37,14 +34,10 @@ pub struct Tile {
     pub instances: Vec<Instance>,
 }
 
-/// Everything a tile is computed from, but the field itself.
+/// Everything a tile is computed from, but the field itself: the run's
+/// request, the brushes by material, the sun's positions.
 pub struct Inputs<'a> {
-    pub world: &'a WorldDesc,
-    pub source: &'a dyn HeightSource,
-    pub holes: &'a [Hole],
-    pub rules: &'a MaterialRules,
-    pub params: &'a VegetationParams,
-    pub masks: &'a super::masks::Masks,
+    pub req: &'a super::Request<'a>,
     pub entries: &'a [Vec<Entry>; 5],
     pub sun_path: &'a [glam::DVec3],
 }
@@ -65,7 +58,7 @@ pub fn tiles(field: &HeightField) -> Vec<Window> {
 /// and the source over the window the tile reads.
 pub fn key(inputs: &Inputs, field: &HeightField, tile: Window) -> u64 {
     let c = field.cell_m;
-    let reach = inputs.params.reach_m.max(f64::from(inputs.params.iterations) * c) + 2.0 * c;
+    let reach = inputs.req.params.reach_m.max(f64::from(inputs.req.params.iterations) * c) + 2.0 * c;
     let bounds = [
         tile.lo[0] as f64 * c - reach,
         tile.lo[1] as f64 * c - reach,
@@ -74,15 +67,15 @@ pub fn key(inputs: &Inputs, field: &HeightField, tile: Window) -> u64 {
     ];
     // Only the holes the window reads: one cut elsewhere changes nothing here.
     let touches = |b: [f64; 4]| b[0] <= bounds[2] && b[2] >= bounds[0] && b[1] <= bounds[3] && b[3] >= bounds[1];
-    let near: Vec<Hole> = inputs.holes.iter().filter(|h| touches(h.bounds())).cloned().collect();
+    let near: Vec<Hole> = inputs.req.holes.iter().filter(|h| touches(h.bounds())).cloned().collect();
     Fnv64::new()
         .u64(u64::from(VERSION))
-        .u64(inputs.params.hash())
-        .u64(inputs.world.hash())
-        .u64(inputs.rules.hash())
+        .u64(inputs.req.params.hash())
+        .u64(inputs.req.world.hash())
+        .u64(inputs.req.rules.hash())
         .u64(holes_hash(&near))
-        .u64(inputs.source.region_hash(bounds))
-        .u64(inputs.masks.region_hash(bounds))
+        .u64(inputs.req.source.region_hash(bounds))
+        .u64(inputs.req.masks.region_hash(bounds))
         .u64(tile.lo[0] as u64)
         .u64(tile.lo[1] as u64)
         .finish()
@@ -90,7 +83,7 @@ pub fn key(inputs: &Inputs, field: &HeightField, tile: Window) -> u64 {
 
 /// Computes `tile` of `field`.
 pub fn compute(inputs: &Inputs, field: &HeightField, tile: Window) -> Tile {
-    let p = inputs.params;
+    let p = inputs.req.params;
     let wide = Window::around(tile, p.iterations as usize, field.size);
     let water = flow(field, wide, p.iterations, p.flow_rule());
     let n = tile.size[0] * tile.size[1];
@@ -123,15 +116,15 @@ pub fn compute(inputs: &Inputs, field: &HeightField, tile: Window) -> Tile {
             out.sun.push(sun);
             // A mask removes what grows, not the water or the sun.
             let centre = [(i as f64 + 0.5) * field.cell_m, (j as f64 + 0.5) * field.cell_m];
-            if inputs.masks.masked(centre) {
+            if inputs.req.masks.masked(centre) {
                 out.grass.push(0);
                 continue;
             }
             out.grass.push(grass_bits(p, entries, &c));
             let grown = instance(p, field, entries, (i, j), &c);
             let at = |t: &Instance| [f64::from(t.position[0]), f64::from(t.position[1])];
-            if let Some(mut t) = grown.filter(|t| !inputs.masks.masked(at(t))) {
-                t.position[2] = inputs.source.sample(f64::from(t.position[0]), f64::from(t.position[1]));
+            if let Some(mut t) = grown.filter(|t| !inputs.req.masks.masked(at(t))) {
+                t.position[2] = inputs.req.source.sample(f64::from(t.position[0]), f64::from(t.position[1]));
                 out.instances.push(t);
             }
         }
