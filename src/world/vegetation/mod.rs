@@ -1,16 +1,16 @@
 //! REDengine 3's offline vegetation generator (seed 004): where water
 //! collects and the sun reaches decide what grows. Over a grid of the
 //! world ([`HeightField`]): resource flows downhill for a number of
-//! iterations ([`resource`]), each cell's share of the day's sun is marched
-//! ([`sun`]), and the brushes of the cell's material offer the types that
-//! tolerate those conditions ([`spawn`]): at most one tree or bush a cell,
+//! iterations (`resource.rs`), each cell's share of the day's sun is marched
+//! (`sun.rs`), and the brushes of the cell's material offer the types that
+//! tolerate those conditions (`spawn.rs`): at most one tree or bush a cell,
 //! scaled by how perfect the conditions are, and for each grass type a bit
 //! a cell, gathered into occurrence maps (a bit per occurrence cell).
 //!
-//! The work is split into tiles ([`tiles`]) kept in the output folder
+//! The work is split into tiles (`tiles.rs`) kept in the output folder
 //! under a key of all they read: a rerun reuses what still holds, shards
 //! take every N-th tile, and the outputs are written once every tile is
-//! there ([`outputs`]). Everything is deterministic per seed: no tile
+//! there (`outputs.rs`). Everything is deterministic per seed: no tile
 //! depends on another's result or on the order they run in.
 
 mod field;
