@@ -33,6 +33,7 @@
 //! blend = "add"                # replace | add | max | min (optional: replace)
 //! falloff = 20                 # metres inside the edge over which it fades in
 //! control_map = "crater-control.png"  # optional (control-map mode): its words where it weighs >= 0.5
+//! vegetation = "crater-veg"    # optional: its own `vista vegetate` folder, pasted with it
 //!
 //! [[decals]]                   # drawn into the virtual texture's pages, in order (effect decals)
 //! texture = "decals/paint.png" # RGBA image (alpha: coverage), resampled to 256 x 256
@@ -205,6 +206,8 @@ struct SceneStamp {
     falloff: f64,
     /// Its own control map (16-bit PNG over its square), control-map mode.
     control_map: Option<PathBuf>,
+    /// Its own `vista vegetate` folder (`vista vegetate` pastes it).
+    vegetation: Option<PathBuf>,
 }
 
 /// A stamp of the scene: its map file (resolved) and where it goes, in the
@@ -215,6 +218,8 @@ pub struct SceneStampSpec {
     pub placement: StampPlacement,
     /// Its own control map, resolved.
     pub control_map: Option<PathBuf>,
+    /// Its own vegetation folder, resolved.
+    pub vegetation: Option<PathBuf>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -342,6 +347,7 @@ impl Scene {
         for st in &mut stamps {
             st.source = vista::world::resolve_relative(dir, &st.source);
             st.control_map = st.control_map.as_ref().map(|c| vista::world::resolve_relative(dir, c));
+            st.vegetation = st.vegetation.as_ref().map(|c| vista::world::resolve_relative(dir, c));
         }
         Ok(Scene {
             world,
@@ -380,7 +386,8 @@ impl Scene {
             if st.control_map.is_some() && self.effects.materials != vista::render::MaterialsMode::ControlMap {
                 bail!("{at}: control_map needs [materials] mode = \"control_map\"");
             }
-            out.push(SceneStampSpec { source: st.source.clone(), placement, control_map: st.control_map.clone() });
+            let (control_map, vegetation) = (st.control_map.clone(), st.vegetation.clone());
+            out.push(SceneStampSpec { source: st.source.clone(), placement, control_map, vegetation });
         }
         Ok(out)
     }

@@ -9,8 +9,8 @@ use std::time::Instant;
 use anyhow::{Context as _, Result};
 use clap::Args;
 use vista::world::vegetation::{
-    generate, write_outputs, Generated, MaskMap, Masks, Occurrence, Request, VegetationParams, MATERIAL_NAMES,
-    TILE_CELLS,
+    generate, write_outputs, Generated, MaskMap, Masks, Occurrence, Request, StampVegetation, VegetationParams,
+    MATERIAL_NAMES, TILE_CELLS,
 };
 use vista::world::Hole;
 
@@ -90,11 +90,32 @@ fn masks(args: &VegetateArgs, params: &VegetationParams, world: &LoadedWorld) ->
     Ok(Masks { shapes, map })
 }
 
+/// The scene's stamps that carry their own vegetation, placed in world metres.
+fn stamp_vegetation(
+    args: &VegetateArgs,
+    params: &VegetationParams,
+    world: &LoadedWorld,
+) -> Result<Vec<StampVegetation>> {
+    let Some(scene) = scene(args)? else { return Ok(Vec::new()) };
+    let input = |e: String| anyhow::Error::from(InputError(e));
+    let mut out = Vec::new();
+    for st in scene.stamps().map_err(|e| input(format!("{e:#}")))? {
+        if let Some(folder) = &st.vegetation {
+            let mut placement = st.placement;
+            placement.center_m = [0, 1].map(|a| placement.center_m[a] - world.origin_m[a]);
+            out.push(StampVegetation::load(folder, placement, params).map_err(|e| input(e.to_string()))?);
+        }
+    }
+    Ok(out)
+}
+
 /// Checks everything `vegetate` reads before it starts.
 pub fn check(args: &VegetateArgs) -> Result<()> {
     let params = params(args)?;
     shard(args)?;
-    masks(args, &params, &args.world.load()?)?;
+    let world = args.world.load()?;
+    masks(args, &params, &world)?;
+    stamp_vegetation(args, &params, &world)?;
     Ok(())
 }
 
@@ -103,6 +124,7 @@ pub fn vegetate(args: &VegetateArgs) -> Result<()> {
     let shard = shard(args)?;
     let world = args.world.load()?;
     let masks = masks(args, &params, &world)?;
+    let stamps = stamp_vegetation(args, &params, &world)?;
     let request = Request {
         world: &world.desc,
         source: world.source.as_ref(),
@@ -110,6 +132,7 @@ pub fn vegetate(args: &VegetateArgs) -> Result<()> {
         rules: &world.bake.materials,
         params: &params,
         masks: &masks,
+        stamps: &stamps,
         shard,
     };
     let size = vista::world::vegetation::check(&request).map_err(|e| InputError(e.to_string()))?;

@@ -20,6 +20,7 @@ mod outputs;
 mod params;
 mod resource;
 mod spawn;
+mod stamped;
 mod sun;
 mod tiles;
 
@@ -37,6 +38,7 @@ pub use params::{
 };
 pub use resource::{flow, Flow, Window};
 pub use spawn::Instance;
+pub use stamped::StampVegetation;
 pub use sun::{lit, lit_share, trajectory};
 pub use tiles::{Tile, TILE_CELLS};
 
@@ -55,6 +57,9 @@ pub struct Request<'a> {
     pub params: &'a VegetationParams,
     /// Where nothing may grow.
     pub masks: &'a Masks,
+    /// Stamps that carry their own vegetation, in the scene's order (a
+    /// later one over an earlier one).
+    pub stamps: &'a [StampVegetation],
     /// Shard `index` of `count`: the tiles whose row-major number is
     /// `index` modulo `count`.
     pub shard: Option<(u32, u32)>,

@@ -11,6 +11,7 @@ use super::field::HeightField;
 use super::params::Entry;
 use super::resource::{flow, Window};
 use super::spawn::{grass_bits, instance, Conditions, Instance};
+use super::stamped::StampVegetation;
 use super::sun::lit_share;
 use crate::world::error::{Result, WorldError};
 use crate::world::hash::Fnv64;
@@ -20,7 +21,7 @@ use crate::world::holes::{holes_hash, Hole};
 pub const TILE_CELLS: usize = 64;
 const MAGIC: &[u8; 4] = b"VVEG";
 /// Bumped when what a tile holds or how it is computed changes.
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 /// One tile's results, row-major over its cells (south row first).
 #[derive(Clone, Debug, PartialEq)]
@@ -76,9 +77,48 @@ pub fn key(inputs: &Inputs, field: &HeightField, tile: Window) -> u64 {
         .u64(holes_hash(&near))
         .u64(inputs.req.source.region_hash(bounds))
         .u64(inputs.req.masks.region_hash(bounds))
+        .u64(stamps_hash(inputs, tile_bounds(field, tile)))
         .u64(tile.lo[0] as u64)
         .u64(tile.lo[1] as u64)
         .finish()
+}
+
+/// The tile's own square (m), grown by a cell.
+fn tile_bounds(field: &HeightField, tile: Window) -> [f64; 4] {
+    let c = field.cell_m;
+    let lo = tile.lo.map(|v| (v as f64 - 1.0) * c);
+    [lo[0], lo[1], (tile.lo[0] + tile.size[0] + 1) as f64 * c, (tile.lo[1] + tile.size[1] + 1) as f64 * c]
+}
+
+fn touching<'a>(inputs: &'a Inputs, b: [f64; 4]) -> impl Iterator<Item = &'a StampVegetation> + 'a {
+    inputs.req.stamps.iter().filter(move |s| {
+        let sb = s.placement.bounds_m();
+        sb[0] <= b[2] && sb[2] >= b[0] && sb[1] <= b[3] && sb[3] >= b[1]
+    })
+}
+
+/// The stamps' vegetation the tile's cells may take.
+fn stamps_hash(inputs: &Inputs, b: [f64; 4]) -> u64 {
+    touching(inputs, b).fold(Fnv64::new(), |h, s| h.u64(s.hash())).finish()
+}
+
+/// The stamps' own instances whose point lies in `tile`'s cells and no
+/// mask (on the ground there).
+fn pasted(inputs: &Inputs, field: &HeightField, tile: Window) -> Vec<Instance> {
+    let mut out = Vec::new();
+    for s in touching(inputs, tile_bounds(field, tile)) {
+        for mut t in s.placed() {
+            let (x, y) = (f64::from(t.position[0]), f64::from(t.position[1]));
+            let (i, j) = ((x / field.cell_m).floor() as i64, (y / field.cell_m).floor() as i64);
+            let inside = tile.contains(i as isize, j as isize) && i >= 0 && j >= 0;
+            if inside && !inputs.req.masks.masked([x, y]) {
+                t.position[2] = inputs.req.source.sample(x, y);
+                t.cell = field.index(i as usize, j as usize) as u32;
+                out.push(t);
+            }
+        }
+    }
+    out
 }
 
 /// Computes `tile` of `field`.
@@ -114,21 +154,26 @@ pub fn compute(inputs: &Inputs, field: &HeightField, tile: Window) -> Tile {
             let entries = &inputs.entries[field.material[k] as usize];
             out.resource.push(r as f32);
             out.sun.push(sun);
-            // A mask removes what grows, not the water or the sun.
+            // A mask removes what grows, not the water or the sun; a
+            // stamp's vegetation replaces the generator's (the last stamp
+            // over the cell).
             let centre = [(i as f64 + 0.5) * field.cell_m, (j as f64 + 0.5) * field.cell_m];
-            if inputs.req.masks.masked(centre) {
-                out.grass.push(0);
+            let stamp = inputs.req.stamps.iter().rev().find(|s| s.covers(centre));
+            if inputs.req.masks.masked(centre) || stamp.is_some() {
+                out.grass.push(stamp.filter(|_| !inputs.req.masks.masked(centre)).map_or(0, |s| s.grass_bits(centre)));
                 continue;
             }
             out.grass.push(grass_bits(p, entries, &c));
             let grown = instance(p, field, entries, (i, j), &c);
             let at = |t: &Instance| [f64::from(t.position[0]), f64::from(t.position[1])];
-            if let Some(mut t) = grown.filter(|t| !inputs.req.masks.masked(at(t))) {
+            let covered = |t: &Instance| inputs.req.stamps.iter().any(|s| s.covers(at(t)));
+            if let Some(mut t) = grown.filter(|t| !inputs.req.masks.masked(at(t)) && !covered(t)) {
                 t.position[2] = inputs.req.source.sample(f64::from(t.position[0]), f64::from(t.position[1]));
                 out.instances.push(t);
             }
         }
     }
+    out.instances.extend(pasted(inputs, field, tile));
     out
 }
 
