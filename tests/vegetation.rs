@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use vista::world::vegetation::{
-    flow, generate, lit_share, trajectory, write_outputs, Flow, HeightField, MaskMap, Masks, Occurrence, Request,
-    VegetationParams, Window,
+    flow, generate, lit_share, trajectory, write_outputs, Flow, Generated, HeightField, MaskMap, Masks, Occurrence,
+    Request, VegetationParams, Window,
 };
 use vista::world::{GridSource, Hole, MaterialRules, WorldDesc};
 
@@ -353,17 +353,8 @@ fn masks_remove_what_grows_and_leave_water_and_sun() {
     assert!(masked.resource == open.resource && masked.sun == open.sun, "water and sun pass through a mask");
 }
 
-/// Seed 004's stamps carry their vegetation: a stamp's own folder (a
-/// 256 m world of its own, generated here) pasted at two places, the second
-/// turned a quarter: inside its square every instance is the stamp's, put
-/// where the test's own transform puts it, and the grass bits turn with it.
-#[test]
-fn a_stamps_vegetation_moves_with_the_stamp() {
-    use vista::world::vegetation::{Instance, StampVegetation};
-    use vista::world::{StampBlend, StampPlacement};
-    let params = VegetationParams { cell_m: 4.0, reach_m: 150.0, occurrence_cell_m: 4.0, ..Default::default() };
-    let rules = MaterialRules::default();
-    // The stamp's world: a bowl 256 m across.
+/// A stamp's own vegetation folder: a bowl 256 m across, generated.
+fn stamp_folder(params: &VegetationParams, rules: &MaterialRules) -> (PathBuf, Generated) {
     let n = 65;
     let bowl: Vec<f32> = (0..n * n)
         .map(|k| {
@@ -378,84 +369,95 @@ fn a_stamps_vegetation_moves_with_the_stamp() {
         lod_count: 2,
         ..Default::default()
     };
-    let stamp_dir = temp("stamp-own");
+    let dir = temp("stamp-own");
+    let (none, own) = (Masks::default(), GridSource::new(n, n, bowl, [256.0, 256.0]));
+    let req =
+        Request { world: &small, source: &own, holes: &[], rules, params, masks: &none, stamps: &[], shard: None };
+    let g = generate(&req, &dir).unwrap().result.unwrap();
+    write_outputs(&dir, params, &g).unwrap();
+    (dir, g)
+}
+
+/// The 1 024 m grid world with the stamp's folder pasted at `center`,
+/// turned `rotation_deg`.
+fn pasted(
+    params: &VegetationParams,
+    rules: &MaterialRules,
+    folder: &Path,
+    center: [f64; 2],
+    rotation_deg: f64,
+) -> Generated {
+    use vista::world::{StampBlend, StampPlacement};
+    let placement = StampPlacement {
+        center_m: center,
+        size_m: 256.0,
+        rotation_deg,
+        height_m: 10.0,
+        offset_m: 0.0,
+        blend: StampBlend::Add,
+        falloff_m: 0.0,
+    };
+    let stamps = [vista::world::vegetation::StampVegetation::load(folder, placement, params).unwrap()];
+    let (world, source) = grid_world(false);
     let none = Masks::default();
-    let own = GridSource::new(n, n, bowl, [256.0, 256.0]);
     let req = Request {
-        world: &small,
-        source: &own,
+        world: &world,
+        source: &source,
         holes: &[],
-        rules: &rules,
-        params: &params,
+        rules,
+        params,
         masks: &none,
-        stamps: &[],
+        stamps: &stamps,
         shard: None,
     };
-    let g = generate(&req, &stamp_dir).unwrap().result.unwrap();
-    write_outputs(&stamp_dir, &params, &g).unwrap();
-    assert!(g.instances.len() > 50, "the stamp grows {} instances", g.instances.len());
-    let (world, source) = grid_world(false);
-    let paste = |center: [f64; 2], rotation_deg: f64, name: &str| {
-        let placement = StampPlacement {
-            center_m: center,
-            size_m: 256.0,
-            rotation_deg,
-            height_m: 10.0,
-            offset_m: 0.0,
-            blend: StampBlend::Add,
-            falloff_m: 0.0,
-        };
-        let stamp = StampVegetation::load(&stamp_dir, placement, &params).unwrap();
-        let stamps = [stamp];
-        let req = Request {
-            world: &world,
-            source: &source,
-            holes: &[],
-            rules: &rules,
-            params: &params,
-            masks: &none,
-            stamps: &stamps,
-            shard: None,
-        };
-        generate(&req, &temp(name)).unwrap().result.unwrap()
-    };
-    let (a, b) = (paste([400.0, 400.0], 0.0, "paste-a"), paste([700.0, 600.0], 90.0, "paste-b"));
-    // The test's own transform of the stamp's instances (a quarter turn:
-    // (u, v) -> (-v, u)), and the instances each run holds inside the square.
-    let expect = |center: [f64; 2], quarter: bool| -> Vec<[f64; 2]> {
-        let mut v: Vec<[f64; 2]> = g
+    generate(&req, &temp(&format!("paste-{}", center[0]))).unwrap().result.unwrap()
+}
+
+/// The points (sorted) of `instances` within the 256 m square about `c`.
+fn points_in_square(instances: &[vista::world::vegetation::Instance], c: [f64; 2]) -> Vec<[f64; 2]> {
+    let mut v: Vec<[f64; 2]> = instances
+        .iter()
+        .map(|i| [f64::from(i.position[0]), f64::from(i.position[1])])
+        .filter(|p| (p[0] - c[0]).abs() < 128.0 && (p[1] - c[1]).abs() < 128.0)
+        .collect();
+    v.sort_by(|p, q| p.partial_cmp(q).unwrap());
+    v
+}
+
+/// Seed 004's stamps carry their vegetation: a stamp's own folder pasted at
+/// two places, the second turned a quarter: inside its square every
+/// instance is the stamp's, put where the test's own transform puts it, and
+/// the grass bits turn with it.
+#[test]
+fn a_stamps_vegetation_moves_with_the_stamp() {
+    let params = VegetationParams { cell_m: 4.0, reach_m: 150.0, occurrence_cell_m: 4.0, ..Default::default() };
+    let rules = MaterialRules::default();
+    let (folder, own) = stamp_folder(&params, &rules);
+    assert!(own.instances.len() > 50, "the stamp grows {} instances", own.instances.len());
+    let a = pasted(&params, &rules, &folder, [400.0, 400.0], 0.0);
+    let b = pasted(&params, &rules, &folder, [700.0, 600.0], 90.0);
+    for (run, c, quarter) in [(&a, [400.0, 400.0], false), (&b, [700.0, 600.0], true)] {
+        // The test's own transform: (u, v) from the stamp's centre, a
+        // quarter turn taking it to (-v, u).
+        let mut want: Vec<[f64; 2]> = own
             .instances
             .iter()
             .map(|i| {
                 let (u, w) = (f64::from(i.position[0]) - 128.0, f64::from(i.position[1]) - 128.0);
                 let (x, y) = if quarter { (-w, u) } else { (u, w) };
-                [center[0] + x, center[1] + y]
+                [c[0] + x, c[1] + y]
             })
             .collect();
-        v.sort_by(|p, q| p.partial_cmp(q).unwrap());
-        v
-    };
-    let inside = |run: &vista::world::vegetation::Generated, c: [f64; 2]| -> Vec<[f64; 2]> {
-        let mut v: Vec<[f64; 2]> = run
-            .instances
-            .iter()
-            .map(|i: &Instance| [f64::from(i.position[0]), f64::from(i.position[1])])
-            .filter(|p| (p[0] - c[0]).abs() < 128.0 && (p[1] - c[1]).abs() < 128.0)
-            .collect();
-        v.sort_by(|p, q| p.partial_cmp(q).unwrap());
-        v
-    };
-    for (run, c, quarter) in [(&a, [400.0, 400.0], false), (&b, [700.0, 600.0], true)] {
-        let (got, want) = (inside(run, c), expect(c, quarter));
+        want.sort_by(|p, q| p.partial_cmp(q).unwrap());
+        let got = points_in_square(&run.instances, c);
         assert_eq!(got.len(), want.len(), "instances inside the stamp at {c:?}");
         for (p, q) in got.iter().zip(&want) {
             assert!((p[0] - q[0]).abs() < 1e-3 && (p[1] - q[1]).abs() < 1e-3, "{p:?} against {q:?}");
         }
     }
     // Grass: the cell at (u, v) from A's centre is the cell at (-v, u) from B's.
-    let bit = |run: &vista::world::vegetation::Generated, x: f64, y: f64| {
-        run.grass[(y / 4.0).floor() as usize * 256 + (x / 4.0).floor() as usize]
-    };
+    let bit =
+        |run: &Generated, x: f64, y: f64| run.grass[(y / 4.0).floor() as usize * 256 + (x / 4.0).floor() as usize];
     let mut set = 0;
     for j in 0..64 {
         for i in 0..64 {

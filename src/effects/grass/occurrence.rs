@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::error::{Error, Result};
 
@@ -31,29 +31,12 @@ pub struct GrassOccurrence {
     pub set: usize,
 }
 
-#[derive(Deserialize)]
-struct Summary {
-    occurrence_cell_m: f64,
-    occurrence_cells: [usize; 2],
-    types: Vec<TypeSummary>,
-}
-
-#[derive(Deserialize)]
-struct TypeSummary {
-    name: String,
-    occurrence_file: Option<String>,
-    material_density: Option<[f64; 5]>,
-}
-
 impl GrassOccurrence {
     /// Reads `folder` (what `vista vegetate --out` wrote): its
     /// `vegetation.json` and every grass type's occurrence map.
     pub fn load(folder: &Path) -> Result<Self> {
         let bad = |m: String| Error::Scene(format!("effects.grass.vegetation: {}: {m}", folder.display()));
-        let json = folder.join("vegetation.json");
-        let text = std::fs::read_to_string(&json)
-            .map_err(|e| bad(format!("vegetation.json: {e} (made by `vista vegetate --out {}`)", folder.display())))?;
-        let s: Summary = serde_json::from_str(&text).map_err(|e| bad(format!("vegetation.json: {e}")))?;
+        let s = crate::world::vegetation::read_summary(folder).map_err(bad)?;
         let [w, h] = s.occurrence_cells;
         if !(s.occurrence_cell_m.is_finite() && s.occurrence_cell_m > 0.0) || w == 0 || h == 0 || w * h > 1 << 30 {
             return Err(bad(format!(
@@ -64,7 +47,7 @@ impl GrassOccurrence {
         let stride = w.div_ceil(32);
         let mut words = vec![0u32; stride * h];
         let mut density = [0f32; 5];
-        let grass: Vec<&TypeSummary> = s.types.iter().filter(|t| t.occurrence_file.is_some()).collect();
+        let grass: Vec<_> = s.types.iter().filter(|t| t.occurrence_file.is_some()).collect();
         if grass.is_empty() {
             return Err(bad("no grass type (kind = \"grass\") was generated: nothing to read".into()));
         }

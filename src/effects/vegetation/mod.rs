@@ -27,7 +27,7 @@ pub mod vegetation_draw;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::shaders::consts::VEG_TYPES;
@@ -78,27 +78,12 @@ pub struct VegetationSet {
     pub instances: Vec<Instance>,
 }
 
-#[derive(Deserialize)]
-struct Summary {
-    instance_bytes: usize,
-    instances: usize,
-    types: Vec<TypeSummary>,
-}
-
-#[derive(Deserialize)]
-struct TypeSummary {
-    name: String,
-    kind: VegetationKind,
-}
-
 impl VegetationSet {
     /// Reads `folder`'s `vegetation.json` and `instances.bin`, each
     /// instance checked (a known tree or bush type, finite numbers).
     pub fn load(folder: &Path) -> Result<Self> {
         let bad = |m: String| Error::Scene(format!("effects.vegetation.folder: {}: {m}", folder.display()));
-        let text = std::fs::read_to_string(folder.join("vegetation.json"))
-            .map_err(|e| bad(format!("vegetation.json: {e} (made by `vista vegetate --out {}`)", folder.display())))?;
-        let s: Summary = serde_json::from_str(&text).map_err(|e| bad(format!("vegetation.json: {e}")))?;
+        let s = crate::world::vegetation::read_summary(folder).map_err(bad)?;
         let size = std::mem::size_of::<Instance>();
         if s.instance_bytes != size || s.instances > MAX_INSTANCES || s.types.len() > VEG_TYPES as usize {
             return Err(bad(format!(
@@ -119,7 +104,11 @@ impl VegetationSet {
             )));
         }
         let instances: Vec<Instance> = bytes.chunks_exact(size).map(bytemuck::pod_read_unaligned).collect();
-        let types: Vec<(String, VegetationKind)> = s.types.into_iter().map(|t| (t.name, t.kind)).collect();
+        let kind = |t: &crate::world::vegetation::TypeSummary| {
+            t.kind.ok_or_else(|| bad(format!("vegetation.json: type \"{}\" has no kind", t.name)))
+        };
+        let types: Vec<(String, VegetationKind)> =
+            s.types.iter().map(|t| Ok((t.name.clone(), kind(t)?))).collect::<Result<_>>()?;
         for (k, i) in instances.iter().enumerate() {
             let known = types.get(i.ty as usize).is_some_and(|t| t.1 != VegetationKind::Grass);
             let finite = i.position.iter().chain([&i.yaw_rad, &i.scale]).all(|v| v.is_finite());

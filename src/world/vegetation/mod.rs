@@ -32,7 +32,7 @@ use rayon::prelude::*;
 pub use field::HeightField;
 pub use maps::{hillshade, pictures};
 pub use masks::{MaskMap, Masks};
-pub use outputs::{write_outputs, Occurrence, OUTPUT_FILES};
+pub use outputs::{read_summary, write_outputs, Occurrence, Summary, TypeSummary, OUTPUT_FILES};
 pub use params::{
     Brush, BrushEntry, VegetationKind, VegetationParams, VegetationType, MATERIAL_NAMES, MAX_CELLS, MAX_TYPES,
 };

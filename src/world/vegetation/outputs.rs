@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::params::{VegetationKind, VegetationParams};
 use super::spawn::Instance;
@@ -56,30 +56,44 @@ impl Occurrence {
     }
 }
 
-#[derive(Serialize)]
-struct Summary<'a> {
-    cell_m: f64,
-    cells: [usize; 2],
-    occurrence_cell_m: f64,
-    occurrence_cells: [usize; 2],
-    instances_file: &'static str,
-    instance_bytes: usize,
-    instance_layout: &'static str,
-    instances: usize,
-    types: Vec<TypeSummary<'a>>,
+/// `vegetation.json`: what a folder holds. Every reader of a folder (effect
+/// grass's occurrence, effect vegetation, a stamp's vegetation) reads it
+/// through [`read_summary`]; a field a hand-made file leaves out reads as
+/// its default, and the readers' size checks catch what does not fit.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Summary {
+    pub cell_m: f64,
+    pub cells: [usize; 2],
+    pub occurrence_cell_m: f64,
+    pub occurrence_cells: [usize; 2],
+    pub instances_file: String,
+    pub instance_bytes: usize,
+    pub instance_layout: String,
+    pub instances: usize,
+    pub types: Vec<TypeSummary>,
 }
 
-#[derive(Serialize)]
-struct TypeSummary<'a> {
-    name: &'a str,
-    kind: VegetationKind,
-    instances: usize,
-    occurrence_file: Option<String>,
-    occurrence_set: Option<usize>,
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TypeSummary {
+    pub name: String,
+    pub kind: Option<VegetationKind>,
+    pub instances: usize,
+    pub occurrence_file: Option<String>,
+    pub occurrence_set: Option<usize>,
     /// Grass: its brushes' density on each material (grass, rock, snow,
     /// scree, sand; the largest where several brushes offer it), which
     /// effect grass multiplies its own densities by.
-    material_density: Option<[f64; 5]>,
+    pub material_density: Option<[f64; 5]>,
+}
+
+/// Reads `folder`'s `vegetation.json`; the error is one line naming the
+/// file and what `vista vegetate` command makes it.
+pub fn read_summary(folder: &Path) -> std::result::Result<Summary, String> {
+    let text = std::fs::read_to_string(folder.join("vegetation.json"))
+        .map_err(|e| format!("vegetation.json: {e} (made by `vista vegetate --out {}`)", folder.display()))?;
+    serde_json::from_str(&text).map_err(|e| format!("vegetation.json: {e}"))
 }
 
 /// Writes the instances, the occurrence maps, the summary and the maps'
@@ -94,8 +108,8 @@ pub fn write_outputs(dir: &Path, params: &VegetationParams, g: &Generated) -> Re
     let mut types = Vec::new();
     for (ty, t) in params.types.iter().enumerate() {
         let mut s = TypeSummary {
-            name: &t.name,
-            kind: t.kind,
+            name: t.name.clone(),
+            kind: Some(t.kind),
             instances: g.instances.iter().filter(|i| i.ty as usize == ty).count(),
             occurrence_file: None,
             occurrence_set: None,
@@ -119,9 +133,9 @@ pub fn write_outputs(dir: &Path, params: &VegetationParams, g: &Generated) -> Re
         cells: g.size,
         occurrence_cell_m: params.occurrence_cell_m,
         occurrence_cells: g.size.map(|s| s.div_ceil(ratio)),
-        instances_file: "instances.bin",
+        instances_file: "instances.bin".into(),
         instance_bytes: std::mem::size_of::<Instance>(),
-        instance_layout: "x, y, z (f32 m), yaw (f32 rad), scale (f32), type (u32), tint (RGBA8), cell (u32)",
+        instance_layout: "x, y, z (f32 m), yaw (f32 rad), scale (f32), type (u32), tint (RGBA8), cell (u32)".into(),
         instances: g.instances.len(),
         types,
     };

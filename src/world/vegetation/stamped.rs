@@ -8,8 +8,6 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
-
 use super::params::VegetationParams;
 use super::spawn::Instance;
 use crate::world::error::{Result, WorldError};
@@ -41,31 +39,12 @@ pub struct StampVegetation {
     hash: u64,
 }
 
-#[derive(Deserialize)]
-struct Summary {
-    cell_m: f64,
-    cells: [usize; 2],
-    occurrence_cell_m: f64,
-    occurrence_cells: [usize; 2],
-    instance_bytes: usize,
-    instances: usize,
-    types: Vec<TypeSummary>,
-}
-
-#[derive(Deserialize)]
-struct TypeSummary {
-    name: String,
-    occurrence_file: Option<String>,
-}
-
 impl StampVegetation {
     /// Reads `folder` for the stamp at `placement`; its types are matched
     /// to `params`' by name (a type the scene lacks is an error).
     pub fn load(folder: &Path, placement: StampPlacement, params: &VegetationParams) -> Result<Self> {
         let bad = |m: String| WorldError::Vegetation(format!("stamp vegetation {}: {m}", folder.display()));
-        let text = std::fs::read_to_string(folder.join("vegetation.json"))
-            .map_err(|e| bad(format!("vegetation.json: {e}")))?;
-        let s: Summary = serde_json::from_str(&text).map_err(|e| bad(format!("vegetation.json: {e}")))?;
+        let s = super::outputs::read_summary(folder).map_err(bad)?;
         let size = std::mem::size_of::<Instance>();
         let bytes = std::fs::read(folder.join("instances.bin")).map_err(|e| bad(format!("instances.bin: {e}")))?;
         if s.instance_bytes != size || bytes.len() != s.instances * size {
@@ -101,7 +80,8 @@ impl StampVegetation {
                 grass[*scene] = Some(GrassMap { ty: *scene, size: [w, h], bits });
             }
         }
-        let hash = Fnv64::new().bytes(&bytes).bytes(text.as_bytes()).u64(placement_hash(&placement)).finish();
+        let hash =
+            Fnv64::new().bytes(&bytes).bytes(format!("{s:?}").as_bytes()).u64(placement_hash(&placement)).finish();
         let extent_m = s.cells.map(|c| c as f64 * s.cell_m);
         Ok(StampVegetation {
             folder: folder.to_path_buf(),
