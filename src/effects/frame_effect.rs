@@ -84,6 +84,20 @@ pub struct SharedPlan {
     /// Effect `decals`: the decals an earlier frame uploaded (None while an
     /// edit waits for its upload).
     pub decals: Option<Vec<super::virtual_texture::decals::Decal>>,
+    /// The tallest of an effect's canopy ([`FrameEffect::canopy`]), m.
+    pub canopy_top_m: Option<f32>,
+}
+
+/// Heights above the ground that cast the sun's shadow over the terrain
+/// (effect `vegetation`'s trees and bushes), over a grid of the world.
+#[derive(Clone, Copy)]
+pub struct Canopy<'a> {
+    /// f16 pairs (the first in the low bits), row-major from the south-west.
+    pub heights: &'a Buffer,
+    /// xy: cell (0, 0)'s south-west corner (world m), z: cells per metre,
+    /// w: the tallest height (m).
+    pub map: [f32; 4],
+    pub size: [u32; 2],
 }
 
 /// What an effect records against.
@@ -159,6 +173,11 @@ pub trait FrameEffect: Any {
     /// (terrain_sink.glsl), written before the terrain's draws; the
     /// terrain's fragments there are pushed behind it (at most one effect).
     fn terrain_sink(&self) -> Option<&Buffer> {
+        None
+    }
+
+    /// Its canopy, which the sun's shadows march over (at most one effect).
+    fn canopy(&self) -> Option<Canopy<'_>> {
         None
     }
 

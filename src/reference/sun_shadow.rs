@@ -44,7 +44,20 @@ impl March {
     /// (threshold height relative to the ground `height(p)`, occluder
     /// distance) at `p`; `first` is the node's sample spacing.
     pub fn threshold(&self, p: DVec2, first: f64, height: impl Fn(DVec2) -> Option<f64>) -> (f64, f64) {
-        let Some(h0) = height(p) else { return (NONE, 0.0) };
+        self.threshold_over(p, first, &height, &|q, _| height(q))
+    }
+
+    /// As [`March::threshold`], the march reading `occluder` at each step's
+    /// point and distance (the ground and what stands on it: the canopy,
+    /// which counts from a distance) and the point on the `ground`.
+    pub fn threshold_over(
+        &self,
+        p: DVec2,
+        first: f64,
+        ground: &dyn Fn(DVec2) -> Option<f64>,
+        occluder: &dyn Fn(DVec2, f64) -> Option<f64>,
+    ) -> (f64, f64) {
+        let Some(h0) = ground(p) else { return (NONE, 0.0) };
         let last = if self.rise > 0.0 { self.reach_m.min((self.ceiling_m - h0) / self.rise) } else { self.reach_m };
         let mut best = (NONE, 0.0);
         if last <= first {
@@ -52,7 +65,7 @@ impl March {
         }
         for i in 0..self.steps {
             let d = step(i, self.steps, first, last);
-            if let Some(h) = height(p + self.dir * d) {
+            if let Some(h) = occluder(p + self.dir * d, d) {
                 if h - d * self.rise > best.0 {
                     best = (h - d * self.rise, d);
                 }

@@ -2,7 +2,7 @@
 //! (arrived and stale ones, up to the budget), the pass before the
 //! lighting resolve, and the atlas the resolve samples.
 
-use super::sun_shadows::{SunShadowJob, SunShadows, MAX_UPDATE_BUDGET};
+use super::sun_shadows::{MarchOver, SunShadowJob, SunShadows, MAX_UPDATE_BUDGET};
 use super::{MarchSun, NodeExtent, ShadowSchedule};
 use crate::effects::frame_effect::{BuildInputs, FrameEffect, FramePoint, PlanInputs, RecordInputs, SharedPlan, Work};
 use crate::error::Result;
@@ -42,7 +42,7 @@ pub fn build(b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
         return Ok(None);
     }
     Ok(Some(Box::new(Shadows {
-        pass: SunShadows::new(b.ctx, b.effects.shadows, b.slot_capacity)?,
+        pass: SunShadows::new(b.ctx, b.effects.shadows, b.slot_capacity, b.on(Effect::Vegetation))?,
         schedule: ShadowSchedule::default(),
         were_off: false,
         catch_up: false,
@@ -58,7 +58,9 @@ impl Shadows {
     /// This frame's jobs. Switched off, none; switched back on, every
     /// resident node's shadow is stale (nodes arrived meanwhile were not
     /// marched) and they are redone as fast as the job list allows.
-    fn jobs(&mut self, terrain: &Terrain) -> Vec<SunShadowJob> {
+    /// `canopy_m`: the tallest canopy on the ground (an arrival's ridge
+    /// casts that much higher).
+    fn jobs(&mut self, terrain: &Terrain, canopy_m: f64) -> Vec<SunShadowJob> {
         let tree = &terrain.tree;
         if !self.on {
             self.were_off = true;
@@ -79,7 +81,7 @@ impl Shadows {
             let slot = tree.shadow.slot_of(n)?;
             let [lo, hi] = tree.shadow.height_range(slot);
             let [x0, y0, x1, y1] = world.bounds_m(n);
-            Some((slot, NodeExtent { bounds_m: [x0, y0, x1, y1], min_m: lo, max_m: hi }))
+            Some((slot, NodeExtent { bounds_m: [x0, y0, x1, y1], min_m: lo, max_m: hi + canopy_m }))
         };
         self.schedule.plan(march, budget, tree.arrived(), extent)
     }
@@ -90,11 +92,11 @@ impl FrameEffect for Shadows {
         Effect::Shadows
     }
 
-    fn plan(&mut self, p: &PlanInputs, _: &SharedPlan) -> Result<()> {
+    fn plan(&mut self, p: &PlanInputs, shared: &SharedPlan) -> Result<()> {
         self.on = p.switches.on(Effect::Shadows);
         self.sun = p.effects.lighting.sun_dir();
         self.elevation_deg = p.effects.lighting.sun_elevation_deg;
-        self.jobs = self.jobs(p.terrain);
+        self.jobs = self.jobs(p.terrain, f64::from(shared.canopy_top_m.unwrap_or(0.0)));
         // Switched back on, the shadows show once every slot holds its own
         // node's texture again; until then the lighting goes without them.
         self.shown = self.on && self.schedule.ready();
@@ -111,7 +113,9 @@ impl FrameEffect for Shadows {
             log.skipped(SUN_SHADOWS, Skip::ShadowsCurrent);
         } else {
             frame.pass(SUN_SHADOWS.name(), false, QueueKind::Graphics, |rec| {
-                self.pass.record(rec, &self.jobs, self.sun, r.terrain, r.sector_data, r.tree)
+                let canopy = r.effects.iter().find_map(|e| e.canopy());
+                let on = MarchOver { terrain: r.terrain, sector_data: r.sector_data, tree: r.tree, canopy };
+                self.pass.record(rec, &self.jobs, self.sun, on)
             });
             log.ran(SUN_SHADOWS, Some(self.jobs.len() as u64));
         }
@@ -138,7 +142,7 @@ impl FrameEffect for Shadows {
     }
 
     fn pipelines(&self) -> Vec<String> {
-        vec![self.pass.pipeline_label().to_string()]
+        self.pass.pipeline_labels().map(str::to_string).collect()
     }
 
     fn memory(&self) -> Vec<(String, u64, Vec<Effect>)> {

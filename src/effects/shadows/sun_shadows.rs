@@ -7,6 +7,7 @@
 //! read by `lighting_resolve`). The effect's parameters and the job list's
 //! entries live here with the pass; `effects::shadows` schedules it.
 
+use crate::effects::frame_effect::Canopy;
 use crate::error::Result;
 use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, Image, ImageDesc, MemoryLocation, Pipeline, Recorder,
@@ -87,7 +88,13 @@ pub struct SunShadowPush {
     pub sun: [f32; 4],
     /// steps, texture side, jobs, unused.
     pub params: [u32; 4],
+    /// Variant CANOPY: `Canopy::map`, then its size (xy) and the nearest
+    /// distance a march reads it at (z, [`canopy_skip_m`]).
+    pub canopy_map: [f32; 4],
+    pub canopy_grid: [f32; 4],
 }
+
+const _: () = assert!(std::mem::size_of::<SunShadowPush>() == crate::shaders::structs::SUN_SHADOW_PUSH);
 
 /// The march's sun: horizontal unit direction and the rise per metre
 /// (`SunShadowPush::sun`'s xyz, also what the CPU twin takes).
@@ -102,8 +109,27 @@ pub fn march_sun(sun_dir: DVec3) -> [f32; 3] {
     [u.x as f32, u.y as f32, (sun_dir.z / len) as f32]
 }
 
+/// The nearest distance a march reads a canopy of `cell_m` cells at (a
+/// cell and a half): nearer, the interpolated canopy and the texels
+/// between which `lighting_resolve` reads the threshold stand above a
+/// crown's own sunlit side, which would shade itself. The ground right
+/// under a crown loses only what the crown above it casts within that
+/// distance (a high sun's).
+pub fn canopy_skip_m(cell_m: f32) -> f32 {
+    1.5 * cell_m
+}
+
+/// What a march reads: the terrain's heights and a canopy on them.
+pub struct MarchOver<'a> {
+    pub terrain: VistaTerrain,
+    pub sector_data: &'a SectorData,
+    pub tree: &'a GpuQuadtree,
+    pub canopy: Option<Canopy<'a>>,
+}
+
 pub struct SunShadows {
-    pipeline: Pipeline,
+    /// (variant bits, pipeline): without and (effect vegetation) with CANOPY.
+    pipelines: Vec<(u32, Pipeline)>,
     nearest: Sampler,
     /// R32G32_SFLOAT (threshold above the ground, occluder distance), `resolution`
     /// square, one layer per slot; GENERAL.
@@ -120,7 +146,8 @@ pub fn layer_bytes(resolution: u32) -> u64 {
 impl SunShadows {
     pub const NAME: &'static str = sh::PASS;
 
-    pub fn new(ctx: &Context, params: ShadowParams, slots: u32) -> Result<Self> {
+    /// `canopy`: effect vegetation is on (its trees may cast).
+    pub fn new(ctx: &Context, params: ShadowParams, slots: u32, canopy: bool) -> Result<Self> {
         let side = params.resolution;
         assert!((2..=consts::SUN_SHADOW_MAX_SIDE).contains(&side), "shadow resolution {side} (checked by the scene)");
         let atlas = Image::new(
@@ -147,56 +174,58 @@ impl SunShadows {
                 location: MemoryLocation::GpuOnly,
             },
         )?;
-        let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &[] };
-        Ok(SunShadows {
-            pipeline: Pipeline::compute(ctx, &desc)?,
-            nearest: nearest_sampler(ctx, "sun_shadows_nearest")?,
-            atlas,
-            jobs,
-            params,
-        })
+        let variants = if canopy { vec![0, sh::VARIANT_CANOPY] } else { vec![0] };
+        let pipelines = variants
+            .into_iter()
+            .map(|v| {
+                let desc = ComputePipelineDesc { name: Self::NAME, shader: sh::variant(v), specialization: &[] };
+                Ok((v, Pipeline::compute(ctx, &desc)?))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(SunShadows { pipelines, nearest: nearest_sampler(ctx, "sun_shadows_nearest")?, atlas, jobs, params })
     }
 
-    pub fn pipeline_label(&self) -> &str {
-        &self.pipeline.label
+    pub fn pipeline_labels(&self) -> impl Iterator<Item = &str> {
+        self.pipelines.iter().map(|(_, p)| p.label.as_str())
     }
 
     pub fn memory(&self) -> [(String, u64); 2] {
         [(self.atlas.name.clone(), self.atlas.memory_bytes()), (self.jobs.name.clone(), self.jobs.memory_bytes())]
     }
 
-    /// Marches `jobs` (at most SUN_SHADOW_MAX_JOBS) for the sun `sun_dir`.
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        jobs: &[SunShadowJob],
-        sun_dir: DVec3,
-        terrain: VistaTerrain,
-        sector_data: &SectorData,
-        tree: &GpuQuadtree,
-    ) {
+    /// Marches `jobs` (at most SUN_SHADOW_MAX_JOBS) for the sun `sun_dir`
+    /// over the terrain's heights and the `canopy` on them.
+    pub fn record(&self, rec: &mut Recorder, jobs: &[SunShadowJob], sun_dir: DVec3, on: MarchOver) {
         assert!(!jobs.is_empty() && jobs.len() <= consts::SUN_SHADOW_MAX_JOBS as usize, "{} jobs", jobs.len());
         rec.update_buffer(&self.jobs, 0, bytemuck::cast_slice(jobs));
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
-        rec.bind_pipeline(&self.pipeline);
-        rec.push_descriptors(
-            &self.pipeline,
-            &[
-                (sh::SECTOR_DATA, Resource::Buffer(sector_data.buffer())),
-                (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
-                (sh::NEAREST, Resource::Sampler(self.nearest.raw())),
-                (sh::SHADOW_ATLAS, Resource::Image(&self.atlas, vk::ImageLayout::GENERAL)),
-                (sh::JOBS, Resource::Buffer(&self.jobs)),
-            ],
-        );
+        let want = if on.canopy.is_some() { sh::VARIANT_CANOPY } else { 0 };
+        let (_, pipeline) =
+            self.pipelines.iter().find(|(v, _)| *v == want).expect("sun_shadows built with CANOPY for vegetation");
+        rec.bind_pipeline(pipeline);
+        let mut bindings = vec![
+            (sh::SECTOR_DATA, Resource::Buffer(on.sector_data.buffer())),
+            (sh::HEIGHT_ATLAS, Resource::Image(on.tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
+            (sh::NEAREST, Resource::Sampler(self.nearest.raw())),
+            (sh::SHADOW_ATLAS, Resource::Image(&self.atlas, vk::ImageLayout::GENERAL)),
+            (sh::JOBS, Resource::Buffer(&self.jobs)),
+        ];
+        if let Some(c) = &on.canopy {
+            bindings.push((sh::CANOPY, Resource::Buffer(c.heights)));
+        }
+        rec.push_descriptors(pipeline, &bindings);
         let [ux, uy, rise] = march_sun(sun_dir);
         let p = &self.params;
         let push = SunShadowPush {
-            terrain,
+            terrain: on.terrain,
             sun: [ux, uy, rise, p.reach_m],
             params: [p.steps, p.resolution, jobs.len() as u32, 0],
+            canopy_map: on.canopy.map_or([0.0; 4], |c| c.map),
+            canopy_grid: on
+                .canopy
+                .map_or([0.0; 4], |c| [c.size[0] as f32, c.size[1] as f32, canopy_skip_m(1.0 / c.map[2]), 0.0]),
         };
-        rec.push_constants(&self.pipeline, &push);
+        rec.push_constants(pipeline, &push);
         let [wx, wy, _] = sh::WORKGROUP_SIZE;
         rec.dispatch(p.resolution.div_ceil(wx), p.resolution.div_ceil(wy), jobs.len() as u32);
         rec.barrier(vk::PipelineStageFlags2::COMPUTE_SHADER, vk::PipelineStageFlags2::ALL_COMMANDS);

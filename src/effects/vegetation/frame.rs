@@ -4,12 +4,13 @@
 //! declaration order, each object retired until the frames using it
 //! completed.
 
+use super::canopy::CanopyGrid;
 use super::meshes::{bush, tree, VegMesh};
 use super::vegetation_cull::{CullBuffers, VegetationCull, VegetationCullPush};
 use super::vegetation_draw::{DrawBuffers, VegetationDraw, VegetationDrawPush};
 use super::{VegetationDrawParams, VegetationSet};
 use crate::effects::frame_effect::{
-    BuildInputs, EffectStats, FrameEffect, FramePoint, PlanInputs, RecordInputs, SharedPlan, Work,
+    BuildInputs, Canopy, EffectStats, FrameEffect, FramePoint, PlanInputs, RecordInputs, SharedPlan, Work,
 };
 use crate::error::{Error, Result};
 use crate::frame::{Frame, QueueKind};
@@ -73,6 +74,8 @@ pub struct Vegetation {
     types: Buffer,
     header: Buffer,
     visible: Buffer,
+    /// With effect `shadows`: the canopy's heights, its map and size.
+    canopy: Option<(Buffer, [f32; 4], [u32; 2])>,
     /// The header as each frame starts it: the draws' index counts and
     /// regions of the visible list, no instance, no count.
     reset: VegetationHeaderGpu,
@@ -89,7 +92,8 @@ pub fn build(b: &mut BuildInputs) -> Result<Option<Box<dyn FrameEffect>>> {
     if !b.on(Effect::Vegetation) {
         return Ok(None);
     }
-    Ok(Some(Box::new(Vegetation::new(b.ctx, &b.effects.vegetation, b.occlusion, b.depth.format, b.layout)?)))
+    let v = Vegetation::new(b.ctx, &b.effects.vegetation, b.occlusion, b.depth.format, b.layout)?;
+    Ok(Some(Box::new(if b.on(Effect::Shadows) { v.with_canopy(b.ctx)? } else { v })))
 }
 
 impl Vegetation {
@@ -131,12 +135,24 @@ impl Vegetation {
                 indirect | vk::BufferUsageFlags::TRANSFER_SRC,
             )?,
             visible: buffer("vegetation_visible", n * u64::from(VEG_LODS) * 4, storage)?,
+            canopy: None,
             reset,
             set,
             frame: None,
             #[cfg(feature = "test-hooks")]
             no_culling: false,
         })
+    }
+
+    /// Rasters and uploads the canopy (effect `shadows` marches over it).
+    pub fn with_canopy(mut self, ctx: &Context) -> Result<Self> {
+        let types = self.params.types_gpu(&self.set);
+        if let Some(g) = CanopyGrid::raster(&self.set, &types, self.params.canopy_cell_m) {
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+            let buffer = Buffer::with_data(ctx, "vegetation_canopy", bytemuck::cast_slice(&g.packed()), usage)?;
+            self.canopy = Some((buffer, g.map(), g.size));
+        }
+        Ok(self)
     }
 
     /// The header (draw arguments, then counters): telemetry copies it.
@@ -180,6 +196,14 @@ fn counters_of(c: &FrameCounters) -> Option<VegetationHeaderGpu> {
 impl FrameEffect for Vegetation {
     fn effect(&self) -> Effect {
         Effect::Vegetation
+    }
+
+    fn share(&self, shared: &mut SharedPlan) {
+        shared.canopy_top_m = self.canopy.as_ref().map(|c| c.1[3]);
+    }
+
+    fn canopy(&self) -> Option<Canopy<'_>> {
+        self.canopy.as_ref().map(|(heights, map, size)| Canopy { heights, map: *map, size: *size })
     }
 
     fn plan(&mut self, p: &PlanInputs, _: &SharedPlan) -> Result<()> {
@@ -251,6 +275,7 @@ impl FrameEffect for Vegetation {
         [&self.vertices, &self.instances, &self.types, &self.header, &self.visible]
             .into_iter()
             .chain(self.indices.iter().map(|(b, _)| b))
+            .chain(self.canopy.iter().map(|c| &c.0))
             .map(|b| (b.name.clone(), b.memory_bytes(), vec![Effect::Vegetation]))
             .collect()
     }

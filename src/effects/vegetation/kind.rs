@@ -29,7 +29,16 @@ impl EffectKind for VegetationKindOf {
     }
 
     fn parameters(&self) -> &'static [&'static str] {
-        &["folder", "lod_m", "tree_draw_m", "bush_draw_m", "tree_height_m", "bush_height_m", "blend_height_m"]
+        &[
+            "folder",
+            "lod_m",
+            "tree_draw_m",
+            "bush_draw_m",
+            "tree_height_m",
+            "bush_height_m",
+            "blend_height_m",
+            "canopy_cell_m",
+        ]
     }
 
     fn read(&self, fx: &mut Effects, key: &str, name: &str, v: &toml::Value, base: &Path) -> Result<()> {

@@ -114,30 +114,45 @@ pub fn tree(lod: u32) -> VegMesh {
     m
 }
 
+/// The bush's ellipsoid: its centre's height, radius and half height.
+const BUSH_C: f32 = 0.45;
+const BUSH_R: f32 = 0.55;
+const BUSH_H: f32 = 0.5;
+
+/// The top of a mesh at horizontal distance `rho` from its axis, both over
+/// the instance's height (what the terrain's sun shadows march over, the
+/// canopy): the conifer's cone (its trunk is too thin to cast), the
+/// bush's ellipsoid; None beyond them.
+pub fn canopy_top(kind: crate::world::vegetation::VegetationKind, rho: f32) -> Option<f32> {
+    use crate::world::vegetation::VegetationKind::{Bush, Grass, Tree};
+    match kind {
+        Tree => (rho <= CROWN_R).then(|| 1.0 - (1.0 - CROWN_BASE) * rho / CROWN_R),
+        Bush => (rho <= BUSH_R).then(|| BUSH_C + BUSH_H * (1.0 - (rho / BUSH_R).powi(2)).max(0.0).sqrt()),
+        Grass => None,
+    }
+}
+
 /// The bush at `lod` (0..3): an ellipsoid 1.1 across and 1 high about
 /// (0, 0, 0.45).
 pub fn bush(lod: u32) -> VegMesh {
-    const C: f32 = 0.45;
-    const R: f32 = 0.55;
-    const H: f32 = 0.5;
     let mut m = VegMesh::default();
     if lod == 2 {
-        m.crossed(&[(0.0, C - H), (R, C), (0.0, C + H), (-R, C)], true);
+        m.crossed(&[(0.0, BUSH_C - BUSH_H), (BUSH_R, BUSH_C), (0.0, BUSH_C + BUSH_H), (-BUSH_R, BUSH_C)], true);
         return m;
     }
     let (sides, rings) = if lod == 0 { (10, 6) } else { (6, 3) };
     let ring: Vec<(f32, f32, f32)> = (1..rings)
         .map(|k| {
             let phi = -std::f32::consts::FRAC_PI_2 + std::f32::consts::PI * k as f32 / rings as f32;
-            let (r, z) = (R * phi.cos(), C + H * phi.sin());
-            // An ellipsoid's normal: (x / R^2, z / H^2) scaled to a unit run.
-            (z, r, (phi.sin() / H) / (phi.cos() / R))
+            let (r, z) = (BUSH_R * phi.cos(), BUSH_C + BUSH_H * phi.sin());
+            // An ellipsoid's normal: (x / BUSH_R^2, z / BUSH_H^2) scaled to a unit run.
+            (z, r, (phi.sin() / BUSH_H) / (phi.cos() / BUSH_R))
         })
         .collect();
     m.revolve(&ring, sides, true);
     let top = (ring.len() as u32 - 1) * sides;
-    m.cap(top, sides, Vec3::new(0.0, 0.0, C + H), false, true);
-    m.cap(0, sides, Vec3::new(0.0, 0.0, C - H), true, true);
+    m.cap(top, sides, Vec3::new(0.0, 0.0, BUSH_C + BUSH_H), false, true);
+    m.cap(0, sides, Vec3::new(0.0, 0.0, BUSH_C - BUSH_H), true, true);
     m
 }
 
@@ -173,5 +188,22 @@ mod tests {
             }
             assert!(triangles[0] > triangles[1] && triangles[1] > triangles[2], "{triangles:?}");
         }
+    }
+
+    /// The canopy is the meshes' top: no LOD-0 vertex rises above it (the
+    /// trunk's excepted), the apex and the rim touch it.
+    #[test]
+    fn the_canopy_is_the_top_of_the_meshes() {
+        use crate::world::vegetation::VegetationKind;
+        for (kind, m) in [(VegetationKind::Tree, tree(0)), (VegetationKind::Bush, bush(0))] {
+            for (p, crown) in m.positions.iter().zip(&m.crown).filter(|(_, c)| **c) {
+                let rho = p.truncate().length();
+                let top = canopy_top(kind, rho).unwrap_or_else(|| panic!("{kind:?} {p} outside the canopy ({crown})"));
+                assert!(p.z <= top + 1e-5, "{kind:?} vertex {p} above the canopy {top}");
+            }
+            let apex = m.positions.iter().map(|p| p.z).fold(f32::MIN, f32::max);
+            assert!((canopy_top(kind, 0.0).unwrap() - apex).abs() < 1e-6, "{kind:?} apex {apex}");
+        }
+        assert_eq!(canopy_top(VegetationKind::Tree, CROWN_R + 1e-3), None);
     }
 }

@@ -6,7 +6,8 @@
 //! the depth pyramid) into six indexed indirect draws (two mesh kinds x
 //! three LODs) that `vegetation_draw` records; near the ground their
 //! vertices blend into the terrain (terrain_blend.glsl, as the assets').
-//! Not cast into the terrain's shadows.
+//! With effect `shadows` on they cast into the terrain's sun shadows as a
+//! height field over the ground (`canopy.rs`).
 //!
 //! ```toml
 //! [effects.vegetation]
@@ -16,8 +17,10 @@
 //! bush_draw_m = 300
 //! tree_height_m = 16    # a scale-1 tree's and bush's height
 //! bush_height_m = 2
+//! canopy_cell_m = 1     # the canopy the sun's shadows march over: cells of this side or larger
 //! ```
 
+pub mod canopy;
 pub mod frame;
 pub mod kind;
 pub mod meshes;
@@ -51,6 +54,8 @@ pub struct VegetationDrawParams {
     pub bush_height_m: f32,
     /// The blend into the terrain fades out over this height above it.
     pub blend_height_m: f32,
+    /// Cells of the canopy (`canopy::CanopyGrid`) are this side or larger.
+    pub canopy_cell_m: f32,
 }
 
 impl Default for VegetationDrawParams {
@@ -64,6 +69,7 @@ impl Default for VegetationDrawParams {
             tree_height_m: 16.0,
             bush_height_m: 2.0,
             blend_height_m: 0.5,
+            canopy_cell_m: 1.0,
         }
     }
 }
@@ -183,6 +189,7 @@ impl VegetationDrawParams {
             "tree_height_m" => self.tree_height_m = metres(v, key)?,
             "bush_height_m" => self.bush_height_m = metres(v, key)?,
             "blend_height_m" => self.blend_height_m = number(key, v, 0.0, 100.0)? as f32,
+            "canopy_cell_m" => self.canopy_cell_m = number(key, v, 0.25, 1000.0)? as f32,
             _ => unreachable!("{key} is a vegetation parameter but not read"),
         }
         Ok(())
