@@ -49,29 +49,54 @@ fn header(ctx: &Context, rig: &Rig) -> VegetationHeaderGpu {
     bytemuck::pod_read_unaligned(&ctx.read_buffer(v.header()).unwrap()[..VegetationHeaderGpu::BYTES as usize])
 }
 
+/// Every instance culled or drawn once, counted where it was culled.
+fn check_counts(h: &VegetationHeaderGpu) -> Vec<u32> {
+    let drawn: Vec<u32> = (0..6).map(|d| h.drawn(d)).collect();
+    println!(
+        "{} clusters ({} instances) culled whole; {} visited: {} by distance, {} by the frustum, {} by the \
+         pyramid; drawn {drawn:?}",
+        h.clusters_culled, h.skipped, h.considered, h.culled_distance, h.culled_frustum, h.culled_hiz
+    );
+    let all = h.culled_distance + h.culled_frustum + h.culled_hiz + drawn.iter().sum::<u32>();
+    assert_eq!((h.considered + h.skipped, all), (101, h.considered), "every instance culled or drawn once");
+    drawn
+}
+
+/// With 64 m clusters the far trees' clusters are culled whole; with one
+/// cluster every instance is tested one by one. Both pictures equal the
+/// one with no culling at all.
 #[test]
 fn culling_is_conservative_and_every_lod_draws() {
     gpu_test(|ctx| {
+        let mut pictures = Vec::new();
+        for cluster_m in [64.0, 10_000.0] {
+            let mut fx = effects(true);
+            fx.vegetation.cluster_m = cluster_m;
+            let mut rig = rig(ctx, fx);
+            pictures.push(rig.shot(ctx, &look(), CullStages::ALL));
+            let h = header(ctx, &rig);
+            let drawn = check_counts(&h);
+            assert!(
+                drawn[0] > 0 && drawn[1] > 0 && drawn[2] > 0 && drawn[3] > 0,
+                "trees at each LOD, bushes: {drawn:?}"
+            );
+            if cluster_m == 64.0 {
+                assert!(h.clusters_culled > 0 && h.skipped > 0, "the far trees' clusters are culled whole");
+            } else {
+                assert_eq!(h.clusters_culled, 0, "one cluster, in view");
+                assert!(h.culled_distance > 0 && h.culled_frustum > 0, "the far trees and the one behind, one by one");
+            }
+        }
         let mut rig = rig(ctx, effects(true));
-        let culled = rig.shot(ctx, &look(), CullStages::ALL);
-        let h = header(ctx, &rig);
-        let drawn: Vec<u32> = (0..6).map(|d| h.drawn(d)).collect();
-        println!(
-            "{} instances: {} by distance, {} by the frustum, {} by the pyramid; drawn {drawn:?}",
-            h.considered, h.culled_distance, h.culled_frustum, h.culled_hiz
-        );
-        let all = h.culled_distance + h.culled_frustum + h.culled_hiz + drawn.iter().sum::<u32>();
-        assert_eq!((h.considered, all), (101, 101), "every instance culled or drawn once");
-        assert!(h.culled_distance > 0 && h.culled_frustum > 0, "the far trees and the one behind are culled");
         rig.renderer.effect_mut::<Vegetation>().unwrap().no_culling = true;
         let every = rig.shot(ctx, &look(), CullStages::ALL);
-        let h2 = header(ctx, &rig);
-        println!("unculled: drawn {:?}", (0..6).map(|d| h2.drawn(d)).collect::<Vec<_>>());
-        assert!(drawn[0] > 0 && drawn[1] > 0 && drawn[2] > 0 && drawn[3] > 0, "trees at each LOD, bushes: {drawn:?}");
-        assert_eq!((h2.culled_distance, h2.culled_frustum, h2.culled_hiz), (0, 0, 0));
+        let h = header(ctx, &rig);
+        assert_eq!((h.culled_distance, h.culled_frustum, h.culled_hiz, h.skipped), (0, 0, 0, 0));
         // Every instance drawn, and not one pixel differs: no culled
-        // instance covered any.
-        assert!(culled.rgba == every.rgba && culled.depth == every.depth, "culling changed the picture");
+        // instance or cluster covered any.
+        for culled in &pictures {
+            assert!(culled.rgba == every.rgba && culled.depth == every.depth, "culling changed the picture");
+        }
     });
 }
 

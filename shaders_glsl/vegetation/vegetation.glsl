@@ -24,6 +24,18 @@ struct VegetationType {
     float pad;
 };
 
+// A cell of the instances' grid (effects/vegetation/clusters.rs): the box
+// around its instances' bounding spheres, the farthest draw distance of
+// their types, and where they lie in the sorted list.
+struct VegetationCluster {
+    vec4 lo;       // xyz: the box's low corner (world m); w: the farthest draw distance
+    vec4 hi;       // xyz: its high corner
+    uint first;
+    uint count;
+    uint pad0;
+    uint pad1;
+};
+
 struct VegetationVertex {
     vec4 position;  // xyz: the mesh at unit height (z up, 0 at the ground)
     vec4 normal;    // xyz: unit; w: 0 trunk, 1 crown
@@ -33,10 +45,14 @@ struct VegetationVertex {
 // the counters.
 struct VegetationHeader {
     uint draws[30];   // 5 words each: index count, instance count, first index, vertex offset, first instance
-    uint considered;
+    uint considered;        // instances tested one by one
     uint culled_distance;
     uint culled_frustum;
     uint culled_hiz;
+    uint clusters_culled;   // clusters culled whole (distance, frustum or pyramid)
+    uint skipped;           // their instances, never visited
+    uint pad0;
+    uint pad1;
 };
 
 #endif

@@ -5,6 +5,7 @@
 //! completed.
 
 use super::canopy::CanopyGrid;
+use super::clusters::cluster;
 use super::meshes::{bush, tree, VegMesh};
 use super::vegetation_cull::{CullBuffers, VegetationCull, VegetationCullPush};
 use super::vegetation_draw::{DrawBuffers, VegetationDraw, VegetationDrawPush};
@@ -40,6 +41,10 @@ pub struct VegetationHeaderGpu {
     pub culled_distance: u32,
     pub culled_frustum: u32,
     pub culled_hiz: u32,
+    /// Clusters culled whole, and their instances (never visited).
+    pub clusters_culled: u32,
+    pub skipped: u32,
+    pub pad: [u32; 2],
 }
 
 const _: () = assert!(DRAWS * 5 == 30);
@@ -70,7 +75,10 @@ pub struct Vegetation {
     vertices: Buffer,
     /// Per draw: its mesh's indices (into `vertices`) and their count.
     indices: Vec<(Buffer, u32)>,
+    /// Sorted by cluster; the clusters and their count.
     instances: Buffer,
+    clusters: Buffer,
+    cluster_count: u32,
     types: Buffer,
     header: Buffer,
     visible: Buffer,
@@ -108,6 +116,8 @@ impl Vegetation {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let with = |name: &str, bytes: &[u8], usage| Buffer::with_data(ctx, name, bytes, usage);
         let (vertices, indices) = meshes_gpu(ctx)?;
+        let types = params.types_gpu(&set);
+        let sorted = cluster(&set, &types, params.cluster_m);
         let n = set.instances.len().max(1) as u64;
         let mut reset = VegetationHeaderGpu::default();
         for (d, (_, count)) in indices.iter().enumerate() {
@@ -127,8 +137,10 @@ impl Vegetation {
             draw: VegetationDraw::new(ctx, depth_format, layout)?,
             vertices,
             indices,
-            instances: with("vegetation_instances", bytemuck::cast_slice(&set.instances), storage)?,
-            types: with("vegetation_types", bytemuck::cast_slice(&params.types_gpu(&set)), storage)?,
+            instances: with("vegetation_instances", bytemuck::cast_slice(&sorted.instances), storage)?,
+            clusters: with("vegetation_clusters", bytemuck::cast_slice(&sorted.clusters), storage)?,
+            cluster_count: sorted.clusters.len() as u32,
+            types: with("vegetation_types", bytemuck::cast_slice(&types), storage)?,
             header: buffer(
                 "vegetation_header",
                 VegetationHeaderGpu::BYTES,
@@ -214,7 +226,7 @@ impl FrameEffect for Vegetation {
         let flags =
             if culled { VEG_FLAG_DISTANCE | VEG_FLAG_FRUSTUM | if p.hiz { VEG_FLAG_HIZ } else { 0 } } else { 0 };
         let push = VegetationCullPush {
-            count: self.set.instances.len() as u32,
+            count: self.cluster_count,
             flags,
             lod_m: self.params.lod_m,
             depth_size: p.depth_size,
@@ -235,6 +247,7 @@ impl FrameEffect for Vegetation {
                     let out = CullBuffers {
                         view: r.view_buffer,
                         instances: &self.instances,
+                        clusters: &self.clusters,
                         types: &self.types,
                         header: &self.header,
                         visible: &self.visible,
@@ -272,7 +285,7 @@ impl FrameEffect for Vegetation {
     }
 
     fn memory(&self) -> Vec<(String, u64, Vec<Effect>)> {
-        [&self.vertices, &self.instances, &self.types, &self.header, &self.visible]
+        [&self.vertices, &self.instances, &self.clusters, &self.types, &self.header, &self.visible]
             .into_iter()
             .chain(self.indices.iter().map(|(b, _)| b))
             .chain(self.canopy.iter().map(|c| &c.0))
@@ -284,8 +297,12 @@ impl FrameEffect for Vegetation {
         let h = counters_of(c).unwrap_or_default();
         match pass {
             VEGETATION_CULL => {
-                let groups = (self.set.instances.len() as u64).div_ceil(64);
-                Some((PassWork { dispatch_groups: Some(groups), ..PassWork::default() }, None))
+                let work = PassWork {
+                    dispatch_groups: Some(u64::from(self.cluster_count).div_ceil(64)),
+                    instances: Some(u64::from(h.considered)),
+                    ..PassWork::default()
+                };
+                Some((work, None))
             }
             VEGETATION_DRAW => {
                 let drawn: u64 = (0..DRAWS).map(|d| u64::from(h.drawn(d))).sum();
@@ -308,8 +325,13 @@ impl FrameEffect for Vegetation {
         };
         let memory_bytes: u64 = self.memory().iter().map(|(_, b, _)| b).sum();
         let line = format!(
-            "vegetation: {} instances, {} culled by distance, {} by the frustum, {} by the depth pyramid; drawn \
-             trees {} and bushes {} (LOD 0/1/2), {} triangles; {:.2} MiB",
+            "vegetation: {} instances in {} clusters, {} clusters ({} instances) culled whole; of the {} visited, {} \
+             culled by distance, {} by the frustum, {} by the depth pyramid; drawn trees {} and bushes {} (LOD \
+             0/1/2), {} triangles; {:.2} MiB",
+            self.set.instances.len(),
+            self.cluster_count,
+            h.clusters_culled,
+            h.skipped,
             h.considered,
             h.culled_distance,
             h.culled_frustum,
@@ -320,6 +342,10 @@ impl FrameEffect for Vegetation {
             memory_bytes as f64 / f64::from(1u32 << 20)
         );
         let value = serde_json::json!({
+            "instances": self.set.instances.len(),
+            "clusters": self.cluster_count,
+            "clusters_culled": h.clusters_culled,
+            "skipped": h.skipped,
             "considered": h.considered,
             "culled_distance": h.culled_distance,
             "culled_frustum": h.culled_frustum,
@@ -349,6 +375,7 @@ mod tests {
     fn twins_have_the_shader_sizes() {
         assert_eq!(std::mem::size_of::<VegetationHeaderGpu>(), structs::VEGETATION_HEADER);
         assert_eq!(std::mem::size_of::<VegetationVertexGpu>(), structs::VEGETATION_VERTEX);
+        assert_eq!(std::mem::size_of::<super::super::clusters::VegetationClusterGpu>(), structs::VEGETATION_CLUSTER);
         assert_eq!(std::mem::size_of::<super::super::VegetationTypeGpu>(), structs::VEGETATION_TYPE);
         assert_eq!(std::mem::size_of::<crate::world::vegetation::Instance>(), structs::VEGETATION_INSTANCE);
     }

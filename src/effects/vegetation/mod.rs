@@ -1,9 +1,10 @@
 //! Effect `vegetation`: the trees and bushes `vista vegetate` placed
 //! (seed 004's generator, `world::vegetation`), drawn as instanced meshes
 //! with three LODs (the last two crossed triangles: a far billboard) into
-//! the G-buffer. `vegetation_cull` culls every instance on the GPU each
-//! frame (its type's draw distance, the frustum, with effect `occlusion`
-//! the depth pyramid) into six indexed indirect draws (two mesh kinds x
+//! the G-buffer. `vegetation_cull` culls on the GPU each frame, clusters
+//! of instances (a grid's cells) first, then the instances of those that
+//! may show (by their type's draw distance, the frustum, with effect
+//! `occlusion` the depth pyramid) into six indexed indirect draws (two mesh kinds x
 //! three LODs) that `vegetation_draw` records; near the ground their
 //! vertices blend into the terrain (terrain_blend.glsl, as the assets').
 //! With effect `shadows` on they cast into the terrain's sun shadows as a
@@ -17,10 +18,12 @@
 //! bush_draw_m = 300
 //! tree_height_m = 16    # a scale-1 tree's and bush's height
 //! bush_height_m = 2
+//! cluster_m = 64       # the culling tests clusters of instances in cells of this side or larger first
 //! canopy_cell_m = 1     # the canopy the sun's shadows march over: cells of this side or larger
 //! ```
 
 pub mod canopy;
+pub mod clusters;
 pub mod frame;
 pub mod kind;
 pub mod meshes;
@@ -36,7 +39,8 @@ use crate::error::{Error, Result};
 use crate::shaders::consts::VEG_TYPES;
 use crate::world::vegetation::{Instance, VegetationKind};
 
-/// Most instances one renderer culls (a dispatch's 65 535 groups of 64).
+/// Most instances one renderer draws (its visible list: three LODs' words
+/// an instance, 48 MiB at most).
 pub const MAX_INSTANCES: usize = 65_535 * 64;
 
 /// Effect `vegetation`'s parameters.
@@ -56,6 +60,8 @@ pub struct VegetationDrawParams {
     pub blend_height_m: f32,
     /// Cells of the canopy (`canopy::CanopyGrid`) are this side or larger.
     pub canopy_cell_m: f32,
+    /// Cells of the culling's clusters (`clusters.rs`) are this side or larger.
+    pub cluster_m: f32,
 }
 
 impl Default for VegetationDrawParams {
@@ -70,6 +76,7 @@ impl Default for VegetationDrawParams {
             bush_height_m: 2.0,
             blend_height_m: 0.5,
             canopy_cell_m: 1.0,
+            cluster_m: 64.0,
         }
     }
 }
@@ -190,6 +197,7 @@ impl VegetationDrawParams {
             "bush_height_m" => self.bush_height_m = metres(v, key)?,
             "blend_height_m" => self.blend_height_m = number(key, v, 0.0, 100.0)? as f32,
             "canopy_cell_m" => self.canopy_cell_m = number(key, v, 0.25, 1000.0)? as f32,
+            "cluster_m" => self.cluster_m = number(key, v, 1.0, 100_000.0)? as f32,
             _ => unreachable!("{key} is a vegetation parameter but not read"),
         }
         Ok(())

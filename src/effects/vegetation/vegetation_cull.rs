@@ -1,8 +1,9 @@
-//! `vegetation_cull` (effect `vegetation`): one thread per instance culls
-//! it by its type's draw distance, the frustum and, variant `HIZ` (effect
-//! `occlusion`, on this frame), the depth pyramid, and appends the rest to
-//! the indexed indirect draw of their mesh kind and LOD. The header holds
-//! the six draws' arguments and the frame's counters.
+//! `vegetation_cull` (effect `vegetation`): one thread per cluster
+//! (`clusters.rs`) tests its box; the workgroup then tests each instance
+//! of its clusters not culled whole: by its type's draw distance, the frustum and, variant
+//! `HIZ` (effect `occlusion`, on this frame), the depth pyramid, and
+//! appends the rest to the indexed indirect draw of their mesh kind and
+//! LOD. The header holds the six draws' arguments and the frame's counters.
 
 use crate::error::Result;
 use crate::gpu::{vk, Buffer, ComputePipelineDesc, Context, Image, Pipeline, Recorder, Resource, Sampler};
@@ -13,6 +14,7 @@ use crate::shaders::{structs, vegetation_cull as sh};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct VegetationCullPush {
+    /// Clusters.
     pub count: u32,
     /// VEG_FLAG_* bits.
     pub flags: u32,
@@ -26,7 +28,9 @@ const _: () = assert!(std::mem::size_of::<VegetationCullPush>() == structs::VEGE
 /// What one culling reads and writes.
 pub struct CullBuffers<'a> {
     pub view: &'a Buffer,
+    /// Sorted by cluster.
     pub instances: &'a Buffer,
+    pub clusters: &'a Buffer,
     pub types: &'a Buffer,
     /// Reset by the caller before the dispatch.
     pub header: &'a Buffer,
@@ -68,6 +72,7 @@ impl VegetationCull {
         let mut bindings = vec![
             (sh::VIEW, Resource::Buffer(out.view)),
             (sh::INSTANCES, Resource::Buffer(out.instances)),
+            (sh::CLUSTERS, Resource::Buffer(out.clusters)),
             (sh::TYPES, Resource::Buffer(out.types)),
             (sh::HEADER, Resource::Buffer(out.header)),
             (sh::VISIBLE, Resource::Buffer(out.visible)),
