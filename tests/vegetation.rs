@@ -217,6 +217,15 @@ fn grid_world(bump: bool) -> (WorldDesc, GridSource) {
 }
 
 fn run(dir: &Path, bump: bool, shard: Option<(u32, u32)>) -> vista::world::vegetation::RunReport {
+    run_part(dir, bump, shard, None)
+}
+
+fn run_part(
+    dir: &Path,
+    bump: bool,
+    shard: Option<(u32, u32)>,
+    region: Option<[f64; 4]>,
+) -> vista::world::vegetation::RunReport {
     let (world, source) = grid_world(bump);
     let params = VegetationParams { cell_m: 4.0, reach_m: 150.0, occurrence_cell_m: 8.0, ..Default::default() };
     let rules = MaterialRules::default();
@@ -230,6 +239,7 @@ fn run(dir: &Path, bump: bool, shard: Option<(u32, u32)>) -> vista::world::veget
         masks: &masks,
         stamps: &[],
         shard,
+        region,
     };
     let report = generate(&req, dir).unwrap();
     if let Some(g) = &report.result {
@@ -283,6 +293,40 @@ fn reruns_shards_and_edits_give_what_one_run_gives() {
     }
 }
 
+/// A region makes only the tiles it overlaps (of 256 m, here one: cells
+/// 75..125 lie in tile 1 both ways), the outputs wait for the rest, and a
+/// whole run after it reuses the region's tile and writes what one run does.
+#[test]
+fn a_region_makes_its_tiles_and_the_rest_completes_the_run() {
+    let (one, part) = (temp("region-one"), temp("region-part"));
+    let r = run_part(&part, false, None, Some([300.0, 300.0, 500.0, 500.0]));
+    assert_eq!((r.computed, r.reused, r.missing), (1, 0, 15), "{r:?}");
+    assert!(r.result.is_none());
+    let rest = run(&part, false, None);
+    assert_eq!((rest.computed, rest.reused), (15, 1));
+    run(&one, false, None);
+    assert_eq!(outputs(&one), outputs(&part), "a region then the rest writes what one run writes");
+    let (world, source) = grid_world(false);
+    let (params, rules, masks) = (VegetationParams::default(), MaterialRules::default(), Masks::default());
+    let req = |region| Request {
+        world: &world,
+        source: &source,
+        holes: &[],
+        rules: &rules,
+        params: &params,
+        masks: &masks,
+        stamps: &[],
+        shard: None,
+        region: Some(region),
+    };
+    let err = vista::world::vegetation::check(&req([2000.0, 0.0, 2100.0, 10.0])).unwrap_err().to_string();
+    assert!(err.contains("does not overlap the world"), "{err}");
+    assert!(vista::world::vegetation::check(&req([10.0, 0.0, 5.0, 10.0])).is_err(), "min over max");
+    for d in [one, part] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
 #[test]
 fn occurrence_bits_say_exactly_where_a_grass_may_grow() {
     let dir = temp("occurrence");
@@ -325,6 +369,7 @@ fn masks_remove_what_grows_and_leave_water_and_sun() {
             masks,
             stamps: &[],
             shard: None,
+            region: None,
         };
         generate(&req, &temp(name)).unwrap().result.unwrap()
     };
@@ -371,8 +416,17 @@ fn stamp_folder(params: &VegetationParams, rules: &MaterialRules) -> (PathBuf, G
     };
     let dir = temp("stamp-own");
     let (none, own) = (Masks::default(), GridSource::new(n, n, bowl, [256.0, 256.0]));
-    let req =
-        Request { world: &small, source: &own, holes: &[], rules, params, masks: &none, stamps: &[], shard: None };
+    let req = Request {
+        world: &small,
+        source: &own,
+        holes: &[],
+        rules,
+        params,
+        masks: &none,
+        stamps: &[],
+        shard: None,
+        region: None,
+    };
     let g = generate(&req, &dir).unwrap().result.unwrap();
     write_outputs(&dir, params, &g).unwrap();
     (dir, g)
@@ -409,6 +463,7 @@ fn pasted(
         masks: &none,
         stamps: &stamps,
         shard: None,
+        region: None,
     };
     generate(&req, &temp(&format!("paste-{}", center[0]))).unwrap().result.unwrap()
 }

@@ -121,7 +121,7 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     })
 }
 
-fn parse_region(s: &str) -> Result<[f64; 4], String> {
+pub(crate) fn parse_region(s: &str) -> Result<[f64; 4], String> {
     let v = parse_list(s, 4, "region")?;
     if v[0] >= v[2] || v[1] >= v[3] {
         return Err(format!("region {s:?} needs MINX < MAXX and MINY < MAXY"));

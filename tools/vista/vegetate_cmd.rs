@@ -34,6 +34,12 @@ pub struct VegetateArgs {
     /// from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX.
     #[arg(long, value_name = "I/N", value_parser = crate::bake_shard::parse_shard, allow_hyphen_values = true)]
     pub shard: Option<ShardArg>,
+    /// Make only the tiles overlapping this rectangle (world metres, as
+    /// `vista bake --region`); the outputs wait for the rest (a later run
+    /// without it reuses these tiles), and the report extrapolates the
+    /// tiles' time to the whole world.
+    #[arg(long, value_name = "MINX,MINY,MAXX,MAXY", value_parser = crate::bake::parse_region, allow_hyphen_values = true)]
+    pub region: Option<[f64; 4]>,
     /// Side of a generator cell in metres (replaces the scene's cell_m).
     #[arg(long, value_name = "METRES", value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
     pub cell: Option<f64>,
@@ -134,6 +140,7 @@ pub fn vegetate(args: &VegetateArgs) -> Result<()> {
         masks: &masks,
         stamps: &stamps,
         shard,
+        region: args.region,
     };
     let size = vista::world::vegetation::check(&request).map_err(|e| InputError(e.to_string()))?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -152,16 +159,23 @@ pub fn vegetate(args: &VegetateArgs) -> Result<()> {
     );
     let start = Instant::now();
     let report = generate(&request, &args.out)?;
-    let which = shard.map(|(i, n)| format!(" (shard {i}/{n})")).unwrap_or_default();
+    let mut which = shard.map(|(i, n)| format!(" (shard {i}/{n})")).unwrap_or_default();
+    if let Some(r) = args.region {
+        which += &format!(" (region {},{} .. {},{} m)", r[0], r[1], r[2], r[3]);
+    }
     println!("field: {:.1} s (heights, slopes, materials of every cell)", report.field_s);
     println!(
         "tiles{which}: {} computed, {} reused (inputs unchanged) in {:.1} s",
         report.computed, report.reused, report.tiles_s
     );
+    if args.region.is_some() && report.computed > 0 {
+        let whole = report.tiles_s * report.tiles as f64 / report.computed as f64;
+        println!("  at this rate the world's {} tiles take about {whole:.0} s (extrapolated)", report.tiles);
+    }
     let Some(g) = &report.result else {
         println!(
-            "outputs: not written: {} of {} tiles (other shards') are not in {} yet; the run that completes them \
-             writes them",
+            "outputs: not written: {} of {} tiles (other shards' or outside --region) are not in {} yet; the run \
+             that completes them writes them",
             report.missing,
             report.tiles,
             args.out.display()

@@ -63,6 +63,10 @@ pub struct Request<'a> {
     /// Shard `index` of `count`: the tiles whose row-major number is
     /// `index` modulo `count`.
     pub shard: Option<(u32, u32)>,
+    /// World metres (min x, min y, max x, max y): only the tiles
+    /// overlapping it (of the shard's), as `vista bake --region` bakes a
+    /// region's nodes; the outputs wait for the rest.
+    pub region: Option<[f64; 4]>,
 }
 
 /// What a run did.
@@ -106,6 +110,15 @@ pub fn check(req: &Request) -> Result<[usize; 2]> {
             size[0], size[1], req.params.cell_m
         )));
     }
+    if let Some(r) = req.region {
+        let [ex, ey] = req.world.extent_m;
+        if !(r[0] < r[2] && r[1] < r[3] && r[0] < ex && r[1] < ey && r[2] > 0.0 && r[3] > 0.0) {
+            return Err(WorldError::Vegetation(format!(
+                "region {},{} .. {},{} m does not overlap the world (0..{ex} x 0..{ey} m)",
+                r[0], r[1], r[2], r[3]
+            )));
+        }
+    }
     if let Some((i, n)) = req.shard {
         if n == 0 || i >= n {
             return Err(WorldError::Vegetation(format!("shard {i}/{n}: the index must be below the count")));
@@ -127,7 +140,15 @@ pub fn generate(req: &Request, dir: &Path) -> Result<RunReport> {
     let inputs = tiles::Inputs { req, entries: &entries, sun_path: &sun_path };
     let all = tiles::tiles(&field);
     let (index, count) = req.shard.unwrap_or((0, 1));
-    let mine: Vec<usize> = (0..all.len()).filter(|k| *k as u32 % count == index).collect();
+    let cell = p.cell_m;
+    let in_region = |w: &Window| {
+        req.region.is_none_or(|r| {
+            let lo = [w.lo[0] as f64 * cell, w.lo[1] as f64 * cell];
+            let hi = [lo[0] + w.size[0] as f64 * cell, lo[1] + w.size[1] as f64 * cell];
+            lo[0] < r[2] && r[0] < hi[0] && lo[1] < r[3] && r[1] < hi[1]
+        })
+    };
+    let mine: Vec<usize> = (0..all.len()).filter(|k| *k as u32 % count == index && in_region(&all[*k])).collect();
     let start = Instant::now();
     let done: Vec<bool> = mine
         .par_iter()

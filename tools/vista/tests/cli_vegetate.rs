@@ -115,6 +115,8 @@ fn mistakes_are_one_line_before_any_work() {
         (&["--cell", "0.01"][..], "raise cell_m"),
         (&["--shard", "2/2"][..], "--shard"),
         (&["--shard", "all/2"][..], "give I/2"),
+        (&["--region", "5000,0,6000,100"][..], "does not overlap the world"),
+        (&["--region", "10,0,5,100"][..], "needs MINX < MAXX"),
     ] {
         let out = vegetate(&good, &dir.join("out"), args).output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
