@@ -240,6 +240,7 @@ fn run_part(
         stamps: &[],
         shard,
         region,
+        sun: None,
     };
     let report = generate(&req, dir).unwrap();
     if let Some(g) = &report.result {
@@ -318,6 +319,7 @@ fn a_region_makes_its_tiles_and_the_rest_completes_the_run() {
         stamps: &[],
         shard: None,
         region: Some(region),
+        sun: None,
     };
     let err = vista::world::vegetation::check(&req([2000.0, 0.0, 2100.0, 10.0])).unwrap_err().to_string();
     assert!(err.contains("does not overlap the world"), "{err}");
@@ -370,6 +372,7 @@ fn masks_remove_what_grows_and_leave_water_and_sun() {
             stamps: &[],
             shard: None,
             region: None,
+            sun: None,
         };
         generate(&req, &temp(name)).unwrap().result.unwrap()
     };
@@ -426,6 +429,7 @@ fn stamp_folder(params: &VegetationParams, rules: &MaterialRules) -> (PathBuf, G
         stamps: &[],
         shard: None,
         region: None,
+        sun: None,
     };
     let g = generate(&req, &dir).unwrap().result.unwrap();
     write_outputs(&dir, params, &g).unwrap();
@@ -464,6 +468,7 @@ fn pasted(
         stamps: &stamps,
         shard: None,
         region: None,
+        sun: None,
     };
     generate(&req, &temp(&format!("paste-{}", center[0]))).unwrap().result.unwrap()
 }

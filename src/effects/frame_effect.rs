@@ -5,6 +5,7 @@
 //! reports its pipelines, memory, pass work, counters and stats.
 
 use super::requested::Effects;
+pub use super::shadows::sun_shadows::Canopy;
 use crate::error::Result;
 use crate::frame::Frame;
 use crate::gpu::{Buffer, Context, Image};
@@ -86,18 +87,6 @@ pub struct SharedPlan {
     pub decals: Option<Vec<super::virtual_texture::decals::Decal>>,
     /// The tallest of an effect's canopy ([`FrameEffect::canopy`]), m.
     pub canopy_top_m: Option<f32>,
-}
-
-/// Heights above the ground that cast the sun's shadow over the terrain
-/// (effect `vegetation`'s trees and bushes), over a grid of the world.
-#[derive(Clone, Copy)]
-pub struct Canopy<'a> {
-    /// f16 pairs (the first in the low bits), row-major from the south-west.
-    pub heights: &'a Buffer,
-    /// xy: cell (0, 0)'s south-west corner (world m), z: cells per metre,
-    /// w: the tallest height (m).
-    pub map: [f32; 4],
-    pub size: [u32; 2],
 }
 
 /// What an effect records against.

@@ -231,7 +231,11 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Stability(args) => stability_cmd::stability(cli.device.clone(), &args),
         // CPU-only, like baking.
-        Command::Vegetate(args) => vegetate_cmd::vegetate(&args),
+        Command::Vegetate(args) if args.sun == vegetate_cmd::SunOn::Gpu => {
+            vegetate_cmd::check(&args)?;
+            with_gpu(&options, |ctx| vegetate_cmd::vegetate(&args, Some(ctx)))
+        }
+        Command::Vegetate(args) => vegetate_cmd::vegetate(&args, None),
     }
 }
 

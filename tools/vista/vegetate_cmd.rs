@@ -9,8 +9,8 @@ use std::time::Instant;
 use anyhow::{Context as _, Result};
 use clap::Args;
 use vista::world::vegetation::{
-    generate, write_outputs, Generated, MaskMap, Masks, Occurrence, Request, StampVegetation, VegetationParams,
-    MATERIAL_NAMES, TILE_CELLS,
+    generate, write_outputs, Generated, MaskMap, Masks, Occurrence, Request, StampVegetation, SunMarch,
+    VegetationParams, MATERIAL_NAMES, TILE_CELLS,
 };
 use vista::world::Hole;
 
@@ -40,9 +40,20 @@ pub struct VegetateArgs {
     /// tiles' time to the whole world.
     #[arg(long, value_name = "MINX,MINY,MAXX,MAXY", value_parser = crate::bake::parse_region, allow_hyphen_values = true)]
     pub region: Option<[f64; 4]>,
+    /// Where the sun's march runs: `cpu` (f64, every core) or `gpu` (f32,
+    /// the Vulkan device: --device picks it). A tile marched by one is not
+    /// reused by a run with the other.
+    #[arg(long, value_enum, default_value_t = SunOn::Cpu)]
+    pub sun: SunOn,
     /// Side of a generator cell in metres (replaces the scene's cell_m).
     #[arg(long, value_name = "METRES", value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
     pub cell: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SunOn {
+    Cpu,
+    Gpu,
 }
 
 fn scene(args: &VegetateArgs) -> Result<Option<Scene>> {
@@ -125,7 +136,9 @@ pub fn check(args: &VegetateArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn vegetate(args: &VegetateArgs) -> Result<()> {
+/// Runs the generator; with `ctx` the sun is marched on its device.
+pub fn vegetate(args: &VegetateArgs, ctx: Option<&vista::gpu::Context>) -> Result<()> {
+    let marcher = ctx.map(vista::effects::vegetation::vegetation_sun::VegetationSun::new).transpose()?;
     let params = params(args)?;
     let shard = shard(args)?;
     let world = args.world.load()?;
@@ -141,6 +154,7 @@ pub fn vegetate(args: &VegetateArgs) -> Result<()> {
         stamps: &stamps,
         shard,
         region: args.region,
+        sun: marcher.as_ref().map(|m| m as &(dyn SunMarch + Sync)),
     };
     let size = vista::world::vegetation::check(&request).map_err(|e| InputError(e.to_string()))?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -168,6 +182,9 @@ pub fn vegetate(args: &VegetateArgs) -> Result<()> {
         "tiles{which}: {} computed, {} reused (inputs unchanged) in {:.1} s",
         report.computed, report.reused, report.tiles_s
     );
+    if let (Some(m), true) = (&marcher, report.computed > 0) {
+        println!("  sun: marched on the GPU ({}) in {:.1} s of them", m.name(), report.sun_s);
+    }
     if args.region.is_some() && report.computed > 0 {
         let whole = report.tiles_s * report.tiles as f64 / report.computed as f64;
         println!("  at this rate the world's {} tiles take about {whole:.0} s (extrapolated)", report.tiles);

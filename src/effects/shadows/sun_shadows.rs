@@ -7,7 +7,6 @@
 //! read by `lighting_resolve`). The effect's parameters and the job list's
 //! entries live here with the pass; `effects::shadows` schedules it.
 
-use crate::effects::frame_effect::Canopy;
 use crate::error::Result;
 use crate::gpu::{
     vk, Buffer, BufferDesc, ComputePipelineDesc, Context, Image, ImageDesc, MemoryLocation, Pipeline, Recorder,
@@ -107,6 +106,18 @@ pub fn march_sun(sun_dir: DVec3) -> [f32; 3] {
     }
     let u = h / len;
     [u.x as f32, u.y as f32, (sun_dir.z / len) as f32]
+}
+
+/// Heights above the ground that cast the sun's shadow over the terrain
+/// (effect `vegetation`'s trees and bushes), over a grid of the world.
+#[derive(Clone, Copy)]
+pub struct Canopy<'a> {
+    /// f16 pairs (the first in the low bits), row-major from the south-west.
+    pub heights: &'a Buffer,
+    /// xy: cell (0, 0)'s south-west corner (world m), z: cells per metre,
+    /// w: the tallest height (m).
+    pub map: [f32; 4],
+    pub size: [u32; 2],
 }
 
 /// The nearest distance a march reads a canopy of `cell_m` cells at (a

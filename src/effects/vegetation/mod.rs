@@ -29,6 +29,7 @@ pub mod kind;
 pub mod meshes;
 pub mod vegetation_cull;
 pub mod vegetation_draw;
+pub mod vegetation_sun;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

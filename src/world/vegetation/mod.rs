@@ -39,7 +39,7 @@ pub use params::{
 pub use resource::{flow, Flow, Window};
 pub use spawn::Instance;
 pub use stamped::StampVegetation;
-pub use sun::{lit, lit_share, trajectory};
+pub use sun::{lit, lit_share, trajectory, SunMarch};
 pub use tiles::{Tile, TILE_CELLS};
 
 use super::error::{Result, WorldError};
@@ -67,6 +67,8 @@ pub struct Request<'a> {
     /// overlapping it (of the shard's), as `vista bake --region` bakes a
     /// region's nodes; the outputs wait for the rest.
     pub region: Option<[f64; 4]>,
+    /// Marches the sun there (the GPU) instead of on this CPU.
+    pub sun: Option<&'a (dyn SunMarch + Sync)>,
 }
 
 /// What a run did.
@@ -81,6 +83,8 @@ pub struct RunReport {
     pub missing: usize,
     pub field_s: f64,
     pub tiles_s: f64,
+    /// Of `tiles_s`, the sun marched elsewhere (`Request::sun`).
+    pub sun_s: f64,
     /// The whole grid, when every tile was there (outputs written from it).
     pub result: Option<Generated>,
 }
@@ -150,18 +154,28 @@ pub fn generate(req: &Request, dir: &Path) -> Result<RunReport> {
     };
     let mine: Vec<usize> = (0..all.len()).filter(|k| *k as u32 % count == index && in_region(&all[*k])).collect();
     let start = Instant::now();
-    let done: Vec<bool> = mine
+    let pending: Vec<(usize, u64)> = mine
         .par_iter()
-        .map(|&k| {
-            let key = tiles::key(&inputs, &field, all[k]);
-            if tiles::read(dir, all[k], key).is_some() {
-                return Ok(false);
-            }
-            tiles::write(dir, &tiles::compute(&inputs, &field, all[k]), key).map(|_| true)
+        .map(|&k| (k, tiles::key(&inputs, &field, all[k])))
+        .filter(|&(k, key)| tiles::read(dir, all[k], key).is_none())
+        .collect();
+    let windows: Vec<Window> = pending.iter().map(|&(k, _)| all[k]).collect();
+    let sun_start = Instant::now();
+    let marched = match req.sun {
+        Some(m) if !windows.is_empty() => Some(m.march(&field, &windows, &sun_path, p.reach_m)?),
+        _ => None,
+    };
+    let sun_s = if marched.is_some() { sun_start.elapsed().as_secs_f64() } else { 0.0 };
+    pending
+        .par_iter()
+        .enumerate()
+        .map(|(n, &(k, key))| {
+            let sun = marched.as_ref().map(|m| &m[n][..]);
+            tiles::write(dir, &tiles::compute(&inputs, &field, all[k], sun), key)
         })
-        .collect::<Result<_>>()?;
+        .collect::<Result<Vec<_>>>()?;
     let tiles_s = start.elapsed().as_secs_f64();
-    let computed = done.iter().filter(|d| **d).count();
+    let computed = pending.len();
     let found: Vec<Option<Tile>> =
         all.par_iter().map(|w| tiles::read(dir, *w, tiles::key(&inputs, &field, *w))).collect();
     let missing = found.iter().filter(|t| t.is_none()).count();
@@ -174,6 +188,7 @@ pub fn generate(req: &Request, dir: &Path) -> Result<RunReport> {
         missing,
         field_s,
         tiles_s,
+        sun_s,
         result,
     })
 }

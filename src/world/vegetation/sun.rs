@@ -9,6 +9,18 @@
 use glam::DVec3;
 
 use super::field::HeightField;
+use super::resource::Window;
+use crate::world::error::Result;
+
+/// Marches the sun elsewhere than this CPU (the GPU: effect vegetation's
+/// `vegetation_sun`): for each window, its cells' lit share row-major, as
+/// [`lit_share`] gives them to the marcher's rounding.
+pub trait SunMarch {
+    /// Names the marcher (and its device) in the tiles' key: a tile one
+    /// marched is not reused by a run with another.
+    fn name(&self) -> String;
+    fn march(&self, field: &HeightField, windows: &[Window], path: &[DVec3], reach_m: f64) -> Result<Vec<Vec<f32>>>;
+}
 
 /// Unit vectors towards the sun (x east, y north, z up) at `samples`
 /// equal steps of the hour angle between sunrise and sunset, each at its

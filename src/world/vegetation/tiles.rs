@@ -80,6 +80,7 @@ pub fn key(inputs: &Inputs, field: &HeightField, tile: Window) -> u64 {
         .u64(stamps_hash(inputs, tile_bounds(field, tile)))
         .u64(tile.lo[0] as u64)
         .u64(tile.lo[1] as u64)
+        .bytes(inputs.req.sun.map(|m| m.name()).unwrap_or_default().as_bytes())
         .finish()
 }
 
@@ -121,8 +122,9 @@ fn pasted(inputs: &Inputs, field: &HeightField, tile: Window) -> Vec<Instance> {
     out
 }
 
-/// Computes `tile` of `field`.
-pub fn compute(inputs: &Inputs, field: &HeightField, tile: Window) -> Tile {
+/// Computes `tile` of `field`; its cells' sun shares when marched
+/// elsewhere (row-major), else here.
+pub fn compute(inputs: &Inputs, field: &HeightField, tile: Window, marched: Option<&[f32]>) -> Tile {
     let p = inputs.req.params;
     let wide = Window::around(tile, p.iterations as usize, field.size);
     let water = flow(field, wide, p.iterations, p.flow_rule());
@@ -144,7 +146,10 @@ pub fn compute(inputs: &Inputs, field: &HeightField, tile: Window) -> Tile {
                 out.grass.push(0);
                 continue;
             }
-            let sun = lit_share(field, i, j, inputs.sun_path, p.reach_m);
+            let sun = match marched {
+                Some(s) => s[(j - tile.lo[1]) * tile.size[0] + (i - tile.lo[0])],
+                None => lit_share(field, i, j, inputs.sun_path, p.reach_m),
+            };
             let c = Conditions {
                 slope_deg: field.slope_deg(i, j),
                 altitude_m: f64::from(field.z[k]),

@@ -90,6 +90,40 @@ fn processes_shards_and_a_moved_stamp_write_what_one_run_writes() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// `--sun gpu` (under the validation layer) makes every tile again over a
+/// CPU run's folder (the key names the marcher), reports the GPU's time,
+/// and grows what the CPU grows within a few instances (a grazing ray);
+/// a second GPU run reuses every tile.
+#[test]
+fn the_sun_on_the_gpu_keys_its_tiles_and_grows_what_the_cpu_grows() {
+    let dir = temp_dir("gpu-sun");
+    let first = scene(&dir, 150.0);
+    let (cpu, gpu) = (dir.join("cpu"), dir.join("gpu"));
+    assert!(run(vegetate(&first, &cpu, &[])).0);
+    let gpu_run = |out: &Path| {
+        let mut c = vista_cmd();
+        c.arg("--validation").arg("vegetate").arg("--scene").arg(&first).arg("--out").arg(out).args(["--sun", "gpu"]);
+        run(c)
+    };
+    std::fs::create_dir_all(&gpu).unwrap();
+    for f in std::fs::read_dir(cpu.join("tiles")).unwrap() {
+        let f = f.unwrap().path();
+        std::fs::create_dir_all(gpu.join("tiles")).unwrap();
+        std::fs::copy(&f, gpu.join("tiles").join(f.file_name().unwrap())).unwrap();
+    }
+    let (ok, out, err) = gpu_run(&gpu);
+    assert!(ok, "{err}");
+    assert_eq!(tiles(&out), (16, 0), "the CPU's tiles are not the GPU's: {out}");
+    assert!(out.contains("sun: marched on the GPU ("), "{out}");
+    let count = |d: &Path| std::fs::metadata(d.join("instances.bin")).unwrap().len() as i64 / 32;
+    let (c, g) = (count(&cpu), count(&gpu));
+    assert!((c - g).abs() <= c / 1000 + 2, "{c} instances on the CPU, {g} with the GPU's sun");
+    let (ok, out, err) = gpu_run(&gpu);
+    assert!(ok, "{err}");
+    assert_eq!(tiles(&out), (0, 16), "a second GPU run reuses them: {out}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 #[test]
 fn mistakes_are_one_line_before_any_work() {
     let dir = temp_dir("mistakes");
