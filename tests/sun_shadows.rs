@@ -25,16 +25,8 @@ const CONE: Surface = Surface::Bump { z0: 100.0, c: [96.0, 96.0], r: 10.0, h: 36
 /// The shadow falls towards azimuth 55 degrees, along no grid axis or diagonal.
 const AZIMUTH: f64 = 235.0;
 
-/// 512 m at 1 m spacing, 3 LODs, heights 100..140 m: the cone's shadow at
-/// 5 degrees (411 m) stays inside.
 fn world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [512.0, 512.0],
-        height_range_m: [100.0, 140.0],
-        spacing_m: 1.0,
-        lod_count: 3,
-        ..WorldDesc::default()
-    }
+    common::terrain::shadow_world()
 }
 
 fn params() -> ShadowParams {
@@ -80,17 +72,8 @@ fn read_layer(ctx: &Context, rig: &Rig, node: NodeId) -> Vec<[f32; 2]> {
     bytemuck::cast_slice::<u8, [f32; 2]>(&bytes).to_vec()
 }
 
-/// The cone sampled as the GPU samples LOD 0: bilinear between 1 m posts.
 fn lod0_height(p: DVec2) -> Option<f64> {
-    let w = world();
-    if p.x < 0.0 || p.y < 0.0 || p.x >= w.extent_m[0] || p.y >= w.extent_m[1] {
-        return None;
-    }
-    let (i, f) = (p.floor(), p - p.floor());
-    let z = |dx: f64, dy: f64| CONE.height(i.x + dx, i.y + dy);
-    let a = z(0.0, 0.0) * (1.0 - f.x) + z(1.0, 0.0) * f.x;
-    let b = z(0.0, 1.0) * (1.0 - f.x) + z(1.0, 1.0) * f.x;
-    Some(a * (1.0 - f.y) + b * f.y)
+    common::terrain::shadow_world_height(CONE, p)
 }
 
 /// Checks every resident LOD-0 node's texture at `elevation`; returns the

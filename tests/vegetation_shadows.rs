@@ -31,15 +31,8 @@ const AZIMUTH: f64 = 235.0;
 /// A scale-1 tree's height (the test's, not the default).
 const TREE_M: f32 = 12.0;
 
-/// 512 m at 1 m spacing, 3 LODs, heights 100..140 m.
 fn world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [512.0, 512.0],
-        height_range_m: [100.0, 140.0],
-        spacing_m: 1.0,
-        lod_count: 3,
-        ..WorldDesc::default()
-    }
+    common::terrain::shadow_world()
 }
 
 fn params() -> ShadowParams {
@@ -98,16 +91,8 @@ fn in_exact_shadow(q: DVec2, trees: &[(DVec2, f64)], away: DVec2, rise: f64) -> 
     })
 }
 
-/// The surface sampled as the GPU samples LOD 0: bilinear between 1 m posts.
 fn lod0_height(p: DVec2) -> Option<f64> {
-    if p.x < 0.0 || p.y < 0.0 || p.x >= 512.0 || p.y >= 512.0 {
-        return None;
-    }
-    let (i, f) = (p.floor(), p - p.floor());
-    let z = |dx: f64, dy: f64| SURFACE.height(i.x + dx, i.y + dy);
-    let a = z(0.0, 0.0) * (1.0 - f.x) + z(1.0, 0.0) * f.x;
-    let b = z(0.0, 1.0) * (1.0 - f.x) + z(1.0, 1.0) * f.x;
-    Some(a * (1.0 - f.y) + b * f.y)
+    common::terrain::shadow_world_height(SURFACE, p)
 }
 
 fn read_layer(ctx: &Context, rig: &Rig, node: NodeId) -> Vec<[f32; 2]> {

@@ -165,6 +165,21 @@ fn spec_for(sh: &ShaderInfo, spec: Specialization) -> Spec {
 }
 
 impl Pipeline {
+    /// One compute pipeline of pass `name` per variant bit set, each from
+    /// `shader` (a bank entry's `variant`), without specialization.
+    pub fn compute_variants(
+        ctx: &Context,
+        name: &str,
+        variants: &[u32],
+        shader: fn(u32) -> &'static ShaderInfo,
+    ) -> Result<Vec<(u32, Pipeline)>> {
+        let build = |v: u32| {
+            let desc = ComputePipelineDesc { name, shader: shader(v), specialization: &[] };
+            Ok((v, Pipeline::compute(ctx, &desc)?))
+        };
+        variants.iter().map(|&v| build(v)).collect()
+    }
+
     pub fn compute(ctx: &Context, desc: &ComputePipelineDesc) -> Result<Pipeline> {
         let s = &ctx.shared;
         assert_eq!(

@@ -190,6 +190,31 @@ pub fn small_world() -> WorldDesc {
     }
 }
 
+/// The sun shadow tests' world: 512 m at 1 m spacing, 3 LODs, heights
+/// 100..140 m (a 40 m shadow at 5 degrees stays inside).
+pub fn shadow_world() -> WorldDesc {
+    WorldDesc {
+        extent_m: [512.0, 512.0],
+        height_range_m: [100.0, 140.0],
+        spacing_m: 1.0,
+        lod_count: 3,
+        ..WorldDesc::default()
+    }
+}
+
+/// `surface` sampled as the GPU samples LOD 0 of [`shadow_world`]:
+/// bilinear between 1 m posts; None off the world.
+pub fn shadow_world_height(surface: Surface, p: glam::DVec2) -> Option<f64> {
+    if p.x < 0.0 || p.y < 0.0 || p.x >= 512.0 || p.y >= 512.0 {
+        return None;
+    }
+    let (i, f) = (p.floor(), p - p.floor());
+    let z = |dx: f64, dy: f64| surface.height(i.x + dx, i.y + dy);
+    let a = z(0.0, 0.0) * (1.0 - f.x) + z(1.0, 0.0) * f.x;
+    let b = z(0.0, 1.0) * (1.0 - f.x) + z(1.0, 1.0) * f.x;
+    Some(a * (1.0 - f.y) + b * f.y)
+}
+
 pub struct Rig {
     pub renderer: TerrainRenderer,
     pub off: Offscreen,

@@ -10,7 +10,7 @@
 
 use crate::effects::virtual_texture::decal_gpu::DecalResources;
 use crate::error::Result;
-use crate::gpu::{vk, Binding, Buffer, ComputePipelineDesc, Context, Image, Pipeline, Recorder, Resource, Sampler};
+use crate::gpu::{vk, Binding, Buffer, Context, Image, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::terrain_query::VistaTerrain;
 use crate::shaders::{grass_place as sh, structs};
@@ -94,13 +94,7 @@ impl GrassPlace {
     pub fn new(ctx: &Context, hiz: bool, decals: bool, occurrence: bool) -> Result<Self> {
         let base = if decals { sh::VARIANT_DECALS } else { 0 } | if occurrence { sh::VARIANT_OCCURRENCE } else { 0 };
         let variants = if hiz { vec![base, base | sh::VARIANT_HIZ] } else { vec![base] };
-        let pipelines = variants
-            .into_iter()
-            .map(|v| {
-                let desc = ComputePipelineDesc { name: Self::NAME, shader: sh::variant(v), specialization: &[] };
-                Ok((v, Pipeline::compute(ctx, &desc)?))
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let pipelines = Pipeline::compute_variants(ctx, Self::NAME, &variants, sh::variant)?;
         Ok(GrassPlace { pipelines, nearest: nearest_sampler(ctx, "grass_place_nearest")? })
     }
 

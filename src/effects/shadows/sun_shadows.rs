@@ -9,8 +9,7 @@
 
 use crate::error::Result;
 use crate::gpu::{
-    vk, Buffer, BufferDesc, ComputePipelineDesc, Context, Image, ImageDesc, MemoryLocation, Pipeline, Recorder,
-    Resource, Sampler,
+    vk, Buffer, BufferDesc, Context, Image, ImageDesc, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
 };
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::sector_data::SectorData;
@@ -186,13 +185,7 @@ impl SunShadows {
             },
         )?;
         let variants = if canopy { vec![0, sh::VARIANT_CANOPY] } else { vec![0] };
-        let pipelines = variants
-            .into_iter()
-            .map(|v| {
-                let desc = ComputePipelineDesc { name: Self::NAME, shader: sh::variant(v), specialization: &[] };
-                Ok((v, Pipeline::compute(ctx, &desc)?))
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let pipelines = Pipeline::compute_variants(ctx, Self::NAME, &variants, sh::variant)?;
         Ok(SunShadows { pipelines, nearest: nearest_sampler(ctx, "sun_shadows_nearest")?, atlas, jobs, params })
     }
 

@@ -6,7 +6,7 @@
 //! LOD. The header holds the six draws' arguments and the frame's counters.
 
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, ComputePipelineDesc, Context, Image, Pipeline, Recorder, Resource, Sampler};
+use crate::gpu::{vk, Buffer, Context, Image, Pipeline, Recorder, Resource, Sampler};
 use crate::passes::cull_patches::nearest_sampler;
 use crate::shaders::{structs, vegetation_cull as sh};
 
@@ -50,13 +50,7 @@ impl VegetationCull {
 
     pub fn new(ctx: &Context, hiz: bool) -> Result<Self> {
         let variants = if hiz { vec![0, sh::VARIANT_HIZ] } else { vec![0] };
-        let pipelines = variants
-            .into_iter()
-            .map(|v| {
-                let desc = ComputePipelineDesc { name: Self::NAME, shader: sh::variant(v), specialization: &[] };
-                Ok((v, Pipeline::compute(ctx, &desc)?))
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let pipelines = Pipeline::compute_variants(ctx, Self::NAME, &variants, sh::variant)?;
         Ok(VegetationCull { pipelines, nearest: nearest_sampler(ctx, "vegetation_cull_nearest")? })
     }
 
