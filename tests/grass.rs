@@ -366,7 +366,7 @@ fn no_grass_grows_under_an_opaque_decal() {
 #[test]
 fn grass_grows_only_where_the_occurrence_map_lets_it() {
     gpu_test(|ctx| {
-        let dir = std::env::temp_dir().join(format!("vista-grass-occurrence-{}", std::process::id()));
+        let dir = common::occurrence::unique_dir("vista-grass-occurrence");
         let mut fx = effects(true);
         fx.grass.occurrence =
             Some(common::occurrence::checkerboard(&dir, world().extent_m, 10.0, [0.5, 0.0, 0.0, 1.0, 0.0]));

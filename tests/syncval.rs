@@ -54,7 +54,7 @@ fn effects() -> Effects {
     // Scaled to the test world (as each effect's own tests do).
     fx.grass = GrassParams { radius_m: 20.0, fade_m: 4.0, ..GrassParams::default() };
     // The vegetation's occurrence map too (grass_place's OCCURRENCE variant).
-    let dir = std::env::temp_dir().join(format!("vista-syncval-occurrence-{}", std::process::id()));
+    let dir = common::occurrence::unique_dir("vista-syncval-occurrence");
     fx.grass.occurrence = Some(common::occurrence::checkerboard(&dir, world().extent_m, 4.0, [1.0; 5]));
     // Trees and bushes along the walk, near and far (every LOD's draw).
     let at = |x: f64, y: f64| [x as f32, y as f32, GROUND.height(x, y) as f32];

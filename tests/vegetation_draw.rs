@@ -21,7 +21,7 @@ const GROUND: Surface = Surface::Bump { z0: 300.0, c: [500.0, 420.0], r: 80.0, h
 /// far: every LOD), some behind it and beyond the draw distance, and a
 /// row of bushes.
 fn effects(on: bool) -> Effects {
-    let dir = std::env::temp_dir().join(format!("vista-vegetation-draw-{}", std::process::id()));
+    let dir = common::occurrence::unique_dir("vista-vegetation-draw");
     let at = |x: f64, y: f64| [x as f32, y as f32, GROUND.height(x, y) as f32];
     let trees: Vec<[f32; 3]> =
         (0..80).map(|k| at(500.0 + 9.0 * (k % 3) as f64, 126.0 + 12.0 * k as f64)).chain([at(500.0, 60.0)]).collect();

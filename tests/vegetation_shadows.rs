@@ -104,7 +104,7 @@ fn read_layer(ctx: &Context, rig: &Rig, node: NodeId) -> Vec<[f32; 2]> {
 #[test]
 fn trees_cast_into_the_terrain_shadows_as_their_twin_and_their_cones_say() {
     gpu_test(|ctx| {
-        let dir = std::env::temp_dir().join(format!("vista-vegetation-shadows-{}", std::process::id()));
+        let dir = common::occurrence::unique_dir("vista-vegetation-shadows");
         let options = options(&dir);
         let set = options.effects.vegetation.set.clone().unwrap();
         let grid = CanopyGrid::raster(&set, &options.effects.vegetation.types_gpu(&set), 1.0).unwrap();

@@ -29,6 +29,14 @@ pub fn checkerboard(dir: &Path, extent_m: [f64; 2], cell_m: f64, density: [f64; 
     GrassOccurrence::load(dir).unwrap()
 }
 
+/// A fresh folder under the temp dir for one call: tests of one binary run
+/// at once, and two writing one folder read each other's half-written files.
+pub fn unique_dir(prefix: &str) -> std::path::PathBuf {
+    static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    std::env::temp_dir().join(format!("{prefix}-{}-{n}", std::process::id()))
+}
+
 /// Writes into `dir` a vegetation folder of trees (type 0, "spruce") and
 /// bushes (type 1, "juniper") at `trees` and `bushes` (x, y, ground z),
 /// turned and scaled by their index, and loads it as effect vegetation's
