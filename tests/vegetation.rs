@@ -216,6 +216,17 @@ fn grid_world(bump: bool) -> (WorldDesc, GridSource) {
     (world, source)
 }
 
+/// A whole run's request on the grid world: no holes, stamps, shard or region.
+fn plain<'a>(
+    world: &'a WorldDesc,
+    source: &'a GridSource,
+    rules: &'a MaterialRules,
+    params: &'a VegetationParams,
+    masks: &'a Masks,
+) -> Request<'a> {
+    Request { world, source, holes: &[], rules, params, masks, stamps: &[], shard: None, region: None, sun: None }
+}
+
 fn run(dir: &Path, bump: bool, shard: Option<(u32, u32)>) -> vista::world::vegetation::RunReport {
     run_part(dir, bump, shard, None)
 }
@@ -230,18 +241,7 @@ fn run_part(
     let params = VegetationParams { cell_m: 4.0, reach_m: 150.0, occurrence_cell_m: 8.0, ..Default::default() };
     let rules = MaterialRules::default();
     let masks = Masks::default();
-    let req = Request {
-        world: &world,
-        source: &source,
-        holes: &[],
-        rules: &rules,
-        params: &params,
-        masks: &masks,
-        stamps: &[],
-        shard,
-        region,
-        sun: None,
-    };
+    let req = Request { shard, region, ..plain(&world, &source, &rules, &params, &masks) };
     let report = generate(&req, dir).unwrap();
     if let Some(g) = &report.result {
         write_outputs(dir, &params, g).unwrap();
@@ -309,18 +309,7 @@ fn a_region_makes_its_tiles_and_the_rest_completes_the_run() {
     assert_eq!(outputs(&one), outputs(&part), "a region then the rest writes what one run writes");
     let (world, source) = grid_world(false);
     let (params, rules, masks) = (VegetationParams::default(), MaterialRules::default(), Masks::default());
-    let req = |region| Request {
-        world: &world,
-        source: &source,
-        holes: &[],
-        rules: &rules,
-        params: &params,
-        masks: &masks,
-        stamps: &[],
-        shard: None,
-        region: Some(region),
-        sun: None,
-    };
+    let req = |region| Request { region: Some(region), ..plain(&world, &source, &rules, &params, &masks) };
     let err = vista::world::vegetation::check(&req([2000.0, 0.0, 2100.0, 10.0])).unwrap_err().to_string();
     assert!(err.contains("does not overlap the world"), "{err}");
     assert!(vista::world::vegetation::check(&req([10.0, 0.0, 5.0, 10.0])).is_err(), "min over max");
