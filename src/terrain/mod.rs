@@ -20,7 +20,7 @@ use crate::error::Result;
 use crate::gpu::Context;
 use crate::terrain::gpu_quadtree::{AtlasSet, GpuQuadtree, ATLAS_COUNT};
 use crate::terrain::selection::TraverseParams;
-use crate::world::vertex_bounds::VertexBoundsTree;
+use crate::world::vertex_bounds_cache::{compute_cached, BoundsOrigin};
 use crate::world::{
     bake_node_with, BakeSettings, BakedNode, ErrorTree, HeightSource, Hole, Limits, LoadFate, LoadFn, Loader,
     MemoryReport, NodeCache, NodeId, RefineWant, Residency, ResidencyConfig, Streamer, WorldDesc, WorldError,
@@ -181,6 +181,8 @@ pub struct Terrain {
     /// Resident roots loaded with pending errors (roots made on demand),
     /// kept to attach their numbers once a child's load has made the tile.
     pending_roots: HashMap<NodeId, BakedNode>,
+    /// Where the per-triangle rule's bounds came from (none: not that rule).
+    bounds_origin: Option<BoundsOrigin>,
 }
 
 impl Terrain {
@@ -234,9 +236,10 @@ impl Terrain {
             custom: options.load.clone(),
             vertex_bounds: options.vertex_bounds,
         };
-        let loader = recipe.loader(source, Arc::clone(&errors))?;
+        let (loader, bounds_origin) = recipe.loader(source, Arc::clone(&errors))?;
         Ok(Terrain {
             world: *world,
+            bounds_origin,
             streamer: Streamer::new(residency, loader),
             recipe,
             errors,
@@ -395,7 +398,8 @@ impl Terrain {
             self.recipe.bake = bake;
         }
         let errors = Arc::new(self.errors.edited(Arc::clone(&source), self.recipe.cache_dir.as_deref())?);
-        let loader = self.recipe.loader(source, Arc::clone(&errors))?;
+        let (loader, bounds_origin) = self.recipe.loader(source, Arc::clone(&errors))?;
+        self.bounds_origin = bounds_origin;
         self.streamer.replace_loader(loader, touches(self.world, region));
         self.errors = errors;
         Ok(self.invalidate(region))
@@ -403,6 +407,12 @@ impl Terrain {
 
     /// Streaming counters; `waiting_upload` is what `quadtree_update` has
     /// not uploaded yet.
+    /// Where the per-triangle rule's bounds came from: read from the
+    /// cache or computed (none: the per-patch rule).
+    pub fn bounds_origin(&self) -> Option<&BoundsOrigin> {
+        self.bounds_origin.as_ref()
+    }
+
     /// The residency budget: nodes that may be resident at once.
     pub fn slots(&self) -> u32 {
         self.slots
@@ -481,10 +491,17 @@ impl LoaderRecipe {
     /// Payloads from the caller's loader, the cache folder or a bake in
     /// memory, each with the world's errors (and with the per-triangle
     /// rule, its vertices' bounds, computed here for the whole world).
-    fn loader(&self, source: Arc<dyn HeightSource>, errors: Arc<ErrorTree>) -> Result<Loader> {
-        let bounds = match self.vertex_bounds {
-            true => Some(Arc::new(VertexBoundsTree::compute(&self.world, source.as_ref(), &self.holes)?)),
-            false => None,
+    /// The bounds are cached beside the error tree's tiles (the world's
+    /// other whole-world numbers); the origin says whether they were read.
+    fn loader(&self, source: Arc<dyn HeightSource>, errors: Arc<ErrorTree>) -> Result<(Loader, Option<BoundsOrigin>)> {
+        let (bounds, origin) = match self.vertex_bounds {
+            true => {
+                let dir = errors.dir().map(|d| d.join("vertex-bounds"));
+                let (tree, origin) = compute_cached(&self.world, source.as_ref(), &self.holes, dir.as_deref())?;
+                log::info!("per-vertex bounds {origin}");
+                (Some(Arc::new(tree)), Some(origin))
+            }
+            false => (None, None),
         };
         let load = self.load_fn(source, errors)?;
         let load: Arc<LoadFn> = match bounds {
@@ -495,7 +512,7 @@ impl LoaderRecipe {
             }),
             None => load,
         };
-        Ok(Loader::new(self.threads, load)?)
+        Ok((Loader::new(self.threads, load)?, origin))
     }
 
     fn load_fn(&self, source: Arc<dyn HeightSource>, errors: Arc<ErrorTree>) -> Result<Arc<LoadFn>> {

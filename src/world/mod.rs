@@ -42,6 +42,7 @@ mod streaming;
 mod texels;
 pub mod vegetation;
 pub mod vertex_bounds;
+pub mod vertex_bounds_cache;
 pub(crate) mod vertex_bounds_exact;
 mod vertex_bounds_fine;
 pub mod vertex_rule;

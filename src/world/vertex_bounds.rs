@@ -24,6 +24,7 @@ use super::holes::Hole;
 use super::layout::{NodeId, WorldDesc, NODE_QUADS, NODE_SAMPLES};
 use super::payload::BakedNode;
 use super::source::HeightSource;
+use super::vertex_bounds_cache::{OwnedParts, Parts};
 use super::vertex_bounds_exact::{diamond_gap, SampleGrid};
 use super::vertex_bounds_fine::{block_numbers, Samples, BLOCK, UNITS};
 use super::vertex_rule::{box_half_width, child_points, up_f16_bits, up_f32, vertex_numbers, VertexNumbers};
@@ -89,22 +90,19 @@ impl VertexBoundsTree {
     /// Computes every vertex's numbers for `world` sampled from `source`
     /// with `holes` cut (a sample is a hole as the bake decides it).
     pub fn compute(world: &WorldDesc, source: &dyn HeightSource, holes: &[Hole]) -> Result<Self, WorldError> {
-        let root = i64::from(NODE_QUADS) << world.root_lod();
-        let [gx, gy] = world.grid(world.root_lod()).map(i64::from);
-        let last = I64Vec2::new(gx * root, gy * root);
-        let points = (last.x as u64 + 1) * (last.y as u64 + 1);
+        let side = Self::lattice_side(world);
+        let points = side[0] as u64 * side[1] as u64;
         if points > MAX_BOUNDS_SAMPLES {
             return Err(WorldError::InvalidConfig(format!(
                 "per-vertex bounds of {} x {} samples need {:.1} GB at once; at most {MAX_BOUNDS_SAMPLES} samples",
-                last.x + 1,
-                last.y + 1,
+                side[0],
+                side[1],
                 points as f64 * 16e-9
             )));
         }
-        let side = [last.x as usize + 1, last.y as usize + 1];
+        let last = I64Vec2::new(side[0] as i64 - 1, side[1] as i64 - 1);
         let (z, hole) = stored_rows(world, source, holes, side);
         let n = side[0] * side[1];
-        let nodes = (gx * root / i64::from(NODE_QUADS)) as usize * (gy * root / i64::from(NODE_QUADS)) as usize;
         let mut tree = VertexBoundsTree {
             world: *world,
             side,
@@ -113,11 +111,42 @@ impl VertexBoundsTree {
             error: vec![0.0; n],
             reach: vec![0.0; n],
             empty: vec![false; n],
-            lod0_refine: vec![NodeRefine::default(); nodes],
+            lod0_refine: vec![NodeRefine::default(); Self::lod0_nodes(world)],
         };
         let base = tree.fine_levels(source, holes, last);
         tree.sample_levels(last, &base);
         Ok(tree)
+    }
+
+    /// Samples a row and rows of `world`'s lattice: the roots' grid.
+    pub fn lattice_side(world: &WorldDesc) -> [usize; 2] {
+        let root = u64::from(NODE_QUADS) << world.root_lod();
+        world.grid(world.root_lod()).map(|g| (u64::from(g) * root) as usize + 1)
+    }
+
+    /// LOD-0 nodes over the lattice.
+    pub fn lod0_nodes(world: &WorldDesc) -> usize {
+        Self::lattice_side(world).iter().map(|s| (s - 1) / NODE_QUADS as usize).product()
+    }
+
+    /// The arrays a cache file keeps.
+    pub(super) fn parts(&self) -> Parts<'_> {
+        Parts {
+            side: self.side,
+            z: &self.z,
+            hole: &self.hole,
+            error: &self.error,
+            reach: &self.reach,
+            empty: &self.empty,
+            lod0_refine: &self.lod0_refine,
+        }
+    }
+
+    /// The tree a cache file held (its lattice checked against `world`).
+    pub(super) fn from_parts(world: WorldDesc, p: OwnedParts) -> Self {
+        assert_eq!(p.side, Self::lattice_side(&world), "a cache file's lattice is checked before");
+        let OwnedParts { side, z, hole, error, reach, empty, lod0_refine } = p;
+        VertexBoundsTree { world, side, z, hole, error, reach, empty, lod0_refine }
     }
 
     fn index(&self, s: I64Vec2) -> usize {

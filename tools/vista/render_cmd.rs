@@ -501,12 +501,13 @@ fn renderer_and_target(
     let d = &world.desc;
     let start = std::time::Instant::now();
     if options.lod.rule == LodRule::Triangle {
-        println!("per-triangle rule: computing the per-vertex bounds of the whole world first (every LOD-0 sample)");
+        println!("per-triangle rule: the per-vertex bounds of the whole world first (from the cache, else every LOD-0 sample)");
     }
     let renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
         .map_err(crate::world_args::plan_error_is_input)?;
     if options.lod.rule == LodRule::Triangle {
-        println!("per-triangle rule: renderer made in {:.1} s (the bounds included)", start.elapsed().as_secs_f64());
+        let bounds = renderer.terrain.bounds_origin().map_or("none".into(), |o| o.to_string());
+        println!("per-triangle rule: renderer made in {:.1} s; the bounds {bounds}", start.elapsed().as_secs_f64());
     }
     let mode = match args.queues {
         QueuesArg::Auto => QueueMode::auto(ctx.info()),
