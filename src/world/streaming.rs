@@ -295,8 +295,10 @@ impl Residency {
     fn candidates(&self, camera_pos_m: [f64; 3], want: Option<&RefineWant>) -> Vec<Candidate> {
         let cam = [camera_pos_m[0], camera_pos_m[1]];
         let mut out = Vec::new();
-        let mut stack = self.roots.clone();
-        while let Some(n) = stack.pop() {
+        // Each node with its parent family's score: a family never sorts
+        // before its parent's (below).
+        let mut stack: Vec<(NodeId, f64)> = self.roots.iter().map(|r| (*r, f64::INFINITY)).collect();
+        while let Some((n, cap)) = stack.pop() {
             if self.is_failed(n) {
                 continue;
             }
@@ -338,16 +340,21 @@ impl Residency {
                     Some(_) => error_px * if held { self.config.hysteresis } else { 1.0 },
                     // Nearest first.
                     None => -dist_to_box(cam, self.world.bounds_m(n)),
-                };
+                }
+                .min(cap);
                 let near = dist_to_box(cam, self.world.bounds_m(n));
                 out.push(Candidate { in_view, score, near, parent: n, family: family.clone() });
-                stack.extend(family);
+                stack.extend(family.into_iter().map(|c| (c, score)));
             }
         }
-        // A child's projected error never exceeds its parent's (monotone
-        // errors, nested boxes), and the view holds a child only if it holds
-        // the parent: a family sorts after its parent's. Coarser first on
-        // ties, then nearer (pending roots' errors tie at infinity).
+        // A family's score is capped at its parent family's (the errors are
+        // monotone with the error tree's numbers, but not always with the
+        // per-triangle rule's refinement bounds: a node over the world's
+        // edge has an infinite one, its parent may not), and the view holds
+        // a child only if it holds the parent: a family sorts after its
+        // parent's (a family ahead of its parent's would never be taken).
+        // Coarser first on ties, then nearer (pending roots' errors tie at
+        // infinity).
         out.sort_by(|a, b| {
             b.in_view
                 .cmp(&a.in_view)
