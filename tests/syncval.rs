@@ -161,6 +161,9 @@ fn run(
         // Every other frame as a render waiting to settle records it: the
         // whole-frame feedback and the shadows' largest budget.
         rig.renderer.set_catch_up(i % 2 == 1);
+        // Every fourth frame draws the last frame's LOD (the LOD camera of
+        // `vista bench accuracy --fly`): the LOD phase reads its own view.
+        rig.renderer.lod_camera = (i % 4 == 3).then(|| walk(i - 1).camera);
         rig.off.frame(ctx, &mut rig.renderer, &walk(i)).unwrap();
         note(&rig);
     }

@@ -47,6 +47,9 @@ pub(crate) struct FramePasses<'a> {
     pub resolve: Option<&'a LightingResolve>,
     pub debug: Option<(&'a DebugViewPass, DebugView)>,
     pub view_buffer: &'a Buffer,
+    /// The LOD phase's view when it is not the frame's
+    /// ([`crate::render::TerrainRenderer::lod_camera`]).
+    pub lod_view_buffer: &'a Buffer,
     pub stages: CullStages,
     pub holes_off: bool,
     pub force_flavours: u32,
@@ -117,6 +120,11 @@ impl FramePasses<'_> {
         }
     }
 
+    /// The LOD phase. `lod`: the constants of the camera the LOD is chosen
+    /// for when it is not the frame's (`view`'s): the phase then reads
+    /// them from its own buffer, and the frame's buffer gets `view`
+    /// first, on the same queue, for whatever else reads it.
+    #[allow(clippy::too_many_arguments)]
     pub fn record_lod(
         &self,
         frame: &mut Frame<'_, '_>,
@@ -124,25 +132,37 @@ impl FramePasses<'_> {
         tree: &GpuQuadtree,
         params: &TraverseParams,
         view: &TerrainViewGpu,
+        lod: Option<&TerrainViewGpu>,
         visibility: Option<&Buffer>,
     ) {
         let (traverse, lod_map, select) = (self.traverse, self.lod_map, self.select);
+        let (view_buffer, view) = match lod {
+            Some(lod) => {
+                frame.untimed(FramePass::SELECT_PATCHES.queue(), |r| {
+                    r.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
+                    r.update_buffer(self.view_buffer, 0, bytemuck::bytes_of(view));
+                    r.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::ALL_COMMANDS);
+                });
+                (self.lod_view_buffer, lod)
+            }
+            None => (self.view_buffer, view),
+        };
         pass(frame, log, FramePass::TRAVERSE, |r| traverse.record(r, tree, params, TraverseMode::SingleDispatch));
         pass(frame, log, FramePass::LOD_MAP, |r| lod_map.record(r, traverse));
         pass(frame, log, FramePass::SECTOR_DATA, |r| self.sector_data.record(r, tree));
         if let Some(t) = self.triangles {
             let view = bytemuck::bytes_of(view);
             pass(frame, log, FramePass::EMIT_TRIANGLES, |r| {
-                t.emit.record(r, traverse, tree, lod_map, self.view_buffer, view, self.stages.frustum)
+                t.emit.record(r, traverse, tree, lod_map, view_buffer, view, self.stages.frustum)
             });
             return;
         }
         pass(frame, log, FramePass::SELECT_PATCHES, |r| {
-            select.record(r, traverse, tree, lod_map, self.view_buffer, bytemuck::bytes_of(view))
+            select.record(r, traverse, tree, lod_map, view_buffer, bytemuck::bytes_of(view))
         });
         let cull = self.cull_frame();
         pass(frame, log, FramePass::CULL_PATCHES, |r| {
-            self.cull.record(r, traverse, tree, lod_map, select, self.view_buffer, cull, visibility)
+            self.cull.record(r, traverse, tree, lod_map, select, view_buffer, cull, visibility)
         });
     }
 

@@ -41,7 +41,7 @@ use crate::passes::traverse::Traverse;
 use crate::render::telemetry::{FrameCounters, Telemetry};
 use crate::scene::graph::PassGraph;
 use crate::scene::shading::{ShadeRules, Shading};
-use crate::scene::view::View;
+use crate::scene::view::{Camera, View};
 use crate::shaders::structs;
 use crate::targets::gbuffer::GBuffer;
 use crate::targets::Output;
@@ -190,6 +190,14 @@ pub struct TerrainRenderer {
     /// One per frame parity (`frame::per_frame`), like what the LOD phase
     /// writes: the compute submission writes it.
     view_buffer: PerFrame<Buffer>,
+    /// The LOD phase's view when [`Self::lod_camera`] is set.
+    lod_view_buffer: PerFrame<Buffer>,
+    /// Chooses the LOD (streaming, traversal, selection, culling) of the
+    /// next frames for this camera instead of the view's, which still draws
+    /// and shades: the surface one camera's LOD gives, seen from another
+    /// (`vista bench accuracy --fly` measures popping with it). `None`: the
+    /// view's.
+    pub lod_camera: Option<Camera>,
     telemetry: Telemetry,
     /// Taken while a frame records (the frame borrows it; see `record.rs`).
     exec: Option<FrameExecutor>,

@@ -111,12 +111,12 @@ fn tile_shading(
     Ok((shade, tiles, variants.len()))
 }
 
-fn view_buffers(ctx: &Context) -> Result<PerFrame<Buffer>> {
+fn view_buffers(ctx: &Context, name: &str) -> Result<PerFrame<Buffer>> {
     PerFrame::new(|i| {
         Buffer::new(
             ctx,
             &BufferDesc {
-                name: &copy_name("terrain_view", i),
+                name: &copy_name(name, i),
                 size: structs::TERRAIN_VIEW as u64,
                 usage: vk::BufferUsageFlags::STORAGE_BUFFER
                     | vk::BufferUsageFlags::TRANSFER_DST
@@ -302,7 +302,9 @@ impl TerrainRenderer {
             shade,
             shading: options.shading,
             lod: options.lod,
-            view_buffer: view_buffers(ctx)?,
+            view_buffer: view_buffers(ctx, "terrain_view")?,
+            lod_view_buffer: view_buffers(ctx, "lod_view")?,
+            lod_camera: None,
             telemetry: Telemetry::new(ctx, options.terrain.frames_in_flight, counters)?,
             exec: Some(FrameExecutor::new(ctx, options.terrain.frames_in_flight, max_passes)?),
             graph,

@@ -57,6 +57,7 @@ impl TerrainRenderer {
             .map(|i| (&i.name, i.memory_bytes()))
             .chain(self.cull.all_lists().iter().map(|l| (&l.list.name, l.list.memory_bytes())))
             .chain(self.view_buffer.all().iter().map(|b| (&b.name, b.memory_bytes())))
+            .chain(self.lod_view_buffer.all().iter().map(|b| (&b.name, b.memory_bytes())))
             .chain([(&self.geometry.indices().name, self.geometry.indices().memory_bytes())])
             .chain(self.sector_data.buffers().iter().map(|b| (&b.name, b.memory_bytes())))
             .chain(self.select.all_levels().iter().map(|b| (&b.name, b.memory_bytes())));

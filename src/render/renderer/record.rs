@@ -28,6 +28,8 @@ struct Begun<'c> {
     terrain_changed: bool,
     /// What the traversal selects for (the streaming's too).
     params: TraverseParams,
+    /// The view the LOD is chosen for, when not the frame's.
+    lod_view: Option<View>,
 }
 
 impl TerrainRenderer {
@@ -48,7 +50,8 @@ impl TerrainRenderer {
         self.prepare_frame(ctx, view, targets)?;
         let ctx_frame = ctx.frame_recording();
         self.telemetry.harvest(ctx);
-        let params = view.traverse_params();
+        let lod_view = self.lod_camera.map(|camera| View { camera, ..view.clone() });
+        let params = lod_view.as_ref().unwrap_or(view).traverse_params();
         self.terrain.stream(&params)?;
         let switched_off = self.switched_off();
         // The frame borrows the executor while the rest of the renderer
@@ -61,7 +64,7 @@ impl TerrainRenderer {
         let query_ms = begin.elapsed().as_secs_f64() * 1e3;
         let mut log = self.graph.begin_frame(frame.number());
         log.switched_off = switched_off;
-        let begun = Begun { ctx, ctx_frame, terrain_changed, params };
+        let begun = Begun { ctx, ctx_frame, terrain_changed, params, lod_view };
         let recorded = self.record_phases(&mut frame, &mut log, &begun, view, targets);
         let number = frame.number();
         drop(frame);
@@ -111,7 +114,8 @@ impl TerrainRenderer {
             e.plan(&plan, &shared)?;
         }
         self.prepare_resolve(ctx, log)?;
-        self.record_passes(frame, log, &begun.params, targets, &gpu, &shade);
+        let lod_gpu = begun.lod_view.as_ref().map(|v| self.view_constants(v, &shade));
+        self.record_passes(frame, log, &begun.params, targets, (&gpu, lod_gpu.as_ref()), &shade);
         self.record_counters(frame, number, ctx_frame);
         Ok(())
     }
@@ -146,7 +150,7 @@ impl TerrainRenderer {
         log: &mut FrameLog,
         params: &TraverseParams,
         targets: &RenderTargets,
-        gpu: &TerrainViewGpu,
+        (gpu, lod_gpu): (&TerrainViewGpu, Option<&TerrainViewGpu>),
         shade: &ShadeRules,
     ) {
         let passes = FramePasses {
@@ -164,6 +168,7 @@ impl TerrainRenderer {
             resolve: self.resolve.as_ref(),
             debug: self.debug_pass.as_ref().zip(self.debug_view),
             view_buffer: self.view_buffer.current(),
+            lod_view_buffer: self.lod_view_buffer.current(),
             stages: self.stages,
             holes_off: !self.switches.holes,
             force_flavours: if self.shading == Shading::Tiled { 0 } else { shade.allowed },
@@ -173,7 +178,7 @@ impl TerrainRenderer {
         let gbuffer = self.gbuffer.as_ref().expect("made by prepare_frame");
         let t = FrameTargets { tree, world: &self.terrain.world, targets, gbuffer };
         let visibility = self.occlusion.as_ref().map(|o| o.cull.visibility());
-        passes.record_lod(frame, log, tree, params, gpu, visibility);
+        passes.record_lod(frame, log, tree, params, gpu, lod_gpu, visibility);
         passes.record_draws(frame, log, &t);
         passes.record_shading(frame, log, &t);
     }
@@ -207,6 +212,7 @@ impl TerrainRenderer {
             o.cull.select_frame(frame);
         }
         self.view_buffer.select(frame);
+        self.lod_view_buffer.select(frame);
     }
 }
 
