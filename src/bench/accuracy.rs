@@ -16,6 +16,7 @@
 
 use super::accuracy_error::{accuracy_error, AccuracyError};
 use super::accuracy_floor::{grid_floors, Floors};
+use super::accuracy_popping::{FlySweep, PoppingPoint};
 use super::accuracy_shadows::{shadow_rows, ShadowPoint, ShadowSweep};
 use super::accuracy_vt::{vt_rows, VtPoint, VtSweep};
 use crate::effects::{Effect, Effects};
@@ -75,6 +76,9 @@ pub struct AccuracyBenchConfig {
     /// triangle"); the shading, shadow and virtual-texture rows draw per
     /// patch.
     pub rules: Vec<LodRule>,
+    /// Popping along a flight from each view, in place of every other row
+    /// ([`super::accuracy_popping`]).
+    pub fly: Option<FlySweep>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -147,6 +151,8 @@ pub struct AccuracyBench {
     pub vt_points: Vec<VtPoint>,
     /// Why virtual-texture rows are absent, when they are.
     pub vt_skipped: Option<String>,
+    /// Popping rows (`fly`).
+    pub popping: Vec<PoppingPoint>,
     #[serde(skip)]
     pub images: Vec<ViewImages>,
 }
@@ -223,6 +229,9 @@ pub fn bench_accuracy(
     views: &[(String, Camera)],
     cfg: &AccuracyBenchConfig,
 ) -> Result<AccuracyBench> {
+    if let Some(fly) = cfg.fly {
+        return popping_bench(ctx, world, source, effects, views, cfg, fly);
+    }
     let start = Instant::now();
     // The reference sees the scene's atmosphere when the frames do.
     let fog = (effects.is_on(Effect::Atmosphere) && effects.is_on(Effect::Lighting)).then_some(effects.atmosphere);
@@ -254,6 +263,7 @@ pub fn bench_accuracy(
         shadows_skipped,
         vt_points: Vec::new(),
         vt_skipped,
+        popping: Vec::new(),
         images: Vec::new(),
     };
     for (name, camera) in views {
@@ -283,6 +293,54 @@ pub fn bench_accuracy(
             let with = |fx: Effects| RendererOptions { effects: fx, ..options(Shading::Tiled) };
             let v = view(cfg.shading_target_px);
             out.vt_points.extend(vt_rows(&mut run, &with, &fx, sweep, &v, name)?);
+        }
+    }
+    Ok(out)
+}
+
+/// `fly`'s rows only: each view's flight for each rule and target, drawn
+/// as the geometry rows are (clay, no splat or cliffs, no shadows).
+fn popping_bench(
+    ctx: &Context,
+    world: &WorldDesc,
+    source: Arc<dyn HeightSource>,
+    effects: &Effects,
+    views: &[(String, Camera)],
+    cfg: &AccuracyBenchConfig,
+    fly: FlySweep,
+) -> Result<AccuracyBench> {
+    let mut fx = effects.clone().with(Effect::Shadows, false).with(Effect::Splat, false).with(Effect::Cliffs, false);
+    fx.lighting.clay_albedo = Some(CLAY_ALBEDO);
+    let skipped = || Some("not asked for (--fly measures popping only)".to_string());
+    let mut out = AccuracyBench {
+        references: Vec::new(),
+        bounds_seconds: 0.0,
+        points: Vec::new(),
+        shading_skipped: skipped(),
+        shadow_points: Vec::new(),
+        shadows_skipped: skipped(),
+        vt_points: Vec::new(),
+        vt_skipped: skipped(),
+        popping: Vec::new(),
+        images: Vec::new(),
+    };
+    let off = Offscreen::new(ctx, cfg.size, 2, SKY)?;
+    let mut run = Run { ctx, world, source: &source, cfg, off, floors: HashMap::new() };
+    for &rule in &cfg.rules {
+        let lod = LodOptions { rule, ..LodOptions::default() };
+        let options = RendererOptions { terrain: terrain_options(cfg), effects: fx.clone(), lod, ..Default::default() };
+        let mut r = TerrainRenderer::new(ctx, world, source.clone(), Vec::new(), &options)?;
+        for (name, camera) in views {
+            for &target in &cfg.targets_px {
+                let view = |camera| View {
+                    camera,
+                    fov_y_deg: cfg.fov_y_deg,
+                    size: cfg.size,
+                    target_error_px: target,
+                    near_m: DEFAULT_NEAR_M,
+                };
+                out.popping.push(run.popping_row(&mut r, &view, camera, name, &fly)?);
+            }
         }
     }
     Ok(out)

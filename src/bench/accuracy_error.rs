@@ -64,31 +64,36 @@ pub fn geometric_error_px(capture: &Capture, view: &View, source: &dyn HeightSou
 /// p (from the depth buffer): the screen length (pixels) of the vertical
 /// segment between the two heights `ends(p)` gives at p's x and y.
 pub fn projected_px(capture: &Capture, view: &View, world: &WorldDesc, ends: impl Fn(DVec3) -> (f64, f64)) -> Vec<f64> {
-    let [w, h] = capture.size;
-    let origin = DVec3::from(view.camera.position_m);
-    let forward = view.camera.basis()[0];
     let mut out = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let d = capture.depth[(y * w + x) as usize];
-            if d <= 0.0 {
-                continue;
-            }
-            let px = [f64::from(x) + 0.5, f64::from(y) + 0.5];
-            let ray = view.ray(px);
-            let p = origin + ray * (f64::from(linear_depth(d, view.near_m)) / ray.dot(forward));
-            let inside = (0.0..=world.extent_m[0]).contains(&p.x) && (0.0..=world.extent_m[1]).contains(&p.y);
-            if !inside {
-                continue;
-            }
-            let (za, zb) = ends(p);
-            let (a, b) = (DVec3::new(p.x, p.y, za), DVec3::new(p.x, p.y, zb));
-            if let (Some((a, _)), Some((b, _))) = (view.project(a.to_array()), view.project(b.to_array())) {
-                out.push((a[0] - b[0]).hypot(a[1] - b[1]));
-            }
-        }
+    for i in 0..capture.depth.len() {
+        let Some(p) = world_point(capture, view, world, i) else { continue };
+        let (za, zb) = ends(p);
+        out.extend(vertical_px(view, p, za, zb));
     }
     out
+}
+
+/// Pixel `i`'s (row-major) world position from the depth buffer, when it
+/// shows terrain inside the world.
+pub fn world_point(capture: &Capture, view: &View, world: &WorldDesc, i: usize) -> Option<DVec3> {
+    let d = capture.depth[i];
+    if d <= 0.0 {
+        return None;
+    }
+    let w = capture.size[0] as usize;
+    let px = [(i % w) as f64 + 0.5, (i / w) as f64 + 0.5];
+    let ray = view.ray(px);
+    let origin = DVec3::from(view.camera.position_m);
+    let p = origin + ray * (f64::from(linear_depth(d, view.near_m)) / ray.dot(view.camera.basis()[0]));
+    let inside = (0.0..=world.extent_m[0]).contains(&p.x) && (0.0..=world.extent_m[1]).contains(&p.y);
+    inside.then_some(p)
+}
+
+/// The screen length (pixels) of the vertical segment from height `za` to
+/// `zb` at `p`'s x and y (none when an end is behind the camera).
+pub fn vertical_px(view: &View, p: DVec3, za: f64, zb: f64) -> Option<f64> {
+    let (a, b) = (view.project([p.x, p.y, za])?.0, view.project([p.x, p.y, zb])?.0);
+    Some((a[0] - b[0]).hypot(a[1] - b[1]))
 }
 
 pub fn accuracy_error(

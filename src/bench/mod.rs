@@ -6,6 +6,7 @@
 pub mod accuracy;
 pub mod accuracy_error;
 pub mod accuracy_floor;
+pub mod accuracy_popping;
 pub mod accuracy_rule;
 pub mod accuracy_shadows;
 pub mod accuracy_vt;

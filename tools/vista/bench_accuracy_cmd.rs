@@ -29,6 +29,7 @@ pub struct AccuracyArgs<'a> {
     pub slots: Option<u32>,
     pub shadows: ShadowSweep,
     pub rules: Vec<vista::render::LodRule>,
+    pub fly: Option<vista::bench::accuracy_popping::FlySweep>,
 }
 
 pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()> {
@@ -70,6 +71,7 @@ pub fn accuracy(ctx: &Context, args: &ViewBench, a: &AccuracyArgs) -> Result<()>
         shadows: Some(a.shadows.clone()),
         virtual_texture: Some(vista::bench::accuracy_vt::VtSweep::default()),
         rules: a.rules.clone(),
+        fly: a.fly,
     };
     let start = Instant::now();
     let result = bench_accuracy(ctx, &d, world.source.clone(), &world.effects, &all, &cfg);
@@ -182,6 +184,11 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
         cfg.frames,
         cfg.warmup_frames
     );
+    if !b.popping.is_empty() {
+        print_popping(b);
+        println!("({seconds:.0} s in all)");
+        return;
+    }
     println!("reference ray-caster (CPU, {} threads): bounds {:.1} s", rayon::current_num_threads(), b.bounds_seconds);
     for r in &b.references {
         println!(
@@ -201,6 +208,32 @@ fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenc
     print_shadows(b);
     print_virtual_texture(b);
     println!("({seconds:.0} s in all)");
+}
+
+/// `--fly`: a row per view, rule and target.
+fn print_popping(b: &AccuracyBench) {
+    println!(
+        "popping: per step the new camera draws the previous one's LOD, then its own (settled); jump = a pixel's vertical move between them, projected (px); culling off"
+    );
+    println!(
+        "{:<14} {:<9} {:>6} {:>7} {:>6} {:>9} {:>8} {:>8} {:>9} {:>8}",
+        "view", "rule", "target", "step m", "steps", "pixels", "p99", "max", "> target", "settled"
+    );
+    for p in &b.popping {
+        println!(
+            "{:<14} {:<9} {:>6} {:>7} {:>6} {:>9} {:>8.3} {:>8.3} {:>8.4}% {:>8}",
+            p.view,
+            p.rule,
+            p.target_error_px,
+            p.step_m,
+            p.step_max_px.len(),
+            p.pixels,
+            p.p99_px,
+            p.max_px,
+            100.0 * p.over_target,
+            format!("{}/{}", p.settled_steps, p.step_max_px.len())
+        );
+    }
 }
 
 /// One row per (view, setting) point, under its header.

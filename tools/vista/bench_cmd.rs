@@ -77,6 +77,13 @@ pub struct BenchArgs {
     /// world's per-vertex bounds are computed first) [default: patch].
     #[arg(long, value_delimiter = ',', value_parser = crate::render_cmd::parse_lod_rule)]
     lod_rules: Option<Vec<vista::render::LodRule>>,
+    /// `bench accuracy`: popping only, measured along a flight of STEPS
+    /// steps of STEP metres from each view (level, along its heading): at
+    /// each step the new camera draws the previous camera's LOD, then its
+    /// own once settled; the largest screen jump of a pixel, p99 and max,
+    /// per rule and target (STEP > 0, STEPS 1..=1000).
+    #[arg(long, value_name = "STEP,STEPS", value_parser = parse_fly)]
+    fly: Option<vista::bench::accuracy_popping::FlySweep>,
     /// `bench cpu`: the far world's side, metres [default: 292000].
     #[arg(long, value_parser = crate::numbers::number_f64, allow_negative_numbers = true)]
     far_extent: Option<f64>,
@@ -137,7 +144,7 @@ pub fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
 
 /// Which kinds read each kind-specific option (by its argument id); every
 /// other option is read by all kinds.
-const USED_BY: [(&str, &[BenchKind]); 12] = {
+const USED_BY: [(&str, &[BenchKind]); 13] = {
     use BenchKind::*;
     [
         ("sets", &[Traverse]),
@@ -150,6 +157,7 @@ const USED_BY: [(&str, &[BenchKind]); 12] = {
         ("images", &[Accuracy]),
         ("slots", &[Accuracy, Cpu]),
         ("lod_rules", &[Accuracy]),
+        ("fly", &[Accuracy]),
         ("far_extent", &[Cpu]),
         ("far_spacing", &[Cpu]),
     ]
@@ -169,6 +177,7 @@ fn unused_options(args: &BenchArgs) -> Vec<String> {
         args.images.is_some(),
         args.slots.is_some(),
         args.lod_rules.is_some(),
+        args.fly.is_some(),
         args.far_extent.is_some(),
         args.far_spacing.is_some(),
     ];
@@ -215,6 +224,18 @@ pub fn check(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--fly STEP,STEPS`: metres a step (> 0) and whole steps (1..=1000).
+fn parse_fly(s: &str) -> std::result::Result<vista::bench::accuracy_popping::FlySweep, String> {
+    let bad = || format!("{s:?}: give STEP,STEPS (metres a step > 0, whole steps 1..=1000), e.g. 2,20");
+    let (step, steps) = s.split_once(',').ok_or_else(bad)?;
+    let step_m: f64 = step.trim().parse().map_err(|_| bad())?;
+    let steps: u32 = steps.trim().parse().map_err(|_| bad())?;
+    if !(step_m.is_finite() && step_m > 0.0 && (1..=1000).contains(&steps)) {
+        return Err(bad());
+    }
+    Ok(vista::bench::accuracy_popping::FlySweep { step_m, steps })
+}
+
 pub fn input_error(message: impl Into<String>) -> Result<()> {
     Err(anyhow::Error::new(crate::InputError(message.into())))
 }
@@ -242,6 +263,7 @@ pub fn bench(ctx: &Context, args: BenchArgs) -> Result<()> {
                 slots: args.slots,
                 shadows,
                 rules: args.lod_rules.clone().unwrap_or(vec![vista::render::LodRule::Patch]),
+                fly: args.fly,
             };
             crate::bench_accuracy_cmd::accuracy(ctx, &bench, &a)
         }

@@ -107,6 +107,31 @@ fn bench_accuracy_sweeps_targets_and_culling_against_the_reference() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `--fly`: popping rows only, per rule and target, under the validation
+/// layer (the LOD camera's frames too).
+#[test]
+fn bench_accuracy_fly_measures_popping_per_rule_and_target() {
+    let json = std::env::temp_dir().join(format!("vista-bench-fly-{}.json", std::process::id()));
+    let args = ["--size", "96x64", "--targets", "1,4", "--views", "high-flight", "--lod-rules", "patch,triangle"];
+    let extra = ["--fly", "20,2", "--json", json.to_str().unwrap()];
+    let (ok, out, err) = vista(&[&["--validation", "bench", "accuracy"][..], &SMALL_WORLD, &args, &extra].concat());
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["bench"]["points"].as_array().unwrap().is_empty(), "--fly measures popping only: {out}");
+    let rows = v["bench"]["popping"].as_array().unwrap();
+    assert_eq!(rows.len(), 4, "two rules x two targets: {out}");
+    for r in rows {
+        assert_eq!(r["step_max_px"].as_array().unwrap().len(), 2, "{r}");
+        let (p99, max) = (r["p99_px"].as_f64().unwrap(), r["max_px"].as_f64().unwrap());
+        assert!(r["pixels"].as_u64().unwrap() > 96 * 64 && p99 >= 0.0 && p99 <= max && max.is_finite(), "{r}");
+    }
+    assert!(out.contains("popping: per step") && out.contains("triangle"), "{out}");
+    // A malformed flight fails before any work, naming the option.
+    let (ok, _, err) = vista(&["bench", "accuracy", "--fly", "2"]);
+    assert!(!ok && err.contains("--fly") && err.contains("STEP,STEPS"), "{err}");
+    let _ = std::fs::remove_file(&json);
+}
+
 #[test]
 fn bench_shade_measures_every_shading_mode_per_view() {
     let json = std::env::temp_dir().join(format!("vista-bench-shade-{}.json", std::process::id()));
