@@ -12,7 +12,7 @@
 mod common;
 
 use common::finest::Finest;
-use common::terrain::{view, Rig, Surface, MAGENTA_RGBA};
+use common::terrain::{adversarial_views, adversarial_world, view, Rig, Surface, ADVERSARIAL, MAGENTA_RGBA};
 use common::{gpu_test, Rng};
 use std::sync::Arc;
 use vista::bench::accuracy_error::{projected_px, quantile};
@@ -51,19 +51,26 @@ fn posts_png() -> (std::path::PathBuf, Vec<u16>, [u32; 2]) {
     (path, px, [w, h])
 }
 
-#[test]
-fn the_drawn_surface_passes_through_every_post() {
+/// The posts' world at its own pixel size (vertices on the posts), its
+/// source and its posts; the PNG's folder is removed by the caller.
+fn posts_world() -> (std::path::PathBuf, WorldDesc, Arc<dyn HeightSource>, Posts) {
     let (path, px, [w, h]) = posts_png();
     let extent = [f64::from(w) * 2.0, f64::from(h) * 2.0];
     let range = [-100.0f32, 300.0];
     let world =
         WorldDesc { extent_m: extent, height_range_m: range, spacing_m: 2.0, lod_count: 3, ..WorldDesc::default() }
             .with_posts([2.0, 2.0]);
-    assert!(world.on_posts(), "a map at its own pixel size puts the vertices on its posts");
     let source: Arc<dyn HeightSource> = Arc::new(Png16Source::open(&path, extent, range).unwrap());
     // The map's own values, as a 16-bit step in metres: what a post is.
     let step = f64::from(range[1] - range[0]) / 65535.0;
-    let posts = Posts { px, w, h, range, step };
+    (path, world, source, Posts { px, w, h, range, step })
+}
+
+#[test]
+fn the_drawn_surface_passes_through_every_post() {
+    let (path, world, source, posts) = posts_world();
+    assert!(world.on_posts(), "a map at its own pixel size puts the vertices on its posts");
+    let step = posts.step;
     gpu_test(|ctx| {
         let (worst, checked) = distance_to_posts(ctx, world, &source, &posts, LodRule::Patch);
         assert!(checked > 40_000, "{checked} pixels checked");
@@ -86,15 +93,8 @@ fn the_drawn_surface_passes_through_every_post() {
 /// sorted their families first, never taken, and LOD 1 was drawn.)
 #[test]
 fn the_per_triangle_rule_passes_through_every_post_too() {
-    let (path, px, [w, h]) = posts_png();
-    let extent = [f64::from(w) * 2.0, f64::from(h) * 2.0];
-    let range = [-100.0f32, 300.0];
-    let world =
-        WorldDesc { extent_m: extent, height_range_m: range, spacing_m: 2.0, lod_count: 3, ..WorldDesc::default() }
-            .with_posts([2.0, 2.0]);
-    let source: Arc<dyn HeightSource> = Arc::new(Png16Source::open(&path, extent, range).unwrap());
-    let step = f64::from(range[1] - range[0]) / 65535.0;
-    let posts = Posts { px, w, h, range, step };
+    let (path, world, source, posts) = posts_world();
+    let step = posts.step;
     gpu_test(|ctx| {
         let (worst, checked) = distance_to_posts(ctx, world, &source, &posts, LodRule::Triangle);
         println!(
@@ -223,25 +223,11 @@ impl Tri {
     }
 }
 
-fn adversarial_world() -> WorldDesc {
-    WorldDesc {
-        extent_m: [2048.0, 2048.0],
-        height_range_m: [0.0, 600.0],
-        spacing_m: 1.0,
-        lod_count: 5,
-        ..WorldDesc::default()
-    }
-}
-
 #[test]
 fn the_promise_holds_on_vertical_steps_and_a_sawtooth_ridge() {
-    let surfaces = [
-        Surface::Terraces { z0: 100.0, step: 6.0, width: 40.0 },
-        Surface::Sawtooth { z0: 150.0, amp: 30.0, period: 120.0 },
-    ];
     let world = adversarial_world();
     gpu_test(|ctx| {
-        for surface in surfaces {
+        for surface in ADVERSARIAL {
             let options = RendererOptions {
                 terrain: TerrainOptions { slots: 1000, ..TerrainOptions::default() },
                 ..Default::default()
@@ -249,14 +235,9 @@ fn the_promise_holds_on_vertical_steps_and_a_sawtooth_ridge() {
             let size = [256, 192];
             let mut rig = Rig::with_options(ctx, world, surface, vec![], size, false, options);
             let finest = Finest::new(&world, &surface);
-            let ground = |x: f64, y: f64| surface.height(x, y);
-            let views = [
-                ([1024.0, 300.0, ground(1024.0, 300.0) + 60.0], 0.0, -12.0),
-                ([700.0, 700.0, ground(700.0, 700.0) + 250.0], 45.0, -35.0),
-                ([1500.0, 1200.0, ground(1500.0, 1200.0) + 15.0], 200.0, -8.0),
-            ];
+            let views = adversarial_views(surface);
             for target in [1.0f32, 4.0] {
-                for (position, yaw, pitch) in views {
+                for &(position, yaw, pitch) in &views {
                     let v = view(position, yaw, pitch, size, target);
                     let c = rig.shot(ctx, &v, CullStages::ALL);
                     let stats = collect(ctx, &rig.renderer, &v).unwrap();

@@ -10,7 +10,7 @@ mod common;
 
 use common::finest::Finest;
 use common::gpu_test;
-use common::terrain::{view, Rig, Surface, MAGENTA_RGBA};
+use common::terrain::{adversarial_views, adversarial_world, view, Rig, ADVERSARIAL, MAGENTA_RGBA};
 use std::sync::Arc;
 use vista::bench::accuracy_error::projected_px;
 use vista::passes::cull_patches::CullStages;
@@ -128,19 +128,9 @@ fn holes_are_cut_where_the_scene_cuts_them_and_nowhere_else() {
 /// the samples yet: close to these steps it is far over the target.)
 #[test]
 fn on_terraces_and_a_sawtooth_every_pixel_is_within_the_target_where_the_bound_is() {
-    let world = WorldDesc {
-        extent_m: [2048.0, 2048.0],
-        height_range_m: [0.0, 600.0],
-        spacing_m: 1.0,
-        lod_count: 5,
-        ..WorldDesc::default()
-    };
-    let surfaces = [
-        Surface::Terraces { z0: 100.0, step: 6.0, width: 40.0 },
-        Surface::Sawtooth { z0: 150.0, amp: 30.0, period: 120.0 },
-    ];
+    let world = adversarial_world();
     gpu_test(|ctx| {
-        for surface in surfaces {
+        for surface in ADVERSARIAL {
             let options = RendererOptions {
                 lod: LodOptions { rule: LodRule::Triangle, ..LodOptions::default() },
                 terrain: TerrainOptions { slots: 1000, ..TerrainOptions::default() },
@@ -149,17 +139,14 @@ fn on_terraces_and_a_sawtooth_every_pixel_is_within_the_target_where_the_bound_i
             let size = [256, 192];
             let mut rig = Rig::with_options(ctx, world, surface, vec![], size, false, options);
             let finest = Finest::new(&world, &surface);
+            // The promise test's views, and two from 600 and 400 m up.
+            let mut views = adversarial_views(surface);
             let ground = |x: f64, y: f64| surface.height(x, y);
-            let views = [
-                ([1024.0, 300.0, ground(1024.0, 300.0) + 60.0], 0.0, -12.0),
-                ([700.0, 700.0, ground(700.0, 700.0) + 250.0], 45.0, -35.0),
-                ([1500.0, 1200.0, ground(1500.0, 1200.0) + 15.0], 200.0, -8.0),
-                ([1024.0, 1024.0, ground(1024.0, 1024.0) + 600.0], 30.0, -40.0),
-                ([400.0, 1600.0, ground(400.0, 1600.0) + 400.0], 120.0, -25.0),
-            ];
+            views.push(([1024.0, 1024.0, ground(1024.0, 1024.0) + 600.0], 30.0, -40.0));
+            views.push(([400.0, 1600.0, ground(400.0, 1600.0) + 400.0], 120.0, -25.0));
             let mut held = 0;
             for target in [1.0f32, 4.0] {
-                for (position, yaw, pitch) in views {
+                for &(position, yaw, pitch) in &views {
                     let v = view(position, yaw, pitch, size, target);
                     let c = rig.shot(ctx, &v, CullStages::ALL);
                     let bound = vista::render::stats::collect(ctx, &rig.renderer, &v).unwrap().bound_px;

@@ -175,6 +175,33 @@ pub fn view(position: [f64; 3], yaw: f64, pitch: f64, size: [u32; 2], target_err
     }
 }
 
+/// The adversarial surfaces' world: 2 km at 1 m spacing over 0..600 m, 5 LODs.
+pub fn adversarial_world() -> WorldDesc {
+    WorldDesc {
+        extent_m: [2048.0, 2048.0],
+        height_range_m: [0.0, 600.0],
+        spacing_m: 1.0,
+        lod_count: 5,
+        ..WorldDesc::default()
+    }
+}
+
+/// Vertical terrace steps and a sawtooth ridge.
+pub const ADVERSARIAL: [Surface; 2] = [
+    Surface::Terraces { z0: 100.0, step: 6.0, width: 40.0 },
+    Surface::Sawtooth { z0: 150.0, amp: 30.0, period: 120.0 },
+];
+
+/// Views (position, yaw, pitch) over `surface`: 60, 250 and 15 m above it.
+pub fn adversarial_views(surface: Surface) -> Vec<([f64; 3], f64, f64)> {
+    let at = |x: f64, y: f64, up: f64| [x, y, surface.height(x, y) + up];
+    vec![
+        (at(1024.0, 300.0, 60.0), 0.0, -12.0),
+        (at(700.0, 700.0, 250.0), 45.0, -35.0),
+        (at(1500.0, 1200.0, 15.0), 200.0, -8.0),
+    ]
+}
+
 /// The GPU tests' small world: 1024 m at 1 m spacing over 100..500 m with
 /// 4 LODs. Its one 1024 m root tiles it exactly (so without hole regions
 /// the hole path has nothing to cut), and every node a view wants stays
