@@ -48,8 +48,9 @@ pub struct PoppingPoint {
     /// Over every step's pixels that show terrain in both frames.
     pub p99_px: f64,
     pub max_px: f64,
-    /// Of those pixels, the share whose jump exceeds the target.
+    /// Of those pixels, the share whose jump exceeds the target, and their count.
     pub over_target: f64,
+    pub over_target_pixels: u64,
     pub pixels: u64,
     /// Steps whose second frame settled within the timeout.
     pub settled_steps: u32,
@@ -120,6 +121,7 @@ impl Run<'_> {
             step_m: fly.step_m,
             max_px: step_max.iter().copied().fold(0.0, f64::max),
             over_target: over as f64 / all.len().max(1) as f64,
+            over_target_pixels: over as u64,
             pixels: all.len() as u64,
             p99_px: quantile(&mut all, 0.99),
             step_max_px: step_max,

@@ -175,20 +175,20 @@ fn check_plot_path(p: &Path) -> Result<()> {
 }
 
 fn print_table(b: &AccuracyBench, label: &str, ctx: &Context, cfg: &AccuracyBenchConfig, seconds: f64) {
-    println!(
-        "bench accuracy: {label} on {}, {}x{}, {} slots, clay albedo {CLAY_ALBEDO}; GPU ms = sum of pass medians over {} frames after {} warm-up",
-        ctx.info().name,
-        cfg.size[0],
-        cfg.size[1],
-        cfg.slots,
-        cfg.frames,
-        cfg.warmup_frames
-    );
+    let [w, h] = cfg.size;
+    let device = &ctx.info().name;
     if !b.popping.is_empty() {
+        println!("bench accuracy --fly: {label} on {device}, {w}x{h}, {} slots, clay albedo {CLAY_ALBEDO}", cfg.slots);
         print_popping(b);
         println!("({seconds:.0} s in all)");
         return;
     }
+    println!(
+        "bench accuracy: {label} on {device}, {w}x{h}, {} slots, clay albedo {CLAY_ALBEDO}; GPU ms = sum of pass medians over {} frames after {} warm-up",
+        cfg.slots,
+        cfg.frames,
+        cfg.warmup_frames
+    );
     println!("reference ray-caster (CPU, {} threads): bounds {:.1} s", rayon::current_num_threads(), b.bounds_seconds);
     for r in &b.references {
         println!(
@@ -221,7 +221,7 @@ fn print_popping(b: &AccuracyBench) {
     );
     for p in &b.popping {
         println!(
-            "{:<14} {:<9} {:>6} {:>7} {:>6} {:>9} {:>8.3} {:>8.3} {:>8.4}% {:>8}",
+            "{:<14} {:<9} {:>6} {:>7} {:>6} {:>9} {:>8.3} {:>8.3} {:>9} {:>8}",
             p.view,
             p.rule,
             p.target_error_px,
@@ -230,7 +230,7 @@ fn print_popping(b: &AccuracyBench) {
             p.pixels,
             p.p99_px,
             p.max_px,
-            100.0 * p.over_target,
+            p.over_target_pixels,
             format!("{}/{}", p.settled_steps, p.step_max_px.len())
         );
     }
