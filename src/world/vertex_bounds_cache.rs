@@ -6,7 +6,7 @@
 //!
 //! Layout (little-endian): magic, version, four keys (world, source, holes,
 //! the rule's arithmetic), the lattice's sides and its LOD-0 nodes' count,
-//! their refinement bounds (3 f32 each), then bands of [`BAND_ROWS`] rows,
+//! their refinement bounds (3 f32 each), then bands of 256 rows (`BAND_ROWS`),
 //! each a `u64` length, a crc32 and the zstd of the band's planes: height
 //! codes (u16: the stored heights are R16 decoded), error and reach (f32
 //! bits), flags (hole 1, empty 2). Bands are packed on their own, so they
