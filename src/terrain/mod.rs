@@ -407,8 +407,7 @@ impl Terrain {
 
     /// Streaming counters; `waiting_upload` is what `quadtree_update` has
     /// not uploaded yet.
-    /// Where the per-triangle rule's bounds came from: read from the
-    /// cache or computed (none: the per-patch rule).
+    /// Where the per-triangle rule's bounds came from (none: per patch).
     pub fn bounds_origin(&self) -> Option<&BoundsOrigin> {
         self.bounds_origin.as_ref()
     }

@@ -505,9 +505,8 @@ fn renderer_and_target(
     }
     let renderer = TerrainRenderer::new(ctx, d, world.source.clone(), world.holes.clone(), &options)
         .map_err(crate::world_args::plan_error_is_input)?;
-    if options.lod.rule == LodRule::Triangle {
-        let bounds = renderer.terrain.bounds_origin().map_or("none".into(), |o| o.to_string());
-        println!("per-triangle rule: renderer made in {:.1} s; the bounds {bounds}", start.elapsed().as_secs_f64());
+    if let Some(origin) = renderer.terrain.bounds_origin() {
+        println!("per-triangle rule: renderer made in {:.1} s; the bounds {origin}", start.elapsed().as_secs_f64());
     }
     let mode = match args.queues {
         QueuesArg::Auto => QueueMode::auto(ctx.info()),

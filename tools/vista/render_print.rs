@@ -43,6 +43,16 @@ pub fn bound_words(px: f32) -> String {
     }
 }
 
+/// A bound of the per-triangle rule: unknown where a vertex or cell over a
+/// hole is drawn (a hole under a vertex is an infinite error, which the
+/// GPU counts as 3e38 px; samples past the world's edge are holes too).
+fn triangle_bound_words(px: f32) -> String {
+    match px < 1e37 {
+        true => format!("{px:.2} px"),
+        false => "unknown (drawn over a hole or the world's edge, which the rule does not bound)".to_string(),
+    }
+}
+
 /// The per-triangle rule's lines (instead of the patches' and selection's).
 fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleListHeader) {
     println!(
@@ -55,12 +65,12 @@ fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleL
         t.forced
     );
     println!(
-        "lod:     error bound {} (target {} px): unsplit vertices {:.2} px, grid cells (the node's own \
-         error) {:.2} px; {} vertices the rule splits drawn unsplit (a coarser node across lacks them)",
-        bound_words(s.bound_px),
+        "lod:     error bound {} (target {} px): unsplit vertices {}, grid cells (the node's own error) {}; {} \
+         vertices the rule splits drawn unsplit (a coarser node across lacks them)",
+        triangle_bound_words(s.bound_px),
         s.target_px,
-        f32::from_bits(t.bound_bits),
-        f32::from_bits(t.grid_bound_bits),
+        triangle_bound_words(f32::from_bits(t.bound_bits)),
+        triangle_bound_words(f32::from_bits(t.grid_bound_bits)),
         t.clamped
     );
 }

@@ -166,6 +166,11 @@ impl Occlusion {
     fn new(ctx: &Context, traverse: &Traverse, indices: u32, build: CullBuild, slots: u32) -> Result<Self> {
         Ok(Occlusion { hiz: HizBuild::new(ctx)?, cull: CullOccluded::new(ctx, traverse, indices, build, slots)? })
     }
+
+    /// Phase 2 and its depth pyramid when `build` asks for occlusion.
+    fn when_built(ctx: &Context, traverse: &Traverse, build: CullBuild, slots: u32) -> Result<Option<Self>> {
+        build.occlusion.then(|| Self::new(ctx, traverse, PATCH_INDEX_COUNT, build, slots)).transpose()
+    }
 }
 
 /// The lighting resolve of outputs `lit` and `hdr` (None: the engine lights).
@@ -257,10 +262,7 @@ impl TerrainRenderer {
         let occlusion = on(Effect::Occlusion) && !triangle;
         let build = CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes), occlusion };
         let cull = CullPatches::new(ctx, &traverse, PATCH_INDEX_COUNT, build)?;
-        let occlusion = build
-            .occlusion
-            .then(|| Occlusion::new(ctx, &traverse, PATCH_INDEX_COUNT, build, slot_capacity))
-            .transpose()?;
+        let occlusion = Occlusion::when_built(ctx, &traverse, build, slot_capacity)?;
         let mut graph = graph(&decisions, options);
         let built = build_effects(&mut BuildInputs {
             ctx,
