@@ -2,11 +2,10 @@
 #extension GL_GOOGLE_include_directive : require
 // The per-triangle rule on the GPU (src/world/vertex_bounds.rs; its CPU
 // twin is src/reference/bintree_cut.rs): one workgroup per drawn node
-// (indirect, from traverse), each of its 256 threads walking one subtree of
-// the node's bintree from depth EMIT_THREAD_DEPTH down to the grid's cells
-// (the depths above are decided first, a depth at a time, each triangle
-// the cut reaches by one thread); the triangles left go to one index list
-// (terrain_triangles draws it).
+// (indirect, from traverse), each of its 256 invocations walking one
+// subtree of the node's bintree from depth EMIT_THREAD_DEPTH down to the
+// grid's cells (the depths above are decided first, by one invocation);
+// the triangles left go to one index list (terrain_triangles draws it).
 //
 // A triangle is split at the midpoint m of its hypotenuse when
 // - m is active: its saturated error, projected from its box (its level's
@@ -290,31 +289,48 @@ void flush() {
     }
 }
 
-// Depth-first over t's subtree (at most NODE_SIDE's depth below it).
-void walk(Tri root) {
-    Tri stack[EMIT_THREAD_DEPTH + 2u];
-    int top = 0;
-    stack[0] = root;
-    while (top >= 0) {
-        Tri t = stack[top--];
-        float px;
-        uint what = decide(t, px);
-        if (what == SPLIT) {
-            stack[++top] = half_of(t, 1u);
-            stack[++top] = half_of(t, 0u);
+// Marks of the triangles at EMIT_THREAD_DEPTH the cut reaches (1: reached,
+// the invocation of its index walks it).
+shared uint s_reached[2u << EMIT_THREAD_DEPTH];
+
+// Depth-first over `root`'s subtree, the first half before the second as a
+// stack would; the way down is kept as bits (the halves taken, the last
+// lowest) and each triangle rebuilt from the root: no per-invocation array
+// (on lavapipe every push and pop to one costs a gather or scatter). A
+// triangle `limit` depths below the root is not decided here but marked in
+// s_reached at `mark` (its index above the path's bits); NO_LIMIT: every
+// triangle is decided.
+const uint NO_LIMIT = 0xffffffffu;
+void walk(Tri root, uint limit, uint mark) {
+    uint depth = 0u;
+    uint path = 0u;
+    while (true) {
+        if (depth == limit) {
+            s_reached[mark | path] = 1u;
         } else {
+            Tri t = root;
+            for (uint d = 0u; d < depth; ++d) {
+                t = half_of(t, (path >> (depth - 1u - d)) & 1u);
+            }
+            float px;
+            uint what = decide(t, px);
+            if (what == SPLIT) {
+                depth += 1u;
+                path <<= 1u;
+                continue;
+            }
             finish(t, what, px);
         }
+        while (depth > 0u && (path & 1u) == 1u) {
+            depth -= 1u;
+            path >>= 1u;
+        }
+        if (depth == 0u) {
+            break;
+        }
+        path += 1u;
     }
 }
-
-// Reached, split: its halves are decided next.
-const uint S_SPLIT = 1u;
-// Not reached, or emitted (or culled) whole.
-const uint S_DONE = 0u;
-// The decisions of one depth above the threads' own, and of the one before.
-shared uint s_state[2u << EMIT_THREAD_DEPTH];
-shared uint s_parent[2u << EMIT_THREAD_DEPTH];
 
 // Triangle i (0 .. 2 << depth) of the node's bintree at `depth`: bit
 // `depth` of i picks the square's half, the lower bits the halves below.
@@ -341,32 +357,21 @@ void main() {
     if (t == 0u) {
         slot_nodes.nodes[g_slot] = n;
     }
-    // The depths above the threads' own, one at a time: each triangle the
-    // cut reaches is decided once, by the thread of its index.
-    for (uint d = 0u; d < EMIT_THREAD_DEPTH; ++d) {
-        if (t < (2u << d)) {
-            uint state = S_DONE;
-            if (d == 0u || s_parent[t >> 1u] == S_SPLIT) {
-                Tri tri = triangle_at(d, t);
-                float px;
-                uint what = decide(tri, px);
-                if (what == SPLIT) {
-                    state = S_SPLIT;
-                } else {
-                    finish(tri, what, px);
-                }
-            }
-            s_state[t] = state;
+    // The depths above the threads' own, by one invocation: on lavapipe a
+    // workgroup barrier costs more than these few hundred decisions, so
+    // there is one barrier, not two a depth.
+    if (t == 0u) {
+        for (uint i = 0u; i < (2u << EMIT_THREAD_DEPTH); ++i) {
+            s_reached[i] = 0u;
         }
-        barrier();
-        if (t < (2u << d)) {
-            s_parent[t] = s_state[t];
+        for (uint r = 0u; r < 2u; ++r) {
+            walk(triangle_at(0u, r), EMIT_THREAD_DEPTH, r << EMIT_THREAD_DEPTH);
         }
-        barrier();
     }
-    // Each thread walks the subtree of its own triangle, if the cut reaches it.
-    if (s_parent[t >> 1u] == S_SPLIT) {
-        walk(triangle_at(EMIT_THREAD_DEPTH, t));
+    barrier();
+    // Each invocation walks the subtree of its own triangle, if the cut reaches it.
+    if (s_reached[t] == 1u) {
+        walk(triangle_at(EMIT_THREAD_DEPTH, t), NO_LIMIT, 0u);
     }
     flush();
 }

@@ -3,8 +3,9 @@
 //! 40 random viewpoints (every pixel terrain: a T-junction would show the
 //! background), the same picture with the frustum culling off, with no
 //! vertex clamped once streaming settled, with holes
-//! cut where the scene cuts them and nowhere else, and with fewer triangles
-//! than the per-patch rule draws for the same views.
+//! cut where the scene cuts them and nowhere else, with fewer triangles
+//! than the per-patch rule draws for the same views, and with a finite
+//! bound up to the edge of a world that is not a whole number of nodes.
 
 mod common;
 
@@ -170,5 +171,34 @@ fn on_terraces_and_a_sawtooth_every_pixel_is_within_the_target_where_the_bound_i
             }
             assert!(held >= 3, "{surface:?}: the bound met the target on only {held} of 10 views");
         }
+    });
+}
+
+/// A world that is not a whole number of nodes (1000 x 900 m of 128 m
+/// LOD-0 nodes): its lattice runs past the edge, where the bake makes every
+/// sample a hole. The numbers there continue the edge instead, so looking
+/// at the far corner the frame's bound is finite and the edge does not
+/// pull its nodes down to LOD 0 (with the samples past it read as holes,
+/// every vertex near the edge was infinite: bound 3e38 px, and the cut
+/// split down to the edge's cells in every node along it).
+#[test]
+fn past_the_world_s_edge_nothing_is_split_and_the_bound_stays_finite() {
+    gpu_test(|ctx| {
+        let (mut world, source) = rough();
+        world.extent_m = [1000.0, 900.0];
+        let size = [128, 96];
+        let options = RendererOptions {
+            lod: LodOptions { rule: LodRule::Triangle, ..LodOptions::default() },
+            ..RendererOptions::default()
+        };
+        let mut rig = Rig::with_source(ctx, world, source.clone(), vec![], size, false, options);
+        let z = f64::from(source.sample(600.0, 500.0)) + 120.0;
+        let v = view([600.0, 500.0, z], 45.0, -25.0, size, 1.0);
+        rig.shot(ctx, &v, CullStages::ALL);
+        let stats = vista::render::stats::collect(ctx, &rig.renderer, &v).unwrap();
+        let h = rig.renderer.triangles.as_ref().expect("built").emit.read_header(ctx).unwrap();
+        eprintln!("bound {:.3} px, {} triangles, {} LOD-0 nodes", stats.bound_px, h.drawn(), stats.nodes_per_lod[0]);
+        assert!(stats.bound_px <= 1.0, "bound {} px over the target looking at the edge", stats.bound_px);
+        assert!(h.drawn() > 1000, "{} triangles", h.drawn());
     });
 }

@@ -4,7 +4,8 @@
 //!   the finest surface (measured point by point here), never falls under
 //!   a child's, and never exceeds the walked bintree's own-plus-child sum
 //!   (`world::bintree`, f64, vertex by vertex over the finest lattice);
-//!   holes give an infinite error, all-hole diamonds none;
+//!   holes give an infinite error, all-hole diamonds none, and past the
+//!   extent the lattice continues the edge (finite, not holes);
 //! - the reach covers the finest surface over the vertex's diamond;
 //! - every node holds the same bits for a point it shares with another
 //!   (borders, and a coarser node's points), procedural and image worlds;
@@ -73,12 +74,12 @@ fn holes() -> Vec<Hole> {
 }
 
 /// The finest surface with the bake's holes: a lattice point takes its
-/// nearest sample's (ties up), outside the extent too.
+/// nearest sample's (ties up); past the extent, the edge's nearest sample's
+/// (the numbers continue the edge there: the GPU drops those triangles).
 fn finest_with_holes<'a>(w: &'a WorldDesc, s: &'a FinestSurface, holes: &'a [Hole]) -> impl Fn(I64Vec2) -> f64 + 'a {
     move |v: I64Vec2| {
-        let near = DVec2::from(w.sample_pos((v.x + 2) >> 2, (v.y + 2) >> 2));
-        let out = near.x > w.extent_m[0] || near.y > w.extent_m[1];
-        if out || holes.iter().any(|h| h.contains(near.x, near.y)) {
+        let near = DVec2::from(w.sample_pos((v.x + 2) >> 2, (v.y + 2) >> 2)).min(DVec2::from(w.extent_m));
+        if holes.iter().any(|h| h.contains(near.x, near.y)) {
             return f64::NAN;
         }
         s.at_lattice(v.x, v.y)
@@ -137,7 +138,9 @@ fn errors_bound_each_diamond_s_gap_never_above_the_walked_sum_across_fine_blocks
     let coarse: Vec<f64> = ratios.iter().filter(|(t, _)| *t >= 4).map(|(_, r)| *r).collect();
     let mean = coarse.iter().sum::<f64>() / coarse.len() as f64;
     eprintln!("{finite} finite ({measured} measured), {infinite} infinite, {empty} empty vertices; coarse error / sum {mean:.3}");
-    assert!(finite > 100_000 && infinite > 100 && empty > 10_000, "{finite} {infinite} {empty}");
+    // Past the extent (380 of 512 m) the lattice continues the edge: only
+    // the holes' vertices are infinite or empty.
+    assert!(finite > 250_000 && infinite > 100 && empty > 100, "{finite} {infinite} {empty}");
     // The measured bound is what the rule is for: on rough ground the
     // coarse levels' sums add a term per half-level the gap does not have.
     assert!(mean < 0.8, "coarse levels' errors {mean:.3} of the sum: the measured bound is not used");

@@ -327,8 +327,13 @@ fn stored(world: &WorldDesc, source: &dyn HeightSource, holes: &[Hole], lo: I64V
             let mut raw = vec![0f32; w as usize];
             source.sample_row(&clamped, y.clamp(0.0, ey), &mut raw);
             let z = raw.iter().map(|r| f64::from(world.decode_height(world.encode_height(*r)))).collect();
-            let hole =
-                xs.iter().map(|x| super::bake::is_hole_at(world, source, holes, [*x, y], world.spacing_m)).collect();
+            // Past the world's edge the lattice continues its edge's samples,
+            // holes too: a vertex there neither forces splits towards the
+            // edge nor hides an error (the bake makes those samples holes, so
+            // the GPU drops the triangles that reach them).
+            let yc = y.clamp(0.0, ey);
+            let hole = clamped.iter().map(|x| super::bake::is_hole_at(world, source, holes, [*x, yc], world.spacing_m));
+            let hole = hole.collect();
             (z, hole)
         })
         .collect();

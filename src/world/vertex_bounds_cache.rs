@@ -28,10 +28,22 @@ const MAGIC: [u8; 4] = *b"VVB\0";
 /// Raised whenever the bounds' arithmetic changes: older files are then
 /// recomputed (they are keyed by it).
 const ARITHMETIC: u64 = 1;
+/// Added for worlds whose lattice passes their edge: version 1 read the
+/// samples past it as holes, which version 2 continues from the edge
+/// (`vertex_bounds`); the other worlds' numbers are the same bits.
+const PAST_EDGE: u64 = 1;
 const FORMAT: u32 = 1;
 const BAND_ROWS: usize = 256;
 /// Bytes a sample takes unpacked: code, error, reach, flags.
 const SAMPLE_BYTES: usize = 2 + 4 + 4 + 1;
+
+/// Whether a lattice sample of `world` lies outside its extent.
+fn lattice_passes_edge(world: &WorldDesc) -> bool {
+    let [w, h] = VertexBoundsTree::lattice_side(world);
+    let (first, last) = (world.sample_pos(0, 0), world.sample_pos(w as i64 - 1, h as i64 - 1));
+    let slack = world.spacing_m * 1e-6;
+    (0..2).any(|a| first[a] < -slack || last[a] > world.extent_m[a] + slack)
+}
 
 /// Where a world's bounds came from ([`compute_cached`]).
 #[derive(Clone, Debug)]
@@ -69,7 +81,8 @@ pub fn compute_cached(
     dir: Option<&Path>,
 ) -> Result<(VertexBoundsTree, BoundsOrigin), WorldError> {
     let start = Instant::now();
-    let keys = [world.hash(), source.id_hash(), holes_hash(holes), ARITHMETIC ^ u64::from(REFINE_LEVELS) << 32];
+    let arithmetic = ARITHMETIC + if lattice_passes_edge(world) { PAST_EDGE } else { 0 };
+    let keys = [world.hash(), source.id_hash(), holes_hash(holes), arithmetic ^ u64::from(REFINE_LEVELS) << 32];
     let file = dir.map(|d| d.join(format!("{:016x}{:016x}{:016x}.vvb", keys[0], keys[1], keys[2])));
     let mut note = None;
     if let Some(path) = &file {
