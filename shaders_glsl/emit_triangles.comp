@@ -1,5 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+// variants: OCCLUSION LATE
 // The per-triangle rule on the GPU (src/world/vertex_bounds.rs; its CPU
 // twin is src/reference/bintree_cut.rs): one workgroup per drawn node
 // (indirect, from traverse), each of its 256 invocations walking one
@@ -17,7 +18,22 @@
 // Both nodes of a border decide a vertex they share from the same bits in
 // the same arithmetic, so the list is a conforming cut: no T-junction and
 // no stitching. A subtree whose box is outside the frustum is dropped.
+//
+// Occlusion (two phases, as cull_patches and cull_occluded do for
+// patches; one visibility bit per invocation's subtree and slot): with
+// OCCLUSION this is phase 1, which emits the triangles above the
+// invocations' depth and the subtrees visible when last tested; with LATE
+// too it is phase 2, after hiz_build reduced phase 1's depth: every
+// subtree the cut reaches is tested against the pyramid (its split
+// vertex's box holds every triangle under it), those visible that phase 1
+// did not emit are emitted into phase 2's list, and every bit is rewritten
+// for the next frame. Phase 2 decides the same cut from the same inputs.
 layout(local_size_x = 256) in;
+
+// Phase 2 is a phase of occlusion (the LATE-only variant is its twin).
+#if defined(LATE) && !defined(OCCLUSION)
+#define OCCLUSION
+#endif
 
 #include "node_list.glsl"
 #include "terrain_view.glsl"
@@ -43,16 +59,25 @@ layout(set = 0, binding = 8, std430) buffer Triangles {
     uint indices[];
 } tris;
 layout(set = 0, binding = 9, std430) buffer SlotNodes { uint nodes[]; } slot_nodes;
+#ifdef OCCLUSION
+layout(set = 0, binding = 10, std430) buffer Visibility { uint words[]; } visibility;
+#endif
+#ifdef LATE
+layout(set = 0, binding = 11) uniform texture2D hiz;
+#endif
 
 layout(push_constant, std430) uniform EmitPush {
     uint capacity;  // triangles the list holds
     uint frustum;   // 1: subtrees outside the frustum are dropped (CullStages::frustum)
-    uint pad1;
-    uint pad2;
+    uint depth_w;   // LATE: the depth target's size (the pyramid's level 0 is made from it)
+    uint depth_h;
 } pc;
 
 #include "projected_error.glsl"
 #include "frustum_box.glsl"
+#ifdef LATE
+#include "hiz_test.glsl"
+#endif
 
 const uint LEAF = 0u;
 const uint SPLIT = 1u;
@@ -79,6 +104,9 @@ uint g_clamped = 0u;
 uint g_culled = 0u;
 float g_bound_px = 0.0;
 float g_grid_px = 0.0;
+// Phase 2 decides the triangles above the invocations' depth again, but
+// phase 1 emitted them: nothing is emitted or counted while this is set.
+bool g_quiet = false;
 
 ivec2 sample_of(ivec2 p) {
     return (g_node * g_side + p) << int(g_lod);
@@ -258,6 +286,9 @@ float cell_px(Tri t) {
 
 // Emits t as the rule leaves it (a leaf, culled, or split further).
 void finish(Tri t, uint what, float px) {
+    if (g_quiet) {
+        return;
+    }
     if (what == CULLED) {
         g_culled += 1u;
         return;
@@ -345,6 +376,51 @@ Tri triangle_at(uint depth, uint i) {
     return t;
 }
 
+#ifdef OCCLUSION
+// This workgroup's slot's visibility bits, rewritten by phase 2.
+shared uint s_visible[VISIBILITY_WORDS_PER_SLOT];
+
+// Whether invocation t's subtree was visible when last tested.
+bool was_visible(uint t) {
+    return (visibility.words[g_slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] & (1u << (t & 31u))) != 0u;
+}
+#endif
+
+#ifdef LATE
+// Whether any of the subtree under r may show past the pyramid: the box of
+// its split vertex holds every triangle under it (a hole under it: its
+// box bounds nothing, so it counts as visible).
+bool subtree_visible(Tri r) {
+    vec3 lo, hi;
+    if (vertex_px((r.b + r.c) / 2, lo, hi) >= HUGE_PX) {
+        return true;
+    }
+    uint level;
+    return hiz_box_visible(lo, hi, view.v.view_proj, uvec2(pc.depth_w, pc.depth_h), level);
+}
+#endif
+
+// Walks invocation t's subtree where this phase draws it (all of it
+// without occlusion), and in phase 2 notes whether it is visible.
+void own_subtree(uint t) {
+    Tri root = triangle_at(EMIT_THREAD_DEPTH, t);
+#if defined(LATE)
+    bool now = subtree_visible(root);
+    if (now) {
+        atomicOr(s_visible[t >> 5u], 1u << (t & 31u));
+    }
+    if (now && !was_visible(t)) {
+        walk(root, NO_LIMIT, 0u);
+    }
+#elif defined(OCCLUSION)
+    if (was_visible(t)) {
+        walk(root, NO_LIMIT, 0u);
+    }
+#else
+    walk(root, NO_LIMIT, 0u);
+#endif
+}
+
 void main() {
     uvec2 entry = traverse_out.nodes[gl_WorkGroupID.x];
     uint n = entry.x;
@@ -354,9 +430,19 @@ void main() {
     uint side_u = NODE_SIDE;  // read first: naga cannot parse a converted spec constant
     g_side = int(side_u);
     uint t = gl_LocalInvocationID.x;
+#ifndef LATE
     if (t == 0u) {
         slot_nodes.nodes[g_slot] = n;
     }
+#endif
+#ifdef OCCLUSION
+    if (t < VISIBILITY_WORDS_PER_SLOT) {
+        s_visible[t] = 0u;
+    }
+#endif
+#ifdef LATE
+    g_quiet = true;
+#endif
     // The depths above the threads' own, by one invocation: on lavapipe a
     // workgroup barrier costs more than these few hundred decisions, so
     // there is one barrier, not two a depth.
@@ -368,10 +454,22 @@ void main() {
             walk(triangle_at(0u, r), EMIT_THREAD_DEPTH, r << EMIT_THREAD_DEPTH);
         }
     }
+#ifdef LATE
+    // Phase 1 counted the splits above the invocations' depth.
+    g_quiet = false;
+    g_forced = 0u;
+    g_clamped = 0u;
+#endif
     barrier();
     // Each invocation walks the subtree of its own triangle, if the cut reaches it.
     if (s_reached[t] == 1u) {
-        walk(triangle_at(EMIT_THREAD_DEPTH, t), NO_LIMIT, 0u);
+        own_subtree(t);
     }
+#ifdef LATE
+    barrier();
+    if (t < VISIBILITY_WORDS_PER_SLOT) {
+        visibility.words[g_slot * VISIBILITY_WORDS_PER_SLOT + t] = s_visible[t];
+    }
+#endif
     flush();
 }

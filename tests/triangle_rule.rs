@@ -4,8 +4,9 @@
 //! background), the same picture with the frustum culling off, with no
 //! vertex clamped once streaming settled, with holes
 //! cut where the scene cuts them and nowhere else, with fewer triangles
-//! than the per-patch rule draws for the same views, and with a finite
-//! bound up to the edge of a world that is not a whole number of nodes.
+//! than the per-patch rule draws for the same views, with a finite bound up
+//! to the edge of a world that is not a whole number of nodes, and with
+//! occlusion culling drawing the same picture from fewer triangles.
 
 mod common;
 
@@ -200,5 +201,36 @@ fn past_the_world_s_edge_nothing_is_split_and_the_bound_stays_finite() {
         eprintln!("bound {:.3} px, {} triangles, {} LOD-0 nodes", stats.bound_px, h.drawn(), stats.nodes_per_lod[0]);
         assert!(stats.bound_px <= 1.0, "bound {} px over the target looking at the edge", stats.bound_px);
         assert!(h.drawn() > 1000, "{} triangles", h.drawn());
+    });
+}
+
+/// Occlusion's two phases on the per-triangle cut (`emit_triangles`'
+/// OCCLUSION and LATE variants): from 2 m above rough ground looking level,
+/// where nearer relief hides most of the ground, the picture and depth are
+/// those drawn without occlusion, pixel for pixel, with fewer triangles.
+#[test]
+fn occlusion_draws_the_same_picture_with_fewer_triangles() {
+    gpu_test(|ctx| {
+        let size = [128, 96];
+        let (_, source) = rough();
+        let mut tri = rig(ctx, LodRule::Triangle, vec![], size);
+        let without = CullStages { occlusion: false, ..CullStages::ALL };
+        let mut drawn = [0u64; 2];
+        for (x, y, yaw) in [(300.0, 300.0, 45.0), (700.0, 320.0, 300.0), (500.0, 750.0, 170.0)] {
+            let z = f64::from(source.sample(x, y)) + 2.0;
+            let v = view([x, y, z], yaw, 0.0, size, 1.0);
+            let culled = tri.shot(ctx, &v, CullStages::ALL);
+            let header = |tri: &Rig| tri.renderer.triangles.as_ref().expect("built").emit.read_header(ctx).unwrap();
+            let with = header(&tri).drawn();
+            let plain = tri.again(ctx, &v, without);
+            let all = header(&tri).drawn();
+            eprintln!("from {x},{y}: {with} triangles with occlusion, {all} without");
+            assert!(culled.rgba == plain.rgba && culled.depth == plain.depth, "occlusion changed the picture");
+            drawn[0] += u64::from(with);
+            drawn[1] += u64::from(all);
+        }
+        // Measured: 53 436 of 77 693 (the subtrees tested are 64 quads each,
+        // and rough ground 2 m below the eye hides less than a ridge would).
+        assert!(drawn[0] * 4 < drawn[1] * 3, "occlusion kept {} of {} triangles", drawn[0], drawn[1]);
     });
 }

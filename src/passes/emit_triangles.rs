@@ -3,12 +3,15 @@
 //! vertices' baked numbers (`world::vertex_bounds`), into one index list of
 //! vertex codes that `terrain_triangles` draws (emit_triangles.comp says
 //! how the cut stays conforming across nodes). Writes the frame's view
-//! first, as `select_patches` does on the per-patch path.
+//! first, as `select_patches` does on the per-patch path. With effect
+//! `occlusion` it runs twice a frame ([`EmitPhase`]): phase 1 emits the
+//! subtrees visible when last tested, phase 2 (after `hiz_build`) the
+//! others the depth pyramid leaves visible, into its own list.
 
 use crate::error::Result;
 use crate::frame::per_frame::{copy_name, PerFrame};
 use crate::gpu::{
-    vk, Buffer, BufferDesc, ComputePipelineDesc, Context, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
+    vk, Buffer, BufferDesc, ComputePipelineDesc, Context, Image, MemoryLocation, Pipeline, Recorder, Resource, Sampler,
 };
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::lod_map::LodMap;
@@ -57,6 +60,19 @@ impl TriangleListHeader {
     pub fn drawn(&self) -> u32 {
         self.index_count / 3
     }
+
+    /// Phase 1's and phase 2's counts added, their bounds the larger.
+    fn merged(mut self, late: &TriangleListHeader) -> Self {
+        self.index_count += late.index_count;
+        self.triangles += late.triangles;
+        self.overflow += late.overflow;
+        self.clamped += late.clamped;
+        self.forced += late.forced;
+        self.culled += late.culled;
+        self.bound_bits = self.bound_bits.max(late.bound_bits);
+        self.grid_bound_bits = self.grid_bound_bits.max(late.grid_bound_bits);
+        self
+    }
 }
 
 #[repr(C)]
@@ -65,7 +81,46 @@ pub struct EmitPush {
     pub capacity: u32,
     /// 1: subtrees outside the frustum are dropped.
     pub frustum: u32,
-    pub pad: [u32; 2],
+    /// Phase 2: the depth target's size (the pyramid's level 0 comes from it).
+    pub depth_size: [u32; 2],
+}
+
+/// What one recording of the pass emits.
+#[derive(Clone, Copy)]
+pub enum EmitPhase<'a> {
+    /// Every triangle of the cut (occlusion not built, or off this frame).
+    All,
+    /// Occlusion's phase 1: the triangles above the invocations' depth and
+    /// the subtrees visible when last tested.
+    Early,
+    /// Phase 2: the other subtrees `hiz`'s pyramid (made from a depth
+    /// target of this size) leaves visible, into the second list.
+    Late(&'a Image, [u32; 2]),
+}
+
+/// Occlusion's side of the pass (effect `occlusion`).
+struct EmitOcclusion {
+    early: Pipeline,
+    late: Pipeline,
+    /// Phase 2's list (its header and indices, as `list`), one per parity.
+    list: PerFrame<Buffer>,
+    /// One bit per invocation's subtree and slot, rewritten by phase 2;
+    /// one per parity: a frame's phase 1 reads what its copy got two frames
+    /// before (`cull_occluded` keeps its bits the same way).
+    visibility: PerFrame<Buffer>,
+}
+
+/// What every recording of the pass reads.
+pub struct EmitInputs<'a> {
+    pub traverse: &'a Traverse,
+    pub tree: &'a GpuQuadtree,
+    pub lod_map: &'a LodMap,
+    /// The view the cut is made for, and its bytes (written into it by
+    /// phase 1, or without occlusion).
+    pub view: &'a Buffer,
+    pub view_bytes: &'a [u8],
+    /// Subtrees outside the frustum are dropped.
+    pub frustum: bool,
 }
 
 pub struct EmitTriangles {
@@ -80,36 +135,73 @@ pub struct EmitTriangles {
     /// way from a vertex code's slot to its node), one per frame parity.
     slot_nodes: PerFrame<Buffer>,
     capacity: u32,
+    occlusion: Option<EmitOcclusion>,
+}
+
+fn list_buffers(ctx: &Context, name: &str, capacity: u32) -> Result<PerFrame<Buffer>> {
+    PerFrame::new(|i| {
+        Buffer::new(
+            ctx,
+            &BufferDesc {
+                name: &copy_name(name, i),
+                size: (structs::TRIANGLE_LIST_HEADER + capacity as usize * 12) as u64,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::INDEX_BUFFER
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC,
+                location: MemoryLocation::GpuOnly,
+            },
+        )
+    })
+}
+
+fn pipeline(ctx: &Context, variant: u32) -> Result<Pipeline> {
+    let specialization = [(sh::SPEC_NODE_SIDE, NODE_QUADS)];
+    Pipeline::compute(
+        ctx,
+        &ComputePipelineDesc {
+            name: EmitTriangles::NAME,
+            shader: sh::variant(variant),
+            specialization: &specialization,
+        },
+    )
+}
+
+impl EmitOcclusion {
+    fn new(ctx: &Context, slot_capacity: u32, capacity: u32) -> Result<Self> {
+        let visibility = PerFrame::new(|i| {
+            Buffer::new(
+                ctx,
+                &BufferDesc {
+                    name: &copy_name("triangle_visibility", i),
+                    size: u64::from((FIRST_SLOT + slot_capacity) * k::VISIBILITY_WORDS_PER_SLOT * 4),
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                    location: MemoryLocation::GpuOnly,
+                },
+            )
+        })?;
+        ctx.submit_and_wait(|rec| {
+            visibility.all().iter().for_each(|v| rec.fill_buffer(v, 0));
+            Ok(())
+        })?;
+        Ok(EmitOcclusion {
+            early: pipeline(ctx, sh::VARIANT_OCCLUSION)?,
+            late: pipeline(ctx, sh::VARIANT_OCCLUSION | sh::VARIANT_LATE)?,
+            list: list_buffers(ctx, "emit_triangles_late_list", capacity)?,
+            visibility,
+        })
+    }
 }
 
 impl EmitTriangles {
     pub const NAME: &'static str = sh::PASS;
 
-    pub fn new(ctx: &Context, slot_capacity: u32) -> Result<Self> {
-        let pipeline = Pipeline::compute(
-            ctx,
-            &ComputePipelineDesc {
-                name: Self::NAME,
-                shader: &sh::SHADER,
-                specialization: &[(sh::SPEC_NODE_SIDE, NODE_QUADS)],
-            },
-        )?;
+    /// `occlusion`: with phase 2's list and the visibility bits.
+    pub fn new(ctx: &Context, slot_capacity: u32, occlusion: bool) -> Result<Self> {
+        let pipeline = pipeline(ctx, 0)?;
         let capacity = k::MAX_EMITTED_TRIANGLES;
-        let list = PerFrame::new(|i| {
-            Buffer::new(
-                ctx,
-                &BufferDesc {
-                    name: &copy_name("emit_triangles_list", i),
-                    size: (structs::TRIANGLE_LIST_HEADER + capacity as usize * 12) as u64,
-                    usage: vk::BufferUsageFlags::STORAGE_BUFFER
-                        | vk::BufferUsageFlags::INDEX_BUFFER
-                        | vk::BufferUsageFlags::INDIRECT_BUFFER
-                        | vk::BufferUsageFlags::TRANSFER_DST
-                        | vk::BufferUsageFlags::TRANSFER_SRC,
-                    location: MemoryLocation::GpuOnly,
-                },
-            )
-        })?;
+        let list = list_buffers(ctx, "emit_triangles_list", capacity)?;
         let slot_nodes = PerFrame::new(|i| {
             Buffer::new(
                 ctx,
@@ -127,12 +219,23 @@ impl EmitTriangles {
             list,
             slot_nodes,
             capacity,
+            occlusion: occlusion.then(|| EmitOcclusion::new(ctx, slot_capacity, capacity)).transpose()?,
         })
+    }
+
+    /// Built with occlusion's two phases.
+    pub fn occludes(&self) -> bool {
+        self.occlusion.is_some()
     }
 
     /// The list of the frame being (or last) recorded.
     pub fn list(&self) -> &Buffer {
         self.list.current()
+    }
+
+    /// Phase 2's list of the frame being (or last) recorded.
+    pub fn late_list(&self) -> Option<&Buffer> {
+        self.occlusion.as_ref().map(|o| o.list.current())
     }
 
     pub fn slot_nodes(&self) -> &Buffer {
@@ -143,6 +246,10 @@ impl EmitTriangles {
     pub fn select_frame(&mut self, frame: u64) {
         self.list.select(frame);
         self.slot_nodes.select(frame);
+        if let Some(o) = &mut self.occlusion {
+            o.list.select(frame);
+            o.visibility.select(frame);
+        }
     }
 
     pub fn capacity(&self) -> u32 {
@@ -153,59 +260,83 @@ impl EmitTriangles {
         self.list.all().iter().chain(self.slot_nodes.all())
     }
 
-    /// Writes this frame's view (`view_bytes`, a TerrainView, into `view`)
-    /// and resets the list's header behind one barrier, then emits every
-    /// drawn node's triangles (`frustum`: dropping the subtrees outside
-    /// the frustum); the list is visible to the indirect draw and every
-    /// later command.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &self,
-        rec: &mut Recorder,
-        traverse: &Traverse,
-        tree: &GpuQuadtree,
-        lod_map: &LodMap,
-        view: &Buffer,
-        view_bytes: &[u8],
-        frustum: bool,
-    ) {
-        rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
-        rec.update_buffer(view, 0, view_bytes);
+    /// Occlusion's buffers (phase 2's lists, the visibility bits).
+    pub fn occlusion_memory(&self) -> impl Iterator<Item = &Buffer> {
+        self.occlusion.iter().flat_map(|o| o.list.all().iter().chain(o.visibility.all()))
+    }
+
+    /// Emits every drawn node's triangles of `phase` into its list, after
+    /// resetting that list's header (and, in phase 1 or without occlusion,
+    /// writing this frame's view first; without occlusion this frame, phase
+    /// 2's list is emptied too), behind barriers: the list is visible to
+    /// the indirect draw and every later command.
+    pub fn record(&self, rec: &mut Recorder, inputs: &EmitInputs, phase: EmitPhase) {
+        let occlusion = || self.occlusion.as_ref().expect("built with occlusion");
+        let (pipeline, list) = match phase {
+            EmitPhase::All => (&self.pipeline, self.list()),
+            EmitPhase::Early => (&occlusion().early, self.list()),
+            EmitPhase::Late(..) => (&occlusion().late, occlusion().list.current()),
+        };
         let header = TriangleListHeader {
             instance_count: 1,
             first_index: (structs::TRIANGLE_LIST_HEADER / 4) as u32,
             ..TriangleListHeader::default()
         };
-        rec.update_buffer(self.list(), 0, bytemuck::bytes_of(&header));
+        rec.barrier(vk::PipelineStageFlags2::ALL_COMMANDS, vk::PipelineStageFlags2::ALL_TRANSFER);
+        if !matches!(phase, EmitPhase::Late(..)) {
+            rec.update_buffer(inputs.view, 0, inputs.view_bytes);
+        }
+        rec.update_buffer(list, 0, bytemuck::bytes_of(&header));
+        if let (EmitPhase::All, Some(o)) = (phase, &self.occlusion) {
+            rec.update_buffer(o.list.current(), 0, bytemuck::bytes_of(&header));
+        }
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
-        rec.bind_pipeline(&self.pipeline);
-        rec.push_descriptors(
-            &self.pipeline,
-            &[
-                (sh::TRAVERSE_OUT, Resource::Buffer(traverse.output())),
-                (sh::VIEW, Resource::Buffer(view)),
-                (sh::LOD_MAP, Resource::Image(lod_map.image(), vk::ImageLayout::GENERAL)),
-                (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
-                (sh::VERTEX_BOUNDS, Resource::Image(tree.required_atlas(ATLAS_VERTEX_BOUNDS), ATLAS_LAYOUT)),
-                (sh::NEAREST, Resource::Sampler(self.sampler.raw())),
-                (sh::NODE_DESCS, Resource::Buffer(&tree.node_descs)),
-                (sh::NODE_ERRORS, Resource::Buffer(&tree.node_errors)),
-                (sh::TRIS, Resource::Buffer(self.list())),
-                (sh::SLOT_NODES, Resource::Buffer(self.slot_nodes())),
-            ],
-        );
-        let push = EmitPush { capacity: self.capacity, frustum: u32::from(frustum), pad: [0; 2] };
-        rec.push_constants(&self.pipeline, &push);
-        rec.dispatch_indirect(traverse.output(), 0);
+        rec.bind_pipeline(pipeline);
+        let mut bindings = self.bindings(inputs, list);
+        let mut depth_size = [0; 2];
+        if let Some(o) = self.occlusion.as_ref().filter(|_| !matches!(phase, EmitPhase::All)) {
+            bindings.push((sh::VISIBILITY, Resource::Buffer(o.visibility.current())));
+        }
+        if let EmitPhase::Late(hiz, size) = phase {
+            bindings.push((sh::HIZ, Resource::Image(hiz, vk::ImageLayout::GENERAL)));
+            depth_size = size;
+        }
+        rec.push_descriptors(pipeline, &bindings);
+        let push = EmitPush { capacity: self.capacity, frustum: u32::from(inputs.frustum), depth_size };
+        rec.push_constants(pipeline, &push);
+        rec.dispatch_indirect(inputs.traverse.output(), 0);
         rec.barrier(
             vk::PipelineStageFlags2::COMPUTE_SHADER,
             vk::PipelineStageFlags2::DRAW_INDIRECT | vk::PipelineStageFlags2::ALL_COMMANDS,
         );
     }
 
-    /// The last frame's header (tests, CLI): waits.
+    fn bindings<'b>(&'b self, i: &EmitInputs<'b>, list: &'b Buffer) -> Vec<(crate::gpu::Binding, Resource<'b>)> {
+        let tree = i.tree;
+        vec![
+            (sh::TRAVERSE_OUT, Resource::Buffer(i.traverse.output())),
+            (sh::VIEW, Resource::Buffer(i.view)),
+            (sh::LOD_MAP, Resource::Image(i.lod_map.image(), vk::ImageLayout::GENERAL)),
+            (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
+            (sh::VERTEX_BOUNDS, Resource::Image(tree.required_atlas(ATLAS_VERTEX_BOUNDS), ATLAS_LAYOUT)),
+            (sh::NEAREST, Resource::Sampler(self.sampler.raw())),
+            (sh::NODE_DESCS, Resource::Buffer(&tree.node_descs)),
+            (sh::NODE_ERRORS, Resource::Buffer(&tree.node_errors)),
+            (sh::TRIS, Resource::Buffer(list)),
+            (sh::SLOT_NODES, Resource::Buffer(self.slot_nodes())),
+        ]
+    }
+
+    /// The last frame's header, both phases' merged (tests, CLI): waits.
     pub fn read_header(&self, ctx: &Context) -> Result<TriangleListHeader> {
-        let bytes = ctx.read_buffer(self.list())?;
-        Ok(bytemuck::pod_read_unaligned(&bytes[..structs::TRIANGLE_LIST_HEADER]))
+        let read = |list: &Buffer| -> Result<TriangleListHeader> {
+            let bytes = ctx.read_buffer(list)?;
+            Ok(bytemuck::pod_read_unaligned(&bytes[..structs::TRIANGLE_LIST_HEADER]))
+        };
+        let early = read(self.list())?;
+        match self.late_list() {
+            Some(late) => Ok(early.merged(&read(late)?)),
+            None => Ok(early),
+        }
     }
 }

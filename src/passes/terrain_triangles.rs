@@ -56,7 +56,8 @@ impl TerrainTriangles {
     }
 
     /// Draws the list `emit` wrote, after clearing the targets, with the
-    /// sink where built with it.
+    /// sink where built with it; `late`: occlusion's phase 2, the second
+    /// list, over what phase 1 drew.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -65,11 +66,16 @@ impl TerrainTriangles {
         gbuffer: &GBuffer,
         view: &crate::gpu::Buffer,
         emit: &EmitTriangles,
+        late: bool,
         tree: &GpuQuadtree,
         sink: Option<&crate::gpu::Buffer>,
     ) {
         assert_eq!(sink.is_some(), self.sink, "the terrain's sink is bound exactly to its SINK variant");
-        begin_geometry(rec, targets, gbuffer, self.depth, true);
+        let list = match late {
+            true => emit.late_list().expect("phase 2 is built with occlusion"),
+            false => emit.list(),
+        };
+        begin_geometry(rec, targets, gbuffer, self.depth, !late);
         rec.bind_pipeline(&self.pipeline);
         let mut bindings = vec![
             (vs::VIEW, Resource::Buffer(view)),
@@ -83,7 +89,7 @@ impl TerrainTriangles {
         bindings.extend(sink.map(|s| (fs::SINK, Resource::Buffer(s))));
         rec.push_descriptors(&self.pipeline, &bindings);
         rec.push_constants(&self.pipeline, &TrianglesPush { nan_bits: QUIET_NAN_BITS, pad: [0; 3] });
-        rec.draw_indexed_indirect(emit.list(), emit.list(), 0);
+        rec.draw_indexed_indirect(list, list, 0);
         rec.end_rendering();
     }
 }

@@ -13,6 +13,7 @@ use crate::gpu::{depth_layout, vk, Buffer, Image, Recorder};
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_patches::{CullFrame, CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
+use crate::passes::emit_triangles::{EmitInputs, EmitPhase};
 use crate::passes::gbuffer_tiles::{variant_label, GbufferTiles, MaterialBindings};
 use crate::passes::lighting_resolve::{LightingResolve, ResolveInputs};
 use crate::passes::lod_map::LodMap;
@@ -51,6 +52,9 @@ pub(crate) struct FramePasses<'a> {
     /// ([`crate::render::TerrainRenderer::lod_camera`]).
     pub lod_view_buffer: &'a Buffer,
     pub stages: CullStages,
+    /// The per-triangle rule's cut runs in occlusion's two phases this
+    /// frame, where built (off: one phase emits every triangle).
+    pub triangle_phases: bool,
     pub holes_off: bool,
     pub force_flavours: u32,
     /// The built effects, in registry order.
@@ -151,10 +155,11 @@ impl FramePasses<'_> {
         pass(frame, log, FramePass::LOD_MAP, |r| lod_map.record(r, traverse));
         pass(frame, log, FramePass::SECTOR_DATA, |r| self.sector_data.record(r, tree));
         if let Some(t) = self.triangles {
-            let view = bytemuck::bytes_of(view);
-            pass(frame, log, FramePass::EMIT_TRIANGLES, |r| {
-                t.emit.record(r, traverse, tree, lod_map, view_buffer, view, self.stages.frustum)
-            });
+            let view_bytes = bytemuck::bytes_of(view);
+            let inputs =
+                EmitInputs { traverse, tree, lod_map, view: view_buffer, view_bytes, frustum: self.stages.frustum };
+            let phase = if self.triangle_phases(t) { EmitPhase::Early } else { EmitPhase::All };
+            pass(frame, log, FramePass::EMIT_TRIANGLES, |r| t.emit.record(r, &inputs, phase));
             return;
         }
         pass(frame, log, FramePass::SELECT_PATCHES, |r| {
@@ -180,8 +185,9 @@ impl FramePasses<'_> {
         self.at(FramePoint::BeforeTerrainDraws, frame, log, &self.inputs(t, base.as_ref()));
         if let Some(tri) = self.triangles {
             pass(frame, log, FramePass::TERRAIN_TRIANGLES, |r| {
-                tri.draw.record(r, targets, gb, view, &tri.emit, tree, sink)
+                tri.draw.record(r, targets, gb, view, &tri.emit, false, tree, sink)
             });
+            self.record_triangles_late(frame, log, t, tri);
             self.at(FramePoint::AfterTerrainDraws, frame, log, &self.inputs(t, base.as_ref()));
             return;
         }
@@ -197,6 +203,46 @@ impl FramePasses<'_> {
             self.record_phase_two(frame, log, t, o);
         }
         self.at(FramePoint::AfterTerrainDraws, frame, log, &self.inputs(t, base.as_ref()));
+    }
+
+    /// Whether the per-triangle rule's cut runs in two phases this frame.
+    fn triangle_phases(&self, t: &TrianglePath) -> bool {
+        t.hiz.is_some() && self.triangle_phases
+    }
+
+    /// The per-triangle rule's phase 2, where occlusion is built: the
+    /// pyramid of phase 1's depth, the subtrees it leaves visible and
+    /// their draw.
+    fn record_triangles_late(
+        &self,
+        frame: &mut Frame<'_, '_>,
+        log: &mut FrameLog,
+        t: &FrameTargets,
+        tri: &TrianglePath,
+    ) {
+        let Some(hiz) = &tri.hiz else { return };
+        let late = [FramePass::HIZ_BUILD, FramePass::EMIT_TRIANGLES_LATE, FramePass::TERRAIN_TRIANGLES_LATE];
+        if !self.triangle_phases(tri) {
+            let why = if self.stages.occlusion { Skip::LodCamera } else { Skip::OcclusionOff };
+            late.into_iter().for_each(|p| log.skipped(p, why));
+            return;
+        }
+        let (tree, targets, gb, view) = (t.tree, t.targets, t.gbuffer, self.view_buffer);
+        pass(frame, log, FramePass::HIZ_BUILD, |r| hiz.record(r, targets.depth));
+        let pyramid = hiz.pyramid().expect("hiz_build ran");
+        let inputs = EmitInputs {
+            traverse: self.traverse,
+            tree,
+            lod_map: self.lod_map,
+            view,
+            view_bytes: &[],
+            frustum: self.stages.frustum,
+        };
+        let phase = EmitPhase::Late(pyramid, targets.depth.extent);
+        pass(frame, log, FramePass::EMIT_TRIANGLES_LATE, |r| tri.emit.record(r, &inputs, phase));
+        pass(frame, log, FramePass::TERRAIN_TRIANGLES_LATE, |r| {
+            tri.draw.record(r, targets, gb, view, &tri.emit, true, tree, self.sink())
+        });
     }
 
     fn record_phase_two(&self, frame: &mut Frame<'_, '_>, log: &mut FrameLog, t: &FrameTargets, o: &Occlusion) {

@@ -97,7 +97,9 @@ pub enum LodRule {
     /// Pascucci): per triangle inside each drawn node, a conforming cut
     /// with a strict bound (`emit_triangles`, `terrain_triangles`). Its
     /// bounds are computed for the whole world when the renderer is made.
-    /// Not yet: refinement below the samples, occlusion and cone culling.
+    /// With effect `occlusion` it culls its subtrees in two phases against
+    /// the depth pyramid. Not yet: refinement below the samples, cone
+    /// culling.
     Triangle,
 }
 
@@ -224,6 +226,9 @@ pub struct TerrainRenderer {
 pub struct TrianglePath {
     pub emit: EmitTriangles,
     pub draw: TerrainTriangles,
+    /// Effect `occlusion`: the depth pyramid of phase 1's draw, which the
+    /// cut's phase 2 tests its subtrees against.
+    pub hiz: Option<HizBuild>,
 }
 
 /// The passes of effect `occlusion` (phase 2).

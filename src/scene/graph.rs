@@ -47,6 +47,10 @@ impl FramePass {
     /// Phase 2 of occlusion culling: the patches the pyramid left visible.
     pub const TERRAIN_GEOMETRY_LATE: FramePass = FramePass::phase_two(sh::terrain_geometry_vert::PASS);
     pub const TERRAIN_HOLES_LATE: FramePass = FramePass::phase_two(sh::terrain_holes_vert::PASS);
+    /// Phase 2 of the per-triangle rule's cut: the subtrees the pyramid
+    /// left visible that phase 1 did not draw, and their draw.
+    pub const EMIT_TRIANGLES_LATE: FramePass = FramePass::phase_two(sh::emit_triangles::PASS);
+    pub const TERRAIN_TRIANGLES_LATE: FramePass = FramePass::phase_two(sh::terrain_triangles_vert::PASS);
     pub const CLASSIFY_TILES: FramePass = FramePass::new(sh::classify_tiles::PASS);
     /// One draw per variant built, each timed on its own.
     pub const GBUFFER_TILES: FramePass = FramePass::new(sh::gbuffer_tiles_vert::PASS);
@@ -135,7 +139,7 @@ enum Step {
     Point(FramePoint),
 }
 
-const FRAME: [Step; 23] = [
+const FRAME: [Step; 25] = [
     Step::Pass(FramePass::QUADTREE_UPDATE, &[]),
     Step::Pass(FramePass::TRAVERSE, &[]),
     Step::Pass(FramePass::LOD_MAP, &[]),
@@ -151,6 +155,8 @@ const FRAME: [Step; 23] = [
     Step::Pass(FramePass::CULL_OCCLUDED, &[Effect::Occlusion]),
     Step::Pass(FramePass::TERRAIN_GEOMETRY_LATE, &[Effect::Occlusion]),
     Step::Pass(FramePass::TERRAIN_HOLES_LATE, &[Effect::Holes, Effect::Occlusion]),
+    Step::Pass(FramePass::EMIT_TRIANGLES_LATE, &[Effect::Occlusion]),
+    Step::Pass(FramePass::TERRAIN_TRIANGLES_LATE, &[Effect::Occlusion]),
     Step::Point(FramePoint::AfterTerrainDraws),
     Step::Point(FramePoint::BeforeClassify),
     Step::Pass(FramePass::CLASSIFY_TILES, &[]),
@@ -167,6 +173,9 @@ pub enum Skip {
     NothingToUpload,
     /// Occlusion is built but switched off this frame (`CullStages`).
     OcclusionOff,
+    /// The per-triangle rule's cut is made for another camera this frame
+    /// (`TerrainRenderer::lod_camera`): one phase emits all of it.
+    LodCamera,
     /// No node arrived and every resident node's shadow was made for this sun.
     ShadowsCurrent,
     /// Effect `shadows` is built but switched off this frame (`FrameSwitches`).
@@ -195,6 +204,7 @@ impl Skip {
         match self {
             Skip::NothingToUpload => "no node arrived or left this frame or the last (known on the CPU)",
             Skip::OcclusionOff => "occlusion switched off this frame (culling stages)",
+            Skip::LodCamera => "the cut is made for another camera (lod_camera): one phase draws all of it",
             Skip::ShadowsCurrent => "idle: every resident node's shadow is made for this sun (known on the CPU)",
             Skip::ShadowsOff => "shadows switched off this frame (FrameSwitches; built, redone when back on)",
             Skip::HolesOff => "holes switched off this frame (FrameSwitches; every patch drawn solid)",

@@ -140,24 +140,26 @@ fn graph(decisions: &[EffectDecision], options: &RendererOptions) -> PassGraph {
         FramePass::CULL_PATCHES,
         FramePass::TERRAIN_GEOMETRY,
         FramePass::TERRAIN_HOLES,
-        FramePass::HIZ_BUILD,
         FramePass::CULL_OCCLUDED,
         FramePass::TERRAIN_GEOMETRY_LATE,
         FramePass::TERRAIN_HOLES_LATE,
     ];
-    match options.lod.rule {
-        LodRule::Patch => {
-            for p in [FramePass::EMIT_TRIANGLES, FramePass::TERRAIN_TRIANGLES] {
-                graph.not_built(p, "LOD rule patch: the per-patch selection draws".into());
-            }
-        }
-        LodRule::Triangle => {
-            for p in per_patch {
-                let why = "LOD rule triangle: the per-triangle rule draws (its vertices test holes; no occlusion \
-                           or cone culling yet)";
-                graph.not_built(p, why.into());
-            }
-        }
+    let per_triangle = [
+        FramePass::EMIT_TRIANGLES,
+        FramePass::TERRAIN_TRIANGLES,
+        FramePass::EMIT_TRIANGLES_LATE,
+        FramePass::TERRAIN_TRIANGLES_LATE,
+    ];
+    let (off, why) = match options.lod.rule {
+        LodRule::Patch => (&per_triangle[..], "LOD rule patch: the per-patch selection draws"),
+        LodRule::Triangle => (
+            &per_patch[..],
+            "LOD rule triangle: the per-triangle rule draws (its vertices test holes; its subtrees are culled by \
+             the frustum and, with effect occlusion, the depth pyramid; no cone culling yet)",
+        ),
+    };
+    for p in off {
+        graph.not_built(*p, why.into());
     }
     graph
 }
@@ -219,23 +221,26 @@ fn traversal(ctx: &Context, world: &WorldDesc, options: &RendererOptions) -> Res
 }
 
 /// The terrain's draws: the patch draw, the hole draw where built and the
-/// per-triangle rule's passes where it draws (`triangle`: its slots), each
+/// per-triangle rule's passes where it draws (`triangle`: its slots, and
+/// whether effect `occlusion` gives it two phases), each
 /// pushing an effect's sunk cells behind where one has a sink (terrain_sink.rs).
 fn terrain_draws(
     ctx: &Context,
     depth: crate::passes::terrain_geometry::DepthOptions,
     effects: &[Box<dyn FrameEffect>],
     holes: bool,
-    triangle: Option<u32>,
+    triangle: Option<(u32, bool)>,
 ) -> Result<(TerrainGeometry, Option<TerrainHoles>, Option<TrianglePath>)> {
     let sinks = effects.iter().filter(|e| e.terrain_sink().is_some()).count();
     assert!(sinks <= 1, "{sinks} effects sink the height field; the terrain's draws read one sink");
     let sink = sinks == 1;
     let holes = if holes { Some(TerrainHoles::new(ctx, depth, sink)?) } else { None };
     let triangles = match triangle {
-        Some(slots) => {
-            Some(TrianglePath { emit: EmitTriangles::new(ctx, slots)?, draw: TerrainTriangles::new(ctx, depth, sink)? })
-        }
+        Some((slots, occlusion)) => Some(TrianglePath {
+            emit: EmitTriangles::new(ctx, slots, occlusion)?,
+            draw: TerrainTriangles::new(ctx, depth, sink)?,
+            hiz: occlusion.then(|| HizBuild::new(ctx)).transpose()?,
+        }),
         None => None,
     };
     Ok((TerrainGeometry::new(ctx, depth, sink)?, holes, triangles))
@@ -258,7 +263,7 @@ impl TerrainRenderer {
         let traverse = traversal(ctx, world, options)?;
         // Per-slot resources cover the reload slots too (gpu_quadtree::RELOAD_SLOTS).
         let slot_capacity = terrain.tree.slot_capacity();
-        // The per-triangle rule has no occlusion phase 2 (yet).
+        // The per-triangle rule's own two phases are its passes'.
         let occlusion = on(Effect::Occlusion) && !triangle;
         let build = CullBuild { cone: on(Effect::ConeCull), holes: on(Effect::Holes), occlusion };
         let cull = CullPatches::new(ctx, &traverse, PATCH_INDEX_COUNT, build)?;
@@ -281,8 +286,13 @@ impl TerrainRenderer {
         // gbuffer_tiles records one timed draw per variant.
         let max_passes = graph.max_recorded() + variants as u32;
         let counters = counter_layout(world, &cull, build, &built);
-        let (geometry, holes, triangles) =
-            terrain_draws(ctx, options.depth, &built, build.holes, triangle.then_some(slot_capacity))?;
+        let (geometry, holes, triangles) = terrain_draws(
+            ctx,
+            options.depth,
+            &built,
+            build.holes,
+            triangle.then_some((slot_capacity, on(Effect::Occlusion))),
+        )?;
         let resolve = resolve(ctx, options, &decisions)?;
         Ok(TerrainRenderer {
             update: QuadtreeUpdatePass::new(ctx, build.occlusion)?,

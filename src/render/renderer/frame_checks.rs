@@ -74,9 +74,10 @@ impl TerrainRenderer {
 
     /// Sizes the per-view resources before anything is recorded.
     pub(super) fn prepare_frame(&mut self, ctx: &Context, view: &View, targets: &RenderTargets) -> Result<()> {
-        if let Some(o) = &mut self.occlusion {
+        let triangle_hiz = self.triangles.as_mut().and_then(|t| t.hiz.as_mut());
+        if let Some(hiz) = self.occlusion.as_mut().map(|o| &mut o.hiz).or(triangle_hiz) {
             HizBuild::check_target(targets.depth)?;
-            o.hiz.prepare(ctx, targets.depth.extent)?;
+            hiz.prepare(ctx, targets.depth.extent)?;
         }
         if self.gbuffer.as_ref().is_none_or(|g| g.size() != view.size) {
             self.gbuffer = Some(GBuffer::new(ctx, view.size, &self.output)?);

@@ -79,6 +79,12 @@ impl TerrainRenderer {
                 out.push((p.name.clone(), p.memory_bytes(), vec![Effect::Occlusion]));
             }
         }
+        if let Some(t) = &self.triangles {
+            out.extend(t.emit.memory().map(|b| (b.name.clone(), b.memory_bytes(), Vec::new())));
+            let occlusion = t.emit.occlusion_memory().map(|b| (&b.name, b.memory_bytes()));
+            let pyramid = t.hiz.iter().flat_map(|h| h.pyramid()).map(|p| (&p.name, p.memory_bytes()));
+            out.extend(occlusion.chain(pyramid).map(|(n, b)| (n.clone(), b, vec![Effect::Occlusion])));
+        }
         for img in self.gbuffer.iter().flat_map(GBuffer::images) {
             out.push((img.name.clone(), img.memory_bytes(), Vec::new()));
         }

@@ -170,6 +170,9 @@ impl TerrainRenderer {
             view_buffer: self.view_buffer.current(),
             lod_view_buffer: self.lod_view_buffer.current(),
             stages: self.stages,
+            // A cut made for another camera cannot be tested against this
+            // view's depth.
+            triangle_phases: self.stages.occlusion && lod_gpu.is_none(),
             holes_off: !self.switches.holes,
             force_flavours: if self.shading == Shading::Tiled { 0 } else { shade.allowed },
             effects: &self.built,
