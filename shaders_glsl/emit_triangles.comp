@@ -27,7 +27,8 @@
 // subtree the cut reaches is tested against the pyramid (its split
 // vertex's box holds every triangle under it), those visible that phase 1
 // did not emit are emitted into phase 2's list, and every bit is rewritten
-// for the next frame. Phase 2 decides the same cut from the same inputs.
+// for the next frame. Phase 1 leaves which depth-7 triangles its cut
+// reached (a bit each), so phase 2 does not decide the depths above again.
 layout(local_size_x = 256) in;
 
 // Phase 2 is a phase of occlusion (the LATE-only variant is its twin).
@@ -61,6 +62,8 @@ layout(set = 0, binding = 8, std430) buffer Triangles {
 layout(set = 0, binding = 9, std430) buffer SlotNodes { uint nodes[]; } slot_nodes;
 #ifdef OCCLUSION
 layout(set = 0, binding = 10, std430) buffer Visibility { uint words[]; } visibility;
+// Phase 1's s_reached, a bit each (VISIBILITY_WORDS_PER_SLOT words a slot).
+layout(set = 0, binding = 12, std430) buffer Reached { uint words[]; } reached;
 #endif
 #ifdef LATE
 layout(set = 0, binding = 11) uniform texture2D hiz;
@@ -104,9 +107,6 @@ uint g_clamped = 0u;
 uint g_culled = 0u;
 float g_bound_px = 0.0;
 float g_grid_px = 0.0;
-// Phase 2 decides the triangles above the invocations' depth again, but
-// phase 1 emitted them: nothing is emitted or counted while this is set.
-bool g_quiet = false;
 
 ivec2 sample_of(ivec2 p) {
     return (g_node * g_side + p) << int(g_lod);
@@ -286,9 +286,6 @@ float cell_px(Tri t) {
 
 // Emits t as the rule leaves it (a leaf, culled, or split further).
 void finish(Tri t, uint what, float px) {
-    if (g_quiet) {
-        return;
-    }
     if (what == CULLED) {
         g_culled += 1u;
         return;
@@ -435,14 +432,12 @@ void main() {
         slot_nodes.nodes[g_slot] = n;
     }
 #endif
-#ifdef OCCLUSION
+#ifdef LATE
     if (t < VISIBILITY_WORDS_PER_SLOT) {
         s_visible[t] = 0u;
     }
-#endif
-#ifdef LATE
-    g_quiet = true;
-#endif
+    s_reached[t] = (reached.words[g_slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] >> (t & 31u)) & 1u;
+#else
     // The depths above the threads' own, by one invocation: on lavapipe a
     // workgroup barrier costs more than these few hundred decisions, so
     // there is one barrier, not two a depth.
@@ -454,13 +449,17 @@ void main() {
             walk(triangle_at(0u, r), EMIT_THREAD_DEPTH, r << EMIT_THREAD_DEPTH);
         }
     }
-#ifdef LATE
-    // Phase 1 counted the splits above the invocations' depth.
-    g_quiet = false;
-    g_forced = 0u;
-    g_clamped = 0u;
 #endif
     barrier();
+#if defined(OCCLUSION) && !defined(LATE)
+    if (t < VISIBILITY_WORDS_PER_SLOT) {
+        uint w = 0u;
+        for (uint i = 0u; i < 32u; ++i) {
+            w |= s_reached[32u * t + i] << i;
+        }
+        reached.words[g_slot * VISIBILITY_WORDS_PER_SLOT + t] = w;
+    }
+#endif
     // Each invocation walks the subtree of its own triangle, if the cut reaches it.
     if (s_reached[t] == 1u) {
         own_subtree(t);

@@ -108,6 +108,9 @@ struct EmitOcclusion {
     /// one per parity: a frame's phase 1 reads what its copy got two frames
     /// before (`cull_occluded` keeps its bits the same way).
     visibility: PerFrame<Buffer>,
+    /// Which depth-7 triangles phase 1's cut reached (a bit each, as the
+    /// visibility bits), for phase 2; one per parity.
+    reached: PerFrame<Buffer>,
 }
 
 /// What every recording of the pass reads.
@@ -170,17 +173,20 @@ fn pipeline(ctx: &Context, variant: u32) -> Result<Pipeline> {
 
 impl EmitOcclusion {
     fn new(ctx: &Context, slot_capacity: u32, capacity: u32) -> Result<Self> {
-        let visibility = PerFrame::new(|i| {
-            Buffer::new(
-                ctx,
-                &BufferDesc {
-                    name: &copy_name("triangle_visibility", i),
-                    size: u64::from((FIRST_SLOT + slot_capacity) * k::VISIBILITY_WORDS_PER_SLOT * 4),
-                    usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                    location: MemoryLocation::GpuOnly,
-                },
-            )
-        })?;
+        let bits = |name: &str| {
+            PerFrame::new(|i| {
+                Buffer::new(
+                    ctx,
+                    &BufferDesc {
+                        name: &copy_name(name, i),
+                        size: u64::from((FIRST_SLOT + slot_capacity) * k::VISIBILITY_WORDS_PER_SLOT * 4),
+                        usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                        location: MemoryLocation::GpuOnly,
+                    },
+                )
+            })
+        };
+        let visibility = bits("triangle_visibility")?;
         ctx.submit_and_wait(|rec| {
             visibility.all().iter().for_each(|v| rec.fill_buffer(v, 0));
             Ok(())
@@ -190,6 +196,7 @@ impl EmitOcclusion {
             late: pipeline(ctx, sh::VARIANT_OCCLUSION | sh::VARIANT_LATE)?,
             list: list_buffers(ctx, "emit_triangles_late_list", capacity)?,
             visibility,
+            reached: bits("triangle_reached")?,
         })
     }
 }
@@ -249,6 +256,7 @@ impl EmitTriangles {
         if let Some(o) = &mut self.occlusion {
             o.list.select(frame);
             o.visibility.select(frame);
+            o.reached.select(frame);
         }
     }
 
@@ -262,7 +270,7 @@ impl EmitTriangles {
 
     /// Occlusion's buffers (phase 2's lists, the visibility bits).
     pub fn occlusion_memory(&self) -> impl Iterator<Item = &Buffer> {
-        self.occlusion.iter().flat_map(|o| o.list.all().iter().chain(o.visibility.all()))
+        self.occlusion.iter().flat_map(|o| o.list.all().iter().chain(o.visibility.all()).chain(o.reached.all()))
     }
 
     /// Emits every drawn node's triangles of `phase` into its list, after
@@ -296,6 +304,7 @@ impl EmitTriangles {
         let mut depth_size = [0; 2];
         if let Some(o) = self.occlusion.as_ref().filter(|_| !matches!(phase, EmitPhase::All)) {
             bindings.push((sh::VISIBILITY, Resource::Buffer(o.visibility.current())));
+            bindings.push((sh::REACHED, Resource::Buffer(o.reached.current())));
         }
         if let EmitPhase::Late(hiz, size) = phase {
             bindings.push((sh::HIZ, Resource::Image(hiz, vk::ImageLayout::GENERAL)));
