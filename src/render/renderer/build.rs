@@ -286,13 +286,8 @@ impl TerrainRenderer {
         // gbuffer_tiles records one timed draw per variant.
         let max_passes = graph.max_recorded() + variants as u32;
         let counters = counter_layout(world, &cull, build, &built);
-        let (geometry, holes, triangles) = terrain_draws(
-            ctx,
-            options.depth,
-            &built,
-            build.holes,
-            triangle.then_some((slot_capacity, on(Effect::Occlusion))),
-        )?;
+        let tri = triangle.then_some((slot_capacity, on(Effect::Occlusion)));
+        let (geometry, holes, triangles) = terrain_draws(ctx, options.depth, &built, build.holes, tri)?;
         let resolve = resolve(ctx, options, &decisions)?;
         Ok(TerrainRenderer {
             update: QuadtreeUpdatePass::new(ctx, build.occlusion)?,
