@@ -106,7 +106,10 @@ struct EmitOcclusion {
     list: PerFrame<Buffer>,
     /// One bit per invocation's subtree and slot, rewritten by phase 2;
     /// one per parity: a frame's phase 1 reads what its copy got two frames
-    /// before (`cull_occluded` keeps its bits the same way).
+    /// before (`cull_occluded` keeps its bits the same way). Unlike the
+    /// patches' bits they are not cleared when a slot takes another node:
+    /// a stale bit only moves a subtree from phase 2's test to phase 1's
+    /// draw, and phase 2 rewrites it that frame.
     visibility: PerFrame<Buffer>,
     /// Which depth-7 triangles phase 1's cut reached (a bit each, as the
     /// visibility bits), for phase 2; one per parity.
