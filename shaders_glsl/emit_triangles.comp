@@ -7,6 +7,9 @@
 // subtree of the node's bintree from depth EMIT_THREAD_DEPTH down to the
 // grid's cells (the depths above are decided first, by one invocation);
 // the triangles left go to one index list (terrain_triangles draws it).
+// Points are in lattice units (2^-REFINE_LEVELS grid steps): a LOD-0 node
+// continues the bisection below its samples, on the Catmull-Rom surface,
+// with numbers each vertex takes from its parents (emit_triangles_fine.glsl).
 //
 // A triangle is split at the midpoint m of its hypotenuse when
 // - m is active: its saturated error, projected from its box (its level's
@@ -85,8 +88,13 @@ layout(push_constant, std430) uniform EmitPush {
 const uint LEAF = 0u;
 const uint SPLIT = 1u;
 const uint CULLED = 2u;
-// A leaf whose hypotenuse has no midpoint in the grid (a cell's half).
+// A leaf whose hypotenuse has no midpoint in the grid (a cell's half), or
+// below a LOD-0 node's samples in the finest lattice.
 const uint CELL = 3u;
+// A LOD-0 node's cell half: the levels below its samples are walked after
+// the grid's (walk_cells), so the walks' loops each hold one kind of
+// decision (lavapipe runs every branch of a loop's body, masked).
+const uint FINE = 4u;
 
 struct Tri {
     ivec2 apex;
@@ -107,6 +115,14 @@ uint g_clamped = 0u;
 uint g_culled = 0u;
 float g_bound_px = 0.0;
 float g_grid_px = 0.0;
+// Lattice units a grid step, the node's side in them, and (LOD 0) its
+// south-west corner on the world's lattice.
+const int UNITS = 1 << int(REFINE_LEVELS);
+int g_side_l;
+ivec2 g_origin_l;
+// Levels below LOD 0 the frame refines to (LodOptions::refine_levels, 0 to
+// REFINE_LEVELS; 0: a LOD-0 node's cells are drawn whole).
+uint g_refine;
 
 ivec2 sample_of(ivec2 p) {
     return (g_node * g_side + p) << int(g_lod);
@@ -116,124 +132,87 @@ ivec2 sample_of(ivec2 p) {
 // infinity would be folded into an invalid constant.
 const float HUGE_PX = 3.0e38;
 
-// Half the width (m) of the box of the vertex at LOD-0 sample s
-// (world/vertex_rule.rs box_half_width, in lattice units below the samples).
-float half_width_m(ivec2 s) {
-    int tx = s.x == 0 ? 30 : findLSB(s.x);
-    int ty = s.y == 0 ? 30 : findLSB(s.y);
-    int ts = min(tx, ty);
-    bool centre = ((s.x >> ts) & 1) == 1 && ((s.y >> ts) & 1) == 1;
-    int t = ts + int(REFINE_LEVELS);
+// Half the width (m) of the box of the vertex at world lattice point g
+// (world/vertex_rule.rs box_half_width; never the origin, a corner of
+// every level).
+float half_width_lattice_m(ivec2 g) {
+    int t = min(findLSB(g.x | g.y), 28);
+    bool centre = ((g.x >> t) & 1) == 1 && ((g.y >> t) & 1) == 1;
     int r = centre ? 3 * (1 << t) - 1 : (2 << t) - 1;
-    return float(r) * view.v.spacing_m / float(1u << REFINE_LEVELS);
+    return float(r) * view.v.spacing_m / float(UNITS);
 }
 
-// Projected error (px) of grid point p's numbers (0: it splits nothing;
-// HUGE_PX: a hole under it), and its camera-relative box.
-float vertex_px(ivec2 p, out vec3 lo, out vec3 hi) {
-    vec2 n = unpackHalf2x16(texelFetch(usampler2DArray(vertex_bounds, nearest), ivec3(p, int(g_slot)), 0).r);
+// A vertex's numbers as the rule reads them: its saturated error (m; 0:
+// it splits nothing; infinite: a hole under it) and its camera-relative box.
+struct Numbers {
+    float e;
+    vec3 lo;
+    vec3 hi;
+};
+
+// Grid point p's numbers (p one past the grid: a neighbour's sample, the
+// layer's margin). A hole under it bounds nothing: its box is the world's
+// height range.
+Numbers grid_numbers(ivec2 p) {
+    ivec3 at = ivec3(atlas_texel(p), int(g_slot));
+    vec2 n = unpackHalf2x16(texelFetch(usampler2DArray(vertex_bounds, nearest), at, 0).r);
     ivec2 s = sample_of(p);
-    float h = texelFetch(sampler2DArray(height_atlas, nearest), ivec3(atlas_texel(p), int(g_slot)), 0).r;
+    float h = texelFetch(sampler2DArray(height_atlas, nearest), at, 0).r;
     float z = view.v.height_lo + h * view.v.height_range;
     float top = view.v.height_lo + view.v.height_range;
-    float r = half_width_m(s);
+    float reach = isinf(n.x) ? view.v.height_range : n.y;
+    float r = half_width_lattice_m(s * UNITS);
     vec2 xy = view_rel_xy(s, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
-    lo = vec3(xy - r, clamp(z - n.y, view.v.height_lo, top) - view.v.camera_z);
-    hi = vec3(xy + r, clamp(z + n.y, view.v.height_lo, top) - view.v.camera_z);
-    if (isinf(n.x)) {
+    Numbers o;
+    o.e = n.x;
+    o.lo = vec3(xy - r, clamp(z - reach, view.v.height_lo, top) - view.v.camera_z);
+    o.hi = vec3(xy + r, clamp(z + reach, view.v.height_lo, top) - view.v.camera_z);
+    return o;
+}
+
+// Numbers' projected error (px; HUGE_PX: a hole under the vertex).
+float numbers_px(Numbers n) {
+    if (isinf(n.e)) {
         return HUGE_PX;
     }
-    return n.x > 0.0 ? projected_px(n.x, lo, hi) : 0.0;
+    return n.e > 0.0 ? projected_px(n.e, n.lo, n.hi) : 0.0;
 }
 
-// The LOD of the listed node covering sector q, or NO_LOD.
-uint lod_at(ivec2 q) {
-    if (any(lessThan(q, ivec2(0))) || q.x >= int(view.v.lod_map_w) || q.y >= int(view.v.lod_map_h)) {
-        return NO_LOD;
-    }
-    return imageLoad(lod_map, q).r;
+// Projected error (px) of grid point p's numbers, and its box.
+float vertex_px(ivec2 p, out vec3 lo, out vec3 hi) {
+    Numbers n = grid_numbers(p);
+    lo = n.lo;
+    hi = n.hi;
+    return numbers_px(n);
 }
 
-// Whether every node across the border line through sample s (the line's
-// axis `along`; `out_step` -1 or 0 picks the sector across) holds s.
-bool held_on_line(ivec2 s, int along, int out_step) {
-    int side = g_side;
-    int a = s[along];
-    ivec2 q = s / side;
-    q[1 - along] += out_step;
-    for (int k = 0; k < 2; ++k) {
-        // A point on a sector boundary touches the sectors on both sides.
-        if (k == 1 && a % side != 0) {
-            break;
-        }
-        ivec2 at = q;
-        at[along] -= k;
-        uint l = lod_at(at);
-        if (l != NO_LOD && (a & ((1 << l) - 1)) != 0) {
-            return false;
-        }
-    }
-    return true;
-}
+#include "emit_triangles_borders.glsl"
 
-bool held_across(ivec2 p) {
-    ivec2 s = sample_of(p);
-    bool ok = true;
-    if (p.x == 0 || p.x == g_side) {
-        ok = held_on_line(s, 1, p.x == 0 ? -1 : 0);
-    }
-    if (p.y == 0 || p.y == g_side) {
-        ok = ok && held_on_line(s, 0, p.y == 0 ? -1 : 0);
-    }
-    return ok;
-}
-
-// Whether the grid segment u-w lies on the node's border with a finer
-// node's corner strictly inside it, across.
-bool corner_across(ivec2 u, ivec2 w) {
-    int along;
-    int out_step;
-    if (u.x == w.x && (u.x == 0 || u.x == g_side)) {
-        along = 1;
-        out_step = u.x == 0 ? -1 : 0;
-    } else if (u.y == w.y && (u.y == 0 || u.y == g_side)) {
-        along = 0;
-        out_step = u.y == 0 ? -1 : 0;
-    } else {
-        return false;
-    }
-    ivec2 s0 = sample_of(min(u, w));
-    ivec2 s1 = sample_of(max(u, w));
-    int len = s1[along] - s0[along];
-    int side = g_side;
-    ivec2 q = s0 / side;
-    q[1 - along] += out_step;
-    for (int k = s0[along] / side; k < (s1[along] + side - 1) / side; ++k) {
-        ivec2 at = q;
-        at[along] = k;
-        uint l = lod_at(at);
-        if (l != NO_LOD && (side << l) < len) {
-            return true;
-        }
-    }
-    return false;
-}
+#include "emit_triangles_fine.glsl"
 
 // What to do with triangle t; `px`: its split vertex's projected error
 // when it stays whole.
 uint decide(Tri t, out float px) {
     px = 0.0;
     ivec2 sum = t.b + t.c;
-    if (((sum.x | sum.y) & 1) != 0) {
+    // The finest triangles: a LOD-0 node's lattice, a coarser node's grid.
+    int finest = g_lod == 0u ? 1 : 2 * UNITS - 1;
+    if (((sum.x | sum.y) & finest) != 0) {
         return CELL;
     }
-    ivec2 m = sum / 2;
+    ivec2 ml = sum / 2;
+    if (((ml.x | ml.y) & (UNITS - 1)) != 0) {
+        return g_refine == 0u ? CELL : FINE;
+    }
+    // On the grid, and so are t's corners.
+    ivec2 m = ml / UNITS;
     vec3 lo, hi;
     px = vertex_px(m, lo, hi);
     if (pc.frustum != 0u && px < HUGE_PX && box_outside_frustum(lo, hi)) {
         return CULLED;
     }
-    if (corner_across(t.apex, t.b) || corner_across(t.b, t.c) || corner_across(t.c, t.apex)) {
+    ivec2 a = t.apex / UNITS, b = t.b / UNITS, c = t.c / UNITS;
+    if (corner_across(a, b) || corner_across(b, c) || corner_across(c, a)) {
         g_forced += 1u;
         return SPLIT;
     }
@@ -271,12 +250,13 @@ Tri half_of(Tri t, uint which) {
 
 // The largest projected error (px) of the node's own error over cell
 // triangle t's column (its square across, the node's height range up):
-// what a cell of its grid may be off by.
+// what a cell of a coarser node's grid may be off by (a LOD-0 node's
+// finest triangles lie on the finest surface).
 float cell_px(Tri t) {
     uvec2 d = node_descs.descs[g_slot];
     int bias = bitfieldExtract(int(d.y), int(DESC_BIAS_SHIFT), int(DESC_BIAS_BITS));
     float err = ldexp(node_errors.errors[g_slot], bias);
-    ivec2 lo = min(min(t.apex, t.b), t.c), hi = max(max(t.apex, t.b), t.c);
+    ivec2 lo = min(min(t.apex, t.b), t.c) / UNITS, hi = max(max(t.apex, t.b), t.c) / UNITS;
     vec2 xy0 = view_rel_xy(sample_of(lo), view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
     vec2 xy1 = view_rel_xy(sample_of(hi), view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
     float z0 = view.v.height_lo + float(bitfieldExtract(d.x, 0, int(HALF_BITS))) * view.v.height_scale;
@@ -291,7 +271,7 @@ void finish(Tri t, uint what, float px) {
         return;
     }
     emit(t);
-    if (what == CELL) {
+    if (what == CELL && (g_lod != 0u || g_refine == 0u)) {
         g_grid_px = max(g_grid_px, cell_px(t));
     } else {
         g_bound_px = max(g_bound_px, px);
@@ -321,49 +301,94 @@ void flush() {
 // the invocation of its index walks it).
 shared uint s_reached[2u << EMIT_THREAD_DEPTH];
 
-// Depth-first over `root`'s subtree, the first half before the second as a
-// stack would; the way down is kept as bits (the halves taken, the last
-// lowest) and each triangle rebuilt from the root: no per-invocation array
-// (on lavapipe every push and pop to one costs a gather or scatter). A
-// triangle `limit` depths below the root is not decided here but marked in
-// s_reached at `mark` (its index above the path's bits); NO_LIMIT: every
-// triangle is decided.
+// The triangle half_of(p, which) was cut from: p's hypotenuse ends are
+// the half's legs' far ends, mirrored through its right angle.
+Tri parent_of(Tri t, uint which) {
+    return which == 0u ? Tri(t.b, t.c, 2 * t.apex - t.c) : Tri(t.c, 2 * t.apex - t.b, t.b);
+}
+
+// A depth-first walk's step after a triangle is done: up past the second
+// halves, then across to the next second half; false when the walk is done.
+// The way down is kept as bits (the halves taken, the last lowest) and the
+// one triangle moves down, up or across: no per-invocation array (on
+// lavapipe every push and pop to one costs a gather or scatter).
+bool next_triangle(inout Tri t, inout uint depth, inout uint path) {
+    while (depth > 0u && (path & 1u) == 1u) {
+        t = parent_of(t, 1u);
+        depth -= 1u;
+        path >>= 1u;
+    }
+    if (depth == 0u) {
+        return false;
+    }
+    t = half_of(parent_of(t, 0u), 1u);
+    path += 1u;
+    return true;
+}
+
+// Cell halves below an invocation's triangle (its own subtree's depth to
+// the grid's cells), and their marks: a bit each, FINE_WORDS words an
+// invocation (only its own).
+// (The cells are 2 x EMIT_THREAD_DEPTH below the node's halves: NODE_QUADS is
+// 1 << EMIT_THREAD_DEPTH; the invocations' triangles EMIT_THREAD_DEPTH.)
+const uint CELL_DEPTH = EMIT_THREAD_DEPTH;
+const uint FINE_WORDS = (1u << CELL_DEPTH) / 32u;
+shared uint s_fine[256u * FINE_WORDS];
+
+// Depth-first over `root`'s subtree down to the grid's cells, the first
+// half before the second as a stack would. Every loop an invocation runs
+// counts towards one lavapipe limit (65535 iterations in all, after which
+// its loops end), and lavapipe runs every loop in a loop's body on every
+// pass, masked: so the decisions hold no loop, and the steps a few
+// iterations each (a LOD-0 subtree refined to the finest lattice decides
+// 4095 triangles). A triangle `limit` depths below the root is not decided
+// here but marked in s_reached at `mark` (its index above the path's
+// bits); NO_LIMIT: every triangle is decided, and the LOD-0 cell halves
+// marked in s_fine.
 const uint NO_LIMIT = 0xffffffffu;
 void walk(Tri root, uint limit, uint mark) {
     uint depth = 0u;
     uint path = 0u;
+    Tri t = root;
     while (true) {
         if (depth == limit) {
             s_reached[mark | path] = 1u;
         } else {
-            Tri t = root;
-            for (uint d = 0u; d < depth; ++d) {
-                t = half_of(t, (path >> (depth - 1u - d)) & 1u);
-            }
             float px;
             uint what = decide(t, px);
             if (what == SPLIT) {
+                t = half_of(t, 0u);
                 depth += 1u;
                 path <<= 1u;
                 continue;
             }
-            finish(t, what, px);
+            if (what == FINE) {
+                s_fine[gl_LocalInvocationID.x * FINE_WORDS + (path >> 5u)] |= 1u << (path & 31u);
+            } else {
+                finish(t, what, px);
+            }
         }
-        while (depth > 0u && (path & 1u) == 1u) {
-            depth -= 1u;
-            path >>= 1u;
-        }
-        if (depth == 0u) {
+        if (!next_triangle(t, depth, path)) {
             break;
         }
-        path += 1u;
     }
+}
+
+#include "emit_triangles_cells.glsl"
+
+// Walks an invocation's own subtree, the grid's levels then the ones below.
+void walk_subtree(Tri root) {
+    for (uint w = 0u; w < FINE_WORDS; ++w) {
+        s_fine[gl_LocalInvocationID.x * FINE_WORDS + w] = 0u;
+    }
+    walk(root, NO_LIMIT, 0u);
+    walk_cells(root);
 }
 
 // Triangle i (0 .. 2 << depth) of the node's bintree at `depth`: bit
 // `depth` of i picks the square's half, the lower bits the halves below.
 Tri triangle_at(uint depth, uint i) {
-    ivec2 sw = ivec2(0), se = ivec2(g_side, 0), nw = ivec2(0, g_side), ne = ivec2(g_side);
+    ivec2 sw = ivec2(0), se = ivec2(g_side_l, 0), nw = ivec2(0, g_side_l), ne = ivec2(g_side_l);
     bool slash = ((g_node.x + g_node.y) & 1) == 0;
     bool first = (i >> depth) == 0u;
     Tri t = slash ? (first ? Tri(se, sw, ne) : Tri(nw, ne, sw)) : (first ? Tri(sw, se, nw) : Tri(ne, nw, se));
@@ -389,7 +414,7 @@ bool was_visible(uint t) {
 // box bounds nothing, so it counts as visible).
 bool subtree_visible(Tri r) {
     vec3 lo, hi;
-    if (vertex_px((r.b + r.c) / 2, lo, hi) >= HUGE_PX) {
+    if (vertex_px((r.b + r.c) / (2 * UNITS), lo, hi) >= HUGE_PX) {
         return true;
     }
     uint level;
@@ -407,14 +432,14 @@ void own_subtree(uint t) {
         atomicOr(s_visible[t >> 5u], 1u << (t & 31u));
     }
     if (now && !was_visible(t)) {
-        walk(root, NO_LIMIT, 0u);
+        walk_subtree(root);
     }
 #elif defined(OCCLUSION)
     if (was_visible(t)) {
-        walk(root, NO_LIMIT, 0u);
+        walk_subtree(root);
     }
 #else
-    walk(root, NO_LIMIT, 0u);
+    walk_subtree(root);
 #endif
 }
 
@@ -426,6 +451,9 @@ void main() {
     g_node = ivec2(node_x(n), node_y(n));
     uint side_u = NODE_SIDE;  // read first: naga cannot parse a converted spec constant
     g_side = int(side_u);
+    g_side_l = g_side * UNITS;
+    g_refine = min(uint(view.v.lod_params.z), REFINE_LEVELS);
+    g_origin_l = g_node * g_side_l;
     uint t = gl_LocalInvocationID.x;
 #ifndef LATE
     if (t == 0u) {

@@ -210,13 +210,22 @@ fn the_reach_covers_the_finest_surface_over_each_diamond() {
 fn shared_points(tree: &VertexBoundsTree, w: &WorldDesc) -> usize {
     let mut seen: HashMap<I64Vec2, (u32, NodeId)> = HashMap::new();
     let mut shared = 0;
+    let side = VertexBoundsTree::lattice_side(w);
+    let last = I64Vec2::new(side[0] as i64 - 1, side[1] as i64 - 1);
     for lod in 0..w.lod_count as u8 {
         for id in w.nodes_at(lod) {
             let values = tree.node_values(id);
             let step = 1i64 << lod;
-            let first = I64Vec2::new(i64::from(id.x), i64::from(id.y)) * i64::from(NODE_QUADS) * step;
+            // The heights' atlas layout: 132 x 132 texels, grid point -2 first.
+            assert_eq!(values.len(), 132 * 132);
+            let first = (I64Vec2::new(i64::from(id.x), i64::from(id.y)) * i64::from(NODE_QUADS) - 2) * step;
             for (k, v) in values.iter().enumerate() {
-                let s = first + I64Vec2::new(k as i64 % 129, k as i64 / 129) * step;
+                let s = first + I64Vec2::new(k as i64 % 132, k as i64 / 132) * step;
+                if s.cmplt(I64Vec2::ZERO).any() || s.cmpgt(last).any() {
+                    // Past the lattice: infinite, so it never lowers a smaller-of-two.
+                    assert_eq!(*v, 0x7C00_7C00, "{id} {s}");
+                    continue;
+                }
                 // The f16 pair rounds the tree's numbers up.
                 let (_, n) = tree.at(s);
                 let err = half::f16::from_bits(*v as u16).to_f32();

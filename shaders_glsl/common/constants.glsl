@@ -94,12 +94,14 @@
 #define REFINE_BUCKETS 256u
 #define REFINE_BUCKETS_PER_OCTAVE 16u
 // The per-triangle rule (emit_triangles): a vertex of the emitted index
-// list is slot | grid x << TRIANGLE_X_SHIFT | grid y << TRIANGLE_Y_SHIFT
-// (x, y in 0..NODE_QUADS of its node's grid); each workgroup thread walks
-// one of the node's triangles at this depth (2 << depth = its 256 threads).
+// list is slot | x << TRIANGLE_X_SHIFT | y << TRIANGLE_Y_SHIFT, x and y in
+// lattice units of its node (2^-REFINE_LEVELS grid steps, 0..NODE_QUADS <<
+// REFINE_LEVELS: a LOD-0 node refines below its samples); each workgroup
+// thread walks one of the node's triangles at this depth (2 << depth = its
+// 256 threads).
 #define TRIANGLE_X_SHIFT 11u
-#define TRIANGLE_Y_SHIFT 19u
-#define TRIANGLE_COORD_MASK 0xFFu
+#define TRIANGLE_Y_SHIFT 21u
+#define TRIANGLE_COORD_MASK 0x3FFu
 #define EMIT_THREAD_DEPTH 7u
 // Triangles the index list holds (48 MiB); beyond, a triangle is counted, not drawn.
 #define MAX_EMITTED_TRIANGLES 4194304u

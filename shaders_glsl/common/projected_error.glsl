@@ -14,17 +14,29 @@
 // of the perspective Jacobian; z is the depth along the forward axis): at
 // most e f k / d, d the box's distance and k = |v|^2 / z(v)^2 at its worst
 // corner v (the angle is quasi-convex), never above the frustum's widest.
+//
+// The corners are written out, not looped over: lavapipe ends every loop of
+// an invocation once they have run 65535 iterations in all, and
+// emit_triangles projects thousands of vertices an invocation.
+void jacobian_corner(vec3 v, vec3 fwd, float widest, inout float k) {
+    float dt = dot(v, fwd);
+    k = dt <= 0.0 ? widest : max(k, dot(v, v) / (dt * dt));
+}
+
 float jacobian_px(float err, vec3 lo, vec3 hi) {
     vec3 fwd = view.v.lod_forward.xyz;
     float widest = view.v.lod_params.y;
     vec3 o = max(max(lo, -hi), vec3(0.0));
     float d = max(length(o), 1e-3);
     float k = 1.0;
-    for (uint c = 0u; c < 8u; ++c) {
-        vec3 v = vec3((c & 1u) != 0u ? hi.x : lo.x, (c & 2u) != 0u ? hi.y : lo.y, (c & 4u) != 0u ? hi.z : lo.z);
-        float dt = dot(v, fwd);
-        k = dt <= 0.0 ? widest : max(k, dot(v, v) / (dt * dt));
-    }
+    jacobian_corner(vec3(lo.x, lo.y, lo.z), fwd, widest, k);
+    jacobian_corner(vec3(hi.x, lo.y, lo.z), fwd, widest, k);
+    jacobian_corner(vec3(lo.x, hi.y, lo.z), fwd, widest, k);
+    jacobian_corner(vec3(hi.x, hi.y, lo.z), fwd, widest, k);
+    jacobian_corner(vec3(lo.x, lo.y, hi.z), fwd, widest, k);
+    jacobian_corner(vec3(hi.x, lo.y, hi.z), fwd, widest, k);
+    jacobian_corner(vec3(lo.x, hi.y, hi.z), fwd, widest, k);
+    jacobian_corner(vec3(hi.x, hi.y, hi.z), fwd, widest, k);
     return err * view.v.lod_forward.w * min(k, widest) / d;
 }
 
@@ -36,35 +48,47 @@ float jacobian_px(float err, vec3 lo, vec3 hi) {
 // near plane where a corner is closer) and the largest |u_xy - s u_z| over
 // the rectangle of its corners' tangents within the frustum (convex in s:
 // a rectangle corner is the worst).
+// A corner's depth and screen tangents (the near plane where it is closer).
+struct Tangents {
+    float zmin;
+    vec2 smin;
+    vec2 smax;
+    bool straddles;
+};
+
+void vertical_corner(vec3 v, inout Tangents t) {
+    vec3 fwd = view.v.lod_forward.xyz, right = view.v.lod_right.xyz, up = view.v.lod_up.xyz;
+    float z = dot(v, fwd);
+    t.zmin = min(t.zmin, z);
+    if (z <= view.v.camera_world.w) {
+        t.straddles = true;
+    } else {
+        vec2 s = vec2(dot(v, right), dot(v, up)) / z;
+        t.smin = min(t.smin, s);
+        t.smax = max(t.smax, s);
+    }
+}
+
 float vertical_px(float err, vec3 lo, vec3 hi) {
     vec3 fwd = view.v.lod_forward.xyz, right = view.v.lod_right.xyz, up = view.v.lod_up.xyz;
     vec2 tan_half = vec2(view.v.lod_right.w, view.v.lod_up.w);
     float near = view.v.camera_world.w;
-    float zmin = 1e30;
-    vec2 smin = vec2(1e30), smax = vec2(-1e30);
-    bool straddles = false;
-    for (uint c = 0u; c < 8u; ++c) {
-        vec3 v = vec3((c & 1u) != 0u ? hi.x : lo.x, (c & 2u) != 0u ? hi.y : lo.y, (c & 4u) != 0u ? hi.z : lo.z);
-        float z = dot(v, fwd);
-        zmin = min(zmin, z);
-        if (z <= near) {
-            straddles = true;
-        } else {
-            vec2 s = vec2(dot(v, right), dot(v, up)) / z;
-            smin = min(smin, s);
-            smax = max(smax, s);
-        }
-    }
+    Tangents t = Tangents(1e30, vec2(1e30), vec2(-1e30), false);
+    vertical_corner(vec3(lo.x, lo.y, lo.z), t);
+    vertical_corner(vec3(hi.x, lo.y, lo.z), t);
+    vertical_corner(vec3(lo.x, hi.y, lo.z), t);
+    vertical_corner(vec3(hi.x, hi.y, lo.z), t);
+    vertical_corner(vec3(lo.x, lo.y, hi.z), t);
+    vertical_corner(vec3(hi.x, lo.y, hi.z), t);
+    vertical_corner(vec3(lo.x, hi.y, hi.z), t);
+    vertical_corner(vec3(hi.x, hi.y, hi.z), t);
     // A box reaching the near plane: any tangent in the frustum, at the near plane.
-    smin = straddles ? -tan_half : clamp(smin, -tan_half, tan_half);
-    smax = straddles ? tan_half : clamp(smax, -tan_half, tan_half);
-    zmin = max(zmin, near);
+    vec2 smin = t.straddles ? -tan_half : clamp(t.smin, -tan_half, tan_half);
+    vec2 smax = t.straddles ? tan_half : clamp(t.smax, -tan_half, tan_half);
+    float zmin = max(t.zmin, near);
     vec3 u = vec3(right.z, up.z, fwd.z);
-    float g = 0.0;
-    for (uint c = 0u; c < 4u; ++c) {
-        vec2 s = vec2((c & 1u) != 0u ? smax.x : smin.x, (c & 2u) != 0u ? smax.y : smin.y);
-        g = max(g, length(u.xy - s * u.z));
-    }
+    float g = max(max(length(u.xy - smin * u.z), length(u.xy - vec2(smax.x, smin.y) * u.z)),
+                  max(length(u.xy - vec2(smin.x, smax.y) * u.z), length(u.xy - smax * u.z)));
     return err * view.v.lod_forward.w * g / zmin;
 }
 

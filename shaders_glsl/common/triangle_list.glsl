@@ -22,11 +22,12 @@ struct TriangleListHeader {
     uint grid_bound_bits; // the same for the finest grid's cells (the node's own error)
 };
 
+// `g`: the point in lattice units (2^-REFINE_LEVELS grid steps).
 uint triangle_vertex(uint slot, ivec2 g) {
     return slot | (uint(g.x) << TRIANGLE_X_SHIFT) | (uint(g.y) << TRIANGLE_Y_SHIFT);
 }
 uint triangle_vertex_slot(uint v) { return bitfieldExtract(v, 0, int(SLOT_BITS)); }
-ivec2 triangle_vertex_grid(uint v) {
+ivec2 triangle_vertex_lattice(uint v) {
     return ivec2((v >> TRIANGLE_X_SHIFT) & TRIANGLE_COORD_MASK, (v >> TRIANGLE_Y_SHIFT) & TRIANGLE_COORD_MASK);
 }
 

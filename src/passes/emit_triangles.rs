@@ -42,13 +42,20 @@ pub struct TriangleListHeader {
     pub culled: u32,
     /// Largest projected error (px) of a drawn triangle's unsplit vertex.
     pub bound_bits: u32,
-    /// Largest projected node error (px) of a node drawn down to its
-    /// grid's cells (what those cells may be off by).
+    /// Largest projected node error (px) of a node coarser than LOD 0
+    /// drawn down to its grid's cells (what those cells may be off by; a
+    /// LOD-0 node's finest triangles lie on the finest surface).
     pub grid_bound_bits: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<TriangleListHeader>() == structs::TRIANGLE_LIST_HEADER);
 const _: () = assert!(NODE_QUADS == 1 << k::EMIT_THREAD_DEPTH);
+// emit_triangles_fine.glsl writes out the four bisections of two levels.
+const _: () = assert!(k::REFINE_LEVELS == 2);
+// A vertex code: slot, and x and y in lattice units (0..=NODE_QUADS << REFINE_LEVELS).
+const _: () = assert!((NODE_QUADS << k::REFINE_LEVELS) <= k::TRIANGLE_COORD_MASK);
+const _: () = assert!(k::TRIANGLE_X_SHIFT == k::SLOT_BITS);
+const _: () = assert!(k::TRIANGLE_Y_SHIFT + k::TRIANGLE_COORD_MASK.count_ones() <= 32);
 
 impl TriangleListHeader {
     /// The error bound the frame achieved (px): the larger of the two.

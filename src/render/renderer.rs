@@ -98,8 +98,9 @@ pub enum LodRule {
     /// with a strict bound (`emit_triangles`, `terrain_triangles`). Its
     /// bounds are computed for the whole world when the renderer is made.
     /// With effect `occlusion` it culls its subtrees in two phases against
-    /// the depth pyramid. Not yet: refinement below the samples, cone
-    /// culling.
+    /// the depth pyramid. A LOD-0 node continues the bisection below its
+    /// samples, on the Catmull-Rom surface, to the finest lattice. Not
+    /// yet: cone culling.
     Triangle,
 }
 

@@ -3,8 +3,7 @@
 
 use crate::gpu::vk;
 use crate::world::{
-    BakedNode, PayloadFormat, TexelKind, ATLAS_SIDE, CONE_BLOCKS_PER_NODE_SIDE, NODE_SAMPLES, PATCHES_PER_NODE_SIDE,
-    SPLAT_RES,
+    BakedNode, PayloadFormat, TexelKind, ATLAS_SIDE, CONE_BLOCKS_PER_NODE_SIDE, PATCHES_PER_NODE_SIDE, SPLAT_RES,
 };
 
 pub(super) struct AtlasKind {
@@ -36,7 +35,9 @@ pub(super) const ATLASES: [AtlasKind; 10] = [
     plain("atlas_patch_holes", vk::Format::R8_UINT, PATCHES_PER_NODE_SIDE, 1),
     plain("atlas_patch_errors", vk::Format::R32G32_SFLOAT, PATCHES_PER_NODE_SIDE, 8),
     plain("atlas_control", vk::Format::R16_UINT, SPLAT_RES as u32, 2),
-    plain("atlas_vertex_bounds", vk::Format::R32_UINT, NODE_SAMPLES as u32, 4),
+    // The heights' layout: a LOD-0 node's vertices below its samples read
+    // their parents one sample past the node.
+    plain("atlas_vertex_bounds", vk::Format::R32_UINT, ATLAS_SIDE as u32, 4),
 ];
 
 /// Vulkan format and layer bytes of atlas `i` for payloads in `format`.

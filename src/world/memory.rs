@@ -51,7 +51,7 @@ impl MemoryReport {
                 // A control-map world's words (`with_control`).
                 kind("control", "R16_UINT 65x65", 0, 0),
                 // The per-triangle rule's vertex numbers (`with_vertex_bounds`).
-                kind("vertex bounds", "R32_UINT 129x129", 0, 0),
+                kind("vertex bounds", "R32_UINT 132x132", 0, 0),
                 // id, min/max, error, representation error; on the GPU the
                 // 2 x u32 node description and the f32 LOD error.
                 kind("node scalars", "2 x u32 desc + f32 error", 9 + 4 + 4 + 4, 12),
@@ -70,7 +70,7 @@ impl MemoryReport {
     /// The report of a renderer drawing with the per-triangle rule, whose
     /// nodes carry their vertices' numbers.
     pub fn with_vertex_bounds(mut self) -> Self {
-        let b = super::layout::NODE_SAMPLES * super::layout::NODE_SAMPLES * 4;
+        let b = super::texels::ATLAS_SIDE * super::texels::ATLAS_SIDE * 4;
         let k = self.kinds.iter_mut().find(|k| k.name == "vertex bounds").expect("the vertex bounds kind");
         (k.cpu_bytes, k.gpu_bytes) = (b, b);
         self

@@ -71,6 +71,7 @@ pub struct BakedNode {
     /// triangles against the finest surface), metres.
     pub repr_error_m: f32,
     /// The per-triangle rule's numbers of the node's 129x129 grid points
+    /// and the points past them, in the heights' 132x132 atlas layout
     /// (`world::vertex_bounds`): f16 error | f16 reach << 16. Attached after
     /// the load by a renderer that draws with the rule (the world's bounds
     /// are computed whole); empty otherwise, and never in the cache file.

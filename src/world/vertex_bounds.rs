@@ -1,6 +1,7 @@
 //! Every vertex's numbers for the per-triangle rule ([`super::vertex_rule`])
 //! over a whole world, the way nodes carry them: per node, its 129 x 129
-//! grid points' saturated error and vertical reach (f16 each, rounded up),
+//! grid points' saturated error and vertical reach (f16 each, rounded up;
+//! in the heights' atlas layout, with the points past the node around),
 //! and a refinement bound (its quads' centres merged: what the traversal
 //! tests before it draws the node's children).
 //!
@@ -21,9 +22,10 @@
 
 use super::bintree::{classify, diamond, Bounds, Kind, VertexBound};
 use super::holes::Hole;
-use super::layout::{NodeId, WorldDesc, NODE_QUADS, NODE_SAMPLES};
+use super::layout::{NodeId, WorldDesc, NODE_QUADS};
 use super::payload::BakedNode;
 use super::source::HeightSource;
+use super::texels::{ATLAS_BORDER, ATLAS_SIDE};
 use super::vertex_bounds_cache::{OwnedParts, Parts};
 use super::vertex_bounds_exact::{diamond_gap, SampleGrid};
 use super::vertex_bounds_fine::{block_numbers, Samples, BLOCK, UNITS};
@@ -350,16 +352,27 @@ impl VertexBoundsTree {
         &self.world
     }
 
-    /// Node `id`'s grid points, row-major from its south-west corner: the
+    /// Node `id`'s grid points in the heights' atlas layout (texel t holds
+    /// grid point t - ATLAS_BORDER, row-major from the south-west): the
     /// error's f16 bits in the low half, the reach's in the high half (both
-    /// rounded up; an empty diamond's are 0).
+    /// rounded up; an empty diamond's are 0). The margin holds the points
+    /// past the node (a LOD-0 node's vertices below its samples read their
+    /// parents there); a point past the lattice is infinite, so it never
+    /// lowers a number taken as the smaller of two.
     pub fn node_values(&self, id: NodeId) -> Vec<u32> {
         let step = 1i64 << id.lod;
-        let first = I64Vec2::new(i64::from(id.x), i64::from(id.y)) * i64::from(NODE_QUADS) * step;
-        let mut out = Vec::with_capacity(NODE_SAMPLES * NODE_SAMPLES);
-        for j in 0..NODE_SAMPLES as i64 {
-            for i in 0..NODE_SAMPLES as i64 {
+        let border = ATLAS_BORDER as i64;
+        let first = (I64Vec2::new(i64::from(id.x), i64::from(id.y)) * i64::from(NODE_QUADS) - border) * step;
+        let last = I64Vec2::new(self.side[0] as i64 - 1, self.side[1] as i64 - 1);
+        let inf = u32::from(half::f16::INFINITY.to_bits());
+        let mut out = Vec::with_capacity(ATLAS_SIDE * ATLAS_SIDE);
+        for j in 0..ATLAS_SIDE as i64 {
+            for i in 0..ATLAS_SIDE as i64 {
                 let s = first + I64Vec2::new(i, j) * step;
+                if s.cmplt(I64Vec2::ZERO).any() || s.cmpgt(last).any() {
+                    out.push(inf | inf << 16);
+                    continue;
+                }
                 let k = self.index(s);
                 out.push(u32::from(up_f16_bits(self.error[k])) | u32::from(up_f16_bits(self.reach[k])) << 16);
             }

@@ -114,8 +114,8 @@ pub struct ViewpointArgs {
     pub slots: Option<u32>,
     /// LOD selection: `patch` (per 8x8-quad patch, Far Cry 5's) or
     /// `triangle` (per triangle inside each node, a restricted bintree with
-    /// saturated errors; computes the world's per-vertex bounds first, and
-    /// has no refinement below the samples or cone culling yet).
+    /// saturated errors, refined below the samples; computes the world's
+    /// per-vertex bounds first; no cone culling yet).
     #[arg(long, default_value = "patch", value_parser = parse_lod_rule)]
     pub lod_rule: LodRule,
 }
