@@ -203,7 +203,15 @@ fn the_per_triangle_rule_with_every_effect_is_clean_under_synchronization_valida
     gpu_test_with(&syncval(), |ctx| {
         for mode in [QueueMode::Single, QueueMode::SplitOneQueue] {
             let ran = run(ctx, Output::default(), DepthOptions::default(), mode, LodRule::Triangle);
-            for p in ["emit_triangles", "terrain_triangles", "grass_draw", "cliff_meshes", "sun_shadows", "vt_pages"] {
+            for p in [
+                "emit_triangles",
+                "emit_fine",
+                "terrain_triangles",
+                "grass_draw",
+                "cliff_meshes",
+                "sun_shadows",
+                "vt_pages",
+            ] {
                 assert!(ran.contains(p), "{mode:?}: {p} did not run: {ran:?}");
             }
             for p in ["select_patches", "cull_patches", "terrain_geometry", "terrain_holes", "cull_occluded"] {

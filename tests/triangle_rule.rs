@@ -16,6 +16,7 @@ use common::terrain::{adversarial_views, adversarial_world, view, Rig, ADVERSARI
 use std::sync::Arc;
 use vista::bench::accuracy_error::projected_px;
 use vista::passes::cull_patches::CullStages;
+use vista::passes::emit_triangles::{vertex_code_point, TriangleListHeader};
 use vista::render::{LodOptions, LodRule, RendererOptions};
 use vista::terrain::TerrainOptions;
 use vista::world::{GridSource, HeightSource, Hole, WorldDesc};
@@ -257,17 +258,21 @@ fn every_node_s_triangles_cover_it_exactly_down_to_the_finest_lattice() {
         let h = emit.read_header(ctx).unwrap();
         assert_eq!(h.overflow, 0);
         let bytes = ctx.read_buffer(emit.list()).unwrap();
-        let codes: &[u32] = bytemuck::cast_slice(&bytes[48..][..h.drawn() as usize * 12]);
+        let first = std::mem::size_of::<TriangleListHeader>();
+        let codes: &[u32] = bytemuck::cast_slice(&bytes[first..][..h.drawn() as usize * 12]);
         let (mut area, mut finest) = (std::collections::BTreeMap::new(), 0usize);
-        // A vertex code: slot (11 bits), x and y in lattice units (10 bits each).
-        let point = |c: u32| (i64::from((c >> 11) & 0x3ff), i64::from((c >> 21) & 0x3ff));
+        let point = |c: u32| {
+            let (_, [x, y]) = vertex_code_point(c);
+            (i64::from(x), i64::from(y))
+        };
+        let slot = |c: u32| vertex_code_point(c).0;
         for t in codes.chunks_exact(3) {
-            assert!(t[1] & 0x7ff == t[0] & 0x7ff && t[2] & 0x7ff == t[0] & 0x7ff, "a triangle across slots");
+            assert!(slot(t[1]) == slot(t[0]) && slot(t[2]) == slot(t[0]), "a triangle across slots");
             let (a, b, c) = (point(t[0]), point(t[1]), point(t[2]));
             let doubled = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
             assert!(doubled > 0, "{a:?} {b:?} {c:?} not counter-clockwise");
             finest += usize::from(doubled == 1);
-            *area.entry(t[0] & 0x7ff).or_insert(0i64) += doubled;
+            *area.entry(slot(t[0])).or_insert(0i64) += doubled;
         }
         let short: Vec<_> = area.iter().filter(|(_, a)| **a != 2 * 512 * 512).collect();
         eprintln!("{} triangles over {} nodes, {finest} of the finest lattice", h.drawn(), area.len());

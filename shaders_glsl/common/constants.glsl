@@ -94,17 +94,26 @@
 #define REFINE_BUCKETS 256u
 #define REFINE_BUCKETS_PER_OCTAVE 16u
 // The per-triangle rule (emit_triangles): a vertex of the emitted index
-// list is slot | x << TRIANGLE_X_SHIFT | y << TRIANGLE_Y_SHIFT, x and y in
-// lattice units of its node (2^-REFINE_LEVELS grid steps, 0..NODE_QUADS <<
-// REFINE_LEVELS: a LOD-0 node refines below its samples); each workgroup
-// thread walks one of the node's triangles at this depth (2 << depth = its
-// 256 threads).
-#define TRIANGLE_X_SHIFT 11u
-#define TRIANGLE_Y_SHIFT 21u
-#define TRIANGLE_COORD_MASK 0x3FFu
+// list is its point, x and y in lattice units of its node (2^-REFINE_LEVELS
+// grid steps, 0..NODE_QUADS << REFINE_LEVELS: a LOD-0 node refines below
+// its samples), and its slot: the low TRIANGLE_LOW_BITS of x, then of y,
+// then the high TRIANGLE_HIGH_BITS of x, then of y, then the slot. The
+// lowest byte thus tells apart the points of a 16 x 16 window: lavapipe's
+// vertex cache hashes an index by its lowest byte, and with the slot there
+// every vertex of a node took the same entry (no vertex was shaded once).
+// Each workgroup thread walks one of the node's triangles at this depth
+// (2 << depth = its 256 threads).
+#define TRIANGLE_LOW_BITS 4u
+#define TRIANGLE_HIGH_BITS 6u
+#define TRIANGLE_SLOT_SHIFT 20u
 #define EMIT_THREAD_DEPTH 7u
 // Triangles the index list holds (48 MiB); beyond, a triangle is counted, not drawn.
 #define MAX_EMITTED_TRIANGLES 4194304u
+// LOD-0 cell halves a phase's fine list holds (4 MiB), each walked below
+// the samples by one emit_fine invocation; beyond, emit_triangles draws a
+// cell half whole and counts it (its node's error then bounds it).
+#define MAX_FINE_CELLS 1048576u
+#define FINE_GROUP_SIZE 64u
 // Counters before the per-slot levels in the selection buffer.
 #define SELECT_HEADER_WORDS 4u
 // A region no listed node covers (outside the world, or no root yet).

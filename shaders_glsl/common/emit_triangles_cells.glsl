@@ -1,8 +1,8 @@
-// emit_triangles' walk below a LOD-0 node's samples (its includer's
-// globals, walk steps and decisions come first): the cell halves `walk`
-// marked, each walked down to the finest lattice in a loop of its own, so
-// the grid's walk holds none of these decisions (lavapipe runs every
-// branch of a loop's body, masked).
+// The walk below a LOD-0 node's samples (emit_triangles_core.glsl's
+// globals, walk steps and numbers come first): a cell half emit_triangles
+// queued, walked down to the finest lattice by one emit_fine invocation,
+// so the grid's walk holds none of these decisions (lavapipe runs every
+// branch of a loop's body, masked, in every workgroup).
 #ifndef VISTA_EMIT_TRIANGLES_CELLS_GLSL
 #define VISTA_EMIT_TRIANGLES_CELLS_GLSL
 
@@ -43,32 +43,11 @@ void walk_fine(Tri root) {
     }
 }
 
-// The cell halves `walk` marked under `root`, each walked below the
-// samples: one loop over the marks of all words (on lavapipe a loop's body
-// runs once even when no invocation enters it, so one loop, not a loop a
-// word).
-void walk_cells(Tri root) {
-    uint base = gl_LocalInvocationID.x * FINE_WORDS;
-    uint w = 0u;
-    uint bits = s_fine[base];
-    while (true) {
-        while (bits == 0u && w + 1u < FINE_WORDS) {
-            w += 1u;
-            bits = s_fine[base + w];
-        }
-        if (bits == 0u) {
-            break;
-        }
-        uint p = 32u * w + uint(findLSB(bits));
-        bits &= bits - 1u;
-        Tri t = root;
-        for (uint d = 0u; d < CELL_DEPTH; ++d) {
-            t = half_of(t, (p >> (CELL_DEPTH - 1u - d)) & 1u);
-        }
-        find_centres(min(min(t.apex, t.b), t.c));
-        walk_fine(t);
-    }
+// Walks LOD-0 cell half t below the samples, its cell's 3 x 3 centres
+// found first.
+void walk_cell(Tri t) {
+    find_centres(min(min(t.apex, t.b), t.c));
+    walk_fine(t);
 }
-
 
 #endif

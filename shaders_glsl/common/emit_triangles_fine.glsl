@@ -88,7 +88,7 @@ Numbers centre_1(ivec2 v) {
 
 // The quad centres of the 3 x 3 cells around the cell a walk below the
 // samples is in: every vertex under a cell half takes its numbers from
-// these, so they are found once a cell half (walk_cells), not once a
+// these, so they are found once a cell half (walk_cell), not once a
 // vertex.
 Numbers g_centres[9];
 // The first one's point (node-local lattice).

@@ -2,8 +2,10 @@
 //! workgroup per drawn node): every node's cut of its bintree, by its
 //! vertices' baked numbers (`world::vertex_bounds`), into one index list of
 //! vertex codes that `terrain_triangles` draws (emit_triangles.comp says
-//! how the cut stays conforming across nodes). Writes the frame's view
-//! first, as `select_patches` does on the per-patch path. With effect
+//! how the cut stays conforming across nodes). The LOD-0 cell halves its
+//! cut reaches go to the fine list, which `emit_fine` walks below the
+//! samples into the same index list. Writes the frame's view first, as
+//! `select_patches` does on the per-patch path. With effect
 //! `occlusion` it runs twice a frame ([`EmitPhase`]): phase 1 emits the
 //! subtrees visible when last tested, phase 2 (after `hiz_build`) the
 //! others the depth pyramid leaves visible, into its own list.
@@ -46,16 +48,43 @@ pub struct TriangleListHeader {
     /// drawn down to its grid's cells (what those cells may be off by; a
     /// LOD-0 node's finest triangles lie on the finest surface).
     pub grid_bound_bits: u32,
+    /// LOD-0 cell halves drawn whole because the fine list was full (their
+    /// node's error counts in `grid_bound_bits`).
+    pub unrefined: u32,
+}
+
+/// Host twin of `FineCellsHeader` (fine_cells.glsl): `emit_fine`'s
+/// dispatch, then the cell halves appended.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FineCellsHeader {
+    pub groups: [u32; 3],
+    pub count: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<TriangleListHeader>() == structs::TRIANGLE_LIST_HEADER);
+const _: () = assert!(std::mem::size_of::<FineCellsHeader>() == structs::FINE_CELLS_HEADER);
+// A fine cell: slot | its index among the node's 2 << (2 x EMIT_THREAD_DEPTH) cell halves.
+const _: () = assert!(k::SLOT_BITS + 2 * k::EMIT_THREAD_DEPTH < 32);
 const _: () = assert!(NODE_QUADS == 1 << k::EMIT_THREAD_DEPTH);
 // emit_triangles_fine.glsl writes out the four bisections of two levels.
 const _: () = assert!(k::REFINE_LEVELS == 2);
-// A vertex code: slot, and x and y in lattice units (0..=NODE_QUADS << REFINE_LEVELS).
-const _: () = assert!((NODE_QUADS << k::REFINE_LEVELS) <= k::TRIANGLE_COORD_MASK);
-const _: () = assert!(k::TRIANGLE_X_SHIFT == k::SLOT_BITS);
-const _: () = assert!(k::TRIANGLE_Y_SHIFT + k::TRIANGLE_COORD_MASK.count_ones() <= 32);
+// A vertex code: x and y in lattice units (0..=NODE_QUADS << REFINE_LEVELS),
+// their low and high bits, then the slot (constants.glsl's TRIANGLE_*).
+const _: () = assert!((NODE_QUADS << k::REFINE_LEVELS) >> k::TRIANGLE_LOW_BITS < 1 << k::TRIANGLE_HIGH_BITS);
+const _: () = assert!(k::TRIANGLE_SLOT_SHIFT == 2 * (k::TRIANGLE_LOW_BITS + k::TRIANGLE_HIGH_BITS));
+const _: () = assert!(k::TRIANGLE_SLOT_SHIFT + k::SLOT_BITS <= 32);
+
+/// A vertex code's slot and point (x, y in lattice units): the host twin of
+/// triangle_list.glsl's decoding (tests read the list back with it).
+pub fn vertex_code_point(code: u32) -> (u32, [u32; 2]) {
+    let low = (1 << k::TRIANGLE_LOW_BITS) - 1;
+    let high = (1 << k::TRIANGLE_HIGH_BITS) - 1;
+    let l = k::TRIANGLE_LOW_BITS;
+    let x = (code & low) | (((code >> (2 * l)) & high) << l);
+    let y = ((code >> l) & low) | (((code >> (2 * l + k::TRIANGLE_HIGH_BITS)) & high) << l);
+    (code >> k::TRIANGLE_SLOT_SHIFT, [x, y])
+}
 
 impl TriangleListHeader {
     /// The error bound the frame achieved (px): the larger of the two.
@@ -76,6 +105,7 @@ impl TriangleListHeader {
         self.clamped += late.clamped;
         self.forced += late.forced;
         self.culled += late.culled;
+        self.unrefined += late.unrefined;
         self.bound_bits = self.bound_bits.max(late.bound_bits);
         self.grid_bound_bits = self.grid_bound_bits.max(late.grid_bound_bits);
         self
@@ -121,6 +151,8 @@ struct EmitOcclusion {
     /// Which depth-7 triangles phase 1's cut reached (a bit each, as the
     /// visibility bits), for phase 2; one per parity.
     reached: PerFrame<Buffer>,
+    /// Phase 2's fine list (as `fine`).
+    fine: Buffer,
 }
 
 /// What every recording of the pass reads.
@@ -148,7 +180,26 @@ pub struct EmitTriangles {
     /// way from a vertex code's slot to its node), one per frame parity.
     slot_nodes: PerFrame<Buffer>,
     capacity: u32,
+    /// The LOD-0 cell halves the cut reaches, for `emit_fine` (its
+    /// dispatch's header, then a word each). Written and read within the
+    /// frame's LOD phase on one queue, so one copy, not one per parity.
+    fine: Buffer,
     occlusion: Option<EmitOcclusion>,
+}
+
+fn fine_buffer(ctx: &Context, name: &str) -> Result<Buffer> {
+    Buffer::new(
+        ctx,
+        &BufferDesc {
+            name,
+            size: (structs::FINE_CELLS_HEADER + k::MAX_FINE_CELLS as usize * 4) as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::INDIRECT_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            location: MemoryLocation::GpuOnly,
+        },
+    )
 }
 
 fn list_buffers(ctx: &Context, name: &str, capacity: u32) -> Result<PerFrame<Buffer>> {
@@ -207,6 +258,7 @@ impl EmitOcclusion {
             list: list_buffers(ctx, "emit_triangles_late_list", capacity)?,
             visibility,
             reached: bits("triangle_reached")?,
+            fine: fine_buffer(ctx, "emit_triangles_late_fine")?,
         })
     }
 }
@@ -236,6 +288,7 @@ impl EmitTriangles {
             list,
             slot_nodes,
             capacity,
+            fine: fine_buffer(ctx, "emit_triangles_fine")?,
             occlusion: occlusion.then(|| EmitOcclusion::new(ctx, slot_capacity, capacity)).transpose()?,
         })
     }
@@ -253,6 +306,15 @@ impl EmitTriangles {
     /// Phase 2's list of the frame being (or last) recorded.
     pub fn late_list(&self) -> Option<&Buffer> {
         self.occlusion.as_ref().map(|o| o.list.current())
+    }
+
+    /// The fine list of phase 2 (`late`) or of phase 1 / the only phase.
+    pub fn fine_cells(&self, late: bool) -> &Buffer {
+        match (late, &self.occlusion) {
+            (true, Some(o)) => &o.fine,
+            (true, None) => panic!("phase 2's fine list: built without occlusion"),
+            (false, _) => &self.fine,
+        }
     }
 
     pub fn slot_nodes(&self) -> &Buffer {
@@ -275,12 +337,14 @@ impl EmitTriangles {
     }
 
     pub fn memory(&self) -> impl Iterator<Item = &Buffer> {
-        self.list.all().iter().chain(self.slot_nodes.all())
+        self.list.all().iter().chain(self.slot_nodes.all()).chain([&self.fine])
     }
 
     /// Occlusion's buffers (phase 2's lists, the visibility bits).
     pub fn occlusion_memory(&self) -> impl Iterator<Item = &Buffer> {
-        self.occlusion.iter().flat_map(|o| o.list.all().iter().chain(o.visibility.all()).chain(o.reached.all()))
+        self.occlusion
+            .iter()
+            .flat_map(|o| o.list.all().iter().chain(o.visibility.all()).chain(o.reached.all()).chain([&o.fine]))
     }
 
     /// Emits every drawn node's triangles of `phase` into its list, after
@@ -290,11 +354,13 @@ impl EmitTriangles {
     /// the indirect draw and every later command.
     pub fn record(&self, rec: &mut Recorder, inputs: &EmitInputs, phase: EmitPhase) {
         let occlusion = || self.occlusion.as_ref().expect("built with occlusion");
+        let late = matches!(phase, EmitPhase::Late(..));
         let (pipeline, list) = match phase {
             EmitPhase::All => (&self.pipeline, self.list()),
             EmitPhase::Early => (&occlusion().early, self.list()),
             EmitPhase::Late(..) => (&occlusion().late, occlusion().list.current()),
         };
+        let fine = FineCellsHeader { groups: [0, 1, 1], count: 0 };
         let header = TriangleListHeader {
             instance_count: 1,
             first_index: (structs::TRIANGLE_LIST_HEADER / 4) as u32,
@@ -305,12 +371,14 @@ impl EmitTriangles {
             rec.update_buffer(inputs.view, 0, inputs.view_bytes);
         }
         rec.update_buffer(list, 0, bytemuck::bytes_of(&header));
+        rec.update_buffer(self.fine_cells(late), 0, bytemuck::bytes_of(&fine));
         if let (EmitPhase::All, Some(o)) = (phase, &self.occlusion) {
             rec.update_buffer(o.list.current(), 0, bytemuck::bytes_of(&header));
         }
         rec.barrier(vk::PipelineStageFlags2::ALL_TRANSFER, vk::PipelineStageFlags2::COMPUTE_SHADER);
         rec.bind_pipeline(pipeline);
-        let mut bindings = self.bindings(inputs, list);
+        let mut bindings = self.bindings(inputs, list, late);
+        bindings.push((sh::TRAVERSE_OUT, Resource::Buffer(inputs.traverse.output())));
         let mut depth_size = [0; 2];
         if let Some(o) = self.occlusion.as_ref().filter(|_| !matches!(phase, EmitPhase::All)) {
             bindings.push((sh::VISIBILITY, Resource::Buffer(o.visibility.current())));
@@ -330,10 +398,16 @@ impl EmitTriangles {
         );
     }
 
-    fn bindings<'b>(&'b self, i: &EmitInputs<'b>, list: &'b Buffer) -> Vec<(crate::gpu::Binding, Resource<'b>)> {
+    /// What `emit_triangles` and `emit_fine` both bind (the same numbers,
+    /// emit_triangles_core.glsl): phase `late`'s list and fine list.
+    pub fn bindings<'b>(
+        &'b self,
+        i: &EmitInputs<'b>,
+        list: &'b Buffer,
+        late: bool,
+    ) -> Vec<(crate::gpu::Binding, Resource<'b>)> {
         let tree = i.tree;
         vec![
-            (sh::TRAVERSE_OUT, Resource::Buffer(i.traverse.output())),
             (sh::VIEW, Resource::Buffer(i.view)),
             (sh::LOD_MAP, Resource::Image(i.lod_map.image(), vk::ImageLayout::GENERAL)),
             (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
@@ -343,6 +417,7 @@ impl EmitTriangles {
             (sh::NODE_ERRORS, Resource::Buffer(&tree.node_errors)),
             (sh::TRIS, Resource::Buffer(list)),
             (sh::SLOT_NODES, Resource::Buffer(self.slot_nodes())),
+            (sh::FINE, Resource::Buffer(self.fine_cells(late))),
         ]
     }
 

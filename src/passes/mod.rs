@@ -5,6 +5,7 @@ pub mod counters;
 pub mod cull_occluded;
 pub mod cull_patches;
 pub mod debug_view;
+pub mod emit_fine;
 pub mod emit_triangles;
 pub mod gbuffer_tiles;
 pub mod hiz_build;

@@ -160,6 +160,7 @@ impl FramePasses<'_> {
                 EmitInputs { traverse, tree, lod_map, view: view_buffer, view_bytes, frustum: self.stages.frustum };
             let phase = if self.triangle_phases(t) { EmitPhase::Early } else { EmitPhase::All };
             pass(frame, log, FramePass::EMIT_TRIANGLES, |r| t.emit.record(r, &inputs, phase));
+            pass(frame, log, FramePass::EMIT_FINE, |r| t.fine.record(r, &t.emit, &inputs, false));
             return;
         }
         pass(frame, log, FramePass::SELECT_PATCHES, |r| {
@@ -221,7 +222,12 @@ impl FramePasses<'_> {
         tri: &TrianglePath,
     ) {
         let Some(hiz) = &tri.hiz else { return };
-        let late = [FramePass::HIZ_BUILD, FramePass::EMIT_TRIANGLES_LATE, FramePass::TERRAIN_TRIANGLES_LATE];
+        let late = [
+            FramePass::HIZ_BUILD,
+            FramePass::EMIT_TRIANGLES_LATE,
+            FramePass::EMIT_FINE_LATE,
+            FramePass::TERRAIN_TRIANGLES_LATE,
+        ];
         if !self.triangle_phases(tri) {
             let why = if self.stages.occlusion { Skip::LodCamera } else { Skip::OcclusionOff };
             late.into_iter().for_each(|p| log.skipped(p, why));
@@ -240,6 +246,7 @@ impl FramePasses<'_> {
         };
         let phase = EmitPhase::Late(pyramid, targets.depth.extent);
         pass(frame, log, FramePass::EMIT_TRIANGLES_LATE, |r| tri.emit.record(r, &inputs, phase));
+        pass(frame, log, FramePass::EMIT_FINE_LATE, |r| tri.fine.record(r, &tri.emit, &inputs, true));
         pass(frame, log, FramePass::TERRAIN_TRIANGLES_LATE, |r| {
             tri.draw.record(r, targets, gb, view, &tri.emit, true, tree, self.sink())
         });

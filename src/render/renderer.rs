@@ -26,6 +26,7 @@ use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullPatches, CullStages};
 use crate::passes::debug_view::{DebugView, DebugViewPass};
+use crate::passes::emit_fine::EmitFine;
 use crate::passes::emit_triangles::EmitTriangles;
 use crate::passes::gbuffer_tiles::GbufferTiles;
 use crate::passes::hiz_build::HizBuild;
@@ -226,6 +227,7 @@ pub struct TerrainRenderer {
 /// The per-triangle rule's passes ([`LodRule::Triangle`]).
 pub struct TrianglePath {
     pub emit: EmitTriangles,
+    pub fine: EmitFine,
     pub draw: TerrainTriangles,
     /// Effect `occlusion`: the depth pyramid of phase 1's draw, which the
     /// cut's phase 2 tests its subtrees against.

@@ -38,6 +38,8 @@ impl FramePass {
     pub const CULL_PATCHES: FramePass = FramePass::new(sh::cull_patches::PASS);
     /// The per-triangle rule's cut (instead of select and cull).
     pub const EMIT_TRIANGLES: FramePass = FramePass::new(sh::emit_triangles::PASS);
+    /// The per-triangle rule below a LOD-0 node's samples (the cells the cut reached).
+    pub const EMIT_FINE: FramePass = FramePass::new(sh::emit_fine::PASS);
     pub const TERRAIN_GEOMETRY: FramePass = FramePass::new(sh::terrain_geometry_vert::PASS);
     pub const TERRAIN_HOLES: FramePass = FramePass::new(sh::terrain_holes_vert::PASS);
     /// The per-triangle rule's draw (instead of terrain_geometry and terrain_holes).
@@ -50,6 +52,7 @@ impl FramePass {
     /// Phase 2 of the per-triangle rule's cut: the subtrees the pyramid
     /// left visible that phase 1 did not draw, and their draw.
     pub const EMIT_TRIANGLES_LATE: FramePass = FramePass::phase_two(sh::emit_triangles::PASS);
+    pub const EMIT_FINE_LATE: FramePass = FramePass::phase_two(sh::emit_fine::PASS);
     pub const TERRAIN_TRIANGLES_LATE: FramePass = FramePass::phase_two(sh::terrain_triangles_vert::PASS);
     pub const CLASSIFY_TILES: FramePass = FramePass::new(sh::classify_tiles::PASS);
     /// One draw per variant built, each timed on its own.
@@ -94,6 +97,7 @@ impl FramePass {
             FramePass::SELECT_PATCHES,
             FramePass::CULL_PATCHES,
             FramePass::EMIT_TRIANGLES,
+            FramePass::EMIT_FINE,
         ];
         if compute.contains(&self) {
             QueueKind::Compute
@@ -139,7 +143,7 @@ enum Step {
     Point(FramePoint),
 }
 
-const FRAME: [Step; 25] = [
+const FRAME: [Step; 27] = [
     Step::Pass(FramePass::QUADTREE_UPDATE, &[]),
     Step::Pass(FramePass::TRAVERSE, &[]),
     Step::Pass(FramePass::LOD_MAP, &[]),
@@ -147,6 +151,7 @@ const FRAME: [Step; 25] = [
     Step::Pass(FramePass::SELECT_PATCHES, &[]),
     Step::Pass(FramePass::CULL_PATCHES, &[]),
     Step::Pass(FramePass::EMIT_TRIANGLES, &[]),
+    Step::Pass(FramePass::EMIT_FINE, &[]),
     Step::Point(FramePoint::BeforeTerrainDraws),
     Step::Pass(FramePass::TERRAIN_GEOMETRY, &[]),
     Step::Pass(FramePass::TERRAIN_HOLES, &[Effect::Holes]),
@@ -156,6 +161,7 @@ const FRAME: [Step; 25] = [
     Step::Pass(FramePass::TERRAIN_GEOMETRY_LATE, &[Effect::Occlusion]),
     Step::Pass(FramePass::TERRAIN_HOLES_LATE, &[Effect::Holes, Effect::Occlusion]),
     Step::Pass(FramePass::EMIT_TRIANGLES_LATE, &[Effect::Occlusion]),
+    Step::Pass(FramePass::EMIT_FINE_LATE, &[Effect::Occlusion]),
     Step::Pass(FramePass::TERRAIN_TRIANGLES_LATE, &[Effect::Occlusion]),
     Step::Point(FramePoint::AfterTerrainDraws),
     Step::Point(FramePoint::BeforeClassify),

@@ -73,6 +73,13 @@ fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleL
         triangle_bound_words(f32::from_bits(t.grid_bound_bits)),
         t.clamped
     );
+    if t.unrefined > 0 {
+        println!(
+            "note:    {} LOD-0 cell halves drawn whole: the fine list (emit_fine's) was full; their node's error \
+             is in the bound",
+            t.unrefined
+        );
+    }
 }
 
 pub fn print_stats(s: &RenderStats, stages: CullStages, occlusion: bool) {

@@ -13,6 +13,7 @@ use crate::gpu::{vk, Buffer, BufferDesc, Context, MemoryLocation};
 use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches};
+use crate::passes::emit_fine::EmitFine;
 use crate::passes::emit_triangles::EmitTriangles;
 use crate::passes::gbuffer_tiles::{GbufferTiles, TileMaterials};
 use crate::passes::hiz_build::HizBuild;
@@ -146,8 +147,10 @@ fn graph(decisions: &[EffectDecision], options: &RendererOptions) -> PassGraph {
     ];
     let per_triangle = [
         FramePass::EMIT_TRIANGLES,
+        FramePass::EMIT_FINE,
         FramePass::TERRAIN_TRIANGLES,
         FramePass::EMIT_TRIANGLES_LATE,
+        FramePass::EMIT_FINE_LATE,
         FramePass::TERRAIN_TRIANGLES_LATE,
     ];
     let (off, why) = match options.lod.rule {
@@ -238,6 +241,7 @@ fn terrain_draws(
     let triangles = match triangle {
         Some((slots, occlusion)) => Some(TrianglePath {
             emit: EmitTriangles::new(ctx, slots, occlusion)?,
+            fine: EmitFine::new(ctx)?,
             draw: TerrainTriangles::new(ctx, depth, sink)?,
             hiz: occlusion.then(|| HizBuild::new(ctx)).transpose()?,
         }),
