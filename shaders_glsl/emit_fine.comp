@@ -15,7 +15,7 @@ layout(local_size_x = FINE_GROUP_SIZE) in;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= min(fine.header.count, MAX_FINE_CELLS)) {
+    if (i >= min(fine.header.count, pc.fine_capacity)) {
         return;
     }
     uint c = fine.cells[i];

@@ -163,7 +163,7 @@ void queue_cells(uint t) {
         return;
     }
     uint first = atomicAdd(fine.header.count, n);
-    uint end = min(first + n, MAX_FINE_CELLS);
+    uint end = min(first + n, pc.fine_capacity);
     if (end > first) {
         uint groups = (end + FINE_GROUP_SIZE - 1u) / FINE_GROUP_SIZE - (first + FINE_GROUP_SIZE - 1u) / FINE_GROUP_SIZE;
         if (groups != 0u) {
@@ -176,7 +176,7 @@ void queue_cells(uint t) {
         while (bits != 0u) {
             uint index = (t << CELL_DEPTH) | (32u * w + uint(findLSB(bits)));
             bits &= bits - 1u;
-            if (i < MAX_FINE_CELLS) {
+            if (i < pc.fine_capacity) {
                 fine.cells[i] = fine_cell(g_slot, index);
             } else {
                 Tri c = triangle_at(2u * EMIT_THREAD_DEPTH, index);

@@ -13,6 +13,7 @@ mod common;
 use common::finest::Finest;
 use common::gpu_test;
 use common::terrain::{adversarial_views, adversarial_world, view, Rig, ADVERSARIAL, MAGENTA_RGBA};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 use vista::bench::accuracy_error::projected_px;
 use vista::passes::cull_patches::CullStages;
@@ -239,10 +240,51 @@ fn occlusion_draws_the_same_picture_with_fewer_triangles() {
     });
 }
 
-/// The emitted list read back, culling off, from 2 m above the ground
-/// (where the LOD-0 nodes refine below their samples, to the finest
-/// lattice): every drawn node's triangles cover its square exactly, their
-/// doubled areas in lattice units summing to 2 x 512^2, all wound
+/// The emitted list (phase 1's: culling off, one phase) read back: each
+/// drawn node's doubled triangle areas in lattice units, every triangle
+/// checked to lie in one slot and wind counter-clockwise, and how many
+/// triangles are of the finest lattice (doubled area 1).
+fn list_areas(ctx: &vista::gpu::Context, tri: &Rig) -> (BTreeMap<u32, i64>, usize) {
+    let emit = &tri.renderer.triangles.as_ref().expect("built").emit;
+    let h = emit.read_header(ctx).unwrap();
+    assert_eq!(h.overflow, 0);
+    let bytes = ctx.read_buffer(emit.list()).unwrap();
+    let first = std::mem::size_of::<TriangleListHeader>();
+    let codes: &[u32] = bytemuck::cast_slice(&bytes[first..][..h.drawn() as usize * 12]);
+    let (mut area, mut finest) = (BTreeMap::new(), 0usize);
+    let point = |c: u32| {
+        let (_, [x, y]) = vertex_code_point(c);
+        (i64::from(x), i64::from(y))
+    };
+    let slot = |c: u32| vertex_code_point(c).0;
+    for t in codes.chunks_exact(3) {
+        assert!(slot(t[1]) == slot(t[0]) && slot(t[2]) == slot(t[0]), "a triangle across slots");
+        let (a, b, c) = (point(t[0]), point(t[1]), point(t[2]));
+        let doubled = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+        assert!(doubled > 0, "{a:?} {b:?} {c:?} not counter-clockwise");
+        finest += usize::from(doubled == 1);
+        *area.entry(slot(t[0])).or_insert(0i64) += doubled;
+    }
+    (area, finest)
+}
+
+/// Nodes whose triangles do not cover their square exactly (2 x 512^2
+/// doubled lattice units).
+fn short_nodes(area: &BTreeMap<u32, i64>) -> Vec<(&u32, &i64)> {
+    area.iter().filter(|(_, a)| **a != 2 * 512 * 512).collect()
+}
+
+/// From 2 m above rough ground, looking level: where the LOD-0 nodes
+/// refine below their samples, to the finest lattice.
+fn near_the_ground(ctx: &vista::gpu::Context, tri: &mut Rig, size: [u32; 2]) {
+    let (_, source) = rough();
+    let z = f64::from(source.sample(500.0, 500.0)) + 2.0;
+    tri.shot(ctx, &view([500.0, 500.0, z], 30.0, -10.0, size, 1.0), CullStages::NONE);
+}
+
+/// The emitted list read back, culling off, from 2 m above the ground:
+/// every drawn node's triangles cover its square exactly, their doubled
+/// areas in lattice units summing to 2 x 512^2, all wound
 /// counter-clockwise. (On lavapipe every loop an invocation runs counts
 /// towards one limit of 65535 iterations, after which its loops end: a walk
 /// cut short left parts of these nodes empty, 14 of 64 nodes here.)
@@ -250,33 +292,56 @@ fn occlusion_draws_the_same_picture_with_fewer_triangles() {
 fn every_node_s_triangles_cover_it_exactly_down_to_the_finest_lattice() {
     gpu_test(|ctx| {
         let size = [128, 96];
-        let (_, source) = rough();
         let mut tri = rig(ctx, LodRule::Triangle, vec![], size);
-        let z = f64::from(source.sample(500.0, 500.0)) + 2.0;
-        tri.shot(ctx, &view([500.0, 500.0, z], 30.0, -10.0, size, 1.0), CullStages::NONE);
-        let emit = &tri.renderer.triangles.as_ref().expect("built").emit;
-        let h = emit.read_header(ctx).unwrap();
-        assert_eq!(h.overflow, 0);
-        let bytes = ctx.read_buffer(emit.list()).unwrap();
-        let first = std::mem::size_of::<TriangleListHeader>();
-        let codes: &[u32] = bytemuck::cast_slice(&bytes[first..][..h.drawn() as usize * 12]);
-        let (mut area, mut finest) = (std::collections::BTreeMap::new(), 0usize);
-        let point = |c: u32| {
-            let (_, [x, y]) = vertex_code_point(c);
-            (i64::from(x), i64::from(y))
-        };
-        let slot = |c: u32| vertex_code_point(c).0;
-        for t in codes.chunks_exact(3) {
-            assert!(slot(t[1]) == slot(t[0]) && slot(t[2]) == slot(t[0]), "a triangle across slots");
-            let (a, b, c) = (point(t[0]), point(t[1]), point(t[2]));
-            let doubled = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
-            assert!(doubled > 0, "{a:?} {b:?} {c:?} not counter-clockwise");
-            finest += usize::from(doubled == 1);
-            *area.entry(slot(t[0])).or_insert(0i64) += doubled;
-        }
-        let short: Vec<_> = area.iter().filter(|(_, a)| **a != 2 * 512 * 512).collect();
-        eprintln!("{} triangles over {} nodes, {finest} of the finest lattice", h.drawn(), area.len());
-        assert!(short.is_empty(), "nodes not covered exactly (slot, doubled area): {short:?}");
+        near_the_ground(ctx, &mut tri, size);
+        let (area, finest) = list_areas(ctx, &tri);
+        eprintln!("{} nodes, {finest} triangles of the finest lattice", area.len());
+        assert!(short_nodes(&area).is_empty(), "nodes not covered exactly: {:?}", short_nodes(&area));
         assert!(finest > 10_000, "only {finest} triangles of the finest lattice");
+    });
+}
+
+/// When the fine list (the cell halves `emit_fine` walks below the
+/// samples) is full, the cells past it are drawn whole, counted as
+/// `unrefined`, and their node's error enters the bound: the nodes stay
+/// covered exactly. With room for none, every queued cell half is
+/// unrefined and no triangle is of the finest lattice; with room for 100,
+/// 100 fewer are. (Measured: 22 096 cell halves queued; the bound 418.7 px
+/// with none refined, 1.00 px with all; 168 437 and 321 777 triangles.)
+#[test]
+fn a_full_fine_list_draws_its_cells_whole_says_so_and_bounds_them() {
+    gpu_test(|ctx| {
+        let size = [128, 96];
+        let mut tri = rig(ctx, LodRule::Triangle, vec![], size);
+        let header = |tri: &Rig| tri.renderer.triangles.as_ref().expect("built").emit.read_header(ctx).unwrap();
+        let limit = |tri: &mut Rig, cells| tri.renderer.triangles.as_mut().expect("built").emit.limit_fine_cells(cells);
+        near_the_ground(ctx, &mut tri, size);
+        let full = header(&tri);
+        assert_eq!(full.unrefined, 0);
+        assert!(full.bound_px() <= 1.0, "bound {} px with room for every cell", full.bound_px());
+        let v = view([500.0, 500.0, f64::from(rough().1.sample(500.0, 500.0)) + 2.0], 30.0, -10.0, size, 1.0);
+        limit(&mut tri, 0);
+        tri.again(ctx, &v, CullStages::NONE);
+        let none = header(&tri);
+        let (area, finest) = list_areas(ctx, &tri);
+        assert!(short_nodes(&area).is_empty(), "nodes not covered exactly: {:?}", short_nodes(&area));
+        assert_eq!(finest, 0, "triangles of the finest lattice with no room in the fine list");
+        assert!(none.unrefined > 100, "{} cell halves queued", none.unrefined);
+        // A LOD-0 cell drawn whole is off the finest surface by up to its
+        // node's error, which the bound must now hold.
+        assert!(f32::from_bits(none.grid_bound_bits) > 0.0 && none.drawn() < full.drawn());
+        limit(&mut tri, 100);
+        tri.again(ctx, &v, CullStages::NONE);
+        let some = header(&tri);
+        assert_eq!(some.unrefined, none.unrefined - 100);
+        assert!(short_nodes(&list_areas(ctx, &tri).0).is_empty());
+        eprintln!(
+            "{} cell halves queued; bound {} px with none refined, {} px with all ({} and {} triangles)",
+            none.unrefined,
+            none.bound_px(),
+            full.bound_px(),
+            none.drawn(),
+            full.drawn()
+        );
     });
 }

@@ -39,6 +39,7 @@ layout(push_constant, std430) uniform EmitPush {
     uint frustum;   // 1: subtrees outside the frustum are dropped (CullStages::frustum)
     uint depth_w;   // LATE: the depth target's size (the pyramid's level 0 is made from it)
     uint depth_h;
+    uint fine_capacity;  // cell halves the fine list holds (MAX_FINE_CELLS; less in tests)
 } pc;
 
 #include "projected_error.glsl"

@@ -7,7 +7,7 @@
 
 use crate::error::Result;
 use crate::gpu::{vk, ComputePipelineDesc, Context, Pipeline, Recorder};
-use crate::passes::emit_triangles::{EmitInputs, EmitPush, EmitTriangles};
+use crate::passes::emit_triangles::{EmitInputs, EmitTriangles};
 use crate::shaders::{consts as k, emit_fine as sh};
 use crate::world::NODE_QUADS;
 
@@ -36,7 +36,7 @@ impl EmitFine {
         let list = if late { emit.late_list().expect("phase 2 built") } else { emit.list() };
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(&self.pipeline, &emit.bindings(inputs, list, late));
-        let push = EmitPush { capacity: emit.capacity(), frustum: u32::from(inputs.frustum), depth_size: [0; 2] };
+        let push = emit.push(inputs, [0; 2]);
         rec.push_constants(&self.pipeline, &push);
         rec.dispatch_indirect(emit.fine_cells(late), 0);
         rec.barrier(

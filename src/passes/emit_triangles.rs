@@ -120,6 +120,8 @@ pub struct EmitPush {
     pub frustum: u32,
     /// Phase 2: the depth target's size (the pyramid's level 0 comes from it).
     pub depth_size: [u32; 2],
+    /// Cell halves the fine list holds.
+    pub fine_capacity: u32,
 }
 
 /// What one recording of the pass emits.
@@ -184,6 +186,8 @@ pub struct EmitTriangles {
     /// dispatch's header, then a word each). Written and read within the
     /// frame's LOD phase on one queue, so one copy, not one per parity.
     fine: Buffer,
+    /// Cell halves the fine lists are used up to (`limit_fine_cells`).
+    fine_capacity: u32,
     occlusion: Option<EmitOcclusion>,
 }
 
@@ -289,6 +293,7 @@ impl EmitTriangles {
             slot_nodes,
             capacity,
             fine: fine_buffer(ctx, "emit_triangles_fine")?,
+            fine_capacity: k::MAX_FINE_CELLS,
             occlusion: occlusion.then(|| EmitOcclusion::new(ctx, slot_capacity, capacity)).transpose()?,
         })
     }
@@ -334,6 +339,24 @@ impl EmitTriangles {
 
     pub fn capacity(&self) -> u32 {
         self.capacity
+    }
+
+    /// What `emit_triangles` and `emit_fine` push.
+    pub fn push(&self, inputs: &EmitInputs, depth_size: [u32; 2]) -> EmitPush {
+        EmitPush {
+            capacity: self.capacity,
+            frustum: u32::from(inputs.frustum),
+            depth_size,
+            fine_capacity: self.fine_capacity,
+        }
+    }
+
+    /// Makes the fine lists hold only `cells` cell halves (at most
+    /// `MAX_FINE_CELLS`): the cells past it are drawn whole, counted in
+    /// the header's `unrefined` (tests reach that path with it).
+    pub fn limit_fine_cells(&mut self, cells: u32) {
+        assert!(cells <= k::MAX_FINE_CELLS, "{cells} cell halves: the fine lists hold {}", k::MAX_FINE_CELLS);
+        self.fine_capacity = cells;
     }
 
     pub fn memory(&self) -> impl Iterator<Item = &Buffer> {
@@ -389,8 +412,7 @@ impl EmitTriangles {
             depth_size = size;
         }
         rec.push_descriptors(pipeline, &bindings);
-        let push = EmitPush { capacity: self.capacity, frustum: u32::from(inputs.frustum), depth_size };
-        rec.push_constants(pipeline, &push);
+        rec.push_constants(pipeline, &self.push(inputs, depth_size));
         rec.dispatch_indirect(inputs.traverse.output(), 0);
         rec.barrier(
             vk::PipelineStageFlags2::COMPUTE_SHADER,
