@@ -8,10 +8,10 @@
 #include "constants.glsl"
 
 struct FineCellsHeader {
-    uint groups_x;  // VkDispatchIndirectCommand: ceil(cells within MAX_FINE_CELLS / FINE_GROUP_SIZE)
+    uint groups_x;  // VkDispatchIndirectCommand: ceil(cells within the capacity / FINE_GROUP_SIZE)
     uint groups_y;  // 1
     uint groups_z;  // 1
-    uint count;     // cell halves appended (past MAX_FINE_CELLS too)
+    uint count;     // cell halves appended (past the capacity, EmitPush.fine_capacity, too)
 };
 
 // A cell half: its slot, and its index among the node's bintree's
