@@ -22,7 +22,8 @@
 //   across (forced: that node draws the corner as a vertex).
 // Both nodes of a border decide a vertex they share from the same bits in
 // the same arithmetic, so the list is a conforming cut: no T-junction and
-// no stitching. A subtree whose box is outside the frustum is dropped.
+// no stitching. A subtree whose box is outside the frustum is dropped,
+// and one inside a patch of holes only.
 //
 // Occlusion (two phases, as cull_patches and cull_occluded do for
 // patches; one visibility bit per invocation's subtree and slot): with
@@ -74,11 +75,15 @@ uint decide(Tri t, out float px) {
     if (((ml.x | ml.y) & (UNITS - 1)) != 0) {
         return g_refine == 0u ? CELL : FINE;
     }
+    if ((pc.cull & EMIT_CULL_HOLES) != 0u && all_holes(t)) {
+        return HOLES;
+    }
     // On the grid, and so are t's corners.
     ivec2 m = ml / UNITS;
     vec3 lo, hi;
     px = vertex_px(m, lo, hi);
-    if (pc.frustum != 0u && px < HUGE_PX && box_outside_frustum(lo, hi)) {
+    // A hole's box is the height range: it still bounds the subtree.
+    if ((pc.cull & EMIT_CULL_FRUSTUM) != 0u && box_outside_frustum(lo, hi)) {
         return CULLED;
     }
     ivec2 a = t.apex / UNITS, b = t.b / UNITS, c = t.c / UNITS;

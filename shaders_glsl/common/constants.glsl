@@ -97,15 +97,22 @@
 // list is its point, x and y in lattice units of its node (2^-REFINE_LEVELS
 // grid steps, 0..NODE_QUADS << REFINE_LEVELS: a LOD-0 node refines below
 // its samples), and its slot: the low TRIANGLE_LOW_BITS of x, then of y,
-// then the high TRIANGLE_HIGH_BITS of x, then of y, then the slot. The
-// lowest byte thus tells apart the points of a 16 x 16 window: lavapipe's
-// vertex cache hashes an index by its lowest byte, and with the slot there
-// every vertex of a node took the same entry (no vertex was shaded once).
+// then the high TRIANGLE_HIGH_BITS of x, then of y, then the slot; the
+// lowest byte is then XORed with the top byte of the bits above it times
+// TRIANGLE_MIX_MUL (triangle_list.glsl). lavapipe's vertex cache is 256
+// entries indexed by an index's lowest byte: with the slot there every
+// vertex of a node took one entry, and with only x's and y's low bits
+// every grid point of a cut coarser than 4 samples did (their low bits are
+// 0), so almost no vertex was shaded once.
 // Each workgroup thread walks one of the node's triangles at this depth
 // (2 << depth = its 256 threads).
 #define TRIANGLE_LOW_BITS 4u
 #define TRIANGLE_HIGH_BITS 6u
 #define TRIANGLE_SLOT_SHIFT 20u
+#define TRIANGLE_MIX_MUL 0x9E3779B1u
+// emit_triangles' culling stages (EmitPush.cull bits).
+#define EMIT_CULL_FRUSTUM 1u
+#define EMIT_CULL_HOLES 2u
 #define EMIT_THREAD_DEPTH 7u
 // Triangles the index list holds (48 MiB); beyond, a triangle is counted, not drawn.
 #define MAX_EMITTED_TRIANGLES 4194304u

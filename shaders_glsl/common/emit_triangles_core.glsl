@@ -14,6 +14,8 @@
 
 // Quads per node side (world NODE_QUADS): 1 << EMIT_THREAD_DEPTH.
 layout(constant_id = 0) const uint NODE_SIDE = 128u;
+// Quads per patch side (world PATCH_QUADS): the squares patch_holes flags.
+layout(constant_id = 1) const uint PATCH_QUADS = 8u;
 
 layout(set = 0, binding = 1, std430) readonly buffer View { TerrainView v; } view;
 layout(set = 0, binding = 2, r8ui) uniform readonly uimage2D lod_map;
@@ -34,9 +36,13 @@ layout(set = 0, binding = 13, std430) buffer FineCells {
     uint cells[];
 } fine;
 
+// Per patch of a node, whether its samples are all, some or no holes
+// (PATCH_HOLE_*): a subtree inside an all-hole patch draws nothing.
+layout(set = 0, binding = 14) uniform utexture2DArray patch_holes;
+
 layout(push_constant, std430) uniform EmitPush {
     uint capacity;  // triangles the list holds
-    uint frustum;   // 1: subtrees outside the frustum are dropped (CullStages::frustum)
+    uint cull;      // EMIT_CULL_* bits: the frustum, holes (CullStages::frustum, ::hole)
     uint depth_w;   // LATE: the depth target's size (the pyramid's level 0 is made from it)
     uint depth_h;
     uint fine_capacity;  // cell halves the fine list holds (MAX_FINE_CELLS; less in tests)
@@ -55,6 +61,8 @@ const uint CELL = 3u;
 // emit_fine, so emit_triangles' walk holds none of those decisions
 // (lavapipe runs every branch of a loop's body, masked).
 const uint FINE = 4u;
+// Inside a patch whose samples are all holes: every vertex under it is NaN.
+const uint HOLES = 5u;
 
 struct Tri {
     ivec2 apex;
@@ -73,6 +81,7 @@ uint g_written = 0u;
 uint g_forced = 0u;
 uint g_clamped = 0u;
 uint g_culled = 0u;
+uint g_holes = 0u;
 // LOD-0 cell halves drawn whole: the fine list was full (emit_triangles).
 uint g_unrefined = 0u;
 float g_bound_px = 0.0;
@@ -148,6 +157,21 @@ float vertex_px(ivec2 p, out vec3 lo, out vec3 hi) {
     return numbers_px(n);
 }
 
+// Whether t lies inside one patch whose samples are all holes (a vertex
+// below the samples takes its nearest sample's flag, inside the patch too):
+// nothing under t is drawn. A bintree triangle no wider than a patch lies
+// inside one, its corners on the patch's squares.
+bool all_holes(Tri t) {
+    ivec2 lo = min(min(t.apex, t.b), t.c), hi = max(max(t.apex, t.b), t.c);
+    uint quads = PATCH_QUADS;
+    int patch_l = int(quads) * UNITS;
+    ivec2 p = lo / patch_l;
+    if (any(greaterThan(hi, (p + 1) * patch_l))) {
+        return false;
+    }
+    return texelFetch(usampler2DArray(patch_holes, nearest), ivec3(p, int(g_slot)), 0).r == PATCH_HOLE_ALL;
+}
+
 #include "emit_triangles_borders.glsl"
 
 #include "emit_triangles_fine.glsl"
@@ -195,6 +219,10 @@ void finish(Tri t, uint what, float px) {
         g_culled += 1u;
         return;
     }
+    if (what == HOLES) {
+        g_holes += 1u;
+        return;
+    }
     emit(t);
     if (what == CELL && (g_lod != 0u || g_refine == 0u)) {
         g_grid_px = max(g_grid_px, cell_px(t));
@@ -209,11 +237,12 @@ void flush() {
     if (g_written != 0u) {
         atomicAdd(tris.header.index_count, 3u * g_written);
     }
-    if ((g_forced | g_clamped | g_culled | g_unrefined) != 0u) {
+    if ((g_forced | g_clamped | g_culled | g_unrefined | g_holes) != 0u) {
         atomicAdd(tris.header.forced, g_forced);
         atomicAdd(tris.header.clamped, g_clamped);
         atomicAdd(tris.header.culled, g_culled);
         atomicAdd(tris.header.unrefined, g_unrefined);
+        atomicAdd(tris.header.holes, g_holes);
     }
     if (g_bound_px > 0.0) {
         atomicMax(tris.header.bound_bits, floatBitsToUint(g_bound_px));

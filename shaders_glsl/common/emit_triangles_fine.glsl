@@ -140,7 +140,7 @@ Numbers fine_numbers(ivec2 v) {
 uint decide_fine(ivec2 m, out float px) {
     Numbers n = fine_numbers(m);
     px = numbers_px(n);
-    if (pc.frustum != 0u && px < HUGE_PX && box_outside_frustum(n.lo, n.hi)) {
+    if ((pc.cull & EMIT_CULL_FRUSTUM) != 0u && box_outside_frustum(n.lo, n.hi)) {
         return CULLED;
     }
     if (px <= view.v.lod_params.x) {

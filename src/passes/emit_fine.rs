@@ -9,7 +9,7 @@ use crate::error::Result;
 use crate::gpu::{vk, ComputePipelineDesc, Context, Pipeline, Recorder};
 use crate::passes::emit_triangles::{EmitInputs, EmitTriangles};
 use crate::shaders::{consts as k, emit_fine as sh};
-use crate::world::NODE_QUADS;
+use crate::world::{NODE_QUADS, PATCH_QUADS};
 
 // The fine list's dispatch counts workgroups of this many cells.
 const _: () = assert!(sh::WORKGROUP_SIZE[0] == k::FINE_GROUP_SIZE);
@@ -22,7 +22,7 @@ impl EmitFine {
     pub const NAME: &'static str = sh::PASS;
 
     pub fn new(ctx: &Context) -> Result<Self> {
-        let specialization = [(sh::SPEC_NODE_SIDE, NODE_QUADS)];
+        let specialization = [(sh::SPEC_NODE_SIDE, NODE_QUADS), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)];
         let desc = ComputePipelineDesc { name: Self::NAME, shader: &sh::SHADER, specialization: &specialization };
         Ok(EmitFine { pipeline: Pipeline::compute(ctx, &desc)? })
     }

@@ -19,9 +19,9 @@ use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::lod_map::LodMap;
 use crate::passes::traverse::Traverse;
 use crate::shaders::{consts as k, emit_triangles as sh, structs};
-use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_VERTEX_BOUNDS};
+use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_PATCH_HOLES, ATLAS_VERTEX_BOUNDS};
 use crate::terrain::quadtree::FIRST_SLOT;
-use crate::world::NODE_QUADS;
+use crate::world::{NODE_QUADS, PATCH_QUADS};
 
 /// Host twin of `TriangleListHeader` (triangle_list.glsl).
 #[repr(C)]
@@ -51,6 +51,8 @@ pub struct TriangleListHeader {
     /// LOD-0 cell halves drawn whole because the fine list was full (their
     /// node's error counts in `grid_bound_bits`).
     pub unrefined: u32,
+    /// Subtrees inside a patch whose samples are all holes (not emitted).
+    pub holes: u32,
 }
 
 /// Host twin of `FineCellsHeader` (fine_cells.glsl): `emit_fine`'s
@@ -74,15 +76,17 @@ const _: () = assert!(k::REFINE_LEVELS == 2);
 const _: () = assert!((NODE_QUADS << k::REFINE_LEVELS) >> k::TRIANGLE_LOW_BITS < 1 << k::TRIANGLE_HIGH_BITS);
 const _: () = assert!(k::TRIANGLE_SLOT_SHIFT == 2 * (k::TRIANGLE_LOW_BITS + k::TRIANGLE_HIGH_BITS));
 const _: () = assert!(k::TRIANGLE_SLOT_SHIFT + k::SLOT_BITS <= 32);
+// The mixed byte replaces exactly the low bits of x and y.
+const _: () = assert!(2 * k::TRIANGLE_LOW_BITS == 8);
 
 /// A vertex code's slot and point (x, y in lattice units): the host twin of
 /// triangle_list.glsl's decoding (tests read the list back with it).
 pub fn vertex_code_point(code: u32) -> (u32, [u32; 2]) {
-    let low = (1 << k::TRIANGLE_LOW_BITS) - 1;
-    let high = (1 << k::TRIANGLE_HIGH_BITS) - 1;
-    let l = k::TRIANGLE_LOW_BITS;
-    let x = (code & low) | (((code >> (2 * l)) & high) << l);
-    let y = ((code >> l) & low) | (((code >> (2 * l + k::TRIANGLE_HIGH_BITS)) & high) << l);
+    let (l, h) = (k::TRIANGLE_LOW_BITS, k::TRIANGLE_HIGH_BITS);
+    let upper = code >> (2 * l);
+    let bottom = (code & ((1 << (2 * l)) - 1)) ^ (upper.wrapping_mul(k::TRIANGLE_MIX_MUL) >> 24);
+    let x = (bottom & ((1 << l) - 1)) | ((upper & ((1 << h) - 1)) << l);
+    let y = (bottom >> l) | (((upper >> h) & ((1 << h) - 1)) << l);
     (code >> k::TRIANGLE_SLOT_SHIFT, [x, y])
 }
 
@@ -106,6 +110,7 @@ impl TriangleListHeader {
         self.forced += late.forced;
         self.culled += late.culled;
         self.unrefined += late.unrefined;
+        self.holes += late.holes;
         self.bound_bits = self.bound_bits.max(late.bound_bits);
         self.grid_bound_bits = self.grid_bound_bits.max(late.grid_bound_bits);
         self
@@ -116,8 +121,9 @@ impl TriangleListHeader {
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct EmitPush {
     pub capacity: u32,
-    /// 1: subtrees outside the frustum are dropped.
-    pub frustum: u32,
+    /// `EMIT_CULL_*` bits: subtrees outside the frustum, or inside a patch
+    /// of holes only, are dropped.
+    pub cull: u32,
     /// Phase 2: the depth target's size (the pyramid's level 0 comes from it).
     pub depth_size: [u32; 2],
     /// Cell halves the fine list holds.
@@ -168,6 +174,8 @@ pub struct EmitInputs<'a> {
     pub view_bytes: &'a [u8],
     /// Subtrees outside the frustum are dropped.
     pub frustum: bool,
+    /// Subtrees inside a patch of holes only are dropped.
+    pub holes: bool,
 }
 
 pub struct EmitTriangles {
@@ -189,6 +197,19 @@ pub struct EmitTriangles {
     /// Cell halves the fine lists are used up to (`limit_fine_cells`).
     fine_capacity: u32,
     occlusion: Option<EmitOcclusion>,
+}
+
+/// Whether the hole stage runs: asked for, and the world has holes (effect
+/// `holes` keeps the per-patch hole flags only then).
+fn holes_stage(inputs: &EmitInputs) -> bool {
+    inputs.holes && inputs.tree.atlas(ATLAS_PATCH_HOLES).is_some()
+}
+
+/// The per-patch hole flags; without holes in the world (no such atlas)
+/// another unsigned atlas fills the binding, never read: the push
+/// constants leave the hole stage off (`holes_stage`).
+fn patch_holes(tree: &GpuQuadtree) -> &Image {
+    tree.atlas(ATLAS_PATCH_HOLES).unwrap_or_else(|| tree.required_atlas(ATLAS_VERTEX_BOUNDS))
 }
 
 fn fine_buffer(ctx: &Context, name: &str) -> Result<Buffer> {
@@ -225,7 +246,7 @@ fn list_buffers(ctx: &Context, name: &str, capacity: u32) -> Result<PerFrame<Buf
 }
 
 fn pipeline(ctx: &Context, variant: u32) -> Result<Pipeline> {
-    let specialization = [(sh::SPEC_NODE_SIDE, NODE_QUADS)];
+    let specialization = [(sh::SPEC_NODE_SIDE, NODE_QUADS), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)];
     Pipeline::compute(
         ctx,
         &ComputePipelineDesc {
@@ -345,7 +366,8 @@ impl EmitTriangles {
     pub fn push(&self, inputs: &EmitInputs, depth_size: [u32; 2]) -> EmitPush {
         EmitPush {
             capacity: self.capacity,
-            frustum: u32::from(inputs.frustum),
+            cull: u32::from(inputs.frustum) * k::EMIT_CULL_FRUSTUM
+                + u32::from(holes_stage(inputs)) * k::EMIT_CULL_HOLES,
             depth_size,
             fine_capacity: self.fine_capacity,
         }
@@ -434,6 +456,7 @@ impl EmitTriangles {
             (sh::LOD_MAP, Resource::Image(i.lod_map.image(), vk::ImageLayout::GENERAL)),
             (sh::HEIGHT_ATLAS, Resource::Image(tree.required_atlas(ATLAS_HEIGHT), ATLAS_LAYOUT)),
             (sh::VERTEX_BOUNDS, Resource::Image(tree.required_atlas(ATLAS_VERTEX_BOUNDS), ATLAS_LAYOUT)),
+            (sh::PATCH_HOLES, Resource::Image(patch_holes(tree), ATLAS_LAYOUT)),
             (sh::NEAREST, Resource::Sampler(self.sampler.raw())),
             (sh::NODE_DESCS, Resource::Buffer(&tree.node_descs)),
             (sh::NODE_ERRORS, Resource::Buffer(&tree.node_errors)),

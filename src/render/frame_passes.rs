@@ -156,8 +156,15 @@ impl FramePasses<'_> {
         pass(frame, log, FramePass::SECTOR_DATA, |r| self.sector_data.record(r, tree));
         if let Some(t) = self.triangles {
             let view_bytes = bytemuck::bytes_of(view);
-            let inputs =
-                EmitInputs { traverse, tree, lod_map, view: view_buffer, view_bytes, frustum: self.stages.frustum };
+            let inputs = EmitInputs {
+                traverse,
+                tree,
+                lod_map,
+                view: view_buffer,
+                view_bytes,
+                frustum: self.stages.frustum,
+                holes: self.stages.hole,
+            };
             let phase = if self.triangle_phases(t) { EmitPhase::Early } else { EmitPhase::All };
             pass(frame, log, FramePass::EMIT_TRIANGLES, |r| t.emit.record(r, &inputs, phase));
             pass(frame, log, FramePass::EMIT_FINE, |r| t.fine.record(r, &t.emit, &inputs, false));
@@ -243,6 +250,7 @@ impl FramePasses<'_> {
             view,
             view_bytes: &[],
             frustum: self.stages.frustum,
+            holes: self.stages.hole,
         };
         let phase = EmitPhase::Late(pyramid, targets.depth.extent);
         pass(frame, log, FramePass::EMIT_TRIANGLES_LATE, |r| tri.emit.record(r, &inputs, phase));

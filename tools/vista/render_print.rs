@@ -57,11 +57,12 @@ fn triangle_bound_words(px: f32) -> String {
 fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleListHeader) {
     println!(
         "triangles: {} drawn by the per-triangle rule ({} emitted, {} past the list), {} subtrees outside the \
-         frustum not emitted, {} splits forced by a finer neighbour's corner",
+         frustum and {} inside a patch of holes only not emitted, {} splits forced by a finer neighbour's corner",
         t.drawn(),
         t.triangles,
         t.overflow,
         t.culled,
+        t.holes,
         t.forced
     );
     println!(

@@ -158,7 +158,8 @@ fn graph(decisions: &[EffectDecision], options: &RendererOptions) -> PassGraph {
         LodRule::Triangle => (
             &per_patch[..],
             "LOD rule triangle: the per-triangle rule draws (its vertices test holes; its subtrees are culled by \
-             the frustum and, with effect occlusion, the depth pyramid; no cone culling yet)",
+             the frustum, patches of holes only and, with effect occlusion, the depth pyramid; no cone culling \
+             yet)",
         ),
     };
     for p in off {
