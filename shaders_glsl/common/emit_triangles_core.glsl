@@ -157,19 +157,20 @@ float vertex_px(ivec2 p, out vec3 lo, out vec3 hi) {
     return numbers_px(n);
 }
 
-// Whether t lies inside one patch whose samples are all holes (a vertex
-// below the samples takes its nearest sample's flag, inside the patch too):
-// nothing under t is drawn. A bintree triangle no wider than a patch lies
-// inside one, its corners on the patch's squares.
+// Whether t is the half of a patch's square and the patch's samples are all
+// holes (a vertex below the samples takes its nearest sample's flag,
+// inside the patch too): nothing under t is drawn. Only that level looks:
+// a finer triangle lies in the patch its ancestor there was tested in,
+// and a coarser one spans several (the cost is one fetch per patch the
+// cut reaches, not one per decision).
 bool all_holes(Tri t) {
     ivec2 lo = min(min(t.apex, t.b), t.c), hi = max(max(t.apex, t.b), t.c);
     uint quads = PATCH_QUADS;
     int patch_l = int(quads) * UNITS;
-    ivec2 p = lo / patch_l;
-    if (any(greaterThan(hi, (p + 1) * patch_l))) {
+    if (any(notEqual(hi - lo, ivec2(patch_l)))) {
         return false;
     }
-    return texelFetch(usampler2DArray(patch_holes, nearest), ivec3(p, int(g_slot)), 0).r == PATCH_HOLE_ALL;
+    return texelFetch(usampler2DArray(patch_holes, nearest), ivec3(lo / patch_l, int(g_slot)), 0).r == PATCH_HOLE_ALL;
 }
 
 #include "emit_triangles_borders.glsl"
