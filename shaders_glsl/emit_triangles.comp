@@ -5,7 +5,7 @@
 // twin is src/reference/bintree_cut.rs): one workgroup per drawn node
 // (indirect, from traverse), each of its 256 invocations walking one
 // subtree of the node's bintree from depth EMIT_THREAD_DEPTH down to the
-// grid's cells (the depths above are decided first, by one invocation);
+// grid's cells (the depths above first, each invocation its own path);
 // the triangles left go to one index list (terrain_triangles draws it).
 // Points are in lattice units (2^-REFINE_LEVELS grid steps): a LOD-0 node
 // continues the bisection below its samples, on the Catmull-Rom surface,
@@ -43,6 +43,7 @@ layout(local_size_x = 256) in;
 #endif
 
 #include "emit_triangles_core.glsl"
+#include "emit_triangles_borders.glsl"
 
 layout(set = 0, binding = 0, std430) readonly buffer TraverseOutput {
     TraverseHeader header;
@@ -116,37 +117,29 @@ const uint FINE_WORDS = (1u << CELL_DEPTH) / 32u;
 shared uint s_fine[256u * FINE_WORDS];
 
 // Depth-first over `root`'s subtree down to the grid's cells, the first
-// half before the second as a stack would. Every loop an invocation runs
-// counts towards one lavapipe limit (65535 iterations in all, after which
-// its loops end), and lavapipe runs every loop in a loop's body on every
-// pass, masked: so the decisions hold no loop, and the steps a few
-// iterations each (a LOD-0 subtree refined to the finest lattice decides
-// 4095 triangles). A triangle `limit` depths below the root is not decided
-// here but marked in s_reached at `mark` (its index above the path's
-// bits); NO_LIMIT: every triangle is decided, and the LOD-0 cell halves
-// marked in s_fine.
-const uint NO_LIMIT = 0xffffffffu;
-void walk(Tri root, uint limit, uint mark) {
+// half before the second as a stack would; the grid's cell halves are
+// marked in s_fine. Every loop an invocation runs counts towards one
+// lavapipe limit (65535 iterations in all, after which its loops end),
+// and lavapipe runs every loop in a loop's body on every pass, masked: so
+// the decisions hold no loop, and the steps a few iterations each (a
+// LOD-0 subtree refined to the finest lattice decides 4095 triangles).
+void walk(Tri root) {
     uint depth = 0u;
     uint path = 0u;
     Tri t = root;
     while (true) {
-        if (depth == limit) {
-            s_reached[mark | path] = 1u;
+        float px;
+        uint what = decide(t, px);
+        if (what == SPLIT) {
+            t = half_of(t, 0u);
+            depth += 1u;
+            path <<= 1u;
+            continue;
+        }
+        if (what == FINE || what == CELL) {
+            s_fine[gl_LocalInvocationID.x * FINE_WORDS + (path >> 5u)] |= 1u << (path & 31u);
         } else {
-            float px;
-            uint what = decide(t, px);
-            if (what == SPLIT) {
-                t = half_of(t, 0u);
-                depth += 1u;
-                path <<= 1u;
-                continue;
-            }
-            if (what == FINE) {
-                s_fine[gl_LocalInvocationID.x * FINE_WORDS + (path >> 5u)] |= 1u << (path & 31u);
-            } else {
-                finish(t, what, px);
-            }
+            finish(t, what, px);
         }
         if (!next_triangle(t, depth, path)) {
             break;
@@ -194,14 +187,65 @@ void queue_cells(uint t) {
     }
 }
 
-// Walks an invocation's own subtree down to the grid's cells, and queues
-// the cell halves below the samples it reaches.
+// The grid's cell halves `walk` marked under invocation t's subtree (root)
+// where the node is not refined below them: drawn whole, each with the
+// node's own error over its column in the grid's bound. Not in the walk:
+// lavapipe runs the whole body of its loop on every pass, masked, and
+// this projection was a sixth of the pass there.
+void emit_cells(Tri root, uint t) {
+    for (uint w = 0u; w < FINE_WORDS; ++w) {
+        uint bits = s_fine[t * FINE_WORDS + w];
+        while (bits != 0u) {
+            Tri c = below(root, CELL_DEPTH, 32u * w + uint(findLSB(bits)));
+            bits &= bits - 1u;
+            emit(c);
+            g_grid_px = max(g_grid_px, cell_px(c));
+        }
+    }
+}
+
+// Walks an invocation's own subtree down to the grid's cells, then draws
+// or queues the cell halves it reaches (queued: a LOD-0 node refined
+// below its samples).
 void walk_subtree(Tri root, uint t) {
     for (uint w = 0u; w < FINE_WORDS; ++w) {
         s_fine[t * FINE_WORDS + w] = 0u;
     }
-    walk(root, NO_LIMIT, 0u);
-    queue_cells(t);
+    walk(root);
+    if (g_lod == 0u && g_refine != 0u) {
+        queue_cells(t);
+    } else {
+        emit_cells(root, t);
+    }
+}
+
+// Whether the cut reaches invocation t's triangle (at EMIT_THREAD_DEPTH):
+// t decides the triangles above it, on its path from the node's half, in
+// parallel with the others (the 8 lanes of a lavapipe SIMD group share the
+// depths above the last 3, so those decisions cost one). A triangle above
+// that the cut leaves whole is emitted and counted by its first
+// descendant's invocation only (t's bits below its depth all 0).
+// One invocation walking the depths above alone took most of the pass.
+bool path_reached(uint t) {
+    Tri tri = triangle_at(0u, t >> EMIT_THREAD_DEPTH);
+    for (uint d = 0u; d < EMIT_THREAD_DEPTH; ++d) {
+        bool owner = (t & ((1u << (EMIT_THREAD_DEPTH - d)) - 1u)) == 0u;
+        uint forced = g_forced, clamped = g_clamped;
+        float px;
+        uint what = decide(tri, px);
+        if (!owner) {
+            g_forced = forced;
+            g_clamped = clamped;
+        }
+        if (what != SPLIT) {
+            if (owner) {
+                finish(tri, what, px);
+            }
+            return false;
+        }
+        tri = half_of(tri, (t >> (EMIT_THREAD_DEPTH - 1u - d)) & 1u);
+    }
+    return true;
 }
 
 #ifdef OCCLUSION
@@ -254,6 +298,8 @@ void main() {
     uint n = entry.x;
     enter_node(n, entry.y);
     uint t = gl_LocalInvocationID.x;
+    fill_across(t);
+    barrier();
 #ifndef LATE
     if (t == 0u) {
         slot_nodes.nodes[g_slot] = n;
@@ -265,17 +311,7 @@ void main() {
     }
     s_reached[t] = (reached.words[g_slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] >> (t & 31u)) & 1u;
 #else
-    // The depths above the threads' own, by one invocation: on lavapipe a
-    // workgroup barrier costs more than these few hundred decisions, so
-    // there is one barrier, not two a depth.
-    if (t == 0u) {
-        for (uint i = 0u; i < (2u << EMIT_THREAD_DEPTH); ++i) {
-            s_reached[i] = 0u;
-        }
-        for (uint r = 0u; r < 2u; ++r) {
-            walk(triangle_at(0u, r), EMIT_THREAD_DEPTH, r << EMIT_THREAD_DEPTH);
-        }
-    }
+    s_reached[t] = path_reached(t) ? 1u : 0u;
 #endif
     barrier();
 #if defined(OCCLUSION) && !defined(LATE)

@@ -99,6 +99,14 @@ ivec2 sample_of(ivec2 p) {
     return (g_node * g_side + p) << int(g_lod);
 }
 
+// The LOD of the listed node covering sector q, or NO_LOD.
+uint lod_at(ivec2 q) {
+    if (any(lessThan(q, ivec2(0))) || q.x >= int(view.v.lod_map_w) || q.y >= int(view.v.lod_map_h)) {
+        return NO_LOD;
+    }
+    return imageLoad(lod_map, q).r;
+}
+
 // An infinite error's projection (a hole under the vertex): a literal
 // infinity would be folded into an invalid constant.
 const float HUGE_PX = 3.0e38;
@@ -173,8 +181,6 @@ bool all_holes(Tri t) {
     return texelFetch(usampler2DArray(patch_holes, nearest), ivec3(lo / patch_l, int(g_slot)), 0).r == PATCH_HOLE_ALL;
 }
 
-#include "emit_triangles_borders.glsl"
-
 #include "emit_triangles_fine.glsl"
 
 void emit(Tri t) {
@@ -214,7 +220,8 @@ float cell_px(Tri t) {
     return projected_px(err, vec3(xy0, z0 - view.v.camera_z), vec3(xy1, z1 - view.v.camera_z));
 }
 
-// Emits t as the rule leaves it (a leaf, culled, or split further).
+// Emits t as the rule leaves it (a leaf, culled, or split further; a
+// CELL here is of the finest lattice, on the finest surface: no error).
 void finish(Tri t, uint what, float px) {
     if (what == CULLED) {
         g_culled += 1u;
@@ -225,11 +232,7 @@ void finish(Tri t, uint what, float px) {
         return;
     }
     emit(t);
-    if (what == CELL && (g_lod != 0u || g_refine == 0u)) {
-        g_grid_px = max(g_grid_px, cell_px(t));
-    } else {
-        g_bound_px = max(g_bound_px, px);
-    }
+    g_bound_px = max(g_bound_px, px);
 }
 
 // Adds this invocation's counts and errors to the header (errors >= 0:
@@ -278,6 +281,15 @@ bool next_triangle(inout Tri t, inout uint depth, inout uint path) {
     return true;
 }
 
+// The triangle `depth` levels below t along `path` (its bits the halves
+// taken, the first highest).
+Tri below(Tri t, uint depth, uint path) {
+    for (uint d = 0u; d < depth; ++d) {
+        t = half_of(t, (path >> (depth - 1u - d)) & 1u);
+    }
+    return t;
+}
+
 // Triangle i (0 .. 2 << depth) of the node's bintree at `depth`: bit
 // `depth` of i picks the square's half, the lower bits the halves below.
 Tri triangle_at(uint depth, uint i) {
@@ -285,10 +297,7 @@ Tri triangle_at(uint depth, uint i) {
     bool slash = ((g_node.x + g_node.y) & 1) == 0;
     bool first = (i >> depth) == 0u;
     Tri t = slash ? (first ? Tri(se, sw, ne) : Tri(nw, ne, sw)) : (first ? Tri(sw, se, nw) : Tri(ne, nw, se));
-    for (uint d = 0u; d < depth; ++d) {
-        t = half_of(t, (i >> (depth - 1u - d)) & 1u);
-    }
-    return t;
+    return below(t, depth, i);
 }
 
 // Points this invocation at the drawn node n in `slot`.
