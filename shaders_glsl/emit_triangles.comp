@@ -138,7 +138,8 @@ void walk(Tri root) {
         }
         if (what == FINE || what == CELL) {
             s_fine[gl_LocalInvocationID.x * FINE_WORDS + (path >> 5u)] |= 1u << (path & 31u);
-        } else {
+        }
+        if (what != FINE) {
             finish(t, what, px);
         }
         if (!next_triangle(t, depth, path)) {
@@ -187,24 +188,24 @@ void queue_cells(uint t) {
     }
 }
 
-// The grid's cell halves `walk` marked under invocation t's subtree (root)
-// where the node is not refined below them: drawn whole, each with the
-// node's own error over its column in the grid's bound. Not in the walk:
-// lavapipe runs the whole body of its loop on every pass, masked, and
-// this projection was a sixth of the pass there.
-void emit_cells(Tri root, uint t) {
+// The grid's cell halves `walk` drew whole under invocation t's subtree
+// (root) where the node is not refined below them: each adds the node's
+// own error over its column to the grid's bound. Not in the walk: lavapipe
+// runs the whole body of its loop on every pass, masked, and this
+// projection was a sixth of the pass there. (The walk draws them, in its
+// order: drawn after it, the rule's draw was slower on Mont Blanc.)
+void bound_cells(Tri root, uint t) {
     for (uint w = 0u; w < FINE_WORDS; ++w) {
         uint bits = s_fine[t * FINE_WORDS + w];
         while (bits != 0u) {
             Tri c = below(root, CELL_DEPTH, 32u * w + uint(findLSB(bits)));
             bits &= bits - 1u;
-            emit(c);
             g_grid_px = max(g_grid_px, cell_px(c));
         }
     }
 }
 
-// Walks an invocation's own subtree down to the grid's cells, then draws
+// Walks an invocation's own subtree down to the grid's cells, then bounds
 // or queues the cell halves it reaches (queued: a LOD-0 node refined
 // below its samples).
 void walk_subtree(Tri root, uint t) {
@@ -215,7 +216,7 @@ void walk_subtree(Tri root, uint t) {
     if (g_lod == 0u && g_refine != 0u) {
         queue_cells(t);
     } else {
-        emit_cells(root, t);
+        bound_cells(root, t);
     }
 }
 
