@@ -56,6 +56,8 @@ layout(set = 0, binding = 12, std430) buffer Reached { uint words[]; } reached;
 #endif
 #ifdef LATE
 layout(set = 0, binding = 11) uniform texture2D hiz;
+// Each patch's sample height range (encoded), the bake's.
+layout(set = 0, binding = 15) uniform utexture2DArray patch_min_max;
 #endif
 
 #ifdef LATE
@@ -260,13 +262,49 @@ bool was_visible(uint t) {
 #endif
 
 #ifdef LATE
-// Whether any of the subtree under r may show past the pyramid: the box of
-// its split vertex holds every triangle under it (a hole under it: its
-// box bounds nothing, so it counts as visible).
+// Camera-relative position across (m) of grid point p (lattice units).
+vec2 rel_xy_of(ivec2 p) {
+    return view_rel_xy(sample_of(p / UNITS), view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
+}
+
+// The camera-relative height range (m) of the samples of the patches
+// under r (a triangle at EMIT_THREAD_DEPTH spans a patch or two), padded
+// like the patches' boxes.
+vec2 patches_z(Tri r) {
+    uint quads = PATCH_QUADS;  // read first: naga cannot parse a converted spec constant
+    int patch_l = int(quads) * UNITS;
+    ivec2 p0 = min(min(r.apex, r.b), r.c) / patch_l, p1 = (max(max(r.apex, r.b), r.c) - 1) / patch_l;
+    uvec2 m = uvec2(0xffffu, 0u);
+    for (int y = p0.y; y <= p1.y; ++y) {
+        for (int x = p0.x; x <= p1.x; ++x) {
+            uvec2 t = texelFetch(usampler2DArray(patch_min_max, nearest), ivec3(x, y, int(g_slot)), 0).xy;
+            m = uvec2(min(m.x, t.x), max(m.y, t.y));
+        }
+    }
+    vec2 z = view.v.height_lo + vec2(m) * view.v.height_scale - view.v.camera_z;
+    return z + vec2(-1.0, 1.0) * (1e-4 * abs(z) + 1e-3);
+}
+
+// Whether any of the subtree under r may show past the pyramid. Its box:
+// across, r's own (its split vertex's box spans the diamond, both sides);
+// up and down, the vertex's reach, cut to r's patches' sample range where
+// no cell below the samples is drawn (Catmull-Rom overshoots them). A
+// hole under the vertex: its box bounds nothing, so it counts as visible.
+// Padded like the patches' boxes.
 bool subtree_visible(Tri r) {
     vec3 lo, hi;
     if (vertex_px((r.b + r.c) / (2 * UNITS), lo, hi) >= HUGE_PX) {
         return true;
+    }
+    vec2 a = rel_xy_of(r.apex), b = rel_xy_of(r.b), c = rel_xy_of(r.c);
+    vec2 lo_xy = min(min(a, b), c), hi_xy = max(max(a, b), c);
+    vec2 pad = 1e-4 * (abs(lo_xy) + abs(hi_xy)) + 1e-3;
+    lo.xy = lo_xy - pad;
+    hi.xy = hi_xy + pad;
+    if (g_lod != 0u || g_refine == 0u) {
+        vec2 z = patches_z(r);
+        lo.z = max(lo.z, z.x);
+        hi.z = min(hi.z, z.y);
     }
     uint level;
     return hiz_box_visible(lo, hi, view.v.view_proj, uvec2(pc.depth_w, pc.depth_h), level);

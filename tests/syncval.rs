@@ -107,6 +107,10 @@ fn options(output: Output, depth: DepthOptions, rule: LodRule) -> RendererOption
         ],
         output,
         depth,
+        // The per-pass statistics queries (begun and ended around every
+        // graphics-queue pass, reset in the buffer submitted first) are
+        // validated with the rest.
+        counters: true,
         ..RendererOptions::default()
     }
 }

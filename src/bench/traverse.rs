@@ -127,7 +127,7 @@ pub fn bench_traverse(
                 )],
                 target_error_px: target,
             };
-            let mut exec = FrameExecutor::new(ctx, 1, 4)?;
+            let mut exec = FrameExecutor::new(ctx, 1, 4, false)?;
             let mut frames = Vec::new();
             for _ in 0..cfg.warmup_frames + cfg.frames + 1 {
                 ring.record(ctx, |rec| {

@@ -6,7 +6,7 @@ pub mod per_frame;
 pub mod profiler;
 
 use crate::error::Result;
-use crate::gpu::{Context, FrameCommands, QueueMode, Recorder, TimestampPool};
+use crate::gpu::{Context, FrameCommands, QueueMode, Recorder, StatisticsPool, TimestampPool};
 use serde::Serialize;
 
 /// A queue kind: where a pass belongs when compute is split off
@@ -30,6 +30,35 @@ pub struct PassTiming {
     /// Start relative to the frame's first pass.
     pub start_ms: f64,
     pub gpu_ms: f64,
+    /// The pass's pipeline statistics, where the executor counts them
+    /// (asked for, the device enabled them, a graphics queue).
+    pub counters: Option<PassCounters>,
+}
+
+/// One pass's pipeline statistics (Vulkan's counters of the same names;
+/// on lavapipe a fragment invocation is counted per pixel shaded).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct PassCounters {
+    /// Primitives the input assembler read (triangles of a triangle list).
+    pub input_primitives: u64,
+    pub vertex_invocations: u64,
+    /// Primitives that came out of clipping (culled ones not counted).
+    pub clipped_primitives: u64,
+    pub fragment_invocations: u64,
+    pub compute_invocations: u64,
+}
+
+impl PassCounters {
+    fn from_raw(c: [u64; 5]) -> Self {
+        let [input_primitives, vertex_invocations, clipped_primitives, fragment_invocations, compute_invocations] = c;
+        PassCounters {
+            input_primitives,
+            vertex_invocations,
+            clipped_primitives,
+            fragment_invocations,
+            compute_invocations,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -65,6 +94,10 @@ pub fn pass_label(name: &str, late: bool) -> String {
 
 struct Slot {
     pool: Option<TimestampPool>,
+    /// Per-pass statistics, one query a pass (its timestamp pair's index).
+    stats: Option<StatisticsPool>,
+    /// Whether each pass in `passes` began a statistics query.
+    counted: Vec<bool>,
     /// (name, late, queue) of each pass with a timestamp pair, in query order.
     passes: Vec<(&'static str, bool, QueueKind)>,
     mode: QueueMode,
@@ -86,8 +119,9 @@ pub struct FrameExecutor {
 
 impl FrameExecutor {
     /// `frames_in_flight` must be at least the caller's; `max_passes` bounds
-    /// the passes of one frame.
-    pub fn new(ctx: &Context, frames_in_flight: usize, max_passes: u32) -> Result<Self> {
+    /// the passes of one frame; `counters`: count each graphics-queue
+    /// pass's pipeline statistics where the device enabled them.
+    pub fn new(ctx: &Context, frames_in_flight: usize, max_passes: u32, counters: bool) -> Result<Self> {
         let limits = &ctx.info().limits;
         if !limits.timestamps_supported {
             log::info!("{}: no timestamp support on the graphics queue; running without pass timings", ctx.info().name);
@@ -99,8 +133,14 @@ impl FrameExecutor {
             } else {
                 None
             };
+            let stats = match counters && limits.pipeline_statistics && pool.is_some() {
+                true => Some(StatisticsPool::new(ctx, &format!("pass_statistics[{i}]"), max_passes)?),
+                false => None,
+            };
             slots.push(Slot {
                 pool,
+                stats,
+                counted: Vec::new(),
                 passes: Vec::new(),
                 mode: QueueMode::Single,
                 frame: 0,
@@ -141,6 +181,10 @@ impl FrameExecutor {
             let Some(ticks) = pool.try_read(slot.passes.len() as u32 * 2) else {
                 continue;
             };
+            let counts = slot.stats.as_ref().map(|s| s.try_read(slot.passes.len() as u32));
+            if counts.as_ref().is_some_and(|c| c.iter().zip(&slot.counted).any(|(c, asked)| *asked && c.is_none())) {
+                continue;
+            }
             slot.pending = false;
             if self.latest.as_ref().is_some_and(|l| l.frame > slot.frame) || ticks.is_empty() {
                 continue;
@@ -157,6 +201,10 @@ impl FrameExecutor {
                     queue: *queue,
                     start_ms: (ns(ticks[2 * i]) - t0) / 1e6,
                     gpu_ms: (ns(ticks[2 * i + 1]) - ns(ticks[2 * i])) / 1e6,
+                    counters: counts
+                        .as_ref()
+                        .and_then(|c| c[i].filter(|_| slot.counted[i]))
+                        .map(PassCounters::from_raw),
                 })
                 .collect();
             let (frame, mode, [cpu_ms, query_ms]) = (slot.frame, slot.mode, slot.cpu_ms);
@@ -190,6 +238,7 @@ impl FrameExecutor {
             log::debug!("timings of frame {} were not back in time and are dropped", slot.frame);
         }
         slot.passes.clear();
+        slot.counted.clear();
         slot.cpu_ms = [0.0; 2];
         slot.frame = self.frame;
         slot.mode = mode;
@@ -201,6 +250,9 @@ impl FrameExecutor {
                 FrameCommands::Split { compute, .. } => &mut **compute,
             };
             first.reset_queries(pool, 0, pool.capacity);
+            if let Some(stats) = &slot.stats {
+                first.reset_statistics(stats);
+            }
         }
         Frame { exec: self, cmds, mode, slot: slot_index }
     }
@@ -243,12 +295,18 @@ impl<'r> Frame<'_, 'r> {
         let i = slot.passes.len() as u32;
         assert!(i < self.exec.max_passes, "more than {} passes in one frame", self.exec.max_passes);
         let pool = slot.pool.as_ref().filter(|_| timed);
+        // Graphics counters are legal on a graphics queue only.
+        let stats = slot.stats.as_ref().filter(|_| pool.is_some() && ran_on == QueueKind::Graphics);
         if pool.is_some() {
             slot.passes.push((name, late, ran_on));
+            slot.counted.push(stats.is_some());
         }
         rec.begin_label(&pass_label(name, late));
         if let Some(pool) = pool {
             rec.write_timestamp(pool, 2 * i);
+        }
+        if let Some(stats) = stats {
+            rec.begin_statistics(stats, i);
         }
         let out = f(rec);
         let unpublished = rec.host_unpublished();
@@ -256,6 +314,9 @@ impl<'r> Frame<'_, 'r> {
             unpublished.is_empty(),
             "pass {name} wrote {unpublished:?}, which the host reads, with no barrier to the host"
         );
+        if let Some(stats) = stats {
+            rec.end_statistics(stats, i);
+        }
         if let Some(pool) = pool {
             rec.write_timestamp(pool, 2 * i + 1);
         }

@@ -1,7 +1,7 @@
 //! Pass timings as files: JSON (one object per frame) and a Chrome trace
 //! (chrome://tracing, ui.perfetto.dev), plus medians for reports.
 
-use crate::frame::{pass_label, FrameTimings, PassTiming, QueueKind};
+use crate::frame::{pass_label, FrameTimings, PassCounters, PassTiming, QueueKind};
 use serde::Serialize;
 use serde_json::json;
 
@@ -15,6 +15,29 @@ pub struct PassSummary {
     pub min_ms: f64,
     pub max_ms: f64,
     pub samples: usize,
+    /// Each pipeline statistic's median over the frames that counted it.
+    pub counters: Option<PassCounters>,
+}
+
+fn median_u64(mut v: Vec<u64>) -> u64 {
+    v.sort_unstable();
+    v[v.len() / 2]
+}
+
+/// Each counter's median (counts can vary from frame to frame: a list
+/// order that atomics decide changes which fragments early depth drops).
+fn median_counters(c: &[PassCounters]) -> Option<PassCounters> {
+    if c.is_empty() {
+        return None;
+    }
+    let m = |f: fn(&PassCounters) -> u64| median_u64(c.iter().map(f).collect());
+    Some(PassCounters {
+        input_primitives: m(|c| c.input_primitives),
+        vertex_invocations: m(|c| c.vertex_invocations),
+        clipped_primitives: m(|c| c.clipped_primitives),
+        fragment_invocations: m(|c| c.fragment_invocations),
+        compute_invocations: m(|c| c.compute_invocations),
+    })
 }
 
 /// Median, min and max of each pass over `frames`, in first-seen order.
@@ -37,7 +60,12 @@ pub fn summarize(frames: &[FrameTimings]) -> Vec<PassSummary> {
             v.sort_by(f64::total_cmp);
             let median = if v.len() % 2 == 1 { v[v.len() / 2] } else { 0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2]) };
             let (min_ms, max_ms, samples) = (v[0], v[v.len() - 1], v.len());
-            PassSummary { name, late, queue, median_ms: median, min_ms, max_ms, samples }
+            let counted: Vec<PassCounters> = frames
+                .iter()
+                .flat_map(|f| f.passes.iter().filter(|p| p.name == name && p.late == late).filter_map(|p| p.counters))
+                .collect();
+            let counters = median_counters(&counted);
+            PassSummary { name, late, queue, median_ms: median, min_ms, max_ms, samples, counters }
         })
         .collect()
 }

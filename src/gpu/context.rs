@@ -249,6 +249,8 @@ impl Context {
             );
         }
         let mut feats = device_info::required_features();
+        // Optional: the frame executor's per-pass counters where asked for.
+        feats.core = feats.core.pipeline_statistics_query(info.limits.pipeline_statistics);
         let mut ext_names: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
         if options.presents() {
             ext_names.push(ash::khr::swapchain::NAME.as_ptr());
@@ -298,6 +300,9 @@ impl Context {
         info.graphics_family = handles.graphics_queue_family;
         info.compute_family = handles.compute_queue_family;
         info.async_compute = handles.compute_queue != handles.graphics_queue;
+        // Whether the engine enabled pipelineStatisticsQuery is not
+        // visible here: no per-pass counters on its device.
+        info.limits.pipeline_statistics = false;
         Self::build(handles, info, false, Arc::new(ValidationLog::default()))
     }
 

@@ -33,6 +33,11 @@ pub struct Limits {
     pub device_local_bytes: u64,
     pub timestamps_supported: bool,
     pub timestamp_period_ns: f32,
+    /// Pipeline statistics queries are enabled (the per-pass counters of
+    /// `FrameExecutor`): on a device vista created, where it supports
+    /// them; never on an engine's (`Context::from_raw`: vista cannot tell
+    /// what the engine enabled).
+    pub pipeline_statistics: bool,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -146,6 +151,9 @@ pub(crate) fn query(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
             device_local_bytes,
             timestamps_supported: l.timestamp_compute_and_graphics == vk::TRUE && graphics.timestamp_valid_bits > 0,
             timestamp_period_ns: l.timestamp_period,
+            // SAFETY: valid physical device of this instance.
+            pipeline_statistics: unsafe { instance.get_physical_device_features(pd) }.pipeline_statistics_query
+                == vk::TRUE,
         },
         queue_families,
         name,

@@ -30,7 +30,7 @@ pub use device_info::{
     required_features, DeviceInfo, FeatureChain, Limits, QueueFamilyInfo, REQUIRED_DEVICE_EXTENSIONS,
 };
 pub use pipeline::{ComputePipelineDesc, GraphicsPipelineDesc, Pipeline, StencilDesc};
-pub use query::TimestampPool;
+pub use query::{StatisticsPool, TimestampPool, STATISTICS};
 pub use queue_mode::{QueueMode, COMPUTE_LAG, FRAME_COPIES};
 pub use resources::{
     depth_layout, has_stencil, Buffer, BufferDesc, Image, ImageDesc, LiveObjects, MemoryLocation, Sampler, SamplerDesc,

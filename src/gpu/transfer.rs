@@ -3,7 +3,7 @@
 //! layouts it relies on (see `commands.rs`).
 
 use super::commands::Recorder;
-use super::query::TimestampPool;
+use super::query::{StatisticsPool, TimestampPool};
 use super::resources::{aspect_of, has_stencil, Buffer, Image};
 use ash::vk;
 use std::ffi::CString;
@@ -240,6 +240,29 @@ impl Recorder<'_> {
         assert!(first + count <= pool.capacity, "queries {first}+{count} outside pool of {}", pool.capacity);
         // SAFETY: range checked, outside rendering.
         unsafe { self.d().cmd_reset_query_pool(self.cmd, pool.raw, first, count) };
+    }
+
+    pub fn reset_statistics(&mut self, pool: &StatisticsPool) {
+        self.outside_rendering("reset_statistics");
+        // SAFETY: the whole pool, outside rendering.
+        unsafe { self.d().cmd_reset_query_pool(self.cmd, pool.raw, 0, pool.capacity) };
+    }
+
+    /// Begins statistics query `index`, ended by `end_statistics` in this
+    /// command buffer outside rendering too (a query may not straddle a
+    /// render pass's edge).
+    pub fn begin_statistics(&mut self, pool: &StatisticsPool, index: u32) {
+        self.outside_rendering("begin_statistics");
+        assert!(index < pool.capacity, "query {index} outside pool of {}", pool.capacity);
+        // SAFETY: index checked, outside rendering; the query was reset this frame.
+        unsafe { self.d().cmd_begin_query(self.cmd, pool.raw, index, vk::QueryControlFlags::empty()) };
+    }
+
+    pub fn end_statistics(&mut self, pool: &StatisticsPool, index: u32) {
+        self.outside_rendering("end_statistics");
+        assert!(index < pool.capacity, "query {index} outside pool of {}", pool.capacity);
+        // SAFETY: index checked, outside rendering, begun by begin_statistics.
+        unsafe { self.d().cmd_end_query(self.cmd, pool.raw, index) };
     }
 
     pub fn write_timestamp(&mut self, pool: &TimestampPool, index: u32) {

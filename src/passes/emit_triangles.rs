@@ -19,7 +19,9 @@ use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::lod_map::LodMap;
 use crate::passes::traverse::Traverse;
 use crate::shaders::{consts as k, emit_triangles as sh, structs};
-use crate::terrain::gpu_quadtree::{GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_PATCH_HOLES, ATLAS_VERTEX_BOUNDS};
+use crate::terrain::gpu_quadtree::{
+    GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_PATCH_HOLES, ATLAS_PATCH_MIN_MAX, ATLAS_VERTEX_BOUNDS,
+};
 use crate::terrain::quadtree::FIRST_SLOT;
 use crate::world::{NODE_QUADS, PATCH_QUADS};
 
@@ -431,6 +433,8 @@ impl EmitTriangles {
         }
         if let EmitPhase::Late(hiz, size) = phase {
             bindings.push((sh::HIZ, Resource::Image(hiz, vk::ImageLayout::GENERAL)));
+            let min_max = inputs.tree.required_atlas(ATLAS_PATCH_MIN_MAX);
+            bindings.push((sh::PATCH_MIN_MAX, Resource::Image(min_max, ATLAS_LAYOUT)));
             depth_size = size;
         }
         rec.push_descriptors(pipeline, &bindings);

@@ -84,6 +84,11 @@ pub struct RendererOptions {
     /// What a frame writes for the engine: vista's lit picture (`lit`,
     /// the default), linear radiance (`hdr`) or the engine's G-buffer.
     pub output: Output,
+    /// Count each graphics-queue pass's pipeline statistics (vertices,
+    /// primitives, fragments, compute invocations) into its
+    /// [`PassTiming::counters`](crate::frame::PassTiming::counters), where
+    /// the device enabled them (`Limits::pipeline_statistics`).
+    pub counters: bool,
 }
 
 /// Which LOD selection draws the terrain.

@@ -573,6 +573,7 @@ mod tests {
             device_local_bytes: local_mib << 20,
             timestamps_supported: true,
             timestamp_period_ns: 1.0,
+            pipeline_statistics: false,
         }
     }
 

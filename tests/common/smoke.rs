@@ -43,7 +43,7 @@ pub fn render(ctx: &Context, size: [u32; 2], frames: u32) -> Result<SmokeOutput>
     };
     let (tri_target, patch_target) = (target("smoke_triangle_target")?, target("diamond_patch_target")?);
     let mut ring = FrameRing::new(ctx, 2)?;
-    let mut exec = FrameExecutor::new(ctx, 2, 4)?;
+    let mut exec = FrameExecutor::new(ctx, 2, 4, true)?;
     let mut out: Vec<FrameTimings> = Vec::new();
     let corners = [[-0.8, -0.7, 0.0, 1.0], [0.9, -0.2, 0.0, 1.0], [-0.1, 0.85, 0.0, 1.0]];
     for _ in 0..frames {

@@ -53,6 +53,12 @@ pub struct RenderArgs {
     /// memory per effect.
     #[arg(long)]
     pub report: bool,
+    /// Count each graphics-queue pass's pipeline statistics and print a
+    /// draw's triangles in, vertex shader invocations, triangles out of
+    /// clipping and fragment shader invocations beside its time (medians;
+    /// also in timings.json). Needs the device's pipelineStatisticsQuery.
+    #[arg(long)]
+    pub counters: bool,
     /// How frames are submitted: auto (async where the device has a
     /// compute-only queue family, else single), single (one command buffer),
     /// split (compute and graphics command buffers on the graphics queue,
@@ -498,6 +504,10 @@ fn renderer_and_target(
     };
     let mut options = args.viewpoint.renderer_options(ctx, world, args.cache.as_deref(), errors)?;
     options.output = args.output.clone();
+    options.counters = args.counters;
+    if args.counters && !ctx.info().limits.pipeline_statistics {
+        anyhow::bail!("--counters: {} has no pipeline statistics queries (pipelineStatisticsQuery)", ctx.info().name);
+    }
     let d = &world.desc;
     let start = std::time::Instant::now();
     if options.lod.rule == LodRule::Triangle {

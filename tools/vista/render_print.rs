@@ -179,11 +179,17 @@ pub fn print_timings(timed: &[FrameTimings]) {
         println!("no pass timings (timestamps unsupported or no frame finished)");
         return;
     }
-    println!("{:<44} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
+    let summary = vista::frame::profiler::summarize(timed);
+    let counted = summary.iter().any(|s| s.counters.is_some());
+    print!("{:<44} {:<9} {:>10} {:>10} {:>10} {:>8}", "pass", "queue", "median ms", "min ms", "max ms", "frames");
+    if counted {
+        print!(" {:>12} {:>12} {:>12} {:>12}", "triangles in", "vertices", "clipped out", "fragments");
+    }
+    println!();
     let mut total = 0.0;
-    for s in vista::frame::profiler::summarize(timed) {
+    for s in summary {
         total += s.median_ms;
-        println!(
+        print!(
             "{:<44} {:<9} {:>10.4} {:>10.4} {:>10.4} {:>8}",
             vista::frame::pass_label(s.name, s.late),
             format!("{:?}", s.queue).to_lowercase(),
@@ -192,6 +198,11 @@ pub fn print_timings(timed: &[FrameTimings]) {
             s.max_ms,
             s.samples
         );
+        if let Some(c) = s.counters.filter(|c| c.input_primitives + c.fragment_invocations > 0) {
+            let (a, b, d, e) = (c.input_primitives, c.vertex_invocations, c.clipped_primitives, c.fragment_invocations);
+            print!(" {a:>12} {b:>12} {d:>12} {e:>12}");
+        }
+        println!();
     }
     println!("{:<44} {:<9} {:>10.4}", "sum of medians", "", total);
     let median = |f: fn(&FrameTimings) -> f64| {

@@ -318,7 +318,7 @@ impl TerrainRenderer {
             lod_view_buffer: view_buffers(ctx, "lod_view")?,
             lod_camera: None,
             telemetry: Telemetry::new(ctx, options.terrain.frames_in_flight, counters)?,
-            exec: Some(FrameExecutor::new(ctx, options.terrain.frames_in_flight, max_passes)?),
+            exec: Some(FrameExecutor::new(ctx, options.terrain.frames_in_flight, max_passes, options.counters)?),
             graph,
             stages: options.stages,
             switches: FrameSwitches::default(),
