@@ -142,7 +142,7 @@ mod overlap_tests {
     use crate::gpu::QueueMode;
 
     fn pass(name: &'static str, queue: QueueKind, start_ms: f64, gpu_ms: f64) -> PassTiming {
-        PassTiming { name, late: false, queue, start_ms, gpu_ms }
+        PassTiming { name, late: false, queue, start_ms, gpu_ms, counters: None }
     }
 
     #[test]
