@@ -46,8 +46,7 @@ pub struct TerrainOptions {
     /// Also keep the families right around the camera (for motion); off,
     /// only the LOD criterion decides what is resident (exact test sets).
     pub ring_prefetch: bool,
-    /// Payload atlases kept on the GPU (the renderer keeps only those its
-    /// effects read).
+    /// Payload atlases kept on the GPU (the renderer: those its effects read).
     pub atlases: AtlasSet,
     /// What a world may cost ([`WorldPlan`]); the device's own limits are
     /// added from the context.

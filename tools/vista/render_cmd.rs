@@ -12,7 +12,7 @@ use vista::effects::virtual_texture::state::VtCounters;
 use vista::frame::FrameTimings;
 use vista::gpu::{Context, QueueMode};
 use vista::passes::cull_patches::CullStages;
-use vista::render::offscreen::{Offscreen, OffscreenDesc, Settle};
+use vista::render::offscreen::{Offscreen, OffscreenDesc};
 use vista::render::{
     overview_camera, Camera, LodOptions, LodRule, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M,
 };
@@ -447,9 +447,9 @@ pub fn render(ctx: &Context, world: &LoadedWorld, view: &View, args: &RenderArgs
     let warmup = if args.frames as usize > WARMUP_FRAMES { WARMUP_FRAMES } else { 0 };
     let warmup_timed = frames.iter().take_while(|f| f.frame < first + warmup as u64).count();
     let timed = &frames[warmup_timed..];
-    print_device_and_world(ctx, world, view, args, timed.len(), warmup);
+    crate::render_print::print_device_and_world(ctx, world, view, args, timed.len(), warmup);
     let budget = crate::budget::NodeBudget::of(&args.viewpoint, world, &ctx.info().limits)?;
-    print_stream_and_queues(ctx, &renderer, args, (&settle, &budget), timed);
+    crate::render_print::print_stream_and_queues(ctx, &renderer, args, (&settle, &budget), timed);
     let on_demand = renderer.terrain.errors().roots_on_demand();
     println!(
         "time: {ready_s:.1} s from start to the first frame ({}), then {:.1} s streaming to {}",
@@ -532,71 +532,6 @@ fn renderer_and_target(
     };
     let off = Offscreen::with_desc(ctx, &desc)?;
     Ok((renderer, off))
-}
-
-/// The `device:` and `world:` lines.
-fn print_device_and_world(
-    ctx: &Context,
-    world: &LoadedWorld,
-    view: &View,
-    args: &RenderArgs,
-    timed: usize,
-    warmup: usize,
-) {
-    let c = &view.camera;
-    println!(
-        "device: {}  ({} frames rendered: {warmup} warm-up, {} timed; {}x{})",
-        ctx.info().name,
-        args.frames,
-        timed,
-        view.size[0],
-        view.size[1]
-    );
-    println!(
-        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m ({:.1} m above the height source), yaw {:.1}, pitch {:.1}, \
-         fov {:.1}, target error {} px{}",
-        world.label,
-        c.position_m[0],
-        c.position_m[1],
-        c.position_m[2],
-        c.position_m[2]
-            - f64::from(world.source.sample(c.position_m[0] - world.origin_m[0], c.position_m[1] - world.origin_m[1])),
-        c.yaw_deg,
-        c.pitch_deg,
-        view.fov_y_deg,
-        view.target_error_px,
-        if args.fly.is_some() { " (where the fly-through ended)" } else { "" }
-    );
-}
-
-/// The `stream:`, `queues:`, `async overlap:` and `output:` lines.
-fn print_stream_and_queues(
-    ctx: &Context,
-    renderer: &TerrainRenderer,
-    args: &RenderArgs,
-    (settle, budget): (&Settle, &crate::budget::NodeBudget),
-    timed: &[FrameTimings],
-) {
-    let st = renderer.terrain.stats();
-    println!(
-        "stream: {} resident of {} slots ({}), {} loading, {} waiting upload, {} failed loads ({} retried, {} nodes given up); {} after {} frames, {:.2} s (lazy bake)",
-        st.resident,
-        renderer.terrain.slots(),
-        budget.describe(),
-        st.loading,
-        st.waiting_upload,
-        st.failed,
-        st.retried,
-        st.gave_up,
-        if settle.settled { "settled" } else { "NOT settled (--settle-seconds ran out)" },
-        settle.frames,
-        settle.seconds
-    );
-    if let Some(ran) = renderer.queue_mode() {
-        println!("queues: {}", ran.describe(ctx.info()));
-        println!("async overlap: {}", crate::render_print::describe_overlap(ran, timed));
-    }
-    println!("output: {}", crate::render_print::describe_output(&args.output, renderer));
 }
 
 /// The culling stages asked for that the renderer built.

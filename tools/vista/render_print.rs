@@ -1,6 +1,6 @@
-//! What `vista render` prints: the counters, the virtual texture's pages
-//! along a fly-through, the per-pass timing table, the output and the
-//! async overlap.
+//! What `vista render` prints: the device, world, stream and queue lines,
+//! the counters, the virtual texture's pages along a fly-through, the
+//! per-pass timing table, the output and the async overlap.
 
 use vista::effects::virtual_texture::state::VtCounters;
 use vista::frame::FrameTimings;
@@ -268,4 +268,69 @@ pub fn describe_overlap(mode: QueueMode, timed: &[FrameTimings]) -> String {
         median(&mut geo),
         all.len()
     )
+}
+
+/// The `device:` and `world:` lines.
+pub fn print_device_and_world(
+    ctx: &vista::gpu::Context,
+    world: &crate::world_args::LoadedWorld,
+    view: &vista::render::View,
+    args: &crate::render_cmd::RenderArgs,
+    timed: usize,
+    warmup: usize,
+) {
+    let c = &view.camera;
+    println!(
+        "device: {}  ({} frames rendered: {warmup} warm-up, {} timed; {}x{})",
+        ctx.info().name,
+        args.frames,
+        timed,
+        view.size[0],
+        view.size[1]
+    );
+    println!(
+        "world:  {}  camera ({:.1}, {:.1}, {:.1}) m ({:.1} m above the height source), yaw {:.1}, pitch {:.1}, \
+         fov {:.1}, target error {} px{}",
+        world.label,
+        c.position_m[0],
+        c.position_m[1],
+        c.position_m[2],
+        c.position_m[2]
+            - f64::from(world.source.sample(c.position_m[0] - world.origin_m[0], c.position_m[1] - world.origin_m[1])),
+        c.yaw_deg,
+        c.pitch_deg,
+        view.fov_y_deg,
+        view.target_error_px,
+        if args.fly.is_some() { " (where the fly-through ended)" } else { "" }
+    );
+}
+
+/// The `stream:`, `queues:`, `async overlap:` and `output:` lines.
+pub fn print_stream_and_queues(
+    ctx: &vista::gpu::Context,
+    renderer: &vista::render::TerrainRenderer,
+    args: &crate::render_cmd::RenderArgs,
+    (settle, budget): (&vista::render::offscreen::Settle, &crate::budget::NodeBudget),
+    timed: &[FrameTimings],
+) {
+    let st = renderer.terrain.stats();
+    println!(
+        "stream: {} resident of {} slots ({}), {} loading, {} waiting upload, {} failed loads ({} retried, {} nodes given up); {} after {} frames, {:.2} s (lazy bake)",
+        st.resident,
+        renderer.terrain.slots(),
+        budget.describe(),
+        st.loading,
+        st.waiting_upload,
+        st.failed,
+        st.retried,
+        st.gave_up,
+        if settle.settled { "settled" } else { "NOT settled (--settle-seconds ran out)" },
+        settle.frames,
+        settle.seconds
+    );
+    if let Some(ran) = renderer.queue_mode() {
+        println!("queues: {}", ran.describe(ctx.info()));
+        println!("async overlap: {}", describe_overlap(ran, timed));
+    }
+    println!("output: {}", describe_output(&args.output, renderer));
 }
