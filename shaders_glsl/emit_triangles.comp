@@ -23,7 +23,9 @@
 // Both nodes of a border decide a vertex they share from the same bits in
 // the same arithmetic, so the list is a conforming cut: no T-junction and
 // no stitching. A subtree whose box is outside the frustum is dropped,
-// and one inside a patch of holes only.
+// and one inside a patch of holes only; then each triangle left whole on
+// the grid that faces away (EMIT_CULL_FACING) or lies outside the frustum
+// by its own vertices (emit_unless_hidden).
 //
 // Occlusion (two phases, as cull_patches and cull_occluded do for
 // patches; one visibility bit per invocation's subtree and slot): with
@@ -118,6 +120,35 @@ const uint CELL_DEPTH = EMIT_THREAD_DEPTH;
 const uint FINE_WORDS = (1u << CELL_DEPTH) / 32u;
 shared uint s_fine[256u * FINE_WORDS];
 
+// The triangles `walk` leaves whole under an invocation's triangle (down
+// to the grid's cells, CELL_DEPTH + 1 levels), a bit each in preorder,
+// LEAF_WORDS words an invocation: emitted after the walk, each tested
+// first (emit_unless_hidden), so neither the test nor the list's atomic
+// is in the walk's loop (lavapipe runs its whole body on every decision).
+const uint LEAF_WORDS = (2u << CELL_DEPTH) / 32u;
+shared uint s_leaves[256u * LEAF_WORDS];
+
+// A triangle's preorder index in its invocation's subtree: `depth` below
+// its root along `path` (the halves taken, the first highest); a second
+// half at depth d skips the 2^(CELL_DEPTH + 1 - d) - 1 triangles of the first.
+uint preorder(uint depth, uint path) {
+    return depth + (path << (CELL_DEPTH + 1u - depth)) - uint(bitCount(path));
+}
+
+// The triangle at preorder index i under root.
+Tri preorder_triangle(Tri root, uint i) {
+    Tri t = root;
+    for (uint d = 0u; d < CELL_DEPTH && i != 0u; ++d) {
+        i -= 1u;
+        // Triangles under each half of a triangle at depth d.
+        uint under = (1u << (CELL_DEPTH - d)) - 1u;
+        uint second = i >= under ? 1u : 0u;
+        i -= second * under;
+        t = half_of(t, second);
+    }
+    return t;
+}
+
 // Depth-first over `root`'s subtree down to the grid's cells, the first
 // half before the second as a stack would; the grid's cell halves are
 // marked in s_fine. Every loop an invocation runs counts towards one
@@ -138,10 +169,15 @@ void walk(Tri root) {
             path <<= 1u;
             continue;
         }
+        uint me = gl_LocalInvocationID.x;
         if (what == FINE || what == CELL) {
-            s_fine[gl_LocalInvocationID.x * FINE_WORDS + (path >> 5u)] |= 1u << (path & 31u);
+            s_fine[me * FINE_WORDS + (path >> 5u)] |= 1u << (path & 31u);
         }
-        if (what != FINE) {
+        if (what == LEAF || what == CELL) {
+            uint i = preorder(depth, path);
+            s_leaves[me * LEAF_WORDS + (i >> 5u)] |= 1u << (i & 31u);
+            g_bound_px = max(g_bound_px, px);
+        } else if (what != FINE) {
             finish(t, what, px);
         }
         if (!next_triangle(t, depth, path)) {
@@ -190,12 +226,26 @@ void queue_cells(uint t) {
     }
 }
 
+// The triangles `walk` left whole under invocation t's subtree (root), in
+// its order, those hidden on their own not.
+void emit_leaves(Tri root, uint t) {
+    for (uint w = 0u; w < LEAF_WORDS; ++w) {
+        uint bits = s_leaves[t * LEAF_WORDS + w];
+        while (bits != 0u) {
+            Tri c = preorder_triangle(root, 32u * w + uint(findLSB(bits)));
+            bits &= bits - 1u;
+            emit_unless_hidden(c);
+        }
+    }
+}
+
 // The grid's cell halves `walk` drew whole under invocation t's subtree
 // (root) where the node is not refined below them: each adds the node's
 // own error over its column to the grid's bound. Not in the walk: lavapipe
 // runs the whole body of its loop on every pass, masked, and this
-// projection was a sixth of the pass there. (The walk draws them, in its
-// order: drawn after it, the rule's draw was slower on Mont Blanc.)
+// projection was a sixth of the pass there. (emit_leaves draws them in
+// the walk's order: drawn after the others, the rule's draw was slower on
+// Mont Blanc.)
 void bound_cells(Tri root, uint t) {
     for (uint w = 0u; w < FINE_WORDS; ++w) {
         uint bits = s_fine[t * FINE_WORDS + w];
@@ -214,7 +264,11 @@ void walk_subtree(Tri root, uint t) {
     for (uint w = 0u; w < FINE_WORDS; ++w) {
         s_fine[t * FINE_WORDS + w] = 0u;
     }
+    for (uint w = 0u; w < LEAF_WORDS; ++w) {
+        s_leaves[t * LEAF_WORDS + w] = 0u;
+    }
     walk(root);
+    emit_leaves(root, t);
     if (g_lod == 0u && g_refine != 0u) {
         queue_cells(t);
     } else {
@@ -241,7 +295,10 @@ bool path_reached(uint t) {
             g_clamped = clamped;
         }
         if (what != SPLIT) {
-            if (owner) {
+            if (owner && what == LEAF) {
+                emit_unless_hidden(tri);
+                g_bound_px = max(g_bound_px, px);
+            } else if (owner) {
                 finish(tri, what, px);
             }
             return false;

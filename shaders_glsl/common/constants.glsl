@@ -113,6 +113,9 @@
 // emit_triangles' culling stages (EmitPush.cull bits).
 #define EMIT_CULL_FRUSTUM 1u
 #define EMIT_CULL_HOLES 2u
+// A drawn triangle on the node's grid facing away from the camera (effect
+// cone_cull: each triangle's own plane, exact, where patches test a cone).
+#define EMIT_CULL_FACING 4u
 #define EMIT_THREAD_DEPTH 7u
 // Triangles the index list holds (48 MiB); beyond, a triangle is counted, not drawn.
 #define MAX_EMITTED_TRIANGLES 4194304u

@@ -42,7 +42,7 @@ layout(set = 0, binding = 14) uniform utexture2DArray patch_holes;
 
 layout(push_constant, std430) uniform EmitPush {
     uint capacity;  // triangles the list holds
-    uint cull;      // EMIT_CULL_* bits: the frustum, holes (CullStages::frustum, ::hole)
+    uint cull;      // EMIT_CULL_* bits: the frustum, holes, facing (CullStages::frustum, ::hole, ::cone)
     uint depth_w;   // LATE: the depth target's size (the pyramid's level 0 is made from it)
     uint depth_h;
     uint fine_capacity;  // cell halves the fine list holds (MAX_FINE_CELLS; less in tests)
@@ -82,6 +82,8 @@ uint g_forced = 0u;
 uint g_clamped = 0u;
 uint g_culled = 0u;
 uint g_holes = 0u;
+uint g_facing = 0u;
+uint g_outside = 0u;
 // LOD-0 cell halves drawn whole: the fine list was full (emit_triangles).
 uint g_unrefined = 0u;
 float g_bound_px = 0.0;
@@ -220,6 +222,51 @@ float cell_px(Tri t) {
     return projected_px(err, vec3(xy0, z0 - view.v.camera_z), vec3(xy1, z1 - view.v.camera_z));
 }
 
+// Grid point p's place as terrain_triangles puts it (camera-relative m;
+// p in lattice units, on the grid).
+vec3 grid_point(ivec2 p) {
+    ivec2 g = p / UNITS;
+    float h = texelFetch(sampler2DArray(height_atlas, nearest), ivec3(atlas_texel(g), int(g_slot)), 0).r;
+    vec2 xy = view_rel_xy(sample_of(g), view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
+    return vec3(xy, view.v.height_lo + h * view.v.height_range - view.v.camera_z);
+}
+
+// Whether all of a, b and c lie outside plane p by more than float error.
+bool outside_plane(vec4 p, vec3 a, vec3 b, vec3 c) {
+    float pad = 1e-3 + 1e-5 * (length(a) + length(b) + length(c));
+    return max(max(dot(p.xyz, a), dot(p.xyz, b)), dot(p.xyz, c)) + p.w < -pad;
+}
+
+// Emits triangle t unless it is on the node's grid and, by its own
+// vertices, faces away from the camera (EMIT_CULL_FACING: by more than
+// half a degree, so no rounding in the rasteriser's own test turns it) or
+// lies outside a frustum plane (EMIT_CULL_FRUSTUM; its subtree's box,
+// tested first, spans its vertices' whole reach). A triangle with a
+// vertex below the samples (on the Catmull-Rom surface) is emitted as it is.
+void emit_unless_hidden(Tri t) {
+    ivec2 any_bits = t.apex | t.b | t.c;
+    if ((pc.cull & (EMIT_CULL_FACING | EMIT_CULL_FRUSTUM)) == 0u || ((any_bits.x | any_bits.y) & (UNITS - 1)) != 0) {
+        emit(t);
+        return;
+    }
+    vec3 a = grid_point(t.apex), b = grid_point(t.b), c = grid_point(t.c);
+    // The plane's normal up (a height field's front faces look up).
+    vec3 n = cross(b - a, c - a);
+    n = n.z < 0.0 ? -n : n;
+    if ((pc.cull & EMIT_CULL_FACING) != 0u && dot(n, a) > 1e-2 * length(n) * length(a)) {
+        g_facing += 1u;
+        return;
+    }
+    if ((pc.cull & EMIT_CULL_FRUSTUM) != 0u
+        && (outside_plane(view.v.frustum[0], a, b, c) || outside_plane(view.v.frustum[1], a, b, c)
+            || outside_plane(view.v.frustum[2], a, b, c) || outside_plane(view.v.frustum[3], a, b, c)
+            || outside_plane(view.v.frustum[4], a, b, c))) {
+        g_outside += 1u;
+        return;
+    }
+    emit(t);
+}
+
 // Emits t as the rule leaves it (a leaf, culled, or split further; a
 // CELL here is of the finest lattice, on the finest surface: no error).
 void finish(Tri t, uint what, float px) {
@@ -231,7 +278,7 @@ void finish(Tri t, uint what, float px) {
         g_holes += 1u;
         return;
     }
-    emit(t);
+    emit_unless_hidden(t);
     g_bound_px = max(g_bound_px, px);
 }
 
@@ -247,6 +294,10 @@ void flush() {
         atomicAdd(tris.header.culled, g_culled);
         atomicAdd(tris.header.unrefined, g_unrefined);
         atomicAdd(tris.header.holes, g_holes);
+    }
+    if ((g_facing | g_outside) != 0u) {
+        atomicAdd(tris.header.facing_away, g_facing);
+        atomicAdd(tris.header.outside, g_outside);
     }
     if (g_bound_px > 0.0) {
         atomicMax(tris.header.bound_bits, floatBitsToUint(g_bound_px));

@@ -22,6 +22,8 @@ struct TriangleListHeader {
     uint grid_bound_bits; // the same for the finest grid's cells (the node's own error)
     uint unrefined;       // LOD-0 cell halves drawn whole, the fine list full (their node's error in grid_bound_bits)
     uint holes;           // subtrees inside a patch of holes only (not emitted)
+    uint facing_away;     // triangles left whole that face away from the camera (not emitted)
+    uint outside;         // triangles left whole outside the frustum, their subtree's box not (not emitted)
 };
 
 // The bits above the low byte (high bits of x and y, then the slot) mixed

@@ -55,6 +55,12 @@ pub struct TriangleListHeader {
     pub unrefined: u32,
     /// Subtrees inside a patch whose samples are all holes (not emitted).
     pub holes: u32,
+    /// Triangles the cut left whole that face away from the camera (not
+    /// emitted; effect `cone_cull`, each triangle on the node's grid).
+    pub facing_away: u32,
+    /// Triangles the cut left whole outside the frustum where their
+    /// subtree's box is not (not emitted; each triangle on the node's grid).
+    pub outside: u32,
 }
 
 /// Host twin of `FineCellsHeader` (fine_cells.glsl): `emit_fine`'s
@@ -113,6 +119,8 @@ impl TriangleListHeader {
         self.culled += late.culled;
         self.unrefined += late.unrefined;
         self.holes += late.holes;
+        self.facing_away += late.facing_away;
+        self.outside += late.outside;
         self.bound_bits = self.bound_bits.max(late.bound_bits);
         self.grid_bound_bits = self.grid_bound_bits.max(late.grid_bound_bits);
         self
@@ -124,7 +132,8 @@ impl TriangleListHeader {
 pub struct EmitPush {
     pub capacity: u32,
     /// `EMIT_CULL_*` bits: subtrees outside the frustum, or inside a patch
-    /// of holes only, are dropped.
+    /// of holes only, and triangles facing away or (on their own) outside
+    /// the frustum, are dropped.
     pub cull: u32,
     /// Phase 2: the depth target's size (the pyramid's level 0 comes from it).
     pub depth_size: [u32; 2],
@@ -178,6 +187,9 @@ pub struct EmitInputs<'a> {
     pub frustum: bool,
     /// Subtrees inside a patch of holes only are dropped.
     pub holes: bool,
+    /// Triangles facing away from the camera are dropped (where the pass is
+    /// built with effect `cone_cull`).
+    pub facing: bool,
 }
 
 pub struct EmitTriangles {
@@ -199,6 +211,17 @@ pub struct EmitTriangles {
     /// Cell halves the fine lists are used up to (`limit_fine_cells`).
     fine_capacity: u32,
     occlusion: Option<EmitOcclusion>,
+    /// Built with effect `cone_cull`: triangles facing away may be dropped.
+    facing: bool,
+}
+
+/// What the pass is built with (effects `occlusion` and `cone_cull`).
+#[derive(Clone, Copy, Debug)]
+pub struct EmitBuild {
+    /// Phase 2's list and the visibility bits.
+    pub occlusion: bool,
+    /// The facing test of every triangle the cut leaves whole.
+    pub facing: bool,
 }
 
 /// Whether the hole stage runs: asked for, and the world has holes (effect
@@ -293,8 +316,7 @@ impl EmitOcclusion {
 impl EmitTriangles {
     pub const NAME: &'static str = sh::PASS;
 
-    /// `occlusion`: with phase 2's list and the visibility bits.
-    pub fn new(ctx: &Context, slot_capacity: u32, occlusion: bool) -> Result<Self> {
+    pub fn new(ctx: &Context, slot_capacity: u32, build: EmitBuild) -> Result<Self> {
         let pipeline = pipeline(ctx, 0)?;
         let capacity = k::MAX_EMITTED_TRIANGLES;
         let list = list_buffers(ctx, "emit_triangles_list", capacity)?;
@@ -304,7 +326,10 @@ impl EmitTriangles {
                 &BufferDesc {
                     name: &copy_name("emit_triangles_slot_nodes", i),
                     size: u64::from(FIRST_SLOT + slot_capacity) * 4,
-                    usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                    // TRANSFER_SRC: read back by tests, to place the list's triangles.
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_DST
+                        | vk::BufferUsageFlags::TRANSFER_SRC,
                     location: MemoryLocation::GpuOnly,
                 },
             )
@@ -317,7 +342,8 @@ impl EmitTriangles {
             capacity,
             fine: fine_buffer(ctx, "emit_triangles_fine")?,
             fine_capacity: k::MAX_FINE_CELLS,
-            occlusion: occlusion.then(|| EmitOcclusion::new(ctx, slot_capacity, capacity)).transpose()?,
+            occlusion: build.occlusion.then(|| EmitOcclusion::new(ctx, slot_capacity, capacity)).transpose()?,
+            facing: build.facing,
         })
     }
 
@@ -369,7 +395,8 @@ impl EmitTriangles {
         EmitPush {
             capacity: self.capacity,
             cull: u32::from(inputs.frustum) * k::EMIT_CULL_FRUSTUM
-                + u32::from(holes_stage(inputs)) * k::EMIT_CULL_HOLES,
+                + u32::from(holes_stage(inputs)) * k::EMIT_CULL_HOLES
+                + u32::from(inputs.facing && self.facing) * k::EMIT_CULL_FACING,
             depth_size,
             fine_capacity: self.fine_capacity,
         }

@@ -164,6 +164,7 @@ impl FramePasses<'_> {
                 view_bytes,
                 frustum: self.stages.frustum,
                 holes: self.stages.hole,
+                facing: self.stages.cone,
             };
             let phase = if self.triangle_phases(t) { EmitPhase::Early } else { EmitPhase::All };
             pass(frame, log, FramePass::EMIT_TRIANGLES, |r| t.emit.record(r, &inputs, phase));
@@ -251,6 +252,7 @@ impl FramePasses<'_> {
             view_bytes: &[],
             frustum: self.stages.frustum,
             holes: self.stages.hole,
+            facing: self.stages.cone,
         };
         let phase = EmitPhase::Late(pyramid, targets.depth.extent);
         pass(frame, log, FramePass::EMIT_TRIANGLES_LATE, |r| tri.emit.record(r, &inputs, phase));

@@ -105,8 +105,10 @@ pub enum LodRule {
     /// bounds are computed for the whole world when the renderer is made.
     /// With effect `occlusion` it culls its subtrees in two phases against
     /// the depth pyramid. A LOD-0 node continues the bisection below its
-    /// samples, on the Catmull-Rom surface, to the finest lattice. Not
-    /// yet: cone culling.
+    /// samples, on the Catmull-Rom surface, to the finest lattice. With
+    /// effect `cone_cull` (stage `cone`) each triangle it leaves whole on a
+    /// node's grid is dropped when it faces away from the camera, and with
+    /// stage `frustum` when it lies outside the frustum on its own.
     Triangle,
 }
 

@@ -56,13 +56,16 @@ fn triangle_bound_words(px: f32) -> String {
 /// The per-triangle rule's lines (instead of the patches' and selection's).
 fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleListHeader) {
     println!(
-        "triangles: {} drawn by the per-triangle rule ({} emitted, {} past the list), {} subtrees outside the \
-         frustum and {} inside a patch of holes only not emitted, {} splits forced by a finer neighbour's corner",
+        "triangles: {} drawn by the per-triangle rule ({} emitted, {} past the list); not emitted: {} subtrees \
+         outside the frustum, {} inside a patch of holes only, {} triangles facing away, {} outside the frustum; {} \
+         splits forced by a finer neighbour's corner",
         t.drawn(),
         t.triangles,
         t.overflow,
         t.culled,
         t.holes,
+        t.facing_away,
+        t.outside,
         t.forced
     );
     println!(

@@ -14,7 +14,7 @@ use crate::passes::classify_tiles::ClassifyTiles;
 use crate::passes::cull_occluded::CullOccluded;
 use crate::passes::cull_patches::{CullBuild, CullPatches};
 use crate::passes::emit_fine::EmitFine;
-use crate::passes::emit_triangles::EmitTriangles;
+use crate::passes::emit_triangles::{EmitBuild, EmitTriangles};
 use crate::passes::gbuffer_tiles::{GbufferTiles, TileMaterials};
 use crate::passes::hiz_build::HizBuild;
 use crate::passes::lighting_resolve::{LightingResolve, ResolveTarget};
@@ -233,18 +233,18 @@ fn terrain_draws(
     depth: crate::passes::terrain_geometry::DepthOptions,
     effects: &[Box<dyn FrameEffect>],
     holes: bool,
-    triangle: Option<(u32, bool)>,
+    triangle: Option<(u32, EmitBuild)>,
 ) -> Result<(TerrainGeometry, Option<TerrainHoles>, Option<TrianglePath>)> {
     let sinks = effects.iter().filter(|e| e.terrain_sink().is_some()).count();
     assert!(sinks <= 1, "{sinks} effects sink the height field; the terrain's draws read one sink");
     let sink = sinks == 1;
     let holes = if holes { Some(TerrainHoles::new(ctx, depth, sink)?) } else { None };
     let triangles = match triangle {
-        Some((slots, occlusion)) => Some(TrianglePath {
-            emit: EmitTriangles::new(ctx, slots, occlusion)?,
+        Some((slots, build)) => Some(TrianglePath {
+            emit: EmitTriangles::new(ctx, slots, build)?,
             fine: EmitFine::new(ctx)?,
             draw: TerrainTriangles::new(ctx, depth, sink)?,
-            hiz: occlusion.then(|| HizBuild::new(ctx)).transpose()?,
+            hiz: build.occlusion.then(|| HizBuild::new(ctx)).transpose()?,
         }),
         None => None,
     };
@@ -291,7 +291,8 @@ impl TerrainRenderer {
         // gbuffer_tiles records one timed draw per variant.
         let max_passes = graph.max_recorded() + variants as u32;
         let counters = counter_layout(world, &cull, build, &built);
-        let tri = triangle.then_some((slot_capacity, on(Effect::Occlusion)));
+        let emit = EmitBuild { occlusion: on(Effect::Occlusion), facing: on(Effect::ConeCull) };
+        let tri = triangle.then_some((slot_capacity, emit));
         let (geometry, holes, triangles) = terrain_draws(ctx, options.depth, &built, build.holes, tri)?;
         let resolve = resolve(ctx, options, &decisions)?;
         Ok(TerrainRenderer {
