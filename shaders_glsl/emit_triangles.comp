@@ -177,8 +177,8 @@ void walk(Tri root) {
             uint i = preorder(depth, path);
             s_leaves[me * LEAF_WORDS + (i >> 5u)] |= 1u << (i & 31u);
             g_bound_px = max(g_bound_px, px);
-        } else if (what != FINE) {
-            finish(t, what, px);
+        } else if (what == CULLED || what == HOLES) {
+            count_dropped(what);
         }
         if (!next_triangle(t, depth, path)) {
             break;
@@ -283,29 +283,32 @@ void walk_subtree(Tri root, uint t) {
 // that the cut leaves whole is emitted and counted by its first
 // descendant's invocation only (t's bits below its depth all 0).
 // One invocation walking the depths above alone took most of the pass.
+// The triangle left whole is finished after the loop: in it, its test
+// would run (masked) on every depth.
 bool path_reached(uint t) {
     Tri tri = triangle_at(0u, t >> EMIT_THREAD_DEPTH);
-    for (uint d = 0u; d < EMIT_THREAD_DEPTH; ++d) {
-        bool owner = (t & ((1u << (EMIT_THREAD_DEPTH - d)) - 1u)) == 0u;
+    uint what = SPLIT;
+    float px = 0.0;
+    bool owner = false;
+    for (uint d = 0u; d < EMIT_THREAD_DEPTH && what == SPLIT; ++d) {
+        owner = (t & ((1u << (EMIT_THREAD_DEPTH - d)) - 1u)) == 0u;
         uint forced = g_forced, clamped = g_clamped;
-        float px;
-        uint what = decide(tri, px);
+        what = decide(tri, px);
         if (!owner) {
             g_forced = forced;
             g_clamped = clamped;
         }
-        if (what != SPLIT) {
-            if (owner && what == LEAF) {
-                emit_unless_hidden(tri);
-                g_bound_px = max(g_bound_px, px);
-            } else if (owner) {
-                finish(tri, what, px);
-            }
-            return false;
+        if (what == SPLIT) {
+            tri = half_of(tri, (t >> (EMIT_THREAD_DEPTH - 1u - d)) & 1u);
         }
-        tri = half_of(tri, (t >> (EMIT_THREAD_DEPTH - 1u - d)) & 1u);
     }
-    return true;
+    if (what == SPLIT) {
+        return true;
+    }
+    if (owner) {
+        finish(tri, what, px);
+    }
+    return false;
 }
 
 #ifdef OCCLUSION

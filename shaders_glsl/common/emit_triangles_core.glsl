@@ -267,15 +267,20 @@ void emit_unless_hidden(Tri t) {
     emit(t);
 }
 
-// Emits t as the rule leaves it (a leaf, culled, or split further; a
-// CELL here is of the finest lattice, on the finest surface: no error).
-void finish(Tri t, uint what, float px) {
+// Counts a subtree the rule drops (CULLED or HOLES).
+void count_dropped(uint what) {
     if (what == CULLED) {
         g_culled += 1u;
-        return;
-    }
-    if (what == HOLES) {
+    } else {
         g_holes += 1u;
+    }
+}
+
+// Emits t as the rule leaves it (a leaf, or dropped; a CELL here is of
+// the finest lattice, on the finest surface: no error).
+void finish(Tri t, uint what, float px) {
+    if (what == CULLED || what == HOLES) {
+        count_dropped(what);
         return;
     }
     emit_unless_hidden(t);
