@@ -263,17 +263,23 @@ fn occlusion_draws_the_same_picture_with_fewer_triangles() {
     });
 }
 
-/// The emitted list (phase 1's: culling off, one phase) read back: each
-/// drawn node's doubled triangle areas in lattice units, every triangle
-/// checked to lie in one slot and wind counter-clockwise, and how many
-/// triangles are of the finest lattice (doubled area 1).
-fn list_areas(ctx: &vista::gpu::Context, tri: &Rig) -> (BTreeMap<u32, i64>, usize) {
+/// The vertex codes of the last frame's list (phase 1's), 3 a triangle;
+/// the list must not have overflowed.
+fn list_codes(ctx: &vista::gpu::Context, tri: &Rig) -> Vec<u32> {
     let emit = &tri.renderer.triangles.as_ref().expect("built").emit;
     let h = emit.read_header(ctx).unwrap();
     assert_eq!(h.overflow, 0);
     let bytes = ctx.read_buffer(emit.list()).unwrap();
     let first = std::mem::size_of::<TriangleListHeader>();
-    let codes: &[u32] = bytemuck::cast_slice(&bytes[first..][..h.drawn() as usize * 12]);
+    bytemuck::cast_slice(&bytes[first..][..h.drawn() as usize * 12]).to_vec()
+}
+
+/// The emitted list (phase 1's: culling off, one phase) read back: each
+/// drawn node's doubled triangle areas in lattice units, every triangle
+/// checked to lie in one slot and wind counter-clockwise, and how many
+/// triangles are of the finest lattice (doubled area 1).
+fn list_areas(ctx: &vista::gpu::Context, tri: &Rig) -> (BTreeMap<u32, i64>, usize) {
+    let codes = list_codes(ctx, tri);
     let (mut area, mut finest) = (BTreeMap::new(), 0usize);
     let point = |c: u32| {
         let (_, [x, y]) = vertex_code_point(c);
@@ -385,11 +391,7 @@ fn placed_list(
     v: &View,
 ) -> Vec<Placed> {
     let emit = &tri.renderer.triangles.as_ref().expect("built").emit;
-    let h = emit.read_header(ctx).unwrap();
-    assert_eq!(h.overflow, 0);
-    let bytes = ctx.read_buffer(emit.list()).unwrap();
-    let first = std::mem::size_of::<TriangleListHeader>();
-    let codes: &[u32] = bytemuck::cast_slice(&bytes[first..][..h.drawn() as usize * 12]);
+    let codes = list_codes(ctx, tri);
     let slots: Vec<u32> = bytemuck::cast_slice(&ctx.read_buffer(emit.slot_nodes()).unwrap()).to_vec();
     let units = 1u32 << REFINE_LEVELS;
     let eye = DVec3::from(v.camera.position_m);
