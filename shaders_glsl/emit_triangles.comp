@@ -128,27 +128,6 @@ shared uint s_fine[256u * FINE_WORDS];
 const uint LEAF_WORDS = (2u << CELL_DEPTH) / 32u;
 shared uint s_leaves[256u * LEAF_WORDS];
 
-// A triangle's preorder index in its invocation's subtree: `depth` below
-// its root along `path` (the halves taken, the first highest); a second
-// half at depth d skips the 2^(CELL_DEPTH + 1 - d) - 1 triangles of the first.
-uint preorder(uint depth, uint path) {
-    return depth + (path << (CELL_DEPTH + 1u - depth)) - uint(bitCount(path));
-}
-
-// The triangle at preorder index i under root.
-Tri preorder_triangle(Tri root, uint i) {
-    Tri t = root;
-    for (uint d = 0u; d < CELL_DEPTH && i != 0u; ++d) {
-        i -= 1u;
-        // Triangles under each half of a triangle at depth d.
-        uint under = (1u << (CELL_DEPTH - d)) - 1u;
-        uint second = i >= under ? 1u : 0u;
-        i -= second * under;
-        t = half_of(t, second);
-    }
-    return t;
-}
-
 // Depth-first over `root`'s subtree down to the grid's cells, the first
 // half before the second as a stack would; the grid's cell halves are
 // marked in s_fine. Every loop an invocation runs counts towards one
@@ -174,7 +153,7 @@ void walk(Tri root) {
             s_fine[me * FINE_WORDS + (path >> 5u)] |= 1u << (path & 31u);
         }
         if (what == LEAF || what == CELL) {
-            uint i = preorder(depth, path);
+            uint i = preorder(depth, path, CELL_DEPTH);
             s_leaves[me * LEAF_WORDS + (i >> 5u)] |= 1u << (i & 31u);
             g_bound_px = max(g_bound_px, px);
         } else if (what == CULLED || what == HOLES) {
@@ -189,7 +168,7 @@ void walk(Tri root) {
 // The cell halves `walk` marked under invocation t's subtree, appended to
 // the fine list with one atomic (and the dispatch's workgroups counted
 // as they fill); past its capacity a cell half is drawn whole, its node's
-// error counted in the bound (finish's CELL).
+// error counted in the bound.
 void queue_cells(uint t) {
     uint base = t * FINE_WORDS;
     uint n = 0u;
@@ -232,7 +211,7 @@ void emit_leaves(Tri root, uint t) {
     for (uint w = 0u; w < LEAF_WORDS; ++w) {
         uint bits = s_leaves[t * LEAF_WORDS + w];
         while (bits != 0u) {
-            Tri c = preorder_triangle(root, 32u * w + uint(findLSB(bits)));
+            Tri c = preorder_triangle(root, 32u * w + uint(findLSB(bits)), CELL_DEPTH);
             bits &= bits - 1u;
             emit_unless_hidden(c);
         }

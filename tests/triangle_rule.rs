@@ -376,13 +376,13 @@ fn a_full_fine_list_draws_its_cells_whole_says_so_and_bounds_them() {
 }
 
 /// A triangle of the emitted list: its vertex codes, and its corners in
-/// camera-relative metres (from the slot's node and the world's heights;
-/// none for a triangle below the samples, which no stage tests).
-type Placed = ([u32; 3], Option<[DVec3; 3]>);
+/// camera-relative metres (from the slot's node and the world's heights).
+type Placed = ([u32; 3], [DVec3; 3]);
 
 /// The list of the last frame read back, each triangle placed on the CPU:
-/// its node from the slot (the list's slot table), its corners' samples
-/// from the node's place, their heights from the world's source.
+/// its node from the slot (the list's slot table), its corners' places
+/// from the node's, their heights from the world's source (a corner
+/// between the samples: from the finest surface, `common::finest`).
 fn placed_list(
     ctx: &vista::gpu::Context,
     tri: &Rig,
@@ -395,15 +395,26 @@ fn placed_list(
     let slots: Vec<u32> = bytemuck::cast_slice(&ctx.read_buffer(emit.slot_nodes()).unwrap()).to_vec();
     let units = 1u32 << REFINE_LEVELS;
     let eye = DVec3::from(v.camera.position_m);
-    let place = |code: u32| {
+    let finest = Finest::new(world, source);
+    // A corner's place across, and whether it lies on its node's grid.
+    let across = |code: u32| {
         let (slot, [x, y]) = vertex_code_point(code);
         let node = node_from_ref(slots[slot as usize]);
-        let sample = |c: u32, p: u32| f64::from((c * NODE_QUADS + p / units) << node.lod) * world.spacing_m;
-        let (wx, wy) = (sample(node.x, x), sample(node.y, y));
-        (x % units == 0 && y % units == 0).then(|| DVec3::new(wx, wy, f64::from(source.sample(wx, wy))) - eye)
+        let at =
+            |c: u32, p: u32| f64::from((c * NODE_QUADS * units + p) << node.lod) / f64::from(units) * world.spacing_m;
+        ([at(node.x, x), at(node.y, y)], x % units == 0 && y % units == 0)
     };
-    let corners = |t: &[u32]| Some([place(t[0])?, place(t[1])?, place(t[2])?]);
-    codes.chunks_exact(3).map(|t| ([t[0], t[1], t[2]], corners(t))).collect()
+    // A triangle with a corner between the samples lies on the finest
+    // surface (its corners on the samples too: R16-rounded, as drawn).
+    let place = |t: &[u32]| {
+        let c = [across(t[0]), across(t[1]), across(t[2])];
+        let on_grid = c.iter().all(|c| c.1);
+        c.map(|([x, y], _)| {
+            let h = if on_grid { f64::from(source.sample(x, y)) } else { finest.height(x, y) };
+            DVec3::new(x, y, h) - eye
+        })
+    };
+    codes.chunks_exact(3).map(|t| ([t[0], t[1], t[2]], place(t))).collect()
 }
 
 /// How far triangle p faces away from the eye: the cosine between its
@@ -442,14 +453,16 @@ fn triangles_facing_away_or_outside_are_dropped_and_nothing_else() {
         let mut tri = rig(ctx, LodRule::Triangle, vec![], size);
         let stages = |frustum: bool, cone: bool| CullStages { frustum, cone, ..CullStages::NONE };
         let header = |tri: &Rig| tri.renderer.triangles.as_ref().expect("built").emit.read_header(ctx).unwrap();
-        let (mut facing, mut outside) = (0u32, 0u32);
+        let (mut facing, mut outside, mut below) = (0u32, 0u32, 0usize);
+        let units = 1u32 << REFINE_LEVELS;
+        let between = |codes: &[u32; 3]| codes.iter().any(|&c| vertex_code_point(c).1.iter().any(|p| p % units != 0));
         for (x, y, up, yaw, pitch) in
             [(300.0, 300.0, 2.0, 45.0, 0.0), (700.0, 320.0, 30.0, 300.0, -20.0), (500.0, 750.0, 2.0, 170.0, 5.0)]
         {
             let v = view([x, y, f64::from(source.sample(x, y)) + up], yaw, pitch, size, 1.0);
             tri.shot(ctx, &v, CullStages::NONE);
             let all = placed_list(ctx, &tri, &world, &*source, &v);
-            let keys: BTreeMap<[u32; 3], Option<[DVec3; 3]>> = all.iter().copied().collect();
+            let keys: BTreeMap<[u32; 3], [DVec3; 3]> = all.iter().copied().collect();
             for (frustum, cone) in [(false, true), (true, false)] {
                 tri.again(ctx, &v, stages(frustum, cone));
                 let h = header(&tri);
@@ -460,23 +473,19 @@ fn triangles_facing_away_or_outside_are_dropped_and_nothing_else() {
                     "a culled frame drew a triangle the unculled did not"
                 );
                 let dropped = all.iter().filter(|p| !kept_keys.contains(&p.0)).map(|p| p.1);
-                let kept_placed = kept.iter().filter_map(|p| p.1);
+                let kept_placed = kept.iter().map(|p| p.1);
                 match cone {
                     true => {
+                        below += all.iter().filter(|p| !kept_keys.contains(&p.0) && between(&p.0)).count();
                         assert_eq!(h.facing_away as usize, all.len() - kept.len(), "the facing-away count");
-                        // Only triangles on the grid are tested.
-                        assert!(
-                            dropped.clone().all(|p| p.is_some_and(|p| facing_away(&p) > 0.005)),
-                            "a dropped triangle faces the eye"
-                        );
+                        assert!(dropped.clone().all(|p| facing_away(&p) > 0.005), "a dropped triangle faces the eye");
                         let clearly = kept_placed.filter(|p| facing_away(p) > 0.02).count();
                         assert_eq!(clearly, 0, "kept triangles clearly facing away");
                         facing += h.facing_away;
                     }
                     false => {
-                        // A subtree's triangles below the samples too.
                         assert!(
-                            dropped.flatten().all(|p| outside_by(&p, &v) > -0.05),
+                            dropped.into_iter().all(|p| outside_by(&p, &v) > -0.05),
                             "a dropped triangle in the frustum"
                         );
                         let clearly = kept_placed.filter(|p| outside_by(p, &v) > 0.05).count();
@@ -486,7 +495,10 @@ fn triangles_facing_away_or_outside_are_dropped_and_nothing_else() {
                 }
             }
         }
-        eprintln!("over 3 views: {facing} triangles dropped facing away, {outside} outside on their own");
-        assert!(facing > 0 && outside > 0, "the views exercise both tests");
+        eprintln!(
+            "over 3 views: {facing} triangles dropped facing away ({below} with a corner between the samples), \
+             {outside} outside on their own"
+        );
+        assert!(facing > 0 && outside > 0 && below > 0, "the views exercise both tests, below the samples too");
     });
 }

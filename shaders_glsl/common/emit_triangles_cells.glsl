@@ -22,10 +22,44 @@ uint decide_below(Tri t, out float px) {
     return decide_fine(m, px);
 }
 
-// Depth-first over a LOD-0 cell half's levels below the samples.
+// Levels below a grid cell half to the finest lattice's triangles.
+const uint FINE_LEVELS = 2u * REFINE_LEVELS;
+
+// The 4 x 4 samples around the cell a walk below the samples is in, its
+// Catmull-Rom taps (refined_height's): every point of the cell's lattice
+// takes its height from these, fetched once a cell half.
+float g_taps[16];
+// The cell's south-west sample (node-local).
+ivec2 g_tap_cell;
+
+void find_taps(ivec2 cell) {
+    g_tap_cell = cell;
+    for (int k = 0; k < 16; ++k) {
+        g_taps[k] = height_texel(g_slot, cell + ivec2(k % 4 - 1, k / 4 - 1));
+    }
+}
+
+// Node-local lattice point p of the taps' cell (its edges included) where
+// terrain_triangles puts it, camera-relative (m): on the Catmull-Rom
+// surface, as refined_height weighs it (a sample itself on the grid).
+vec3 fine_point(ivec2 p) {
+    vec2 t = vec2(p - g_tap_cell * UNITS) / float(UNITS);
+    vec4 wx = catmull_rom(t.x), wy = catmull_rom(t.y);
+    float h = 0.0;
+    for (int j = 0; j < 4; ++j) {
+        h += wy[j] * dot(wx, vec4(g_taps[4 * j], g_taps[4 * j + 1], g_taps[4 * j + 2], g_taps[4 * j + 3]));
+    }
+    vec2 xy = view_rel_xy_fine(g_origin_l + p, REFINE_LEVELS, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
+    return vec3(xy, view.v.height_lo + h * view.v.height_range - view.v.camera_z);
+}
+
+// Depth-first over a LOD-0 cell half's levels below the samples; the
+// triangles it leaves whole are marked (a bit each in preorder) and
+// emitted after the loop, each tested on its own first (hidden).
 void walk_fine(Tri root) {
     uint depth = 0u;
     uint path = 0u;
+    uint leaves = 0u;
     Tri t = root;
     while (true) {
         float px;
@@ -36,17 +70,34 @@ void walk_fine(Tri root) {
             path <<= 1u;
             continue;
         }
-        finish(t, what, px);
+        if (what == CULLED) {
+            count_dropped(what);
+        } else {
+            leaves |= 1u << preorder(depth, path, FINE_LEVELS);
+            g_bound_px = max(g_bound_px, px);
+        }
         if (!next_triangle(t, depth, path)) {
             break;
+        }
+    }
+    bool test = tests_triangles();
+    while (leaves != 0u) {
+        Tri c = preorder_triangle(root, uint(findLSB(leaves)), FINE_LEVELS);
+        leaves &= leaves - 1u;
+        if (!test || !hidden(fine_point(c.apex), fine_point(c.b), fine_point(c.c))) {
+            emit(c);
         }
     }
 }
 
 // Walks LOD-0 cell half t below the samples, its cell's 3 x 3 centres
-// found first.
+// and 4 x 4 taps found first.
 void walk_cell(Tri t) {
-    find_centres(min(min(t.apex, t.b), t.c));
+    ivec2 corner = min(min(t.apex, t.b), t.c);
+    find_centres(corner);
+    if (tests_triangles()) {
+        find_taps(corner / UNITS);
+    }
     walk_fine(t);
 }
 

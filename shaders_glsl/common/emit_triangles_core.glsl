@@ -50,6 +50,7 @@ layout(push_constant, std430) uniform EmitPush {
 
 #include "projected_error.glsl"
 #include "frustum_box.glsl"
+#include "refined_surface.glsl"
 
 const uint LEAF = 0u;
 const uint SPLIT = 1u;
@@ -237,34 +238,44 @@ bool outside_plane(vec4 p, vec3 a, vec3 b, vec3 c) {
     return max(max(dot(p.xyz, a), dot(p.xyz, b)), dot(p.xyz, c)) + p.w < -pad;
 }
 
-// Emits triangle t unless it is on the node's grid and, by its own
-// vertices, faces away from the camera (EMIT_CULL_FACING: by more than
-// half a degree, so no rounding in the rasteriser's own test turns it) or
-// lies outside a frustum plane (EMIT_CULL_FRUSTUM; its subtree's box,
-// tested first, spans its vertices' whole reach). A triangle with a
-// vertex below the samples (on the Catmull-Rom surface) is emitted as it is.
-void emit_unless_hidden(Tri t) {
-    ivec2 any_bits = t.apex | t.b | t.c;
-    if ((pc.cull & (EMIT_CULL_FACING | EMIT_CULL_FRUSTUM)) == 0u || ((any_bits.x | any_bits.y) & (UNITS - 1)) != 0) {
-        emit(t);
-        return;
-    }
-    vec3 a = grid_point(t.apex), b = grid_point(t.b), c = grid_point(t.c);
+// Whether triangle a, b, c (camera-relative, placed as terrain_triangles
+// places its vertices) is hidden on its own, counted: it faces away from
+// the camera (EMIT_CULL_FACING: by more than half a degree, so no rounding
+// in the rasteriser's own test turns it) or lies outside a frustum plane
+// (EMIT_CULL_FRUSTUM; its subtree's box, tested first, spans its
+// vertices' whole reach).
+bool hidden(vec3 a, vec3 b, vec3 c) {
     // The plane's normal up (a height field's front faces look up).
     vec3 n = cross(b - a, c - a);
     n = n.z < 0.0 ? -n : n;
     if ((pc.cull & EMIT_CULL_FACING) != 0u && dot(n, a) > 1e-2 * length(n) * length(a)) {
         g_facing += 1u;
-        return;
+        return true;
     }
     if ((pc.cull & EMIT_CULL_FRUSTUM) != 0u
         && (outside_plane(view.v.frustum[0], a, b, c) || outside_plane(view.v.frustum[1], a, b, c)
             || outside_plane(view.v.frustum[2], a, b, c) || outside_plane(view.v.frustum[3], a, b, c)
             || outside_plane(view.v.frustum[4], a, b, c))) {
         g_outside += 1u;
-        return;
+        return true;
     }
-    emit(t);
+    return false;
+}
+
+// Whether the frame tests triangles on their own (hidden).
+bool tests_triangles() {
+    return (pc.cull & (EMIT_CULL_FACING | EMIT_CULL_FRUSTUM)) != 0u;
+}
+
+// Emits triangle t of the node's grid unless it is hidden on its own. A
+// triangle with a vertex below the samples is emitted as it is: walk_fine
+// tests those, with the heights of its cell's taps.
+void emit_unless_hidden(Tri t) {
+    ivec2 any_bits = t.apex | t.b | t.c;
+    if (!tests_triangles() || ((any_bits.x | any_bits.y) & (UNITS - 1)) != 0
+        || !hidden(grid_point(t.apex), grid_point(t.b), grid_point(t.c))) {
+        emit(t);
+    }
 }
 
 // Counts a subtree the rule drops (CULLED or HOLES).
@@ -276,8 +287,7 @@ void count_dropped(uint what) {
     }
 }
 
-// Emits t as the rule leaves it (a leaf, or dropped; a CELL here is of
-// the finest lattice, on the finest surface: no error).
+// Emits grid triangle t as the rule leaves it (a leaf, or dropped).
 void finish(Tri t, uint what, float px) {
     if (what == CULLED || what == HOLES) {
         count_dropped(what);
@@ -354,6 +364,31 @@ Tri triangle_at(uint depth, uint i) {
     bool first = (i >> depth) == 0u;
     Tri t = slash ? (first ? Tri(se, sw, ne) : Tri(nw, ne, sw)) : (first ? Tri(sw, se, nw) : Tri(ne, nw, se));
     return below(t, depth, i);
+}
+
+// A triangle's preorder index in a subtree `levels` deep (its root at 0,
+// its leaves at `levels`): `depth` below the root along `path` (the
+// halves taken, the first highest); a second half at depth d skips the
+// 2^(levels + 1 - d) - 1 triangles of the first. (Walks mark the
+// triangles they leave whole by it and emit them after the loop: lavapipe
+// runs a loop's whole body on every pass, masked, so a test in it would
+// run on every decision.)
+uint preorder(uint depth, uint path, uint levels) {
+    return depth + (path << (levels + 1u - depth)) - uint(bitCount(path));
+}
+
+// The triangle at preorder index i under root (a subtree `levels` deep).
+Tri preorder_triangle(Tri root, uint i, uint levels) {
+    Tri t = root;
+    for (uint d = 0u; d < levels && i != 0u; ++d) {
+        i -= 1u;
+        // Triangles under each half of a triangle at depth d.
+        uint under = (1u << (levels - d)) - 1u;
+        uint second = i >= under ? 1u : 0u;
+        i -= second * under;
+        t = half_of(t, second);
+    }
+    return t;
 }
 
 // Points this invocation at the drawn node n in `slot`.
