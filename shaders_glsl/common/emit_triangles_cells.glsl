@@ -34,21 +34,15 @@ ivec2 g_tap_cell;
 
 void find_taps(ivec2 cell) {
     g_tap_cell = cell;
-    for (int k = 0; k < 16; ++k) {
-        g_taps[k] = height_texel(g_slot, cell + ivec2(k % 4 - 1, k / 4 - 1));
-    }
+    cell_taps(g_slot, cell, g_taps);
 }
 
 // Node-local lattice point p of the taps' cell (its edges included) where
 // terrain_triangles puts it, camera-relative (m): on the Catmull-Rom
-// surface, as refined_height weighs it (a sample itself on the grid).
+// surface, weighed as refined_height weighs it (a sample itself on the grid).
 vec3 fine_point(ivec2 p) {
     vec2 t = vec2(p - g_tap_cell * UNITS) / float(UNITS);
-    vec4 wx = catmull_rom(t.x), wy = catmull_rom(t.y);
-    float h = 0.0;
-    for (int j = 0; j < 4; ++j) {
-        h += wy[j] * dot(wx, vec4(g_taps[4 * j], g_taps[4 * j + 1], g_taps[4 * j + 2], g_taps[4 * j + 3]));
-    }
+    float h = weigh_taps(g_taps, catmull_rom(t.x), catmull_rom(t.y));
     vec2 xy = view_rel_xy_fine(g_origin_l + p, REFINE_LEVELS, view.v.camera_sample, view.v.camera_frac, view.v.spacing_m);
     return vec3(xy, view.v.height_lo + h * view.v.height_range - view.v.camera_z);
 }

@@ -23,22 +23,35 @@ vec4 catmull_rom(float t) {
     return w;
 }
 
-// Height (R16 units) of the Catmull-Rom surface of a node's samples at
-// `fine`, node-local in units of 2^-r samples: along x over 4 rows, then
-// along y (src/world/error_tile.rs evaluates it the same way). The node's
-// far edge is cell 127 at t = 1, so the taps stay within samples -1..129.
-float refined_height(uint slot, ivec2 fine, uint r) {
-    ivec2 cell = min(fine >> int(r), ivec2(127));
-    vec2 t = vec2(fine - (cell << int(r))) / float(1u << r);
-    vec4 wx = catmull_rom(t.x), wy = catmull_rom(t.y);
+// The 4 x 4 samples around cell `cell` of layer `slot` (row by row from
+// the cell's sample (-1, -1)): the Catmull-Rom taps of every point of it.
+void cell_taps(uint slot, ivec2 cell, out float taps[16]) {
+    for (int k = 0; k < 16; ++k) {
+        taps[k] = height_texel(slot, cell + ivec2(k % 4 - 1, k / 4 - 1));
+    }
+}
+
+// Height (R16 units) of the Catmull-Rom surface over a cell's taps at
+// weights wx, wy: along x over the 4 rows, then along y
+// (src/world/error_tile.rs evaluates it the same way).
+float weigh_taps(float taps[16], vec4 wx, vec4 wy) {
     precise float h = 0.0;
     for (int j = 0; j < 4; ++j) {
-        ivec2 row = cell + ivec2(-1, j - 1);
-        precise float x = wx.x * height_texel(slot, row) + wx.y * height_texel(slot, row + ivec2(1, 0))
-                        + wx.z * height_texel(slot, row + ivec2(2, 0)) + wx.w * height_texel(slot, row + ivec2(3, 0));
+        precise float x = wx.x * taps[4 * j] + wx.y * taps[4 * j + 1] + wx.z * taps[4 * j + 2] + wx.w * taps[4 * j + 3];
         h = h + wy[j] * x;
     }
     return h;
+}
+
+// Height (R16 units) of the Catmull-Rom surface of a node's samples at
+// `fine`, node-local in units of 2^-r samples. The node's far edge is
+// cell 127 at t = 1, so the taps stay within samples -1..129.
+float refined_height(uint slot, ivec2 fine, uint r) {
+    ivec2 cell = min(fine >> int(r), ivec2(127));
+    vec2 t = vec2(fine - (cell << int(r))) / float(1u << r);
+    float taps[16];
+    cell_taps(slot, cell, taps);
+    return weigh_taps(taps, catmull_rom(t.x), catmull_rom(t.y));
 }
 
 #endif
