@@ -3,10 +3,14 @@
 // variants: OCCLUSION LATE
 // The per-triangle rule on the GPU (src/world/vertex_bounds.rs; its CPU
 // twin is src/reference/bintree_cut.rs): one workgroup per drawn node
-// (indirect, from traverse), each of its 256 invocations walking one
-// subtree of the node's bintree from depth EMIT_THREAD_DEPTH down to the
-// grid's cells (the depths above first, each invocation its own path);
-// the triangles left go to one index list (terrain_triangles draws it).
+// (indirect, from traverse): each of its EMIT_GROUP_SIZE invocations
+// decides the depths above EMIT_THREAD_DEPTH on its own path, to its 4
+// triangles there, then the invocations share out the subtrees the cut
+// reaches (listed) and walk each down to the grid's cells; the triangles
+// left go to one index list (terrain_triangles draws it). Few invocations
+// per node matter on lavapipe, where the body of every branch and loop
+// runs for each 8 of them, masked or not: 256 invocations, each walking
+// its own subtree, made the pass 2.4 times as slow (docs/accuracy.md).
 // Points are in lattice units (2^-REFINE_LEVELS grid steps): a LOD-0 node
 // continues the bisection below its samples, on the Catmull-Rom surface,
 // with numbers each vertex takes from its parents (emit_triangles_fine.glsl):
@@ -28,23 +32,24 @@
 // by its own vertices (emit_unless_hidden).
 //
 // Occlusion (two phases, as cull_patches and cull_occluded do for
-// patches; one visibility bit per invocation's subtree and slot): with
+// patches; one visibility bit per subtree and slot): with
 // OCCLUSION this is phase 1, which emits the triangles above the
-// invocations' depth and the subtrees visible when last tested; with LATE
+// subtrees' depth and the subtrees visible when last tested; with LATE
 // too it is phase 2, after hiz_build reduced phase 1's depth: every
 // subtree the cut reaches is tested against the pyramid (its split
 // vertex's box holds every triangle under it), those visible that phase 1
 // did not emit are emitted into phase 2's list, and every bit is rewritten
 // for the next frame. Phase 1 leaves which depth-7 triangles its cut
 // reached (a bit each), so phase 2 does not decide the depths above again.
-layout(local_size_x = 256) in;
-
 // Phase 2 is a phase of occlusion (the LATE-only variant is its twin).
 #if defined(LATE) && !defined(OCCLUSION)
 #define OCCLUSION
 #endif
 
 #include "emit_triangles_core.glsl"
+
+layout(local_size_x = EMIT_GROUP_SIZE) in;
+
 #include "emit_triangles_borders.glsl"
 
 layout(set = 0, binding = 0, std430) readonly buffer TraverseOutput {
@@ -109,24 +114,43 @@ uint decide(Tri t, out float px) {
 
 // Marks of the triangles at EMIT_THREAD_DEPTH the cut reaches (1: reached,
 // the invocation of its index walks it).
-shared uint s_reached[2u << EMIT_THREAD_DEPTH];
+shared uint s_reached[VISIBILITY_WORDS_PER_SLOT];
 
-// Cell halves below an invocation's triangle (its own subtree's depth to
-// the grid's cells), and their marks: a bit each, FINE_WORDS words an
+// The subtrees this phase walks (or, in phase 2, tests first), listed; an
+// invocation takes every EMIT_GROUP_SIZE-th. lavapipe runs the body of
+// every loop at least once for each 8 invocations, masked, the walk's
+// too: a quarter of the invocations, each walking several subtrees,
+// pay a quarter of that for the subtrees the cut does not reach.
+shared uint s_list[2u << EMIT_THREAD_DEPTH];
+shared uint s_count;
+
+// Cell halves below the subtree an invocation walks (its depth to the
+// grid's cells), and their marks: a bit each, FINE_WORDS words an
 // invocation (only its own).
 // (The cells are 2 x EMIT_THREAD_DEPTH below the node's halves: NODE_QUADS is
 // 1 << EMIT_THREAD_DEPTH; the invocations' triangles EMIT_THREAD_DEPTH.)
 const uint CELL_DEPTH = EMIT_THREAD_DEPTH;
 const uint FINE_WORDS = (1u << CELL_DEPTH) / 32u;
-shared uint s_fine[256u * FINE_WORDS];
+shared uint s_fine[EMIT_GROUP_SIZE * FINE_WORDS];
 
-// The triangles `walk` leaves whole under an invocation's triangle (down
+// The triangles `walk` leaves whole under the subtree an invocation walks (down
 // to the grid's cells, CELL_DEPTH + 1 levels), a bit each in preorder,
 // LEAF_WORDS words an invocation: emitted after the walk, each tested
 // first (emit_unless_hidden), so neither the test nor the list's atomic
 // is in the walk's loop (lavapipe runs its whole body on every decision).
 const uint LEAF_WORDS = (2u << CELL_DEPTH) / 32u;
-shared uint s_leaves[256u * LEAF_WORDS];
+shared uint s_leaves[EMIT_GROUP_SIZE * LEAF_WORDS];
+
+// Moves (w, bits) on to the first word from w of ARR[BASE .., WORDS of
+// them] holding a set bit (bits 0 past the last). Loops over a bit set
+// step bit by bit, not word by word: lavapipe runs a loop's body at least
+// once, masked, so a word loop ran the step's whole body once a word even
+// for invocations with nothing to do.
+#define SKIP_EMPTY_WORDS(ARR, BASE, WORDS, w, bits) \
+    while (bits == 0u && w + 1u < (WORDS)) { \
+        w += 1u; \
+        bits = ARR[(BASE) + w]; \
+    }
 
 // Depth-first over `root`'s subtree down to the grid's cells, the first
 // half before the second as a stack would; the grid's cell halves are
@@ -165,12 +189,12 @@ void walk(Tri root) {
     }
 }
 
-// The cell halves `walk` marked under invocation t's subtree, appended to
+// The cell halves `walk` marked under subtree t, appended to
 // the fine list with one atomic (and the dispatch's workgroups counted
 // as they fill); past its capacity a cell half is drawn whole, its node's
 // error counted in the bound.
 void queue_cells(uint t) {
-    uint base = t * FINE_WORDS;
+    uint base = gl_LocalInvocationID.x * FINE_WORDS;
     uint n = 0u;
     for (uint w = 0u; w < FINE_WORDS; ++w) {
         n += uint(bitCount(s_fine[base + w]));
@@ -187,119 +211,163 @@ void queue_cells(uint t) {
         }
     }
     uint i = first;
-    for (uint w = 0u; w < FINE_WORDS; ++w) {
-        uint bits = s_fine[base + w];
-        while (bits != 0u) {
-            uint index = (t << CELL_DEPTH) | (32u * w + uint(findLSB(bits)));
-            bits &= bits - 1u;
-            if (i < pc.fine_capacity) {
-                fine.cells[i] = fine_cell(g_slot, index);
-            } else {
-                Tri c = triangle_at(2u * EMIT_THREAD_DEPTH, index);
-                emit(c);
-                g_unrefined += 1u;
-                g_grid_px = max(g_grid_px, cell_px(c));
-            }
-            i += 1u;
+    uint w = 0u;
+    uint bits = s_fine[base];
+    while (true) {
+        SKIP_EMPTY_WORDS(s_fine, base, FINE_WORDS, w, bits)
+        if (bits == 0u) {
+            break;
         }
+        uint index = (t << CELL_DEPTH) | (32u * w + uint(findLSB(bits)));
+        bits &= bits - 1u;
+        if (i < pc.fine_capacity) {
+            fine.cells[i] = fine_cell(g_slot, index);
+        } else {
+            Tri c = triangle_at(2u * EMIT_THREAD_DEPTH, index);
+            emit(c);
+            g_unrefined += 1u;
+            g_grid_px = max(g_grid_px, cell_px(c));
+        }
+        i += 1u;
     }
 }
 
-// The triangles `walk` left whole under invocation t's subtree (root), in
-// its order, those hidden on their own not.
-void emit_leaves(Tri root, uint t) {
-    for (uint w = 0u; w < LEAF_WORDS; ++w) {
-        uint bits = s_leaves[t * LEAF_WORDS + w];
-        while (bits != 0u) {
-            Tri c = preorder_triangle(root, 32u * w + uint(findLSB(bits)), CELL_DEPTH);
-            bits &= bits - 1u;
-            emit_unless_hidden(c);
+// The triangles `walk` left whole under root, in its order, those hidden
+// on their own not.
+void emit_leaves(Tri root) {
+    uint base = gl_LocalInvocationID.x * LEAF_WORDS;
+    uint w = 0u;
+    uint bits = s_leaves[base];
+    while (true) {
+        SKIP_EMPTY_WORDS(s_leaves, base, LEAF_WORDS, w, bits)
+        if (bits == 0u) {
+            break;
         }
+        Tri c = preorder_triangle(root, 32u * w + uint(findLSB(bits)), CELL_DEPTH);
+        bits &= bits - 1u;
+        emit_unless_hidden(c);
     }
 }
 
-// The grid's cell halves `walk` drew whole under invocation t's subtree
-// (root) where the node is not refined below them: each adds the node's
+// The grid's cell halves `walk` drew whole under root where the node is not refined below them: each adds the node's
 // own error over its column to the grid's bound. Not in the walk: lavapipe
 // runs the whole body of its loop on every pass, masked, and this
 // projection was a sixth of the pass there. (emit_leaves draws them in
 // the walk's order: drawn after the others, the rule's draw was slower on
 // Mont Blanc.)
-void bound_cells(Tri root, uint t) {
-    for (uint w = 0u; w < FINE_WORDS; ++w) {
-        uint bits = s_fine[t * FINE_WORDS + w];
-        while (bits != 0u) {
-            Tri c = below(root, CELL_DEPTH, 32u * w + uint(findLSB(bits)));
-            bits &= bits - 1u;
-            g_grid_px = max(g_grid_px, cell_px(c));
+void bound_cells(Tri root) {
+    uint base = gl_LocalInvocationID.x * FINE_WORDS;
+    uint w = 0u;
+    uint bits = s_fine[base];
+    while (true) {
+        SKIP_EMPTY_WORDS(s_fine, base, FINE_WORDS, w, bits)
+        if (bits == 0u) {
+            break;
         }
+        Tri c = below(root, CELL_DEPTH, 32u * w + uint(findLSB(bits)));
+        bits &= bits - 1u;
+        g_grid_px = max(g_grid_px, cell_px(c));
     }
 }
 
-// Walks an invocation's own subtree down to the grid's cells, then bounds
-// or queues the cell halves it reaches (queued: a LOD-0 node refined
-// below its samples).
-void walk_subtree(Tri root, uint t) {
+// Walks subtree t (a triangle at EMIT_THREAD_DEPTH) down to the grid's
+// cells, then bounds or queues the cell halves it reaches (queued: a
+// LOD-0 node refined below its samples).
+void walk_subtree(uint t) {
+    Tri root = triangle_at(EMIT_THREAD_DEPTH, t);
+    uint me = gl_LocalInvocationID.x;
     for (uint w = 0u; w < FINE_WORDS; ++w) {
-        s_fine[t * FINE_WORDS + w] = 0u;
+        s_fine[me * FINE_WORDS + w] = 0u;
     }
     for (uint w = 0u; w < LEAF_WORDS; ++w) {
-        s_leaves[t * LEAF_WORDS + w] = 0u;
+        s_leaves[me * LEAF_WORDS + w] = 0u;
     }
     walk(root);
-    emit_leaves(root, t);
+    emit_leaves(root);
     if (g_lod == 0u && g_refine != 0u) {
         queue_cells(t);
     } else {
-        bound_cells(root, t);
+        bound_cells(root);
     }
 }
 
-// Whether the cut reaches invocation t's triangle (at EMIT_THREAD_DEPTH):
-// t decides the triangles above it, on its path from the node's half, in
-// parallel with the others (the 8 lanes of a lavapipe SIMD group share the
-// depths above the last 3, so those decisions cost one). A triangle above
-// that the cut leaves whole is emitted and counted by its first
-// descendant's invocation only (t's bits below its depth all 0).
-// One invocation walking the depths above alone took most of the pass.
-// The triangle left whole is finished after the loop: in it, its test
-// would run (masked) on every depth.
-bool path_reached(uint t) {
-    Tri tri = triangle_at(0u, t >> EMIT_THREAD_DEPTH);
+// Each invocation's own triangle is at LANE_DEPTH, the 4 subtrees under it
+// at EMIT_THREAD_DEPTH (4 l .. 4 l + 3 for invocation l).
+const uint LANE_DEPTH = EMIT_THREAD_DEPTH - 2u;
+
+// Which of invocation l's 4 subtrees the cut reaches (bit j: 4 l + j).
+// l decides the triangles on its path from the node's half to its own
+// triangle, in parallel with the others (the 8 lanes of a lavapipe SIMD
+// group share the depths above the last 3, so those decisions cost one),
+// then its own triangle's two halves. A triangle above its own that the
+// cut leaves whole is emitted and counted by its first descendant's
+// invocation only (l's bits below its depth all 0). The triangle left
+// whole on the path is finished after the loop: in it, its test would run
+// (masked) on every depth.
+uint path_reached(uint l) {
+    Tri tri = triangle_at(0u, l >> LANE_DEPTH);
     uint what = SPLIT;
     float px = 0.0;
     bool owner = false;
-    for (uint d = 0u; d < EMIT_THREAD_DEPTH && what == SPLIT; ++d) {
-        owner = (t & ((1u << (EMIT_THREAD_DEPTH - d)) - 1u)) == 0u;
+    for (uint d = 0u; d <= LANE_DEPTH && what == SPLIT; ++d) {
+        owner = (l & ((1u << (LANE_DEPTH - d)) - 1u)) == 0u;
         uint forced = g_forced, clamped = g_clamped;
         what = decide(tri, px);
         if (!owner) {
             g_forced = forced;
             g_clamped = clamped;
         }
-        if (what == SPLIT) {
-            tri = half_of(tri, (t >> (EMIT_THREAD_DEPTH - 1u - d)) & 1u);
+        if (what == SPLIT && d < LANE_DEPTH) {
+            tri = half_of(tri, (l >> (LANE_DEPTH - 1u - d)) & 1u);
         }
     }
-    if (what == SPLIT) {
-        return true;
+    if (what != SPLIT) {
+        if (owner) {
+            finish(tri, what, px);
+        }
+        return 0u;
     }
-    if (owner) {
-        finish(tri, what, px);
+    uint reached = 0u;
+    for (uint h = 0u; h < 2u; ++h) {
+        Tri part = half_of(tri, h);
+        what = decide(part, px);
+        if (what == SPLIT) {
+            reached |= 3u << (2u * h);
+        } else {
+            finish(part, what, px);
+        }
     }
-    return false;
+    return reached;
+}
+
+// Invocation l's 4 bits of a per-subtree bit set (they share a word).
+uint own_bits(uint word, uint l) {
+    return (word >> (4u * (l & 7u))) & 15u;
+}
+
+// Appends the subtrees of invocation l's set bits (bit j: 4 l + j) to
+// s_list.
+void list_subtrees(uint bits, uint l) {
+    if (bits == 0u) {
+        return;
+    }
+    uint i = atomicAdd(s_count, uint(bitCount(bits)));
+    while (bits != 0u) {
+        s_list[i] = 4u * l + uint(findLSB(bits));
+        bits &= bits - 1u;
+        i += 1u;
+    }
 }
 
 #ifdef OCCLUSION
 // This workgroup's slot's visibility bits, rewritten by phase 2.
 shared uint s_visible[VISIBILITY_WORDS_PER_SLOT];
 
-// Whether invocation t's subtree was visible when last tested.
-bool was_visible(uint t) {
-    return (visibility.words[g_slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] & (1u << (t & 31u))) != 0u;
+// The slot's visibility word of subtrees 32 w .. 32 w + 31 when last tested.
+uint was_visible(uint w) {
+    return visibility.words[g_slot * VISIBILITY_WORDS_PER_SLOT + w];
 }
 #endif
-
 #ifdef LATE
 // Camera-relative position across (m) of grid point p (lattice units).
 vec2 rel_xy_of(ivec2 p) {
@@ -348,67 +416,73 @@ bool subtree_visible(Tri r) {
     uint level;
     return hiz_box_visible(lo, hi, view.v.view_proj, uvec2(pc.depth_w, pc.depth_h), level);
 }
-#endif
 
-// Walks invocation t's subtree where this phase draws it (all of it
-// without occlusion), and in phase 2 notes whether it is visible.
-void own_subtree(uint t) {
-    Tri root = triangle_at(EMIT_THREAD_DEPTH, t);
-#if defined(LATE)
-    bool now = subtree_visible(root);
-    if (now) {
-        atomicOr(s_visible[t >> 5u], 1u << (t & 31u));
+// Phase 2: tests the subtrees phase 1 reached (listed) against the
+// pyramid into s_visible, then lists those visible that phase 1 did not
+// walk (not visible when last tested).
+void list_newly_visible(uint l) {
+    for (uint k = l; k < s_count; k += EMIT_GROUP_SIZE) {
+        uint t = s_list[k];
+        if (subtree_visible(triangle_at(EMIT_THREAD_DEPTH, t))) {
+            atomicOr(s_visible[t >> 5u], 1u << (t & 31u));
+        }
     }
-    if (now && !was_visible(t)) {
-        walk_subtree(root, t);
+    barrier();
+    if (l == 0u) {
+        s_count = 0u;
     }
-#elif defined(OCCLUSION)
-    if (was_visible(t)) {
-        walk_subtree(root, t);
-    }
-#else
-    walk_subtree(root, t);
-#endif
+    barrier();
+    list_subtrees(own_bits(s_visible[l >> 3u] & ~was_visible(l >> 3u), l), l);
 }
+#endif
 
 void main() {
     uvec2 entry = traverse_out.nodes[gl_WorkGroupID.x];
     uint n = entry.x;
     enter_node(n, entry.y);
-    uint t = gl_LocalInvocationID.x;
-    fill_across(t);
+    uint l = gl_LocalInvocationID.x;
+    fill_across(l);
+    if (l < VISIBILITY_WORDS_PER_SLOT) {
+#ifdef LATE
+        s_reached[l] = reached.words[g_slot * VISIBILITY_WORDS_PER_SLOT + l];
+        s_visible[l] = 0u;
+#else
+        s_reached[l] = 0u;
+#endif
+    }
+    if (l == 0u) {
+        s_count = 0u;
+    }
     barrier();
-#ifndef LATE
-    if (t == 0u) {
+#ifdef LATE
+    list_subtrees(own_bits(s_reached[l >> 3u], l), l);
+    barrier();
+    list_newly_visible(l);
+#else
+    if (l == 0u) {
         slot_nodes.nodes[g_slot] = n;
     }
-#endif
-#ifdef LATE
-    if (t < VISIBILITY_WORDS_PER_SLOT) {
-        s_visible[t] = 0u;
+    uint mine = path_reached(l);
+    if (mine != 0u) {
+        atomicOr(s_reached[l >> 3u], mine << (4u * (l & 7u)));
     }
-    s_reached[t] = (reached.words[g_slot * VISIBILITY_WORDS_PER_SLOT + (t >> 5u)] >> (t & 31u)) & 1u;
-#else
-    s_reached[t] = path_reached(t) ? 1u : 0u;
+    barrier();
+#ifdef OCCLUSION
+    // Phase 1 walks the subtrees visible when last tested.
+    if (l < VISIBILITY_WORDS_PER_SLOT) {
+        reached.words[g_slot * VISIBILITY_WORDS_PER_SLOT + l] = s_reached[l];
+    }
+    mine &= own_bits(was_visible(l >> 3u), l);
+#endif
+    list_subtrees(mine, l);
 #endif
     barrier();
-#if defined(OCCLUSION) && !defined(LATE)
-    if (t < VISIBILITY_WORDS_PER_SLOT) {
-        uint w = 0u;
-        for (uint i = 0u; i < 32u; ++i) {
-            w |= s_reached[32u * t + i] << i;
-        }
-        reached.words[g_slot * VISIBILITY_WORDS_PER_SLOT + t] = w;
-    }
-#endif
-    // Each invocation walks the subtree of its own triangle, if the cut reaches it.
-    if (s_reached[t] == 1u) {
-        own_subtree(t);
+    for (uint k = l; k < s_count; k += EMIT_GROUP_SIZE) {
+        walk_subtree(s_list[k]);
     }
 #ifdef LATE
-    barrier();
-    if (t < VISIBILITY_WORDS_PER_SLOT) {
-        visibility.words[g_slot * VISIBILITY_WORDS_PER_SLOT + t] = s_visible[t];
+    if (l < VISIBILITY_WORDS_PER_SLOT) {
+        visibility.words[g_slot * VISIBILITY_WORDS_PER_SLOT + l] = s_visible[l];
     }
 #endif
     flush();

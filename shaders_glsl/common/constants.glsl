@@ -117,6 +117,10 @@
 // cone_cull: each triangle's own plane, exact, where patches test a cone).
 #define EMIT_CULL_FACING 4u
 #define EMIT_THREAD_DEPTH 7u
+// emit_triangles' invocations: each decides the triangles above on its way
+// to its own 4 triangles at EMIT_THREAD_DEPTH (2 << EMIT_THREAD_DEPTH of
+// them in all), then walks some of those the cut reaches.
+#define EMIT_GROUP_SIZE 64u
 // Triangles the index list holds (48 MiB); beyond, a triangle is counted, not drawn.
 #define MAX_EMITTED_TRIANGLES 4194304u
 // LOD-0 cell halves a phase's fine list holds (4 MiB), each walked below

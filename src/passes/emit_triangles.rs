@@ -77,6 +77,9 @@ const _: () = assert!(std::mem::size_of::<FineCellsHeader>() == structs::FINE_CE
 // A fine cell: slot | its index among the node's 2 << (2 x EMIT_THREAD_DEPTH) cell halves.
 const _: () = assert!(k::SLOT_BITS + 2 * k::EMIT_THREAD_DEPTH < 32);
 const _: () = assert!(NODE_QUADS == 1 << k::EMIT_THREAD_DEPTH);
+// Each invocation decides its way to 4 of the 2 << EMIT_THREAD_DEPTH subtrees.
+const _: () = assert!(sh::WORKGROUP_SIZE[0] == k::EMIT_GROUP_SIZE);
+const _: () = assert!(4 * k::EMIT_GROUP_SIZE == 2 << k::EMIT_THREAD_DEPTH);
 // emit_triangles_fine.glsl writes out the four bisections of two levels.
 const _: () = assert!(k::REFINE_LEVELS == 2);
 // A vertex code: x and y in lattice units (0..=NODE_QUADS << REFINE_LEVELS),
