@@ -104,8 +104,6 @@
 // vertex of a node took one entry, and with only x's and y's low bits
 // every grid point of a cut coarser than 4 samples did (their low bits are
 // 0), so almost no vertex was shaded once.
-// Each workgroup thread walks one of the node's triangles at this depth
-// (2 << depth = its 256 threads).
 #define TRIANGLE_LOW_BITS 4u
 #define TRIANGLE_HIGH_BITS 6u
 #define TRIANGLE_SLOT_SHIFT 20u
@@ -116,6 +114,9 @@
 // A drawn triangle on the node's grid facing away from the camera (effect
 // cone_cull: each triangle's own plane, exact, where patches test a cone).
 #define EMIT_CULL_FACING 4u
+// The depth of the subtrees emit_triangles walks, each in one go: 2 <<
+// depth = 256 of them a node, 4 under each of its invocations' own
+// triangles (EMIT_GROUP_SIZE below).
 #define EMIT_THREAD_DEPTH 7u
 // emit_triangles' invocations: each decides the triangles above on its way
 // to its own 4 triangles at EMIT_THREAD_DEPTH (2 << EMIT_THREAD_DEPTH of
