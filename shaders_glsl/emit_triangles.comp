@@ -112,8 +112,8 @@ uint decide(Tri t, out float px) {
     return SPLIT;
 }
 
-// Marks of the triangles at EMIT_THREAD_DEPTH the cut reaches (1: reached,
-// the invocation of its index walks it).
+// The triangles at EMIT_THREAD_DEPTH (the subtrees) the cut reaches, a
+// bit each (phase 1 decides them; phase 2 reads phase 1's).
 shared uint s_reached[VISIBILITY_WORDS_PER_SLOT];
 
 // The subtrees this phase walks (or, in phase 2, tests first), listed; an
@@ -133,11 +133,12 @@ const uint CELL_DEPTH = EMIT_THREAD_DEPTH;
 const uint FINE_WORDS = (1u << CELL_DEPTH) / 32u;
 shared uint s_fine[EMIT_GROUP_SIZE * FINE_WORDS];
 
-// The triangles `walk` leaves whole under the subtree an invocation walks (down
-// to the grid's cells, CELL_DEPTH + 1 levels), a bit each in preorder,
-// LEAF_WORDS words an invocation: emitted after the walk, each tested
-// first (emit_unless_hidden), so neither the test nor the list's atomic
-// is in the walk's loop (lavapipe runs its whole body on every decision).
+// The triangles `walk` leaves whole under the subtree an invocation
+// walks (down to the grid's cells, CELL_DEPTH + 1 levels), a bit each in
+// preorder, LEAF_WORDS words an invocation: emitted after the walk, each
+// tested first (emit_unless_hidden), so neither the test nor the list's
+// atomic is in the walk's loop (lavapipe runs its whole body on every
+// decision).
 const uint LEAF_WORDS = (2u << CELL_DEPTH) / 32u;
 shared uint s_leaves[EMIT_GROUP_SIZE * LEAF_WORDS];
 
@@ -249,8 +250,9 @@ void emit_leaves(Tri root) {
     }
 }
 
-// The grid's cell halves `walk` drew whole under root where the node is not refined below them: each adds the node's
-// own error over its column to the grid's bound. Not in the walk: lavapipe
+// The grid's cell halves `walk` drew whole under root where the node is
+// not refined below them: each adds the node's own error over its column
+// to the grid's bound. Not in the walk: lavapipe
 // runs the whole body of its loop on every pass, masked, and this
 // projection was a sixth of the pass there. (emit_leaves draws them in
 // the walk's order: drawn after the others, the rule's draw was slower on
