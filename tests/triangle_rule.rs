@@ -12,9 +12,10 @@ mod common;
 
 use common::finest::Finest;
 use common::gpu_test;
-use common::terrain::{adversarial_views, adversarial_world, view, Rig, ADVERSARIAL, MAGENTA_RGBA};
+use common::terrain::{
+    adversarial_views, adversarial_world, rough_posts as rough, view, Rig, ADVERSARIAL, MAGENTA_RGBA,
+};
 use std::collections::BTreeMap;
-use std::sync::Arc;
 use vista::bench::accuracy_error::projected_px;
 use vista::passes::cull_patches::CullStages;
 use vista::passes::emit_triangles::{vertex_code_point, TriangleListHeader};
@@ -24,28 +25,7 @@ use vista::terrain::TerrainOptions;
 use glam::DVec3;
 use vista::shaders::consts::REFINE_LEVELS;
 use vista::terrain::quadtree::node_from_ref;
-use vista::world::{GridSource, HeightSource, Hole, WorldDesc, NODE_QUADS};
-
-/// 1 km at 1 m samples, 4 LODs, from a 129 x 129 grid of posts with
-/// hashed heights (steep random relief at every scale the LODs see).
-fn rough() -> (WorldDesc, Arc<dyn HeightSource>) {
-    let n = 129usize;
-    let heights: Vec<f32> = (0..n * n)
-        .map(|i| {
-            let (x, y) = ((i % n) as f32, (i / n) as f32);
-            let h = ((i as u64).wrapping_mul(2654435761) % 1000) as f32 / 1000.0;
-            180.0 + 40.0 * (x / 9.0).sin() * (y / 13.0).cos() + 25.0 * h
-        })
-        .collect();
-    let world = WorldDesc {
-        extent_m: [1024.0, 1024.0],
-        height_range_m: [100.0, 300.0],
-        spacing_m: 1.0,
-        lod_count: 4,
-        ..WorldDesc::default()
-    };
-    (world, Arc::new(GridSource::new(n, n, heights, [1024.0, 1024.0])))
-}
+use vista::world::{HeightSource, Hole, WorldDesc, NODE_QUADS};
 
 struct Rng(u64);
 impl Rng {

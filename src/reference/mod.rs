@@ -4,6 +4,7 @@
 pub mod atmosphere;
 pub mod bintree_cut;
 pub mod classify;
+pub mod emitted_cut;
 pub mod finest;
 pub mod grass;
 #[cfg(feature = "bench")]

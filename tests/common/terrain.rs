@@ -9,7 +9,7 @@ use vista::passes::cull_patches::CullStages;
 use vista::render::offscreen::{Capture, Offscreen, OffscreenDesc};
 use vista::render::{Camera, RendererOptions, TerrainRenderer, View, DEFAULT_NEAR_M};
 use vista::terrain::TerrainOptions;
-use vista::world::{HeightSource, Hole, WorldDesc};
+use vista::world::{GridSource, HeightSource, Hole, WorldDesc};
 
 /// Background of the test images: no lit terrain colour is magenta.
 pub const MAGENTA: [f32; 4] = [1.0, 0.0, 1.0, 1.0];
@@ -325,4 +325,25 @@ impl Rig {
         self.off.frame(ctx, &mut self.renderer, view).expect("frame");
         self.off.capture(ctx).expect("capture")
     }
+}
+
+/// 1 km at 1 m samples, 4 LODs, from a 129 x 129 grid of posts with
+/// hashed heights (steep random relief at every scale the LODs see).
+pub fn rough_posts() -> (WorldDesc, Arc<dyn HeightSource>) {
+    let n = 129usize;
+    let heights: Vec<f32> = (0..n * n)
+        .map(|i| {
+            let (x, y) = ((i % n) as f32, (i / n) as f32);
+            let h = ((i as u64).wrapping_mul(2654435761) % 1000) as f32 / 1000.0;
+            180.0 + 40.0 * (x / 9.0).sin() * (y / 13.0).cos() + 25.0 * h
+        })
+        .collect();
+    let world = WorldDesc {
+        extent_m: [1024.0, 1024.0],
+        height_range_m: [100.0, 300.0],
+        spacing_m: 1.0,
+        lod_count: 4,
+        ..WorldDesc::default()
+    };
+    (world, Arc::new(GridSource::new(n, n, heights, [1024.0, 1024.0])))
 }
