@@ -146,7 +146,7 @@ fn error_criterion_wants_the_families_the_camera_refines() {
         widest: 1.0,
         frustum: None,
     };
-    let want = RefineWant { camera, target_error_px: 1.0, prefetch: 1.0, ring_factor: 0.75 };
+    let want = RefineWant { camera, target_error_px: 1.0, prefetch: 1.0, ring_factor: 0.75, infinite_known: false };
     for id in r.update_with(cam, Some(&want)).adds {
         assert_eq!(r.on_loaded(id), Arrival::Accept);
     }
@@ -168,7 +168,8 @@ fn error_criterion_wants_the_families_the_camera_refines() {
 fn a_root_with_pending_errors_wants_its_family_only_in_view_nearest_first() {
     // Roots made on demand load with an unknown (infinite) error: their
     // families are wanted where the view holds the root, nearest first, and
-    // never out of view (their tiles are what the family's load computes).
+    // never out of view (their tiles are what the family's load computes);
+    // a known infinite error (a hole's) wants them everywhere.
     let world = small_world();
     let mut r = Residency::new(&world, ResidencyConfig::default()).unwrap();
     let cam = [900.0, 300.0, 500.0];
@@ -180,7 +181,7 @@ fn a_root_with_pending_errors_wants_its_family_only_in_view_nearest_first() {
         widest: 2.0,
         frustum: Some([[-1.0, 0.0, 0.0, 1100.0]; 5]),
     };
-    let want = RefineWant { camera, target_error_px: 1.0, prefetch: 1.0, ring_factor: 0.0 };
+    let want = RefineWant { camera, target_error_px: 1.0, prefetch: 1.0, ring_factor: 0.0, infinite_known: false };
     for id in r.update_with(cam, Some(&want)).adds {
         assert_eq!(r.on_loaded(id), Arrival::Accept);
     }
@@ -199,6 +200,13 @@ fn a_root_with_pending_errors_wants_its_family_only_in_view_nearest_first() {
     };
     let order: Vec<f64> = adds.iter().map(distance).collect();
     assert!(order.windows(2).all(|w| w[0] <= w[1]), "nearest root first: {order:?}");
+    // Under the per-triangle rule an infinite error is a hole's, known:
+    // the families out of view are wanted too.
+    let known = RefineWant { infinite_known: true, ..want };
+    let more = r.update_with(cam, Some(&known)).adds;
+    let all: HashSet<NodeId> = world.roots().into_iter().flat_map(|root| world.valid_children(root)).collect();
+    assert!(!more.is_empty() && more.iter().all(|id| !expected.contains(id)));
+    assert_eq!(expected.union(&more.into_iter().collect()).copied().collect::<HashSet<_>>(), all);
 }
 
 #[test]

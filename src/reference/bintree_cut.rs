@@ -170,15 +170,20 @@ pub fn active(bounds: &mut dyn Bounds, cam: &TraverseCamera, target_px: f64, m: 
 /// Lattice points of `tris` that lie inside one of their edges (a vertex
 /// of a neighbour the triangle does not share): the cut's cracks.
 pub fn t_junctions(tris: &[Tri]) -> usize {
+    t_junctions_at(tris).len()
+}
+
+/// [`t_junctions`]' points, each with the triangle whose edge holds it.
+pub fn t_junctions_at(tris: &[Tri]) -> Vec<(I64Vec2, Tri)> {
     let vertices: HashSet<I64Vec2> = tris.iter().flat_map(|t| t.corners()).collect();
-    let mut found = 0;
+    let mut found = Vec::new();
     for t in tris {
         let [a, b, c] = t.corners();
         for (p, q) in [(a, b), (b, c), (c, a)] {
             let d = q - p;
             let n = d.x.abs().max(d.y.abs());
             let step = d / n;
-            found += (1..n).filter(|k| vertices.contains(&(p + step * *k))).count();
+            found.extend((1..n).map(|k| p + step * k).filter(|v| vertices.contains(v)).map(|v| (v, *t)));
         }
     }
     found

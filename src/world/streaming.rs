@@ -64,6 +64,11 @@ pub struct RefineWant {
     /// motion), so the budget goes where the error asks for detail; 0
     /// turns the rings off (tests that need an exact resident set).
     pub ring_factor: f64,
+    /// An infinite node error is known: a hole under the node (the
+    /// per-triangle rule's bounds, made for the whole world before the
+    /// first frame), wanted like any other error in view or out of it.
+    /// Off, it is a root's error not made yet, wanted only in view.
+    pub infinite_known: bool,
 }
 
 /// What streaming keeps of a resident node to apply [`RefineWant`].
@@ -324,7 +329,7 @@ impl Residency {
             // A parent whose error is not known yet (a root made on demand,
             // [`super::ErrorTree::with_roots_on_demand`]) wants its family
             // only in view: its tile is made when the family loads.
-            let known_or_seen = error_px.is_finite() || in_view;
+            let known_or_seen = error_px.is_finite() || in_view || want.is_some_and(|w| w.infinite_known);
             // The families right around the camera count as in view: those
             // behind it are drawn at the edges of the view and cap, through
             // the seams, how finely the patches at the camera's feet may be
