@@ -61,7 +61,7 @@ fn through_a_hole(v: &View, px: [f64; 2], source: &dyn HeightSource, holes: &[Ho
     let per_m = f64::from(v.target_error_px) / (v.traverse_camera().pixels_per_tan * (1.0 - d.z * d.z).sqrt());
     let near = |x: f64, y: f64| {
         (0..=32u32).any(|k| {
-            let (a, r) = (std::f64::consts::TAU * f64::from(k % 16) / 16.0, 2.0 * f64::from(k.div_ceil(16)) / 2.0);
+            let (a, r) = (std::f64::consts::TAU * f64::from(k % 16) / 16.0, f64::from(k.div_ceil(16)));
             holes.iter().any(|h| h.contains(x + r * a.cos(), y + r * a.sin()))
         })
     };

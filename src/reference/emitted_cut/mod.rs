@@ -28,7 +28,7 @@ use crate::shaders::consts::{NO_LOD, REFINE_LEVELS};
 use crate::world::bintree::{classify, diamond, slash};
 use crate::world::vertex_bounds::VertexBoundsTree;
 use crate::world::vertex_rule::{box_half_width, up_f16_bits};
-use crate::world::{NodeId, NODE_QUADS};
+use crate::world::{NodeId, TraverseCamera, NODE_QUADS};
 use glam::{DVec2, DVec3, I64Vec2};
 use std::collections::BTreeSet;
 
@@ -97,14 +97,16 @@ struct Numbers {
     hi: DVec3,
 }
 
-/// The camera terms `projected_error.glsl` reads (`TerrainView`'s lod_*).
+/// The camera terms `projected_error.glsl` reads (`TerrainView`'s lod_*):
+/// the traversal's camera (its f64 Jacobian bound is the shader's first)
+/// and what the vertical bound adds.
 struct Terms {
+    cam: TraverseCamera,
     eye: DVec3,
     forward: DVec3,
     right: DVec3,
     up: DVec3,
     pixels_per_tan: f64,
-    widest: f64,
     tan_half: DVec2,
     near: f64,
     target: f64,
@@ -118,6 +120,8 @@ pub struct EmitTwin<'a> {
     tie: f64,
     lo_m: f64,
     hi_m: f64,
+    /// The lattice's samples a row and rows.
+    side: [i64; 2],
 }
 
 impl<'a> EmitTwin<'a> {
@@ -134,13 +138,14 @@ impl<'a> EmitTwin<'a> {
             right,
             up,
             pixels_per_tan: cam.pixels_per_tan,
-            widest: cam.widest,
             tan_half: DVec2::new(tan_y * f64::from(view.size[0]) / f64::from(view.size[1]), tan_y),
             near: view.near_m,
             target: f64::from(view.target_error_px),
+            cam,
         };
         let [lo_m, hi_m] = tree.world().height_range_m.map(f64::from);
-        EmitTwin { tree, map, terms, hole_stage, tie, lo_m, hi_m }
+        let side = VertexBoundsTree::lattice_side(tree.world()).map(|n| n as i64);
+        EmitTwin { tree, map, terms, hole_stage, tie, lo_m, hi_m, side }
     }
 
     /// Every drawn node's triangles; `gpu_split(t)`: whether the GPU split
@@ -236,7 +241,7 @@ impl<'a> EmitTwin<'a> {
     /// Sample s's numbers (f16 rounded up, as the nodes carry them; past
     /// the lattice, as a node's margin holds them: infinite).
     fn grid_numbers(&self, s: I64Vec2) -> Numbers {
-        let side = VertexBoundsTree::lattice_side(self.tree.world()).map(|n| n as i64);
+        let side = self.side;
         let f16 = |x: f64| f64::from(half::f16::from_bits(up_f16_bits(x as f32)).to_f32());
         let inside = s.cmpge(I64Vec2::ZERO).all() && s.x < side[0] && s.y < side[1];
         let (z, e, reach) = match inside.then(|| self.tree.at(s)) {

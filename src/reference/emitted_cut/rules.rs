@@ -30,18 +30,10 @@ impl EmitTwin<'_> {
         })
     }
 
+    /// The Jacobian bound: the traversal's own, on the box in world metres.
     fn jacobian_px(&self, n: &Numbers) -> f64 {
-        let t = &self.terms;
-        let d = n.lo.max(-n.hi).max(DVec3::ZERO).length().max(1e-3);
-        let k = Self::corners(n).iter().fold(1.0f64, |k, v| {
-            let dt = v.dot(t.forward);
-            if dt <= 0.0 {
-                t.widest
-            } else {
-                k.max(v.length_squared() / (dt * dt))
-            }
-        });
-        n.e * t.pixels_per_tan * k.min(t.widest) / d
+        let eye = self.terms.eye;
+        self.terms.cam.projected_px(n.e, (n.lo + eye).to_array(), (n.hi + eye).to_array())
     }
 
     fn vertical_px(&self, n: &Numbers) -> f64 {
