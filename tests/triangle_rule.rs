@@ -413,6 +413,48 @@ fn a_full_fine_list_draws_its_cells_whole_says_so_and_bounds_them() {
     });
 }
 
+/// A list too small for a frame draws what it holds, counts the rest as
+/// past it, and grows to what the frames emit, frames late (the
+/// telemetry's count, never a wait): from room for 2 000 triangles (after
+/// frames looking at the sky, which emit fewer), the frames after draw
+/// every triangle of the full list's frame, the same picture to the bit.
+#[test]
+fn a_list_too_small_for_the_frame_grows_to_it() {
+    gpu_test(|ctx| {
+        let size = [128, 96];
+        let mut tri = rig(ctx, LodRule::Triangle, vec![], size);
+        let header = |tri: &Rig| tri.renderer.triangles.as_ref().expect("built").emit.read_header(ctx).unwrap();
+        near_the_ground(ctx, &mut tri, size);
+        let eye = [500.0, 500.0, f64::from(rough().1.sample(500.0, 500.0)) + 2.0];
+        let v = view(eye, 30.0, -10.0, size, 1.0);
+        let full = tri.again(ctx, &v, CullStages::NONE);
+        let want = header(&tri);
+        assert_eq!(want.overflow, 0);
+        for _ in 0..3 {
+            tri.again(ctx, &view(eye, 30.0, 80.0, size, 1.0), CullStages::ALL);
+        }
+        let sky = header(&tri).triangles;
+        assert!(sky < 2000, "the sky emits {sky} triangles");
+        tri.renderer.triangles.as_mut().expect("built").emit.restart_lists(ctx, 2000).unwrap();
+        tri.again(ctx, &v, CullStages::NONE);
+        let short = header(&tri);
+        assert_eq!((short.drawn(), short.overflow), (2000, want.triangles - 2000));
+        let mut frames = 1;
+        let grown = loop {
+            let c = tri.again(ctx, &v, CullStages::NONE);
+            frames += 1;
+            if header(&tri).overflow == 0 || frames == 6 {
+                break c;
+            }
+        };
+        let h = header(&tri);
+        let capacity = tri.renderer.triangles.as_ref().expect("built").emit.capacity(false);
+        eprintln!("{} triangles: the list grew from 2 000 to {capacity} in {frames} frames", want.triangles);
+        assert_eq!((h.overflow, h.drawn()), (0, want.drawn()), "after {frames} frames");
+        assert!(grown.rgba == full.rgba && grown.depth == full.depth, "the grown list drew another picture");
+    });
+}
+
 /// A triangle of the emitted list: its vertex codes, and its corners in
 /// camera-relative metres (from the slot's node and the world's heights).
 type Placed = ([u32; 3], [DVec3; 3]);

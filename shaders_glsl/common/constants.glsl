@@ -122,8 +122,6 @@
 // to its own 4 triangles at EMIT_THREAD_DEPTH (2 << EMIT_THREAD_DEPTH of
 // them in all), then walks some of those the cut reaches.
 #define EMIT_GROUP_SIZE 64u
-// Triangles the index list holds (48 MiB); beyond, a triangle is counted, not drawn.
-#define MAX_EMITTED_TRIANGLES 4194304u
 // LOD-0 cell halves a phase's fine list holds (4 MiB), each walked below
 // the samples by one emit_fine invocation; beyond, emit_triangles draws a
 // cell half whole and counts it (its node's error then bounds it).

@@ -29,6 +29,9 @@ pub struct Limits {
     pub max_push_constants_bytes: u32,
     pub max_image_dimension_2d: u32,
     pub max_image_array_layers: u32,
+    /// Largest storage buffer range a descriptor binds (the per-triangle
+    /// rule's index lists grow to it at most).
+    pub max_storage_buffer_range: u32,
     /// Size of the largest device-local memory heap.
     pub device_local_bytes: u64,
     pub timestamps_supported: bool,
@@ -148,6 +151,7 @@ pub(crate) fn query(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Result<
             max_push_constants_bytes: l.max_push_constants_size,
             max_image_dimension_2d: l.max_image_dimension2_d,
             max_image_array_layers: l.max_image_array_layers,
+            max_storage_buffer_range: l.max_storage_buffer_range,
             device_local_bytes,
             timestamps_supported: l.timestamp_compute_and_graphics == vk::TRUE && graphics.timestamp_valid_bits > 0,
             timestamp_period_ns: l.timestamp_period,

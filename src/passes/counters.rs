@@ -44,6 +44,9 @@ pub struct FrameCounters {
     /// Each effect's counters (`FrameEffect::counters`), as the GPU wrote
     /// them: the effect reads its own.
     pub effects: Vec<(Effect, Vec<u8>)>,
+    /// The per-triangle rule's lists' headers, phase 1's and phase 2's
+    /// (zero where phase 2 is not built); None under the patch rule.
+    pub triangle_lists: Option<[crate::passes::emit_triangles::TriangleListHeader; 2]>,
 }
 
 impl FrameCounters {

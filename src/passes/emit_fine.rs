@@ -36,7 +36,7 @@ impl EmitFine {
         let list = if late { emit.late_list().expect("phase 2 built") } else { emit.list() };
         rec.bind_pipeline(&self.pipeline);
         rec.push_descriptors(&self.pipeline, &emit.bindings(inputs, list, late));
-        let push = emit.push(inputs, [0; 2]);
+        let push = emit.push(inputs, [0; 2], late);
         rec.push_constants(&self.pipeline, &push);
         rec.dispatch_indirect(emit.fine_cells(late), 0);
         rec.barrier(

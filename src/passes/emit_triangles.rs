@@ -18,6 +18,7 @@ use crate::gpu::{
 use crate::passes::cull_patches::nearest_sampler;
 use crate::passes::lod_map::LodMap;
 use crate::passes::traverse::Traverse;
+use crate::passes::triangle_lists::{TriangleList, FIRST_TRIANGLES};
 use crate::shaders::{consts as k, emit_triangles as sh, structs};
 use crate::terrain::gpu_quadtree::{
     GpuQuadtree, ATLAS_HEIGHT, ATLAS_LAYOUT, ATLAS_PATCH_HOLES, ATLAS_PATCH_MIN_MAX, ATLAS_VERTEX_BOUNDS,
@@ -162,7 +163,7 @@ struct EmitOcclusion {
     early: Pipeline,
     late: Pipeline,
     /// Phase 2's list (its header and indices, as `list`), one per parity.
-    list: PerFrame<Buffer>,
+    list: TriangleList,
     /// One bit per invocation's subtree and slot, rewritten by phase 2;
     /// one per parity: a frame's phase 1 reads what its copy got two frames
     /// before (`cull_occluded` keeps its bits the same way). Unlike the
@@ -201,12 +202,12 @@ pub struct EmitTriangles {
     /// Header (the draw's args, then counters), then 3 vertex codes a
     /// triangle; also the draw's index buffer (its indices start at
     /// `first_index`, past the header). One per frame parity
-    /// (`frame::per_frame`): the compute phase writes it.
-    list: PerFrame<Buffer>,
+    /// (`frame::per_frame`): the compute phase writes it. It grows to
+    /// what the frames emit (`emitted`).
+    list: TriangleList,
     /// The packed node of every slot drawn this frame (the vertex shader's
     /// way from a vertex code's slot to its node), one per frame parity.
     slot_nodes: PerFrame<Buffer>,
-    capacity: u32,
     /// The LOD-0 cell halves the cut reaches, for `emit_fine` (its
     /// dispatch's header, then a word each). Written and read within the
     /// frame's LOD phase on one queue, so one copy, not one per parity.
@@ -255,24 +256,6 @@ fn fine_buffer(ctx: &Context, name: &str) -> Result<Buffer> {
     )
 }
 
-fn list_buffers(ctx: &Context, name: &str, capacity: u32) -> Result<PerFrame<Buffer>> {
-    PerFrame::new(|i| {
-        Buffer::new(
-            ctx,
-            &BufferDesc {
-                name: &copy_name(name, i),
-                size: (structs::TRIANGLE_LIST_HEADER + capacity as usize * 12) as u64,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::INDEX_BUFFER
-                    | vk::BufferUsageFlags::INDIRECT_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_DST
-                    | vk::BufferUsageFlags::TRANSFER_SRC,
-                location: MemoryLocation::GpuOnly,
-            },
-        )
-    })
-}
-
 fn pipeline(ctx: &Context, variant: u32) -> Result<Pipeline> {
     let specialization = [(sh::SPEC_NODE_SIDE, NODE_QUADS), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)];
     Pipeline::compute(
@@ -286,7 +269,7 @@ fn pipeline(ctx: &Context, variant: u32) -> Result<Pipeline> {
 }
 
 impl EmitOcclusion {
-    fn new(ctx: &Context, slot_capacity: u32, capacity: u32) -> Result<Self> {
+    fn new(ctx: &Context, slot_capacity: u32, first: u32) -> Result<Self> {
         let bits = |name: &str| {
             PerFrame::new(|i| {
                 Buffer::new(
@@ -308,7 +291,7 @@ impl EmitOcclusion {
         Ok(EmitOcclusion {
             early: pipeline(ctx, sh::VARIANT_OCCLUSION)?,
             late: pipeline(ctx, sh::VARIANT_OCCLUSION | sh::VARIANT_LATE)?,
-            list: list_buffers(ctx, "emit_triangles_late_list", capacity)?,
+            list: TriangleList::new(ctx, "emit_triangles_late_list", first)?,
             visibility,
             reached: bits("triangle_reached")?,
             fine: fine_buffer(ctx, "emit_triangles_late_fine")?,
@@ -321,8 +304,8 @@ impl EmitTriangles {
 
     pub fn new(ctx: &Context, slot_capacity: u32, build: EmitBuild) -> Result<Self> {
         let pipeline = pipeline(ctx, 0)?;
-        let capacity = k::MAX_EMITTED_TRIANGLES;
-        let list = list_buffers(ctx, "emit_triangles_list", capacity)?;
+        let first = FIRST_TRIANGLES;
+        let list = TriangleList::new(ctx, "emit_triangles_list", first)?;
         let slot_nodes = PerFrame::new(|i| {
             Buffer::new(
                 ctx,
@@ -342,10 +325,9 @@ impl EmitTriangles {
             sampler: nearest_sampler(ctx, "emit_triangles_nearest")?,
             list,
             slot_nodes,
-            capacity,
             fine: fine_buffer(ctx, "emit_triangles_fine")?,
             fine_capacity: k::MAX_FINE_CELLS,
-            occlusion: build.occlusion.then(|| EmitOcclusion::new(ctx, slot_capacity, capacity)).transpose()?,
+            occlusion: build.occlusion.then(|| EmitOcclusion::new(ctx, slot_capacity, first)).transpose()?,
             facing: build.facing,
         })
     }
@@ -358,6 +340,25 @@ impl EmitTriangles {
     /// The list of the frame being (or last) recorded.
     pub fn list(&self) -> &Buffer {
         self.list.current()
+    }
+
+    /// Triangles the lists of the frame being (or last) recorded hold:
+    /// phase 1's and phase 2's (`late`).
+    pub fn capacity(&self, late: bool) -> u32 {
+        match (late, &self.occlusion) {
+            (true, Some(o)) => o.list.capacity(),
+            _ => self.list.capacity(),
+        }
+    }
+
+    /// A frame (phase 1, phase 2) emitted these triangles, drawn or past
+    /// its list (the telemetry's, frames late): the lists grow to hold
+    /// them when next selected.
+    pub fn emitted(&mut self, early: u32, late: u32) {
+        self.list.emitted(early);
+        if let Some(o) = &mut self.occlusion {
+            o.list.emitted(late);
+        }
     }
 
     /// Phase 2's list of the frame being (or last) recorded.
@@ -378,31 +379,39 @@ impl EmitTriangles {
         self.slot_nodes.current()
     }
 
-    /// Frame `frame` writes its parity's copies.
-    pub fn select_frame(&mut self, frame: u64) {
-        self.list.select(frame);
+    /// Frame `frame` writes its parity's copies (its lists grown first
+    /// where a frame emitted more than they hold).
+    pub fn select_frame(&mut self, ctx: &Context, frame: u64) -> Result<()> {
+        self.list.select(ctx, frame)?;
         self.slot_nodes.select(frame);
         if let Some(o) = &mut self.occlusion {
-            o.list.select(frame);
+            o.list.select(ctx, frame)?;
             o.visibility.select(frame);
             o.reached.select(frame);
         }
-    }
-
-    pub fn capacity(&self) -> u32 {
-        self.capacity
+        Ok(())
     }
 
     /// What `emit_triangles` and `emit_fine` push.
-    pub fn push(&self, inputs: &EmitInputs, depth_size: [u32; 2]) -> EmitPush {
+    pub fn push(&self, inputs: &EmitInputs, depth_size: [u32; 2], late: bool) -> EmitPush {
         EmitPush {
-            capacity: self.capacity,
+            capacity: self.capacity(late),
             cull: u32::from(inputs.frustum) * k::EMIT_CULL_FRUSTUM
                 + u32::from(holes_stage(inputs)) * k::EMIT_CULL_HOLES
                 + u32::from(inputs.facing && self.facing) * k::EMIT_CULL_FACING,
             depth_size,
             fine_capacity: self.fine_capacity,
         }
+    }
+
+    /// Makes the triangle lists anew at `triangles` each (tests reach
+    /// their growth with it); they grow from there as before.
+    pub fn restart_lists(&mut self, ctx: &Context, triangles: u32) -> Result<()> {
+        self.list = TriangleList::new(ctx, "emit_triangles_list", triangles)?;
+        if let Some(o) = &mut self.occlusion {
+            o.list = TriangleList::new(ctx, "emit_triangles_late_list", triangles)?;
+        }
+        Ok(())
     }
 
     /// Makes the fine lists hold only `cells` cell halves (at most
@@ -414,14 +423,14 @@ impl EmitTriangles {
     }
 
     pub fn memory(&self) -> impl Iterator<Item = &Buffer> {
-        self.list.all().iter().chain(self.slot_nodes.all()).chain([&self.fine])
+        self.list.buffers().chain(self.slot_nodes.all()).chain([&self.fine])
     }
 
     /// Occlusion's buffers (phase 2's lists, the visibility bits).
     pub fn occlusion_memory(&self) -> impl Iterator<Item = &Buffer> {
         self.occlusion
             .iter()
-            .flat_map(|o| o.list.all().iter().chain(o.visibility.all()).chain(o.reached.all()).chain([&o.fine]))
+            .flat_map(|o| o.list.buffers().chain(o.visibility.all()).chain(o.reached.all()).chain([&o.fine]))
     }
 
     /// Emits every drawn node's triangles of `phase` into its list, after
@@ -468,7 +477,7 @@ impl EmitTriangles {
             depth_size = size;
         }
         rec.push_descriptors(pipeline, &bindings);
-        rec.push_constants(pipeline, &self.push(inputs, depth_size));
+        rec.push_constants(pipeline, &self.push(inputs, depth_size, late));
         rec.dispatch_indirect(inputs.traverse.output(), 0);
         rec.barrier(
             vk::PipelineStageFlags2::COMPUTE_SHADER,

@@ -21,3 +21,4 @@ pub mod terrain_query;
 pub mod terrain_sink;
 pub mod terrain_triangles;
 pub mod traverse;
+pub mod triangle_lists;

@@ -39,7 +39,7 @@ use crate::passes::terrain_geometry::{DepthOptions, RenderTargets, TerrainGeomet
 use crate::passes::terrain_holes::TerrainHoles;
 use crate::passes::terrain_triangles::TerrainTriangles;
 use crate::passes::traverse::Traverse;
-use crate::render::telemetry::{FrameCounters, Telemetry};
+use crate::render::telemetry::{head_bytes, FrameCounters, Telemetry};
 use crate::scene::graph::PassGraph;
 use crate::scene::shading::{ShadeRules, Shading};
 use crate::scene::view::{Camera, View};
@@ -279,7 +279,6 @@ fn counter_lists<'a>(cull: &'a CullPatches, occlusion: &'a Option<Occlusion>) ->
     ]
 }
 
-/// Whether the world has anything for the hole path to cut.
 /// The payload atlases a renderer keeps on the GPU for these decisions:
 /// the core ones, the normal (the geometry pass classifies by it), and
 /// each atlas an effect that is on reads.
@@ -471,17 +470,14 @@ impl TerrainRenderer {
         let mut bytes = ctx.read_buffer(self.traverse.output())?;
         bytes.truncate(std::mem::size_of::<crate::passes::traverse::TraverseHeader>());
         for list in counter_lists(&self.cull, &self.occlusion) {
-            let header = match list {
-                Some(b) => ctx.read_buffer(b)?[..structs::PATCH_LIST_HEADER].to_vec(),
-                None => vec![0; structs::PATCH_LIST_HEADER],
-            };
-            bytes.extend(header);
+            bytes.extend(head_bytes(ctx, list, structs::PATCH_LIST_HEADER)?);
         }
-        match self.classify.lists.as_ref() {
-            Some(l) => bytes.extend(&ctx.read_buffer(&l.buffer)?[..crate::passes::classify_tiles::HEAD_BYTES as usize]),
-            None => bytes.extend(vec![0; crate::passes::classify_tiles::HEAD_BYTES as usize]),
+        let tiles = self.classify.lists.as_ref().map(|l| &l.buffer);
+        bytes.extend(head_bytes(ctx, tiles, crate::passes::classify_tiles::HEAD_BYTES as usize)?);
+        bytes.extend(head_bytes(ctx, Some(self.select.levels()), structs::SELECT_HEADER)?);
+        for list in self.triangles.as_ref().map(|t| [Some(t.emit.list()), t.emit.late_list()]).into_iter().flatten() {
+            bytes.extend(head_bytes(ctx, list, structs::TRIANGLE_LIST_HEADER)?);
         }
-        bytes.extend(&ctx.read_buffer(self.select.levels())?[..structs::SELECT_HEADER]);
         for (buffer, n) in self.built.iter().filter_map(|e| e.counters()) {
             bytes.extend(&ctx.read_buffer(buffer)?[..n as usize]);
         }

@@ -23,6 +23,8 @@ pub struct CounterLayout {
     pub lod_count: u32,
     pub list_capacity: u32,
     pub triangles_per_patch: u64,
+    /// Built with the per-triangle rule: its two lists' headers follow the core.
+    pub triangle_lists: bool,
     /// The built effects' counters and their bytes, in registry order.
     pub effects: Vec<(Effect, u64)>,
 }
@@ -39,16 +41,24 @@ const CORE_BYTES: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES + HEAD_BYTES + SELECT_
 const TILES_AT: u64 = TRAVERSE_BYTES + 4 * HEADER_BYTES;
 /// Where the selection counters start.
 const SELECT_AT: u64 = TILES_AT + HEAD_BYTES;
+/// Bytes of one per-triangle list's header.
+const TRIANGLE_HEADER_BYTES: u64 = structs::TRIANGLE_LIST_HEADER as u64;
 
 impl CounterLayout {
     /// Bytes of one slot.
     fn slot_bytes(&self) -> u64 {
-        CORE_BYTES + self.effects.iter().map(|(_, n)| n).sum::<u64>()
+        self.effects_at() + self.effects.iter().map(|(_, n)| n).sum::<u64>()
+    }
+
+    /// Where the effects' counters start: past the core and the
+    /// per-triangle lists' headers where built.
+    fn effects_at(&self) -> u64 {
+        CORE_BYTES + if self.triangle_lists { 2 * TRIANGLE_HEADER_BYTES } else { 0 }
     }
 
     /// Where each effect's counters start in a slot, and their bytes.
     fn effect_ranges(&self) -> impl Iterator<Item = (Effect, u64, u64)> + '_ {
-        self.effects.iter().scan(CORE_BYTES, |at, &(e, n)| {
+        self.effects.iter().scan(self.effects_at(), |at, &(e, n)| {
             *at += n;
             Some((e, *at - n, n))
         })
@@ -69,6 +79,11 @@ impl CounterLayout {
         let tiles = bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(args).iter().map(|a| a[1]).collect();
         let planes: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[(TILES_AT + ARGS_BYTES) as usize..][..16]);
         let select = bytemuck::pod_read_unaligned(&bytes[SELECT_AT as usize..(SELECT_AT + SELECT_BYTES) as usize]);
+        let triangle = |i: u64| {
+            let at = (CORE_BYTES + i * TRIANGLE_HEADER_BYTES) as usize;
+            bytemuck::pod_read_unaligned(&bytes[at..at + TRIANGLE_HEADER_BYTES as usize])
+        };
+        let triangle_lists = self.triangle_lists.then(|| [triangle(0), triangle(1)]);
         let effects =
             self.effect_ranges().map(|(e, at, n)| (e, bytes[at as usize..(at + n) as usize].to_vec())).collect();
         FrameCounters {
@@ -86,7 +101,16 @@ impl CounterLayout {
             triangles: u64::from(cull.drawn) * self.triangles_per_patch,
             cull,
             effects,
+            triangle_lists,
         }
+    }
+}
+
+/// The first `n` bytes of `buffer` read back (waits), or `n` zeros.
+pub(crate) fn head_bytes(ctx: &Context, buffer: Option<&Buffer>, n: usize) -> Result<Vec<u8>> {
+    match buffer {
+        Some(b) => Ok(ctx.read_buffer(b)?[..n].to_vec()),
+        None => Ok(vec![0; n]),
     }
 }
 
@@ -101,6 +125,8 @@ pub struct CounterSources<'a> {
     pub select: &'a Buffer,
     /// Each effect's counters, in the layout's order.
     pub effects: Vec<&'a Buffer>,
+    /// The per-triangle rule's lists (phase 1's, phase 2's), where built.
+    pub triangle_lists: [Option<&'a Buffer>; 2],
 }
 
 struct Slot {
@@ -187,6 +213,12 @@ impl Telemetry {
             rec.copy_buffer_region(tiles, 0, &slot.buffer, TILES_AT, HEAD_BYTES);
         }
         rec.copy_buffer_region(src.select, 0, &slot.buffer, SELECT_AT, SELECT_BYTES);
+        for (i, list) in src.triangle_lists.iter().enumerate() {
+            if let Some(list) = list.filter(|_| self.layout.triangle_lists) {
+                let at = CORE_BYTES + i as u64 * TRIANGLE_HEADER_BYTES;
+                rec.copy_buffer_region(list, 0, &slot.buffer, at, TRIANGLE_HEADER_BYTES);
+            }
+        }
         for (buffer, (_, at, n)) in src.effects.iter().zip(self.layout.effect_ranges()) {
             rec.copy_buffer_region(buffer, 0, &slot.buffer, at, n);
         }

@@ -41,6 +41,7 @@ mod tests {
             max_push_constants_bytes: 128,
             max_image_dimension_2d: 16384,
             max_image_array_layers: layers,
+            max_storage_buffer_range: 1 << 27,
             device_local_bytes: local_mib << 20,
             timestamps_supported: true,
             timestamp_period_ns: 1.0,

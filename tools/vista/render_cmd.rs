@@ -121,7 +121,8 @@ pub struct ViewpointArgs {
     /// LOD selection: `patch` (per 8x8-quad patch, Far Cry 5's) or
     /// `triangle` (per triangle inside each node, a restricted bintree with
     /// saturated errors, refined below the samples; computes the world's
-    /// per-vertex bounds first; no cone culling yet).
+    /// per-vertex bounds first; effect cone_cull drops the triangles it
+    /// leaves whole that face away).
     #[arg(long, default_value = "patch", value_parser = parse_lod_rule)]
     pub lod_rule: LodRule,
 }

@@ -158,8 +158,8 @@ fn graph(decisions: &[EffectDecision], options: &RendererOptions) -> PassGraph {
         LodRule::Triangle => (
             &per_patch[..],
             "LOD rule triangle: the per-triangle rule draws (its vertices test holes; its subtrees are culled by \
-             the frustum, patches of holes only and, with effect occlusion, the depth pyramid; no cone culling \
-             yet)",
+             the frustum, patches of holes only and, with effect occlusion, the depth pyramid; with effect \
+             cone_cull, each triangle it leaves whole by its facing)",
         ),
     };
     for p in off {
@@ -194,8 +194,10 @@ fn counter_layout(
     cull: &CullPatches,
     build: CullBuild,
     built: &[Box<dyn FrameEffect>],
+    triangle: bool,
 ) -> CounterLayout {
     CounterLayout {
+        triangle_lists: triangle,
         holes: build.holes,
         occlusion: build.occlusion,
         lod_count: world.lod_count,
@@ -290,7 +292,7 @@ impl TerrainRenderer {
         })?;
         // gbuffer_tiles records one timed draw per variant.
         let max_passes = graph.max_recorded() + variants as u32;
-        let counters = counter_layout(world, &cull, build, &built);
+        let counters = counter_layout(world, &cull, build, &built, triangle);
         let emit = EmitBuild { occlusion: on(Effect::Occlusion), facing: on(Effect::ConeCull) };
         let tri = triangle.then_some((slot_capacity, emit));
         let (geometry, holes, triangles) = terrain_draws(ctx, options.depth, &built, build.holes, tri)?;

@@ -50,12 +50,21 @@ impl TerrainRenderer {
         self.prepare_frame(ctx, view, targets)?;
         let ctx_frame = ctx.frame_recording();
         self.telemetry.harvest(ctx);
+        if let (Some(t), Some([early, late])) =
+            (&mut self.triangles, self.telemetry.latest().and_then(|c| c.triangle_lists))
+        {
+            t.emit.emitted(early.triangles, late.triangles);
+        }
         let lod_view = self.lod_camera.map(|camera| View { camera, ..view.clone() });
         let params = lod_view.as_ref().unwrap_or(view).traverse_params();
         self.terrain.stream(&params)?;
         let switched_off = self.switched_off();
         // The frame borrows the executor while the rest of the renderer
         // records into it.
+        let next = self.exec.as_ref().expect("one frame records at a time").next_frame();
+        if let Some(t) = &mut self.triangles {
+            t.emit.select_frame(ctx, next)?;
+        }
         let mut exec = self.exec.take().expect("one frame records at a time");
         self.select_copies(exec.next_frame());
         let terrain_changed = self.terrain.tree.has_work();
@@ -191,6 +200,7 @@ impl TerrainRenderer {
         let sources = CounterSources {
             traverse: self.traverse.output(),
             lists: counter_lists(&self.cull, &self.occlusion),
+            triangle_lists: self.triangles.as_ref().map_or([None, None], |t| [Some(t.emit.list()), t.emit.late_list()]),
             tiles: self.classify.lists.as_ref().map(|l| &l.buffer),
             select: self.select.levels(),
             effects: self.built.iter().filter_map(|e| e.counters().map(|(b, _)| b)).collect(),
@@ -208,9 +218,6 @@ impl TerrainRenderer {
         self.sector_data.select_frame(frame);
         self.select.select_frame(frame);
         self.cull.select_frame(frame);
-        if let Some(t) = &mut self.triangles {
-            t.emit.select_frame(frame);
-        }
         if let Some(o) = &mut self.occlusion {
             o.cull.select_frame(frame);
         }
