@@ -21,6 +21,9 @@ pub struct RenderStats {
     /// The per-triangle rule's list header (`None` on the per-patch path,
     /// whose numbers are `patches` and `select`).
     pub triangles: Option<TriangleListHeader>,
+    /// Triangles the per-triangle rule's phase 1 list of that frame held
+    /// (it grows, frames late, to what the frames emit).
+    pub triangle_capacity: Option<u32>,
     pub patches: CullCounters,
     /// Per-patch LOD selection: patches coarsened and refined, seam conflicts.
     pub select: SelectHeader,
@@ -75,6 +78,7 @@ pub fn collect(ctx: &Context, renderer: &TerrainRenderer, view: &View) -> Result
     };
     Ok(RenderStats {
         triangles,
+        triangle_capacity: renderer.triangles.as_ref().map(|t| t.emit.capacity(false)),
         patches,
         select,
         bound_px: triangles.map_or(c.cull.bound_px, |t| t.bound_px()),

@@ -77,6 +77,13 @@ fn print_triangles(s: &RenderStats, t: &vista::passes::emit_triangles::TriangleL
         triangle_bound_words(f32::from_bits(t.grid_bound_bits)),
         t.clamped
     );
+    if let (true, Some(held)) = (t.overflow > 0, s.triangle_capacity) {
+        println!(
+            "note:    {} triangles past the list, which held {held}: the lists grow to hold them a few frames \
+             later (from the telemetry's counts)",
+            t.overflow
+        );
+    }
     if t.unrefined > 0 {
         println!(
             "note:    {} LOD-0 cell halves drawn whole: the fine list (emit_fine's) was full; their node's error \
