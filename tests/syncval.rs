@@ -141,6 +141,11 @@ fn run(
     if depth.load {
         rig.off.wall = Some(EngineWall { rect: [100, 10, 150, 60], distance_m: 25.0, colour: [0.3, 0.3, 0.3, 1.0] });
     }
+    // The per-triangle rule's lists start small: they grow (a new buffer
+    // each, the old retired behind its frames) under validation too.
+    if let Some(t) = rig.renderer.triangles.as_mut() {
+        t.emit.restart_lists(ctx, 1000).unwrap();
+    }
     let built: Vec<FramePass> = rig.renderer.pass_graph().iter().filter(|n| n.built).map(|n| n.pass).collect();
     let mut ran = BTreeSet::new();
     let mut note = |rig: &Rig| {
@@ -172,6 +177,9 @@ fn run(
         note(&rig);
     }
     rig.off.capture(ctx).unwrap();
+    if let Some(t) = &rig.renderer.triangles {
+        assert!(t.emit.capacity(false) > 1000, "{mode:?}: the triangle list never grew");
+    }
     for p in built {
         assert!(ran.contains(&p.label()), "{mode:?}: pass {} was built but never recorded: {ran:?}", p.label());
     }

@@ -256,6 +256,10 @@ fn fine_buffer(ctx: &Context, name: &str) -> Result<Buffer> {
     )
 }
 
+/// The debug names of phase 1's and phase 2's index lists.
+const LIST: &str = "emit_triangles_list";
+const LATE_LIST: &str = "emit_triangles_late_list";
+
 fn pipeline(ctx: &Context, variant: u32) -> Result<Pipeline> {
     let specialization = [(sh::SPEC_NODE_SIDE, NODE_QUADS), (sh::SPEC_PATCH_QUADS, PATCH_QUADS)];
     Pipeline::compute(
@@ -291,7 +295,7 @@ impl EmitOcclusion {
         Ok(EmitOcclusion {
             early: pipeline(ctx, sh::VARIANT_OCCLUSION)?,
             late: pipeline(ctx, sh::VARIANT_OCCLUSION | sh::VARIANT_LATE)?,
-            list: TriangleList::new(ctx, "emit_triangles_late_list", first)?,
+            list: TriangleList::new(ctx, LATE_LIST, first)?,
             visibility,
             reached: bits("triangle_reached")?,
             fine: fine_buffer(ctx, "emit_triangles_late_fine")?,
@@ -305,7 +309,7 @@ impl EmitTriangles {
     pub fn new(ctx: &Context, slot_capacity: u32, build: EmitBuild) -> Result<Self> {
         let pipeline = pipeline(ctx, 0)?;
         let first = FIRST_TRIANGLES;
-        let list = TriangleList::new(ctx, "emit_triangles_list", first)?;
+        let list = TriangleList::new(ctx, LIST, first)?;
         let slot_nodes = PerFrame::new(|i| {
             Buffer::new(
                 ctx,
@@ -407,9 +411,9 @@ impl EmitTriangles {
     /// Makes the triangle lists anew at `triangles` each (tests reach
     /// their growth with it); they grow from there as before.
     pub fn restart_lists(&mut self, ctx: &Context, triangles: u32) -> Result<()> {
-        self.list = TriangleList::new(ctx, "emit_triangles_list", triangles)?;
+        self.list = TriangleList::new(ctx, LIST, triangles)?;
         if let Some(o) = &mut self.occlusion {
-            o.list = TriangleList::new(ctx, "emit_triangles_late_list", triangles)?;
+            o.list = TriangleList::new(ctx, LATE_LIST, triangles)?;
         }
         Ok(())
     }

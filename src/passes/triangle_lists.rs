@@ -60,8 +60,8 @@ impl TriangleList {
     /// grow to hold a quarter more, rounded up to a power of two, at most
     /// what a binding holds. Never shrinks.
     pub fn emitted(&mut self, triangles: u32) {
-        if triangles > self.copies.all().iter().map(|c| c.capacity).min().unwrap_or(0) {
-            self.wanted = self.wanted.max(grown_to(triangles, self.max));
+        if triangles > self.wanted {
+            self.wanted = grown_to(triangles, self.max);
         }
     }
 
