@@ -12,6 +12,14 @@ use vista::bench::{AccuracyBench, AccuracyPoint};
 
 const SIZE: (u32, u32) = (1400, 1000);
 
+/// The geometry rows' families, a curve each: both rules, culling on and off.
+const FAMILIES: &[(&str, RGBColor)] = &[
+    ("culling on", BLUE),
+    ("culling off", RED),
+    ("culling on per triangle", RGBColor(230, 140, 0)),
+    ("culling off per triangle", RGBColor(150, 60, 170)),
+];
+
 /// Short marks for the shading settings, in the bench's order.
 fn shading_mark(setting: &str) -> &'static str {
     match setting {
@@ -35,6 +43,13 @@ pub fn pareto_plot(b: &AccuracyBench, title: &str, path: &Path) -> Result<()> {
     Ok(vista::output::write_png(path, &buf, [w, h], image::ExtendedColorType::Rgb8)?)
 }
 
+/// A view's points that the panel draws. Only these set the axes: a
+/// family left out would leave an empty stretch of the panel.
+fn drawn_points<'a>(b: &'a AccuracyBench, view: &str) -> Vec<&'a AccuracyPoint> {
+    let drawn = |family: &str| family == "shading" || FAMILIES.iter().any(|f| f.0 == family);
+    b.points.iter().filter(|p| p.view == view && drawn(&p.family)).collect()
+}
+
 fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::with_buffer(buf, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
@@ -45,7 +60,7 @@ fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn st
     let rows = views.len().div_ceil(cols).max(1);
     let panels = root.split_evenly((rows, cols));
     for (panel, view) in panels.iter().zip(&views) {
-        let pts: Vec<&AccuracyPoint> = b.points.iter().filter(|p| p.view == *view).collect();
+        let pts = drawn_points(b, view);
         let xs = pts.iter().map(|p| p.gpu_ms);
         let ys = pts.iter().map(|p| p.error.lod_px_p99);
         let (x0, x1) = (xs.clone().fold(f64::MAX, f64::min), xs.fold(0.0, f64::max));
@@ -66,8 +81,7 @@ fn draw(b: &AccuracyBench, title: &str, buf: &mut [u8]) -> Result<(), Box<dyn st
             .label_style(("sans-serif", 13))
             .max_light_lines(1)
             .draw()?;
-        let triangles = RGBColor(230, 140, 0);
-        for (family, colour) in [("culling on", BLUE), ("culling off", RED), ("culling on per triangle", triangles)] {
+        for &(family, colour) in FAMILIES {
             let mut line: Vec<(f64, f64, f32)> = pts
                 .iter()
                 .filter(|p| p.family == family)
